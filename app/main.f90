@@ -1,0 +1,112 @@
+!> impactchain command line: `impactchain [--quiet] input.nml`. Parses arguments, runs the
+!> library, reports progress and errors, and sets the exit code. No physics here.
+program main
+    use, intrinsic :: iso_fortran_env, only: error_unit, output_unit, int64
+    use impactchain, only: wp, i8, error_t, run_config_t, read_config, run_simulation, &
+                           run_summary_t
+    implicit none
+    type(run_config_t) :: cfg
+    type(run_summary_t) :: summary
+    type(error_t), allocatable :: err
+    character(len=:), allocatable :: input
+    logical :: quiet
+    integer(int64) :: clock_start, clock_last, clock_rate
+
+    call parse_arguments(input, quiet)
+    call read_config(input, cfg, err)
+    if (allocated(err)) call fail(err%message)
+    call system_clock(clock_start, clock_rate)
+    clock_last = clock_start
+    call run_simulation(cfg, summary, err, progress)
+    if (allocated(err)) call fail(err%message)
+    call report(summary)
+    if (.not. summary%complete) error stop 3
+
+contains
+
+    subroutine parse_arguments(input, quiet)
+        character(len=:), allocatable, intent(out) :: input
+        logical, intent(out) :: quiet
+        integer :: j, length
+        character(len=:), allocatable :: arg
+
+        quiet = .false.
+        input = ''
+        do j = 1, command_argument_count()
+            call get_command_argument(j, length=length)
+            allocate (character(len=length) :: arg)
+            call get_command_argument(j, arg)
+            select case (arg)
+            case ('-q', '--quiet')
+                quiet = .true.
+            case ('-h', '--help')
+                call usage(output_unit)
+                stop
+            case ('--version')
+                write (output_unit, '(a)') 'impactchain 0.1.0'
+                stop
+            case default
+                if (arg(1:min(1, len(arg))) == '-') call fail("unknown option '"//arg// &
+                                                              "' (see --help)")
+                if (len(input) > 0) call fail("give one input file, not '"//input// &
+                                              "' and '"//arg//"'")
+                input = arg
+            end select
+            deallocate (arg)
+        end do
+        if (len(input) == 0) then
+            call usage(error_unit)
+            error stop 2
+        end if
+    end subroutine parse_arguments
+
+    subroutine usage(unit)
+        integer, intent(in) :: unit
+
+        write (unit, '(a)') 'usage: impactchain [--quiet] input.nml', &
+            '  Runs the impact-oscillator chain described by the namelist file and writes', &
+            '  HDF5 output (see README.md for every key). Progress goes to stderr for runs', &
+            '  longer than two seconds; --quiet silences it.'
+    end subroutine usage
+
+    !> Progress on stderr at most once a second, after the first two seconds.
+    function progress(done, total) result(keep_going)
+        integer(i8), intent(in) :: done, total
+        logical :: keep_going
+        integer(int64) :: now
+        real(wp) :: elapsed, rate
+
+        keep_going = .true.
+        if (quiet) return
+        call system_clock(now)
+        if (now - clock_last < clock_rate .and. done < total) return
+        elapsed = real(now - clock_start, wp)/clock_rate
+        if (elapsed < 2 .and. done < total) return
+        if (elapsed < 2) return
+        clock_last = now
+        rate = done/max(elapsed, 1.0e-9_wp)
+        write (error_unit, '(a,i0,a,i0,a,es9.2,a,f9.1,a)') 'impactchain: cycle ', done, ' / ', &
+            total, ', ', rate, ' cycles/s, ', (total - done)/max(rate, 1.0e-9_wp), ' s left'
+    end function progress
+
+    subroutine report(summary)
+        type(run_summary_t), intent(in) :: summary
+
+        write (output_unit, '(a)') 'impactchain: wrote '//summary%output_file
+        write (output_unit, '(a,i0,a,f0.4,a,i0,a,i0,a)') '  cycles recorded ', &
+            summary%cycles_done, ', collisions per cycle ', summary%collisions_per_cycle, &
+            ', sticking contacts ', summary%sticks, ', releases ', summary%releases, ''
+        if (allocated(summary%exponents)) write (output_unit, '(a,es12.4,a)') &
+            '  largest Lyapunov exponent ', summary%exponents(1), ' bits/cycle'
+        if (.not. summary%complete) write (error_unit, '(a)') &
+            'impactchain: the run was stopped early; the file is marked complete = 0'
+    end subroutine report
+
+    subroutine fail(message)
+        character(len=*), intent(in) :: message
+
+        write (error_unit, '(a)') 'impactchain: error: '//message
+        error stop 1
+    end subroutine fail
+
+end program main

@@ -1,0 +1,316 @@
+"""Command line: ``python -m post <figure> FILE.h5 [FILE2.h5 ...] -o out.png``.
+
+Errors in the input (missing file, wrong schema, data the figure needs but the run did
+not record) and bad options print one line ``post: error: ...`` on stderr and exit
+with status 2 without writing anything.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+from collections.abc import Callable, Iterator, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+from matplotlib.figure import Figure
+
+from post import figures
+from post.io import Run, SchemaError, read_run
+
+__all__ = ["main", "COMMANDS"]
+
+FORMATS = (".png", ".pdf", ".svg")
+EXIT_ERROR = 2
+
+
+class CliError(Exception):
+    """An error to report as ``post: error: ...`` with exit status 2."""
+
+
+@dataclass(frozen=True)
+class Command:
+    """A figure the CLI can make."""
+
+    name: str
+    help: str
+    require: tuple[str, ...]
+    optional: tuple[str, ...]
+    multiple: bool
+    options: Callable[[argparse.ArgumentParser], None]
+    build: Callable[[list[Run], argparse.Namespace], Figure]
+
+
+# ------------------------------------------------------------------------------ options
+
+
+def _positive_int(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not an integer") from None
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"{value} must be >= 1")
+    return value
+
+
+def _positive_float(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
+    if not value > 0:
+        raise argparse.ArgumentTypeError(f"{value} must be > 0")
+    return value
+
+
+def _site_list(text: str) -> list[int]:
+    try:
+        sites = [int(item) for item in text.split(",") if item.strip()]
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a comma-separated list of "
+                                         "sites, e.g. 1,3") from None
+    if not sites or min(sites) < 1:
+        raise argparse.ArgumentTypeError(f"{text!r}: sites are 1-based integers")
+    return sites
+
+
+def _cycles_option(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--cycles", type=_positive_int, metavar="N",
+                        help="use only the last N strobe records (default: all)")
+
+
+def _panel_options(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--panel-cycles", type=_positive_int, default=60, metavar="N",
+                        help="cycles per panel (default: 60)")
+    parser.add_argument("--panels", type=_positive_int, metavar="K",
+                        help="number of panels (default: all that the record fills, "
+                             "at most 8)")
+    parser.add_argument("--start", type=int, metavar="CYCLE",
+                        help="first cycle of the first panel (default: the first "
+                             "recorded cycle)")
+
+
+def _wait_option(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--max-wait", type=_positive_float, default=1.0, metavar="CYCLES",
+                        help="a shock wave dies after this many drive cycles without "
+                             "a collision (default: 1.0)")
+
+
+def _space_amplitude_options(parser: argparse.ArgumentParser) -> None:
+    _cycles_option(parser)
+    parser.add_argument("--periods", choices=("file", "detect", "none"), default="file",
+                        help="period labels: from the file's /strobe/period (default), "
+                             "detected from the records when the file has none, or none")
+
+
+def _shock_wave_options(parser: argparse.ArgumentParser) -> None:
+    _panel_options(parser)
+    _wait_option(parser)
+
+
+def _poincare_options(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--site", type=_positive_int, default=1, metavar="I",
+                        help="oscillator, 1-based (default: 1)")
+    _cycles_option(parser)
+
+
+def _bifurcation_options(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--sites", type=_site_list, metavar="I,J,...",
+                        help="oscillators to show, 1-based (default: all)")
+
+
+def _lyapunov_options(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--k", type=_positive_int, default=10, metavar="K",
+                        help="number of largest exponents to draw (default: 10)")
+    parser.add_argument("--with-bifurcation", action="store_true",
+                        help="add a bifurcation panel of oscillator 1 above the exponents")
+
+
+def _all_options(parser: argparse.ArgumentParser) -> None:
+    _cycles_option(parser)
+    _panel_options(parser)
+    _wait_option(parser)
+
+
+def _no_options(parser: argparse.ArgumentParser) -> None:
+    del parser
+
+
+# ----------------------------------------------------------------------------- commands
+
+
+COMMANDS: dict[str, Command] = {
+    c.name: c
+    for c in (
+        Command("space-amplitude",
+                "overlaid strobe snapshots x(site); several files overlay in colours",
+                ("strobe",), (), True, _space_amplitude_options,
+                lambda runs, a: figures.space_amplitude(runs, a.cycles, a.periods)),
+        Command("space-time-amplitude",
+                "3-D waterfall of strobe snapshots, in panels of cycles",
+                ("strobe",), (), False, _panel_options,
+                lambda runs, a: figures.space_time_amplitude(runs[0], a.panel_cycles,
+                                                             a.panels, a.start)),
+        Command("shock-wave",
+                "collision cascades from the walls, same panels as space-time-amplitude",
+                ("events",), ("strobe",), False, _shock_wave_options,
+                lambda runs, a: figures.shock_wave(runs[0], a.panel_cycles, a.panels,
+                                                   a.max_wait, a.start)),
+        Command("poincare",
+                "Poincare section (x, v) of one oscillator",
+                ("strobe",), (), False, _poincare_options,
+                lambda runs, a: figures.poincare(runs[0], a.site, a.cycles)),
+        Command("bifurcation",
+                "strobe positions against the swept parameter (sweep file)",
+                ("sweep",), (), False, _bifurcation_options,
+                lambda runs, a: figures.bifurcation(runs[0], a.sites)),
+        Command("lyapunov",
+                "largest Lyapunov exponents against the swept parameter (sweep file)",
+                ("sweep", "sweep/exponents"), (), True, _lyapunov_options,
+                lambda runs, a: figures.lyapunov(runs, a.k, a.with_bifurcation)),
+        Command("ky-dimension",
+                "Kaplan-Yorke dimension against the swept parameter (sweep files)",
+                ("sweep", "sweep/ky_dimension|sweep/exponents"), (), True, _no_options,
+                lambda runs, a: figures.ky_dimension(runs)),
+        Command("spectrum",
+                "Lyapunov spectrum of one run and convergence of the running estimates",
+                ("lyapunov",), ("strobe",), False, _no_options,
+                lambda runs, a: figures.spectrum(runs[0])),
+    )
+}
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The argument parser, one sub-command per figure plus ``all``."""
+    parser = argparse.ArgumentParser(
+        prog="python -m post",
+        description="Figures from impactchain HDF5 output files.",
+        epilog="example: python -m post space-amplitude run.h5 -o fig.png",
+    )
+    sub = parser.add_subparsers(dest="figure", metavar="<figure>", required=True,
+                                title="figures")
+    for command in COMMANDS.values():
+        p = sub.add_parser(command.name, help=command.help, description=command.help)
+        p.add_argument("files", nargs="+" if command.multiple else 1, metavar="FILE.h5")
+        p.add_argument("-o", "--output", required=True, metavar="OUT",
+                       help="output file, .png, .pdf or .svg")
+        command.options(p)
+    p = sub.add_parser("all", help="every figure one file supports, written as "
+                                   "PREFIX_<figure>.png",
+                       description="Write every figure the file's data supports, as "
+                                   "PREFIX_space_amplitude.png etc. (PDF or SVG when "
+                                   "PREFIX ends in .pdf or .svg).")
+    p.add_argument("files", nargs=1, metavar="FILE.h5")
+    p.add_argument("-o", "--output", required=True, metavar="PREFIX",
+                   help="output prefix, e.g. figs/run")
+    _all_options(p)
+    return parser
+
+
+# --------------------------------------------------------------------------------- main
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Run the CLI; return the exit status."""
+    args = build_parser().parse_args(argv)
+    try:
+        if args.figure == "all":
+            _make_all(args)
+        else:
+            _make_one(COMMANDS[args.figure], args)
+    except (CliError, SchemaError, figures.FigureError) as exc:
+        print(f"post: error: {exc}", file=sys.stderr)
+        return EXIT_ERROR
+    return 0
+
+
+def _make_one(command: Command, args: argparse.Namespace) -> None:
+    output = _output_path(args.output)
+    runs = [_read(path, command.require, command.optional, command.name)
+            for path in args.files]
+    figure = command.build(runs, args)
+    _save(figure, output)
+
+
+def _make_all(args: argparse.Namespace) -> None:
+    prefix, suffix = _output_prefix(args.output)
+    path = args.files[0]
+    run = _read(path, (), None, "all")
+    made = list(_all_figures(run, args))
+    if not made:
+        raise CliError(f"{path}: the file holds no data for any figure")
+    for name, figure in made:
+        out = Path(f"{prefix}_{name.replace('-', '_')}{suffix}")
+        _save(figure, out)
+        print(out)
+
+
+def _all_figures(run: Run, args: argparse.Namespace) -> Iterator[tuple[str, Figure]]:
+    """(name, figure) for every figure ``run`` supports; notes skipped ones on stderr."""
+    if run.strobe is not None and run.strobe.n_record:
+        yield "space-amplitude", figures.space_amplitude([run], args.cycles)
+        yield "space-time-amplitude", figures.space_time_amplitude(
+            run, args.panel_cycles, args.panels, args.start)
+        if run.events is not None:
+            yield "shock-wave", figures.shock_wave(run, args.panel_cycles, args.panels,
+                                                   args.max_wait, args.start)
+        else:
+            _note(f"skipped shock-wave: {run.path} holds no events")
+        yield "poincare", figures.poincare(run, 1, args.cycles)
+    if run.lyapunov is not None:
+        yield "spectrum", figures.spectrum(run)
+    sweep = run.sweep
+    if sweep is not None and sweep.values.shape[0]:
+        if not sweep.is_2d:
+            yield "bifurcation", figures.bifurcation(run)
+            if sweep.exponents is not None:
+                yield "lyapunov", figures.lyapunov([run], with_bifurcation=True)
+        if sweep.ky_dimension is not None or sweep.exponents is not None:
+            yield "ky-dimension", figures.ky_dimension([run])
+
+
+def _read(path: str, require: tuple[str, ...], optional: tuple[str, ...] | None,
+          purpose: str) -> Run:
+    groups = None if optional is None else (*require, *optional)
+    run = read_run(path, require=require, groups=groups, purpose=purpose)
+    if not run.complete:
+        _note(f"{path}: the run was interrupted; plotting the records it finished")
+    return run
+
+
+def _note(message: str) -> None:
+    print(f"post: note: {message}", file=sys.stderr)
+
+
+def _output_path(text: str) -> Path:
+    path = Path(text)
+    if path.suffix.lower() not in FORMATS:
+        raise CliError(f"output {text!r} must end in {', '.join(FORMATS)}")
+    return path
+
+
+def _output_prefix(text: str) -> tuple[str, str]:
+    """Split ``figs/run.pdf`` into ('figs/run', '.pdf'); no known suffix means PNG."""
+    path = Path(text)
+    if path.suffix.lower() in FORMATS:
+        return str(path.with_suffix("")), path.suffix.lower()
+    if not path.name:
+        raise CliError(f"output prefix {text!r} has no file name part")
+    return text, ".png"
+
+
+def _save(figure: Figure, out: Path) -> None:
+    """Write the figure atomically: to a hidden temporary file, then rename."""
+    fmt = out.suffix.lower().lstrip(".")
+    temporary = out.with_name(f".{out.name}.partial")
+    try:
+        out.parent.mkdir(parents=True, exist_ok=True)
+        figure.savefig(temporary, format=fmt, dpi=150)
+        os.replace(temporary, out)
+    except OSError as exc:
+        raise CliError(f"cannot write {out}: {exc.strerror or exc}") from exc
+    finally:
+        if temporary.exists():
+            temporary.unlink()

@@ -1,0 +1,578 @@
+"""Read impactchain HDF5 output (schema_version 1).
+
+This is the only module that knows the file layout and its axis order. Everything
+else in ``post`` works on the frozen dataclasses returned by :func:`read_run`, whose
+arrays are read-only numpy arrays with the record axis first:
+
+========================  ======================  ===================================
+HDF5 path                 dataclass field         shape (h5py / numpy order)
+========================  ======================  ===================================
+/params (attributes)      ``Run.params``          scalars; ``spacing`` (n+1,)
+/initial, /final          ``Run.initial/final``   ``x``, ``v`` (n,)
+/strobe                   ``Run.strobe``          ``x``, ``v`` (n_record, n); ``cycle``
+/events                   ``Run.events``          ``time``, ``site``, ... (n_events,)
+/stats                    ``Run.stats``           ``site_counts`` (n+1,)
+/lyapunov                 ``Run.lyapunov``        ``exponents`` (k,), ``running`` (m, k)
+/sweep                    ``Run.sweep``           ``x`` (n_points, cycles, n)
+========================  ======================  ===================================
+
+Every group except ``/params`` is optional; a figure states what it needs through
+``read_run(path, require=...)`` and gets a :class:`SchemaError` naming the missing
+piece when the file lacks it. The Fortran writer stores arrays as ``(n, n_record)``
+so that they appear here as ``(n_record, n)``; a file with the other order is rejected
+rather than silently transposed.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from collections.abc import Iterable, Mapping
+from dataclasses import dataclass, field
+from types import MappingProxyType
+from typing import Any
+
+import h5py
+import numpy as np
+
+__all__ = [
+    "SCHEMA_VERSION",
+    "IMPACT",
+    "STICK",
+    "RELEASE",
+    "SchemaError",
+    "Params",
+    "State",
+    "FinalState",
+    "Strobe",
+    "Events",
+    "Stats",
+    "Lyapunov",
+    "Sweep",
+    "Run",
+    "read_run",
+]
+
+SCHEMA_VERSION = 1
+"""The file layout this module reads."""
+
+IMPACT = 0
+"""``/events/kind``: an ordinary impact."""
+STICK = 1
+"""``/events/kind``: an impact that starts a sticking contact."""
+RELEASE = 2
+"""``/events/kind``: release from a sticking contact (not a collision)."""
+
+OPTIONAL_GROUPS = ("initial", "final", "strobe", "events", "stats", "lyapunov", "sweep")
+
+_HINTS = {
+    "strobe": "the run recorded no strobe snapshots",
+    "events": "events were not recorded in this run",
+    "lyapunov": "Lyapunov exponents were not computed in this run",
+    "sweep": "this is not a parameter-sweep file",
+    "sweep/exponents": "the sweep did not compute Lyapunov exponents",
+    "sweep/ky_dimension": "the sweep did not compute Lyapunov exponents",
+}
+
+
+class SchemaError(ValueError):
+    """The file is missing, not HDF5, of another schema, or lacks needed data."""
+
+
+@dataclass(frozen=True, eq=False)
+class Params:
+    """Run parameters from ``/params`` (MODEL.md sections 1-5)."""
+
+    n: int
+    damping: float
+    restitution: float
+    amplitude: float
+    omega: float
+    boundary: str
+    drive_period: float
+    phase: float
+    transient: int
+    cycles: int
+    spacing: np.ndarray  # (n+1,): bond 0 = left wall|osc 1, ..., bond n = osc n|right wall
+
+    @property
+    def walls(self) -> bool:
+        """True when both end walls are present (``boundary == 'fixed'``)."""
+        return self.boundary == "fixed"
+
+    @property
+    def length(self) -> float:
+        """Position of the right wall: the sum of all spacings."""
+        return float(np.sum(self.spacing))
+
+    @property
+    def equilibrium(self) -> np.ndarray:
+        """Equilibrium position of oscillators 1..n, shape (n,)."""
+        return np.cumsum(self.spacing)[: self.n]
+
+    @property
+    def site_positions(self) -> np.ndarray:
+        """Position of collision sites 0..n, shape (n+1,).
+
+        Site k (bond k) is attributed to oscillator k, the left one of the pair (the
+        paper's convention), so site 0 (the left wall hit) sits at the left wall, 0.
+        """
+        return np.concatenate(([0.0], self.equilibrium))
+
+    @property
+    def section_offset(self) -> float:
+        """Section phase as a fraction of a drive cycle: record ``c`` is at t/T = c + offset."""
+        return self.phase / (2.0 * math.pi)
+
+
+@dataclass(frozen=True, eq=False)
+class State:
+    """A chain state: displacements ``x`` and velocities ``v``, shape (n,)."""
+
+    x: np.ndarray
+    v: np.ndarray
+
+
+@dataclass(frozen=True, eq=False)
+class FinalState(State):
+    """The last state of a run, at absolute drive cycle ``cycle`` and drive ``phase``."""
+
+    cycle: int = 0
+    phase: float = 0.0
+
+
+@dataclass(frozen=True, eq=False)
+class Strobe:
+    """Poincare-section records: state at t = cycle*T + phase/omega."""
+
+    x: np.ndarray  # (n_record, n)
+    v: np.ndarray  # (n_record, n)
+    cycle: np.ndarray  # (n_record,) absolute cycle index
+    period: np.ndarray | None  # (n,) detected period per oscillator, 0 = aperiodic
+
+    @property
+    def n_record(self) -> int:
+        """Number of recorded cycles."""
+        return int(self.x.shape[0])
+
+
+@dataclass(frozen=True, eq=False)
+class Events:
+    """Collision events in time order as written (time from the start of the run)."""
+
+    time: np.ndarray  # (n_events,)
+    site: np.ndarray  # (n_events,) 0..n
+    speed: np.ndarray  # (n_events,) approach speed >= 0
+    kind: np.ndarray  # (n_events,) IMPACT, STICK or RELEASE
+
+    @property
+    def collisions(self) -> np.ndarray:
+        """Mask of events that are collisions (impacts, including sticking ones)."""
+        return self.kind != RELEASE
+
+
+@dataclass(frozen=True, eq=False)
+class Stats:
+    """Collision counts over the recorded cycles."""
+
+    collisions_per_cycle: float
+    impacts: int
+    sticks: int
+    releases: int
+    site_counts: np.ndarray  # (n+1,)
+
+
+@dataclass(frozen=True, eq=False)
+class Lyapunov:
+    """Lyapunov spectrum of one run, descending, in bits per drive cycle."""
+
+    exponents: np.ndarray  # (k,) bits/cycle
+    exponents_per_time: np.ndarray  # (k,) nats/time
+    stderr: np.ndarray  # (k,) bits/cycle
+    running: np.ndarray  # (n_record, k) bits/cycle
+    ky_dimension: float
+    positive_sum: float
+    collisions_per_cycle: float
+
+
+@dataclass(frozen=True, eq=False)
+class Sweep:
+    """A parameter sweep: records and (optionally) exponents at each parameter point."""
+
+    parameter: str
+    parameter2: str  # '' for a 1-D sweep
+    mode: str
+    values: np.ndarray  # (n_points,) or (n_points, 2)
+    x: np.ndarray  # (n_points, cycles, n)
+    collisions_per_cycle: np.ndarray  # (n_points,)
+    period: np.ndarray  # (n_points, n)
+    exponents: np.ndarray | None = None  # (n_points, k) bits/cycle
+    stderr: np.ndarray | None = None  # (n_points, k) bits/cycle
+    ky_dimension: np.ndarray | None = None  # (n_points,)
+
+    @property
+    def is_2d(self) -> bool:
+        """True for a sweep over two parameters."""
+        return bool(self.parameter2) or self.values.ndim == 2
+
+
+@dataclass(frozen=True, eq=False)
+class Run:
+    """One impactchain output file."""
+
+    path: str
+    schema_version: int
+    code_version: str
+    input_namelist: str
+    complete: bool
+    params: Params
+    initial: State | None = None
+    final: FinalState | None = None
+    strobe: Strobe | None = None
+    events: Events | None = None
+    stats: Stats | None = None
+    lyapunov: Lyapunov | None = None
+    sweep: Sweep | None = None
+    units: Mapping[str, str] = field(default_factory=dict)
+
+    @property
+    def name(self) -> str:
+        """File name without directory and extension, for legends."""
+        base = os.path.basename(self.path)
+        return base[:-3] if base.endswith(".h5") else base
+
+    def unit(self, dataset: str, default: str = "") -> str:
+        """The ``units`` attribute of a dataset (e.g. ``'strobe/x'``), or ``default``."""
+        return self.units.get(dataset.strip("/"), default)
+
+
+# ----------------------------------------------------------------------------- reading
+
+
+def read_run(
+    path: str | os.PathLike[str],
+    require: Iterable[str] = (),
+    groups: Iterable[str] | None = None,
+    purpose: str | None = None,
+) -> Run:
+    """Read an impactchain output file.
+
+    ``require`` lists HDF5 paths relative to the root (``'events'``,
+    ``'sweep/exponents'``); an entry ``'a|b'`` is satisfied by either. A missing one
+    raises :class:`SchemaError`, whose message names ``purpose`` (e.g. the figure).
+    ``groups`` restricts which optional groups are loaded (all present ones when None);
+    required groups are always loaded.
+    """
+    path = os.fspath(path)
+    _check_file(path)
+    try:
+        with h5py.File(path, "r") as f:
+            _check_schema(f, path)
+            _check_required(f, path, require, purpose)
+            wanted = _wanted_groups(require, groups)
+            return _read(f, path, wanted)
+    except OSError as exc:
+        raise SchemaError(f"{path}: cannot read HDF5 file ({exc})") from exc
+    except KeyError as exc:
+        raise SchemaError(f"{path}: malformed file ({exc})") from exc
+
+
+def _check_file(path: str) -> None:
+    if not os.path.exists(path):
+        raise SchemaError(f"{path}: no such file")
+    if not os.path.isfile(path):
+        raise SchemaError(f"{path}: not a regular file")
+    if not h5py.is_hdf5(path):
+        raise SchemaError(f"{path}: not an HDF5 file")
+
+
+def _check_schema(f: h5py.File, path: str) -> None:
+    if "schema_version" not in f.attrs:
+        raise SchemaError(
+            f"{path}: no 'schema_version' attribute; not an impactchain output file"
+        )
+    version = _int(f.attrs["schema_version"], path, "schema_version")
+    if version != SCHEMA_VERSION:
+        raise SchemaError(
+            f"{path}: schema_version {version} is not supported (this post/ reads "
+            f"schema_version {SCHEMA_VERSION})"
+        )
+    if "params" not in f:
+        raise SchemaError(f"{path}: no /params group")
+
+
+def _check_required(
+    f: h5py.File, path: str, require: Iterable[str], purpose: str | None
+) -> None:
+    for entry in require:
+        options = [item.strip("/") for item in entry.split("|")]
+        if any(option in f for option in options):
+            continue
+        names = " or ".join(f"/{option}" for option in options)
+        need = f", needed by {purpose}" if purpose else ""
+        hint = _HINTS.get(options[0])
+        reason = f" ({hint})" if hint else ""
+        raise SchemaError(f"{path}: no {names}{need}{reason}")
+
+
+def _wanted_groups(require: Iterable[str], groups: Iterable[str] | None) -> set[str]:
+    if groups is None:
+        return set(OPTIONAL_GROUPS)
+    wanted = {g.strip("/") for g in groups}
+    for entry in require:
+        wanted.update(item.strip("/").split("/")[0] for item in entry.split("|"))
+    return wanted
+
+
+def _read(f: h5py.File, path: str, wanted: set[str]) -> Run:
+    params = _read_params(f, path)
+    n = params.n
+    readers = {
+        "initial": lambda g: _read_state(g, path, n),
+        "final": lambda g: _read_final(g, path, n),
+        "strobe": lambda g: _read_strobe(g, path, n),
+        "events": lambda g: _read_events(g, path, n),
+        "stats": lambda g: _read_stats(g, path, n),
+        "lyapunov": lambda g: _read_lyapunov(g, path),
+        "sweep": lambda g: _read_sweep(g, path, n),
+    }
+    parts: dict[str, Any] = {}
+    for name, reader in readers.items():
+        if name in wanted and name in f:
+            parts[name] = reader(f[name])
+    return Run(
+        path=path,
+        schema_version=_int(f.attrs["schema_version"], path, "schema_version"),
+        code_version=_str(f.attrs.get("code_version", "")),
+        input_namelist=_str(f.attrs.get("input_namelist", "")),
+        complete=bool(_int(f.attrs.get("complete", 1), path, "complete")),
+        params=params,
+        units=MappingProxyType(_collect_units(f)),
+        **parts,
+    )
+
+
+def _read_params(f: h5py.File, path: str) -> Params:
+    g = f["params"]
+    attrs = {name: _attr(g, path, name) for name in _PARAM_TYPES}
+    n = _int(attrs["n"], path, "params/n")
+    if n < 1:
+        raise SchemaError(f"{path}: /params n = {n} must be >= 1")
+    spacing = _dataset(g, path, "spacing", (n + 1,), float)
+    values: dict[str, Any] = {}
+    for name, kind in _PARAM_TYPES.items():
+        where = f"params/{name}"
+        if kind is int:
+            values[name] = _int(attrs[name], path, where)
+        elif kind is float:
+            values[name] = _float(attrs[name], path, where)
+        else:
+            values[name] = _str(attrs[name])
+    values["spacing"] = spacing
+    return Params(**values)
+
+
+_PARAM_TYPES: dict[str, type] = {
+    "n": int,
+    "damping": float,
+    "restitution": float,
+    "amplitude": float,
+    "omega": float,
+    "boundary": str,
+    "drive_period": float,
+    "phase": float,
+    "transient": int,
+    "cycles": int,
+}
+
+
+def _read_state(g: h5py.Group, path: str, n: int) -> State:
+    return State(
+        x=_dataset(g, path, "x", (n,), float),
+        v=_dataset(g, path, "v", (n,), float),
+    )
+
+
+def _read_final(g: h5py.Group, path: str, n: int) -> FinalState:
+    return FinalState(
+        x=_dataset(g, path, "x", (n,), float),
+        v=_dataset(g, path, "v", (n,), float),
+        cycle=_int(_dataset(g, path, "cycle", None, int), path, f"{g.name}/cycle"),
+        phase=_float(_dataset(g, path, "phase", None, float), path, f"{g.name}/phase"),
+    )
+
+
+def _read_strobe(g: h5py.Group, path: str, n: int) -> Strobe:
+    x = _dataset(g, path, "x", (None, n), float)
+    m = x.shape[0]
+    period = _dataset(g, path, "period", (n,), int) if "period" in g else None
+    return Strobe(
+        x=x,
+        v=_dataset(g, path, "v", (m, n), float),
+        cycle=_dataset(g, path, "cycle", (m,), int),
+        period=period,
+    )
+
+
+def _read_events(g: h5py.Group, path: str, n: int) -> Events:
+    time = _dataset(g, path, "time", (None,), float)
+    m = time.shape[0]
+    site = _dataset(g, path, "site", (m,), int)
+    if m and (site.min() < 0 or site.max() > n):
+        raise SchemaError(
+            f"{path}: /events/site holds values outside 0..{n} "
+            f"(found {site.min()}..{site.max()})"
+        )
+    kind = _dataset(g, path, "kind", (m,), int)
+    if m and not np.isin(kind, (IMPACT, STICK, RELEASE)).all():
+        raise SchemaError(f"{path}: /events/kind holds values other than 0, 1, 2")
+    return Events(time=time, site=site, speed=_dataset(g, path, "speed", (m,), float), kind=kind)
+
+
+def _read_stats(g: h5py.Group, path: str, n: int) -> Stats:
+    return Stats(
+        collisions_per_cycle=_float(_attr(g, path, "collisions_per_cycle"), path,
+                                    "stats/collisions_per_cycle"),
+        impacts=_int(_attr(g, path, "impacts"), path, "stats/impacts"),
+        sticks=_int(_attr(g, path, "sticks"), path, "stats/sticks"),
+        releases=_int(_attr(g, path, "releases"), path, "stats/releases"),
+        site_counts=_dataset(g, path, "site_counts", (n + 1,), int),
+    )
+
+
+def _read_lyapunov(g: h5py.Group, path: str) -> Lyapunov:
+    exponents = _dataset(g, path, "exponents", (None,), float)
+    k = exponents.shape[0]
+    return Lyapunov(
+        exponents=exponents,
+        exponents_per_time=_dataset(g, path, "exponents_per_time", (k,), float),
+        stderr=_dataset(g, path, "stderr", (k,), float),
+        running=_dataset(g, path, "running", (None, k), float),
+        ky_dimension=_float(_attr(g, path, "ky_dimension"), path, "lyapunov/ky_dimension"),
+        positive_sum=_float(_attr(g, path, "positive_sum"), path, "lyapunov/positive_sum"),
+        collisions_per_cycle=_float(_attr(g, path, "collisions_per_cycle"), path,
+                                    "lyapunov/collisions_per_cycle"),
+    )
+
+
+def _read_sweep(g: h5py.Group, path: str, n: int) -> Sweep:
+    parameter2 = _str(_attr(g, path, "parameter2"))
+    values = _dataset(g, path, "values", (None, 2) if parameter2 else (None,), float)
+    p = values.shape[0]
+    exponents = _dataset(g, path, "exponents", (p, None), float) if "exponents" in g else None
+    k = None if exponents is None else exponents.shape[1]
+    return Sweep(
+        parameter=_str(_attr(g, path, "parameter")),
+        parameter2=parameter2,
+        mode=_str(_attr(g, path, "mode")),
+        values=values,
+        x=_dataset(g, path, "x", (p, None, n), float),
+        collisions_per_cycle=_dataset(g, path, "collisions_per_cycle", (p,), float),
+        period=_dataset(g, path, "period", (p, n), int),
+        exponents=exponents,
+        stderr=_dataset(g, path, "stderr", (p, k), float) if "stderr" in g else None,
+        ky_dimension=_dataset(g, path, "ky_dimension", (p,), float)
+        if "ky_dimension" in g else None,
+    )
+
+
+# ----------------------------------------------------------------------------- helpers
+
+
+def _attr(g: h5py.Group, path: str, name: str) -> Any:
+    if name not in g.attrs:
+        raise SchemaError(f"{path}: {g.name} lacks attribute '{name}'")
+    return g.attrs[name]
+
+
+def _dataset(
+    g: h5py.Group,
+    path: str,
+    name: str,
+    shape: tuple[int | None, ...] | None,
+    dtype: type,
+) -> np.ndarray:
+    """Read ``g/name`` as a read-only array, checking its shape (None = any extent).
+
+    ``shape=None`` reads a scalar (shape () or (1,)).
+    """
+    where = f"{g.name}/{name}"
+    if name not in g:
+        raise SchemaError(f"{path}: no {where} dataset")
+    obj = g[name]
+    if not isinstance(obj, h5py.Dataset):
+        raise SchemaError(f"{path}: {where} is not a dataset")
+    data = np.asarray(obj[()])
+    if shape is None:
+        if data.size != 1:
+            raise SchemaError(f"{path}: {where} should be a scalar, found shape {data.shape}")
+        data = data.reshape(())
+    else:
+        _check_shape(data.shape, shape, path, where)
+    out = np.array(data, dtype=np.float64 if dtype is float else np.int64)
+    out.setflags(write=False)
+    return out
+
+
+def _check_shape(
+    found: tuple[int, ...], expected: tuple[int | None, ...], path: str, where: str
+) -> None:
+    ok = len(found) == len(expected) and all(
+        e is None or f == e for f, e in zip(found, expected)
+    )
+    if ok:
+        return
+    want = "(" + ", ".join("*" if e is None else str(e) for e in expected) + ")"
+    message = f"{path}: {where} has shape {found}, expected {want}"
+    if len(found) == len(expected) == 2 and found[::-1] != found:
+        flipped = all(e is None or f == e for f, e in zip(found[::-1], expected))
+        if flipped:
+            message += " (axes transposed: the record axis must come first in h5py order)"
+    raise SchemaError(message)
+
+
+def _collect_units(f: h5py.File) -> dict[str, str]:
+    units: dict[str, str] = {}
+
+    def visit(name: str, obj: Any) -> None:
+        if isinstance(obj, h5py.Dataset) and "units" in obj.attrs:
+            units[name] = _str(obj.attrs["units"])
+
+    f.visititems(visit)
+    return units
+
+
+def _item(value: Any) -> Any:
+    arr = np.asarray(value)
+    if arr.size != 1:
+        raise ValueError(f"expected a single value, found shape {arr.shape}")
+    return arr.reshape(-1)[0]
+
+
+def _int(value: Any, path: str, where: str) -> int:
+    try:
+        item = _item(value)
+        number = int(item)
+        if number != item:
+            raise ValueError(f"{item!r} is not an integer")
+        return number
+    except (TypeError, ValueError) as exc:
+        raise SchemaError(f"{path}: {where} is not an integer ({exc})") from exc
+
+
+def _float(value: Any, path: str, where: str) -> float:
+    try:
+        return float(_item(value))
+    except (TypeError, ValueError) as exc:
+        raise SchemaError(f"{path}: {where} is not a number ({exc})") from exc
+
+
+def _str(value: Any) -> str:
+    """Decode an HDF5 string attribute (variable- or fixed-length, maybe padded)."""
+    if isinstance(value, np.ndarray):
+        value = value.reshape(-1)[0] if value.size == 1 else b"".join(
+            v if isinstance(v, bytes) else str(v).encode() for v in value.reshape(-1)
+        )
+    if isinstance(value, bytes):
+        value = value.decode("utf-8", errors="replace")
+    return str(value).rstrip("\x00 ").rstrip()

@@ -1,0 +1,252 @@
+"""Fixtures: small synthetic impactchain files in the schema_version 1 layout.
+
+``write_run`` writes what the Fortran side writes, including its habits: scalar
+attributes as one-element arrays, space-padded fixed-length strings, and a ``units``
+attribute on every dataset.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Mapping
+from pathlib import Path
+from typing import Any
+
+import h5py
+import matplotlib
+import numpy as np
+import pytest
+
+matplotlib.use("Agg")
+
+PERIODS = (1, 2, 4, 0)
+"""Period of oscillator i is PERIODS[(i - 1) % 4] in the synthetic strobe record."""
+
+DEFAULT_SWEEP: dict[str, Any] = {
+    "parameter": "amplitude",
+    "parameter2": "",
+    "points": 7,
+    "cycles": 5,
+    "exponents": 6,
+    "ky_dimension": True,
+    "mode": "down",
+}
+
+
+def _fixed(text: str, width: int | None = None) -> np.bytes_:
+    """A fixed-length, space-padded string, as Fortran writes it."""
+    raw = text.encode()
+    return np.bytes_(raw.ljust(width or len(raw) + 3))
+
+
+def _one(value: Any, dtype: Any) -> np.ndarray:
+    """A one-element array attribute, as h5fortran-style writers store scalars."""
+    return np.array([value], dtype=dtype)
+
+
+def _dataset(group: h5py.Group, name: str, data: Any, units: str) -> None:
+    group.create_dataset(name, data=data)
+    group[name].attrs["units"] = units
+
+
+def strobe_record(n: int, records: int, seed: int = 1) -> np.ndarray:
+    """Synthetic strobe displacements (records, n) with the periods of PERIODS."""
+    rng = np.random.default_rng(seed)
+    x = np.empty((records, n))
+    j = np.arange(records)
+    for i in range(n):
+        period = PERIODS[i % len(PERIODS)]
+        if period == 0:
+            x[:, i] = 0.25 * rng.standard_normal(records)
+        else:
+            x[:, i] = 0.3 * np.cos(2 * math.pi * j / period + i) - 0.05 * i
+    return x
+
+
+def cascade_events(n: int, cycles: np.ndarray, period: float) -> tuple[np.ndarray, ...]:
+    """A left cascade 0..n and a right cascade n..0 in every cycle."""
+    times, sites = [], []
+    for c in cycles:
+        for k in range(n + 1):
+            times.append((c + 0.05 + 0.04 * k) * period)
+            sites.append(k)
+        for k in range(n, -1, -1):
+            times.append((c + 0.55 + 0.04 * (n - k)) * period)
+            sites.append(k)
+    time = np.array(times)
+    site = np.array(sites)
+    return time, site, np.full(time.shape, 0.5), np.zeros(time.shape, dtype=np.int64)
+
+
+def write_run(
+    path: str | Path,
+    n: int = 4,
+    records: int = 30,
+    events: bool | Mapping[str, Any] | None = True,
+    lyapunov: bool = False,
+    sweep: bool | Mapping[str, Any] | None = None,
+    *,
+    strobe: bool = True,
+    periods: bool = True,
+    boundary: str = "fixed",
+    spacing: np.ndarray | None = None,
+    phase: float = 0.0,
+    first_cycle: int = 100,
+    schema_version: int | None = 1,
+    complete: int = 1,
+    omega: float = 1.5,
+    transpose_strobe: bool = False,
+) -> Path:
+    """Write a synthetic run file and return its path.
+
+    ``events``: True for :func:`cascade_events`, a mapping with ``time``, ``site`` and
+    optionally ``speed``, ``kind`` for a given stream, False/None for no /events group.
+    ``sweep``: True or a mapping overriding :data:`DEFAULT_SWEEP`.
+    """
+    path = Path(path)
+    period = 2 * math.pi / omega
+    spacing = np.ones(n + 1) if spacing is None else np.asarray(spacing, dtype=float)
+    cycle = first_cycle + np.arange(records)
+    with h5py.File(path, "w") as f:
+        if schema_version is not None:
+            f.attrs["schema_version"] = _one(schema_version, np.int32)
+        f.attrs["code_version"] = _fixed("0.1.0")
+        f.attrs["input_namelist"] = "&chain\n n = %d\n/\n" % n
+        f.attrs["complete"] = _one(complete, np.int32)
+        _write_params(f, n, spacing, boundary, omega, period, phase, first_cycle, records)
+        for name, x in (("initial", np.zeros(n)), ("final", np.full(n, 0.1))):
+            g = f.create_group(name)
+            _dataset(g, "x", x, "a")
+            _dataset(g, "v", -x, "a/time")
+        _dataset(f["final"], "cycle", first_cycle + records, "cycles")
+        _dataset(f["final"], "phase", phase, "rad")
+        if strobe:
+            _write_strobe(f, n, records, cycle, periods, transpose_strobe)
+        if events:
+            stream = cascade_events(n, cycle, period) if events is True else (
+                np.asarray(events["time"], dtype=float),
+                np.asarray(events["site"]),
+                np.asarray(events.get("speed", np.ones(len(events["time"])))),
+                np.asarray(events.get("kind", np.zeros(len(events["time"]), dtype=int))),
+            )
+            _write_events(f, stream)
+        _write_stats(f, n)
+        if lyapunov:
+            _write_lyapunov(f, n, records)
+        if sweep:
+            _write_sweep(f, n, {**DEFAULT_SWEEP, **(sweep if isinstance(sweep, Mapping) else {})})
+    return path
+
+
+def _write_params(f: h5py.File, n: int, spacing: np.ndarray, boundary: str, omega: float,
+                  period: float, phase: float, transient: int, cycles: int) -> None:
+    g = f.create_group("params")
+    g.attrs["n"] = _one(n, np.int32)
+    g.attrs["damping"] = 0.05
+    g.attrs["restitution"] = 0.7
+    g.attrs["amplitude"] = 1.7
+    g.attrs["omega"] = omega
+    g.attrs["boundary"] = _fixed(boundary, 8)
+    g.attrs["drive_period"] = period
+    g.attrs["phase"] = phase
+    g.attrs["transient"] = _one(transient, np.int32)
+    g.attrs["cycles"] = _one(cycles, np.int32)
+    _dataset(g, "spacing", spacing, "a")
+
+
+def _write_strobe(f: h5py.File, n: int, records: int, cycle: np.ndarray, periods: bool,
+                  transpose: bool) -> None:
+    g = f.create_group("strobe")
+    x = strobe_record(n, records)
+    v = -0.5 * strobe_record(n, records, seed=2)
+    _dataset(g, "x", x.T if transpose else x, "a")
+    _dataset(g, "v", v.T if transpose else v, "a/time")
+    _dataset(g, "cycle", cycle, "cycles")
+    if periods:
+        _dataset(g, "period", np.array([PERIODS[i % 4] for i in range(n)]), "cycles")
+
+
+def _write_events(f: h5py.File, stream: tuple[np.ndarray, ...]) -> None:
+    g = f.create_group("events")
+    for name, data, units in zip(("time", "site", "speed", "kind"), stream,
+                                 ("time", "1", "a/time", "1")):
+        _dataset(g, name, data, units)
+
+
+def _write_stats(f: h5py.File, n: int) -> None:
+    g = f.create_group("stats")
+    g.attrs["collisions_per_cycle"] = 2.0 * (n + 1)
+    g.attrs["impacts"] = _one(60, np.int64)
+    g.attrs["sticks"] = _one(0, np.int64)
+    g.attrs["releases"] = _one(0, np.int64)
+    _dataset(g, "site_counts", np.full(n + 1, 2), "1")
+
+
+def lyapunov_spectrum(n: int) -> np.ndarray:
+    """A synthetic descending spectrum of 2n exponents, bits/cycle."""
+    return np.linspace(0.4, -1.2, 2 * n)
+
+
+def _write_lyapunov(f: h5py.File, n: int, records: int) -> None:
+    g = f.create_group("lyapunov")
+    exponents = lyapunov_spectrum(n)
+    steps = np.arange(1, records + 1)[:, None]
+    _dataset(g, "exponents", exponents, "bits/cycle")
+    _dataset(g, "exponents_per_time", exponents * math.log(2) / 4.0, "1/time")
+    _dataset(g, "stderr", np.full(2 * n, 0.02), "bits/cycle")
+    _dataset(g, "running", exponents + 0.5 / steps, "bits/cycle")
+    g.attrs["ky_dimension"] = 3.5
+    g.attrs["positive_sum"] = float(exponents[exponents > 0].sum())
+    g.attrs["collisions_per_cycle"] = 2.0 * (n + 1)
+
+
+def sweep_values(spec: Mapping[str, Any]) -> np.ndarray:
+    """Parameter values of a synthetic sweep: decreasing, or (points, 2) for 2-D."""
+    values = np.linspace(2.0, 1.0, spec["points"])
+    if spec["parameter2"]:
+        return np.column_stack((values, np.linspace(1.4, 1.6, spec["points"])))
+    return values
+
+
+def _write_sweep(f: h5py.File, n: int, spec: Mapping[str, Any]) -> None:
+    g = f.create_group("sweep")
+    g.attrs["parameter"] = _fixed(spec["parameter"])
+    g.attrs["parameter2"] = _fixed(spec["parameter2"], 1) if spec["parameter2"] else ""
+    g.attrs["mode"] = _fixed(spec["mode"])
+    values = sweep_values(spec)
+    points, cycles = spec["points"], spec["cycles"]
+    x = (np.arange(points)[:, None, None] * 0.1 + np.arange(cycles)[None, :, None] * 0.01
+         + np.arange(n)[None, None, :])
+    _dataset(g, "values", values, "1")
+    _dataset(g, "x", x, "a")
+    _dataset(g, "collisions_per_cycle", np.linspace(0.0, 3.0, points), "1/cycle")
+    _dataset(g, "period", np.ones((points, n), dtype=np.int64), "cycles")
+    k = spec["exponents"]
+    if k:
+        exponents = np.linspace(0.5, -1.0, k)[None, :] - 0.1 * np.arange(points)[:, None]
+        _dataset(g, "exponents", exponents, "bits/cycle")
+        _dataset(g, "stderr", np.full((points, k), 0.01), "bits/cycle")
+        if spec["ky_dimension"]:
+            _dataset(g, "ky_dimension", np.linspace(0.0, 3.0, points), "1")
+
+
+@pytest.fixture
+def make_run(tmp_path: Path) -> Callable[..., Path]:
+    """``make_run(name, **kw)`` writes ``tmp_path/name`` with :func:`write_run`."""
+
+    def make(name: str = "run.h5", **kwargs: Any) -> Path:
+        return write_run(tmp_path / name, **kwargs)
+
+    return make
+
+
+@pytest.fixture
+def run_file(make_run: Callable[..., Path]) -> Path:
+    """A default run: n = 4, 30 records, cascade events, Lyapunov spectrum."""
+    return make_run("run.h5", lyapunov=True)
+
+
+@pytest.fixture
+def sweep_file(make_run: Callable[..., Path]) -> Path:
+    """A default 1-D sweep file with exponents and Kaplan-Yorke dimensions."""
+    return make_run("sweep.h5", strobe=False, events=False, sweep=True)

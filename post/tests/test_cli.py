@@ -1,0 +1,197 @@
+"""The command line: ``python -m post``, in-process and as a subprocess."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+from collections.abc import Callable
+from pathlib import Path
+
+import pytest
+
+from post.cli import COMMANDS, main
+
+MakeRun = Callable[..., Path]
+ROOT = Path(__file__).resolve().parents[2]
+
+
+def _run_module(*args: str | Path) -> subprocess.CompletedProcess[str]:
+    env = {**os.environ, "MPLBACKEND": "Agg",
+           "PYTHONPATH": os.pathsep.join(filter(None, (str(ROOT), os.environ.get("PYTHONPATH"))))}
+    return subprocess.run([sys.executable, "-m", "post", *map(str, args)], capture_output=True,
+                          text=True, env=env, timeout=60, check=False)
+
+
+def _error_line(stderr: str) -> str:
+    lines = stderr.strip().splitlines()
+    assert len(lines) == 1, stderr
+    assert lines[0].startswith("post: error: ")
+    return lines[0]
+
+
+# ----------------------------------------------------------------------- subprocess
+
+
+def test_help_lists_every_figure() -> None:
+    result = _run_module("--help")
+    assert result.returncode == 0
+    for name in (*COMMANDS, "all"):
+        assert name in result.stdout
+
+
+def test_module_writes_png(run_file: Path, tmp_path: Path) -> None:
+    out = tmp_path / "sa.png"
+    result = _run_module("space-amplitude", run_file, "-o", out)
+    assert result.returncode == 0, result.stderr
+    assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_module_missing_file(tmp_path: Path) -> None:
+    out = tmp_path / "x.png"
+    result = _run_module("poincare", tmp_path / "absent.h5", "-o", out)
+    assert result.returncode == 2
+    assert "absent.h5: no such file" in _error_line(result.stderr)
+    assert "Traceback" not in result.stderr and not out.exists()
+
+
+def test_module_figure_needing_absent_data(make_run: MakeRun, tmp_path: Path) -> None:
+    out = tmp_path / "x.png"
+    result = _run_module("shock-wave", make_run(events=False), "-o", out)
+    assert result.returncode == 2
+    assert "no /events, needed by shock-wave" in _error_line(result.stderr)
+    assert not out.exists()
+
+
+# ------------------------------------------------------------------------ in-process
+
+
+@pytest.mark.parametrize(
+    ("figure", "options"),
+    [
+        ("space-amplitude", ["--cycles", "5", "--periods", "detect"]),
+        ("space-time-amplitude", ["--panel-cycles", "10", "--panels", "2"]),
+        ("shock-wave", ["--panel-cycles", "10", "--max-wait", "0.5"]),
+        ("poincare", ["--site", "2", "--cycles", "10"]),
+        ("spectrum", []),
+    ],
+)
+def test_run_figures(figure: str, options: list[str], run_file: Path, tmp_path: Path) -> None:
+    out = tmp_path / f"{figure}.png"
+    assert main([figure, str(run_file), "-o", str(out), *options]) == 0
+    assert out.stat().st_size > 0
+
+
+@pytest.mark.parametrize(
+    ("figure", "options"),
+    [
+        ("bifurcation", ["--sites", "1,3"]),
+        ("lyapunov", ["--k", "3", "--with-bifurcation"]),
+        ("ky-dimension", []),
+    ],
+)
+def test_sweep_figures(figure: str, options: list[str], sweep_file: Path, tmp_path: Path) -> None:
+    out = tmp_path / f"{figure}.pdf"
+    assert main([figure, str(sweep_file), "-o", str(out), *options]) == 0
+    assert out.read_bytes()[:5] == b"%PDF-"
+
+
+def test_overlay_of_several_files(make_run: MakeRun, tmp_path: Path) -> None:
+    files = [str(make_run("red.h5")), str(make_run("green.h5"))]
+    out = tmp_path / "multi.png"
+    assert main(["space-amplitude", *files, "-o", str(out)]) == 0
+    assert out.exists()
+
+
+def test_output_directory_is_created(run_file: Path, tmp_path: Path) -> None:
+    out = tmp_path / "new" / "dir" / "fig.png"
+    assert main(["poincare", str(run_file), "-o", str(out)]) == 0
+    assert out.exists()
+    assert [p.name for p in out.parent.iterdir()] == ["fig.png"]
+
+
+def test_all_writes_every_supported_figure(run_file: Path, tmp_path: Path,
+                                           capsys: pytest.CaptureFixture[str]) -> None:
+    prefix = tmp_path / "figs" / "run"
+    assert main(["all", str(run_file), "-o", str(prefix), "--panel-cycles", "15"]) == 0
+    names = sorted(p.name for p in prefix.parent.iterdir())
+    assert names == ["run_poincare.png", "run_shock_wave.png", "run_space_amplitude.png",
+                     "run_space_time_amplitude.png", "run_spectrum.png"]
+    assert len(capsys.readouterr().out.splitlines()) == 5
+
+
+def test_all_skips_shock_wave_without_events(make_run: MakeRun, tmp_path: Path,
+                                             capsys: pytest.CaptureFixture[str]) -> None:
+    path = make_run(events=False)
+    assert main(["all", str(path), "-o", str(tmp_path / "r.pdf")]) == 0
+    assert "skipped shock-wave" in capsys.readouterr().err
+    assert (tmp_path / "r_space_amplitude.pdf").exists()
+    assert not (tmp_path / "r_shock_wave.pdf").exists()
+
+
+def _expect_error(argv: list[str], message: str, out: Path,
+                  capsys: pytest.CaptureFixture[str]) -> None:
+    assert main([*argv, "-o", str(out)]) == 2
+    assert message in _error_line(capsys.readouterr().err)
+    assert not out.exists()
+
+
+def test_error_not_hdf5(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    path = tmp_path / "notes.h5"
+    path.write_text("hello\n")
+    _expect_error(["space-amplitude", str(path)], "not an HDF5 file", tmp_path / "o.png", capsys)
+
+
+def test_error_wrong_schema(make_run: MakeRun, tmp_path: Path,
+                            capsys: pytest.CaptureFixture[str]) -> None:
+    path = make_run(schema_version=7)
+    _expect_error(["space-amplitude", str(path)], "schema_version 7 is not supported",
+                  tmp_path / "o.png", capsys)
+
+
+def test_error_bifurcation_without_sweep(run_file: Path, tmp_path: Path,
+                                         capsys: pytest.CaptureFixture[str]) -> None:
+    _expect_error(["bifurcation", str(run_file)], "no /sweep, needed by bifurcation",
+                  tmp_path / "o.png", capsys)
+
+
+def test_error_lyapunov_without_exponents(make_run: MakeRun, tmp_path: Path,
+                                          capsys: pytest.CaptureFixture[str]) -> None:
+    path = make_run(sweep={"exponents": 0})
+    _expect_error(["lyapunov", str(path)], "no /sweep/exponents", tmp_path / "o.png", capsys)
+
+
+def test_error_spectrum_without_lyapunov(make_run: MakeRun, tmp_path: Path,
+                                         capsys: pytest.CaptureFixture[str]) -> None:
+    _expect_error(["spectrum", str(make_run())], "no /lyapunov", tmp_path / "o.png", capsys)
+
+
+def test_error_site_out_of_range(run_file: Path, tmp_path: Path,
+                                 capsys: pytest.CaptureFixture[str]) -> None:
+    _expect_error(["poincare", str(run_file), "--site", "9"], "site 9 is outside 1..4",
+                  tmp_path / "o.png", capsys)
+
+
+def test_error_unknown_output_format(run_file: Path, tmp_path: Path,
+                                     capsys: pytest.CaptureFixture[str]) -> None:
+    _expect_error(["poincare", str(run_file)], "must end in .png", tmp_path / "o.jpg", capsys)
+
+
+def test_error_in_one_of_several_files(make_run: MakeRun, tmp_path: Path,
+                                       capsys: pytest.CaptureFixture[str]) -> None:
+    good = make_run("good.h5")
+    _expect_error(["space-amplitude", str(good), str(tmp_path / "bad.h5")], "no such file",
+                  tmp_path / "o.png", capsys)
+
+
+def test_bad_option_is_a_usage_error(run_file: Path, tmp_path: Path) -> None:
+    with pytest.raises(SystemExit) as exit_info:
+        main(["space-time-amplitude", str(run_file), "-o", str(tmp_path / "o.png"),
+              "--panels", "0"])
+    assert exit_info.value.code == 2
+
+
+def test_single_file_figures_take_one_file(run_file: Path, tmp_path: Path) -> None:
+    with pytest.raises(SystemExit) as exit_info:
+        main(["poincare", str(run_file), str(run_file), "-o", str(tmp_path / "o.png")])
+    assert exit_info.value.code == 2

@@ -1,0 +1,171 @@
+"""post.io: reading the schema_version 1 layout and rejecting what is not."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Callable
+from pathlib import Path
+
+import h5py
+import numpy as np
+import pytest
+
+from conftest import PERIODS, cascade_events, lyapunov_spectrum, strobe_record, sweep_values
+from conftest import DEFAULT_SWEEP
+from post.io import SCHEMA_VERSION, SchemaError, read_run
+
+MakeRun = Callable[..., Path]
+
+
+def test_reads_params_and_geometry(make_run: MakeRun) -> None:
+    spacing = np.array([1.0, 0.9, 1.1, 1.0, 1.2])
+    run = read_run(make_run(spacing=spacing, phase=0.5 * math.pi))
+    p = run.params
+    assert (p.n, p.boundary, p.walls) == (4, "fixed", True)
+    assert p.omega == 1.5 and p.drive_period == pytest.approx(2 * math.pi / 1.5)
+    np.testing.assert_array_equal(p.spacing, spacing)
+    np.testing.assert_allclose(p.equilibrium, [1.0, 1.9, 3.0, 4.0])
+    np.testing.assert_allclose(p.site_positions, [0.0, 1.0, 1.9, 3.0, 4.0])
+    assert p.length == pytest.approx(5.2)
+    assert p.section_offset == pytest.approx(0.25)
+
+
+def test_reads_root_attributes_and_padded_strings(make_run: MakeRun) -> None:
+    run = read_run(make_run(boundary="free"))
+    assert run.schema_version == SCHEMA_VERSION
+    assert run.code_version == "0.1.0"
+    assert run.input_namelist.startswith("&chain")
+    assert run.complete is True
+    assert run.params.boundary == "free" and not run.params.walls
+    assert run.name == "run"
+
+
+def test_reads_strobe_with_records_first(make_run: MakeRun) -> None:
+    run = read_run(make_run(n=5, records=12, first_cycle=40))
+    assert run.strobe is not None
+    np.testing.assert_array_equal(run.strobe.x, strobe_record(5, 12))
+    assert run.strobe.x.shape == (12, 5) and run.strobe.n_record == 12
+    np.testing.assert_array_equal(run.strobe.cycle, np.arange(40, 52))
+    np.testing.assert_array_equal(run.strobe.period, [PERIODS[i % 4] for i in range(5)])
+    assert run.unit("strobe/x") == "a" and run.unit("/strobe/x") == "a"
+    assert run.unit("nowhere", "m") == "m"
+
+
+def test_reads_events_stats_final_and_lyapunov(make_run: MakeRun) -> None:
+    run = read_run(make_run(n=3, records=4, lyapunov=True))
+    time, site, _, _ = cascade_events(3, np.arange(100, 104), run.params.drive_period)
+    assert run.events is not None and run.stats is not None and run.lyapunov is not None
+    np.testing.assert_array_equal(run.events.time, time)
+    np.testing.assert_array_equal(run.events.site, site)
+    assert run.events.collisions.all()
+    assert run.stats.site_counts.shape == (4,) and run.stats.impacts == 60
+    assert run.final is not None and run.final.cycle == 104 and run.final.phase == 0.0
+    np.testing.assert_array_equal(run.lyapunov.exponents, lyapunov_spectrum(3))
+    assert run.lyapunov.running.shape == (4, 6)
+    assert run.lyapunov.ky_dimension == 3.5
+
+
+def test_reads_sweep(make_run: MakeRun) -> None:
+    run = read_run(make_run(strobe=False, events=False, sweep=True))
+    sweep = run.sweep
+    assert sweep is not None and run.strobe is None and run.events is None
+    assert (sweep.parameter, sweep.parameter2, sweep.mode) == ("amplitude", "", "down")
+    assert not sweep.is_2d
+    np.testing.assert_array_equal(sweep.values, sweep_values(DEFAULT_SWEEP))
+    assert sweep.x.shape == (7, 5, 4)
+    assert sweep.exponents is not None and sweep.exponents.shape == (7, 6)
+    assert sweep.ky_dimension is not None
+
+
+def test_reads_two_parameter_sweep(make_run: MakeRun) -> None:
+    run = read_run(make_run(sweep={"parameter2": "omega"}))
+    assert run.sweep is not None and run.sweep.is_2d
+    assert run.sweep.values.shape == (7, 2)
+
+
+def test_arrays_are_read_only_and_dataclasses_frozen(make_run: MakeRun) -> None:
+    run = read_run(make_run())
+    assert run.strobe is not None
+    with pytest.raises(ValueError):
+        run.strobe.x[0, 0] = 1.0
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        run.params.n = 3  # type: ignore[misc]
+
+
+def test_groups_limits_what_is_loaded(make_run: MakeRun) -> None:
+    run = read_run(make_run(lyapunov=True), groups=("strobe",))
+    assert run.strobe is not None
+    assert run.events is None and run.lyapunov is None
+
+
+def test_incomplete_run_is_flagged(make_run: MakeRun) -> None:
+    assert read_run(make_run(complete=0)).complete is False
+
+
+def test_missing_file(tmp_path: Path) -> None:
+    with pytest.raises(SchemaError, match="no such file"):
+        read_run(tmp_path / "absent.h5")
+
+
+def test_not_hdf5(tmp_path: Path) -> None:
+    path = tmp_path / "text.h5"
+    path.write_text("not an HDF5 file\n")
+    with pytest.raises(SchemaError, match="not an HDF5 file"):
+        read_run(path)
+
+
+def test_schema_error_is_a_value_error() -> None:
+    assert issubclass(SchemaError, ValueError)
+
+
+def test_wrong_schema_version(make_run: MakeRun) -> None:
+    with pytest.raises(SchemaError, match="schema_version 2 is not supported"):
+        read_run(make_run(schema_version=2))
+
+
+def test_missing_schema_version(make_run: MakeRun) -> None:
+    with pytest.raises(SchemaError, match="no 'schema_version' attribute"):
+        read_run(make_run(schema_version=None))
+
+
+def test_required_group_missing(make_run: MakeRun) -> None:
+    path = make_run(events=False)
+    with pytest.raises(SchemaError, match=r"no /events, needed by shock-wave \(events were"):
+        read_run(path, require=("events",), purpose="shock-wave")
+
+
+def test_required_alternatives(make_run: MakeRun) -> None:
+    path = make_run(sweep={"exponents": 0})
+    with pytest.raises(SchemaError, match="no /sweep/ky_dimension or /sweep/exponents"):
+        read_run(path, require=("sweep/ky_dimension|sweep/exponents",))
+    path = make_run("ok.h5", sweep={"ky_dimension": False})
+    assert read_run(path, require=("sweep/ky_dimension|sweep/exponents",)).sweep is not None
+
+
+def test_transposed_strobe_is_rejected(make_run: MakeRun) -> None:
+    with pytest.raises(SchemaError, match="axes transposed"):
+        read_run(make_run(n=4, records=9, transpose_strobe=True))
+
+
+def test_wrong_spacing_length(make_run: MakeRun) -> None:
+    path = make_run()
+    with h5py.File(path, "r+") as f:
+        del f["params/spacing"]
+        f["params"].create_dataset("spacing", data=np.ones(3))
+    with pytest.raises(SchemaError, match=r"/params/spacing has shape \(3,\), expected \(5\)"):
+        read_run(path)
+
+
+def test_missing_parameter_attribute(make_run: MakeRun) -> None:
+    path = make_run()
+    with h5py.File(path, "r+") as f:
+        del f["params"].attrs["omega"]
+    with pytest.raises(SchemaError, match="/params lacks attribute 'omega'"):
+        read_run(path)
+
+
+def test_event_site_out_of_range(make_run: MakeRun) -> None:
+    path = make_run(n=3, events={"time": [0.1, 0.2], "site": [0, 7]})
+    with pytest.raises(SchemaError, match="outside 0..3"):
+        read_run(path)

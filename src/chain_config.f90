@@ -1,0 +1,741 @@
+!> The run configuration: namelist input, defaults, and validation with messages that name the
+!> group, the key, the value and the allowed range.
+!>
+!> Groups: &chain (the model, required), &initial, &run, &lyapunov, &output, &sweep (optional).
+!> Every key is documented in the README. A group may appear at most once; an unknown group or
+!> key is an error, never silently ignored.
+module chain_config
+    use, intrinsic :: iso_fortran_env, only: iostat_end
+    use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
+    use chain_kinds, only: wp, i8, two_pi
+    use chain_error, only: error_t, set_error
+    implicit none
+    private
+    public :: run_config_t, read_config, validate_config, config_summary
+    public :: max_list, fmt_real, fmt_int, sweep_parameters
+
+    !> Longest explicit list in a namelist (spacing, x0, v0); longer chains use a file start.
+    integer, parameter :: max_list = 100001
+    integer, parameter :: max_n = 10000000
+    real(wp), parameter :: unset = -huge(1.0_wp)
+    character(len=*), parameter :: group_names(6) = &
+        [character(len=8) :: 'chain', 'initial', 'run', 'lyapunov', 'output', 'sweep']
+    character(len=*), parameter :: sweep_parameters(5) = &
+        [character(len=11) :: 'amplitude', 'omega', 'damping', 'restitution', 'spacing']
+
+    type :: run_config_t
+        ! &chain
+        integer :: n = 0
+        real(wp), allocatable :: spacing(:)    !! spacing(n+1): bond 0 (left wall) first
+        real(wp) :: damping = 0.05_wp
+        real(wp) :: restitution = 0.7_wp
+        real(wp) :: amplitude = 0
+        real(wp) :: omega = 1
+        character(len=:), allocatable :: boundary
+        ! &initial
+        character(len=:), allocatable :: initial_kind
+        integer :: seed = 1
+        real(wp) :: x_amp = 0, v_amp = 0
+        real(wp), allocatable :: x0(:), v0(:)
+        character(len=:), allocatable :: initial_file
+        ! &run
+        integer(i8) :: transient = 0
+        integer(i8) :: cycles = 200
+        real(wp) :: phase = 0
+        logical :: record_events = .true.
+        real(wp) :: stick_speed = 1.0e-9_wp
+        integer :: max_period = 16
+        real(wp) :: period_tol = 1.0e-6_wp
+        ! &lyapunov
+        logical :: lyapunov = .false.
+        integer :: vectors = 0
+        integer :: qr_every = 1
+        logical :: jacobian = .false.
+        integer :: jacobian_cycles = 1
+        ! &output
+        character(len=:), allocatable :: output_file
+        logical :: overwrite = .false.
+        real(wp) :: max_size_mb = 4096
+        ! &sweep
+        logical :: sweep = .false.
+        character(len=:), allocatable :: sweep_parameter, sweep_parameter2, sweep_mode
+        real(wp) :: sweep_start = 0, sweep_stop = 0, sweep_step = 0
+        real(wp) :: sweep_start2 = 0, sweep_stop2 = 0, sweep_step2 = 0
+        ! the input as read
+        character(len=:), allocatable :: input_text
+    end type run_config_t
+
+contains
+
+    !> Read and validate the namelist file at `path`.
+    subroutine read_config(path, cfg, err)
+        character(len=*), intent(in) :: path
+        type(run_config_t), intent(out) :: cfg
+        type(error_t), allocatable, intent(out) :: err
+        integer :: u, ios
+        character(len=512) :: msg
+        logical :: present_groups(size(group_names))
+
+        call read_text(path, cfg%input_text, err)
+        if (allocated(err)) return
+        call scan_groups(cfg%input_text, present_groups, err)
+        if (allocated(err)) return
+        if (.not. present_groups(1)) then
+            call set_error(err, trim(path)//": the required group &chain is missing")
+            return
+        end if
+        open (newunit=u, file=path, status='old', action='read', form='formatted', &
+              iostat=ios, iomsg=msg)
+        if (ios /= 0) then
+            call set_error(err, trim(path)//": cannot open: "//trim(msg))
+            return
+        end if
+        call read_chain(u, cfg, err)
+        if (.not. allocated(err) .and. present_groups(2)) call read_initial(u, cfg, err)
+        if (.not. allocated(err) .and. present_groups(3)) call read_run(u, cfg, err)
+        if (.not. allocated(err) .and. present_groups(4)) call read_lyapunov(u, cfg, err)
+        if (.not. allocated(err) .and. present_groups(5)) call read_output(u, cfg, err)
+        if (.not. allocated(err) .and. present_groups(6)) call read_sweep(u, cfg, err)
+        close (u)
+        if (allocated(err)) return
+        if (.not. allocated(cfg%initial_kind)) cfg%initial_kind = 'rest'
+        if (.not. allocated(cfg%initial_file)) cfg%initial_file = ''
+        if (.not. allocated(cfg%output_file)) cfg%output_file = default_output(path)
+        if (.not. allocated(cfg%sweep_mode)) cfg%sweep_mode = 'continuation'
+        if (.not. allocated(cfg%sweep_parameter)) cfg%sweep_parameter = ''
+        if (.not. allocated(cfg%sweep_parameter2)) cfg%sweep_parameter2 = ''
+        if (.not. allocated(cfg%x0)) allocate (cfg%x0(0))
+        if (.not. allocated(cfg%v0)) allocate (cfg%v0(0))
+        call validate_config(cfg, err)
+    end subroutine read_config
+
+    !> Whole file as text; refuses directories, empty files and files with NUL bytes.
+    subroutine read_text(path, text, err)
+        character(len=*), intent(in) :: path
+        character(len=:), allocatable, intent(out) :: text
+        type(error_t), allocatable, intent(out) :: err
+        integer :: u, ios, nbytes
+        logical :: exists
+        character(len=512) :: msg
+
+        inquire (file=path, exist=exists)
+        if (.not. exists) then
+            call set_error(err, trim(path)//": no such input file")
+            return
+        end if
+        open (newunit=u, file=path, status='old', action='read', access='stream', &
+              form='unformatted', iostat=ios, iomsg=msg)
+        if (ios /= 0) then
+            call set_error(err, trim(path)//": cannot open as an input file: "//trim(msg))
+            return
+        end if
+        inquire (unit=u, size=nbytes)
+        if (nbytes <= 0) then
+            close (u)
+            call set_error(err, trim(path)//": is empty or not a regular file; "// &
+                           "an input needs at least a &chain group")
+            return
+        end if
+        if (nbytes > 64*1024*1024) then
+            close (u)
+            call set_error(err, trim(path)//": is larger than 64 MiB; not a namelist input")
+            return
+        end if
+        allocate (character(len=nbytes) :: text)
+        read (u, iostat=ios, iomsg=msg) text
+        close (u)
+        if (ios /= 0) then
+            call set_error(err, trim(path)//": cannot read: "//trim(msg))
+            return
+        end if
+        if (index(text, achar(0)) > 0) then
+            call set_error(err, trim(path)//": contains NUL bytes; not a text namelist file")
+        end if
+    end subroutine read_text
+
+    !> Which groups the text has; unknown and repeated groups are errors.
+    subroutine scan_groups(text, present_groups, err)
+        character(len=*), intent(in) :: text
+        logical, intent(out) :: present_groups(:)
+        type(error_t), allocatable, intent(out) :: err
+        integer :: pos, line_end, j, k, e
+        character(len=:), allocatable :: line, name
+
+        present_groups = .false.
+        pos = 1
+        do while (pos <= len(text))
+            line_end = index(text(pos:), achar(10))
+            if (line_end == 0) then
+                line_end = len(text) + 1
+            else
+                line_end = pos + line_end - 1
+            end if
+            line = adjustl(text(pos:line_end - 1))
+            pos = line_end + 1
+            if (len_trim(line) == 0) cycle
+            if (line(1:1) /= '&') cycle
+            e = scan(line(2:), ' /,'//achar(9)//achar(13))
+            if (e == 0) then
+                name = lower(trim(line(2:)))
+            else
+                name = lower(line(2:e))
+            end if
+            if (name == 'end' .or. len(name) == 0) cycle
+            k = 0
+            do j = 1, size(group_names)
+                if (trim(group_names(j)) == name) k = j
+            end do
+            if (k == 0) then
+                call set_error(err, "input: unknown group &"//name//"; allowed groups are "// &
+                               "&chain, &initial, &run, &lyapunov, &output, &sweep")
+                return
+            end if
+            if (present_groups(k)) then
+                call set_error(err, "input: group &"//name//" appears more than once")
+                return
+            end if
+            present_groups(k) = .true.
+        end do
+    end subroutine scan_groups
+
+    subroutine read_chain(u, cfg, err)
+        integer, intent(in) :: u
+        type(run_config_t), intent(inout) :: cfg
+        type(error_t), allocatable, intent(out) :: err
+        integer :: n, ios, m
+        real(wp) :: damping, restitution, amplitude, omega
+        real(wp), allocatable :: spacing(:)
+        character(len=64) :: boundary
+        character(len=512) :: msg
+        namelist /chain/ n, spacing, damping, restitution, amplitude, omega, boundary
+
+        allocate (spacing(max_list))
+        n = -huge(1)
+        spacing = unset
+        damping = 0.05_wp
+        restitution = 0.7_wp
+        amplitude = unset
+        omega = unset
+        boundary = 'fixed'
+        rewind (u)
+        read (u, nml=chain, iostat=ios, iomsg=msg)
+        if (ios /= 0) then
+            call group_error(err, 'chain', ios, msg)
+            return
+        end if
+        if (n == -huge(1)) then
+            call set_error(err, "&chain: n (number of oscillators) is required, in [1, "// &
+                           fmt_int(max_n)//"]")
+            return
+        end if
+        if (n < 1 .or. n > max_n) then
+            call set_error(err, "&chain: n = "//fmt_int(n)//" is outside [1, "// &
+                           fmt_int(max_n)//"]")
+            return
+        end if
+        if (amplitude == unset) then
+            call set_error(err, "&chain: amplitude (A, drive amplitude) is required, >= 0")
+            return
+        end if
+        if (omega == unset) then
+            call set_error(err, "&chain: omega (w, drive frequency) is required, > 0")
+            return
+        end if
+        m = count_given(spacing)
+        if (m < 0) then
+            call set_error(err, "&chain: spacing must be given as one value, or as n+1 "// &
+                           "consecutive values from spacing(1) (bond 0, the left wall)")
+            return
+        end if
+        if (m == 0) then
+            cfg%spacing = [(1.0_wp, m=0, n)]
+        else if (m == 1) then
+            cfg%spacing = [(spacing(1), m=0, n)]
+        else if (m == n + 1) then
+            cfg%spacing = spacing(1:n + 1)
+        else
+            call set_error(err, "&chain: spacing has "//fmt_int(m)//" values; give one "// &
+                           "(uniform) or n+1 = "//fmt_int(n + 1)//" (one per bond, 0..n)")
+            return
+        end if
+        cfg%n = n
+        cfg%damping = damping
+        cfg%restitution = restitution
+        cfg%amplitude = amplitude
+        cfg%omega = omega
+        cfg%boundary = lower(trim(adjustl(boundary)))
+    end subroutine read_chain
+
+    subroutine read_initial(u, cfg, err)
+        integer, intent(in) :: u
+        type(run_config_t), intent(inout) :: cfg
+        type(error_t), allocatable, intent(out) :: err
+        integer :: seed, ios, mx, mv
+        real(wp) :: x_amp, v_amp
+        real(wp), allocatable :: x0(:), v0(:)
+        character(len=64) :: kind
+        character(len=4096) :: file
+        character(len=512) :: msg
+        namelist /initial/ kind, seed, x_amp, v_amp, x0, v0, file
+
+        allocate (x0(max_list), v0(max_list))
+        kind = 'rest'
+        seed = 1
+        x_amp = 0
+        v_amp = 0
+        x0 = unset
+        v0 = unset
+        file = ''
+        rewind (u)
+        read (u, nml=initial, iostat=ios, iomsg=msg)
+        if (ios /= 0) then
+            call group_error(err, 'initial', ios, msg)
+            return
+        end if
+        mx = count_given(x0)
+        mv = count_given(v0)
+        if (mx < 0 .or. mv < 0) then
+            call set_error(err, "&initial: x0 and v0 must be given as consecutive values "// &
+                           "from index 1")
+            return
+        end if
+        cfg%initial_kind = lower(trim(adjustl(kind)))
+        cfg%seed = seed
+        cfg%x_amp = x_amp
+        cfg%v_amp = v_amp
+        cfg%x0 = x0(1:mx)
+        cfg%v0 = v0(1:mv)
+        cfg%initial_file = trim(file)
+    end subroutine read_initial
+
+    subroutine read_run(u, cfg, err)
+        integer, intent(in) :: u
+        type(run_config_t), intent(inout) :: cfg
+        type(error_t), allocatable, intent(out) :: err
+        integer(i8) :: transient, cycles
+        real(wp) :: phase, stick_speed, period_tol
+        logical :: record_events
+        integer :: max_period, ios
+        character(len=512) :: msg
+        namelist /run/ transient, cycles, phase, record_events, stick_speed, max_period, &
+            period_tol
+
+        transient = cfg%transient
+        cycles = cfg%cycles
+        phase = cfg%phase
+        record_events = cfg%record_events
+        stick_speed = cfg%stick_speed
+        max_period = cfg%max_period
+        period_tol = cfg%period_tol
+        rewind (u)
+        read (u, nml=run, iostat=ios, iomsg=msg)
+        if (ios /= 0) then
+            call group_error(err, 'run', ios, msg)
+            return
+        end if
+        cfg%transient = transient
+        cfg%cycles = cycles
+        cfg%phase = phase
+        cfg%record_events = record_events
+        cfg%stick_speed = stick_speed
+        cfg%max_period = max_period
+        cfg%period_tol = period_tol
+    end subroutine read_run
+
+    subroutine read_lyapunov(u, cfg, err)
+        integer, intent(in) :: u
+        type(run_config_t), intent(inout) :: cfg
+        type(error_t), allocatable, intent(out) :: err
+        logical :: enabled, jacobian
+        integer :: vectors, qr_every, jacobian_cycles, ios
+        character(len=512) :: msg
+        namelist /lyapunov/ enabled, vectors, qr_every, jacobian, jacobian_cycles
+
+        enabled = .true.
+        vectors = cfg%vectors
+        qr_every = cfg%qr_every
+        jacobian = cfg%jacobian
+        jacobian_cycles = cfg%jacobian_cycles
+        rewind (u)
+        read (u, nml=lyapunov, iostat=ios, iomsg=msg)
+        if (ios /= 0) then
+            call group_error(err, 'lyapunov', ios, msg)
+            return
+        end if
+        cfg%lyapunov = enabled
+        cfg%vectors = vectors
+        cfg%qr_every = qr_every
+        cfg%jacobian = jacobian
+        cfg%jacobian_cycles = jacobian_cycles
+    end subroutine read_lyapunov
+
+    subroutine read_output(u, cfg, err)
+        integer, intent(in) :: u
+        type(run_config_t), intent(inout) :: cfg
+        type(error_t), allocatable, intent(out) :: err
+        character(len=4096) :: file
+        logical :: overwrite
+        real(wp) :: max_size_mb
+        integer :: ios
+        character(len=512) :: msg
+        namelist /output/ file, overwrite, max_size_mb
+
+        file = ''
+        overwrite = cfg%overwrite
+        max_size_mb = cfg%max_size_mb
+        rewind (u)
+        read (u, nml=output, iostat=ios, iomsg=msg)
+        if (ios /= 0) then
+            call group_error(err, 'output', ios, msg)
+            return
+        end if
+        if (len_trim(file) > 0) cfg%output_file = trim(file)
+        cfg%overwrite = overwrite
+        cfg%max_size_mb = max_size_mb
+    end subroutine read_output
+
+    subroutine read_sweep(u, cfg, err)
+        integer, intent(in) :: u
+        type(run_config_t), intent(inout) :: cfg
+        type(error_t), allocatable, intent(out) :: err
+        character(len=64) :: parameter, parameter2, mode
+        real(wp) :: start, stop, step, start2, stop2, step2
+        integer :: ios
+        character(len=512) :: msg
+        namelist /sweep/ parameter, start, stop, step, mode, parameter2, start2, stop2, step2
+
+        parameter = ''
+        parameter2 = ''
+        mode = 'continuation'
+        start = unset
+        stop = unset
+        step = unset
+        start2 = unset
+        stop2 = unset
+        step2 = unset
+        rewind (u)
+        read (u, nml=sweep, iostat=ios, iomsg=msg)
+        if (ios /= 0) then
+            call group_error(err, 'sweep', ios, msg)
+            return
+        end if
+        if (start == unset .or. stop == unset .or. step == unset) then
+            call set_error(err, "&sweep: start, stop and step are all required")
+            return
+        end if
+        if (len_trim(parameter2) > 0 .and. &
+            (start2 == unset .or. stop2 == unset .or. step2 == unset)) then
+            call set_error(err, "&sweep: parameter2 needs start2, stop2 and step2")
+            return
+        end if
+        cfg%sweep = .true.
+        cfg%sweep_parameter = lower(trim(adjustl(parameter)))
+        cfg%sweep_parameter2 = lower(trim(adjustl(parameter2)))
+        cfg%sweep_mode = lower(trim(adjustl(mode)))
+        cfg%sweep_start = start
+        cfg%sweep_stop = stop
+        cfg%sweep_step = step
+        if (len_trim(parameter2) > 0) then
+            cfg%sweep_start2 = start2
+            cfg%sweep_stop2 = stop2
+            cfg%sweep_step2 = step2
+        end if
+    end subroutine read_sweep
+
+    !> Check every value against its allowed range (also used for values given from Python).
+    subroutine validate_config(cfg, err)
+        type(run_config_t), intent(in) :: cfg
+        type(error_t), allocatable, intent(out) :: err
+        integer :: j
+        real(wp) :: smallest
+
+        if (cfg%n < 1 .or. cfg%n > max_n) then
+            call set_error(err, "&chain: n = "//fmt_int(cfg%n)//" is outside [1, "// &
+                           fmt_int(max_n)//"]")
+            return
+        end if
+        if (size(cfg%spacing) /= cfg%n + 1) then
+            call set_error(err, "&chain: spacing has "//fmt_int(size(cfg%spacing))// &
+                           " values; give one (uniform) or n+1 = "//fmt_int(cfg%n + 1))
+            return
+        end if
+        do j = 1, size(cfg%spacing)
+            if (.not. (ieee_is_finite(cfg%spacing(j)) .and. cfg%spacing(j) > 0)) then
+                call set_error(err, "&chain: spacing of bond "//fmt_int(j - 1)//" = "// &
+                               fmt_real(cfg%spacing(j))//" must be finite and > 0")
+                return
+            end if
+        end do
+        call check_range(err, 'chain', 'damping', cfg%damping, 0.0_wp, 1.0_wp, '[0, 1)', &
+                         open_high=.true.)
+        if (allocated(err)) return
+        call check_range(err, 'chain', 'restitution', cfg%restitution, 0.0_wp, 1.0_wp, '[0, 1]')
+        if (allocated(err)) return
+        call check_range(err, 'chain', 'amplitude', cfg%amplitude, 0.0_wp, 1.0e6_wp, &
+                         '[0, 1e6]')
+        if (allocated(err)) return
+        call check_range(err, 'chain', 'omega', cfg%omega, 1.0e-3_wp, 1.0e3_wp, '[1e-3, 1e3]')
+        if (allocated(err)) return
+        if (cfg%damping == 0 .and. cfg%omega == 1 .and. cfg%amplitude /= 0) then
+            call set_error(err, "&chain: omega = 1 with damping = 0 is exact resonance: the "// &
+                           "linear response grows without bound; use damping > 0 or omega /= 1")
+            return
+        end if
+        if (cfg%boundary /= 'fixed' .and. cfg%boundary /= 'free') then
+            call set_error(err, "&chain: boundary = '"//cfg%boundary// &
+                           "' is not one of 'fixed', 'free'")
+            return
+        end if
+        select case (cfg%initial_kind)
+        case ('rest', 'random', 'explicit', 'file')
+        case default
+            call set_error(err, "&initial: kind = '"//cfg%initial_kind// &
+                           "' is not one of 'rest', 'random', 'explicit', 'file'")
+            return
+        end select
+        if (cfg%initial_kind == 'random') then
+            smallest = minval(cfg%spacing)
+            call check_range(err, 'initial', 'x_amp', cfg%x_amp, 0.0_wp, &
+                             0.5_wp*smallest, '[0, half the smallest spacing = '// &
+                             fmt_real(0.5_wp*smallest)//') so that no start overlaps', &
+                             open_high=.true.)
+            if (allocated(err)) return
+            call check_range(err, 'initial', 'v_amp', cfg%v_amp, 0.0_wp, 1.0e6_wp, '[0, 1e6]')
+            if (allocated(err)) return
+        end if
+        if (cfg%initial_kind == 'explicit') then
+            if (size(cfg%x0) /= cfg%n) then
+                call set_error(err, "&initial: kind = 'explicit' needs x0 with n = "// &
+                               fmt_int(cfg%n)//" values, got "//fmt_int(size(cfg%x0)))
+                return
+            end if
+            if (size(cfg%v0) /= cfg%n .and. size(cfg%v0) /= 0) then
+                call set_error(err, "&initial: v0 needs n = "//fmt_int(cfg%n)// &
+                               " values (or none for rest), got "//fmt_int(size(cfg%v0)))
+                return
+            end if
+            if (.not. (all(ieee_is_finite(cfg%x0)) .and. all(ieee_is_finite(cfg%v0)))) then
+                call set_error(err, "&initial: x0 and v0 must be finite")
+                return
+            end if
+        end if
+        if (cfg%initial_kind == 'file' .and. len_trim(cfg%initial_file) == 0) then
+            call set_error(err, "&initial: kind = 'file' needs file = 'earlier-run.h5'")
+            return
+        end if
+        if (cfg%transient < 0 .or. cfg%transient > 10_i8**12) then
+            call set_error(err, "&run: transient = "//fmt_int8(cfg%transient)// &
+                           " is outside [0, 1e12]")
+            return
+        end if
+        if (cfg%cycles < 1 .or. cfg%cycles > 10_i8**12) then
+            call set_error(err, "&run: cycles = "//fmt_int8(cfg%cycles)//" is outside [1, 1e12]")
+            return
+        end if
+        call check_range(err, 'run', 'phase', cfg%phase, 0.0_wp, two_pi, '[0, 2 pi)', &
+                         open_high=.true.)
+        if (allocated(err)) return
+        call check_range(err, 'run', 'stick_speed', cfg%stick_speed, tiny(1.0_wp), 1.0_wp, &
+                         '(0, 1]')
+        if (allocated(err)) return
+        if (cfg%max_period < 1 .or. cfg%max_period > 10000) then
+            call set_error(err, "&run: max_period = "//fmt_int(cfg%max_period)// &
+                           " is outside [1, 10000]")
+            return
+        end if
+        call check_range(err, 'run', 'period_tol', cfg%period_tol, tiny(1.0_wp), 1.0_wp, &
+                         '(0, 1)', open_high=.true.)
+        if (allocated(err)) return
+        if (cfg%vectors < 0 .or. cfg%vectors > 2*cfg%n) then
+            call set_error(err, "&lyapunov: vectors = "//fmt_int(cfg%vectors)// &
+                           " is outside [0, 2n = "//fmt_int(2*cfg%n)//"] (0 means all 2n)")
+            return
+        end if
+        if (cfg%qr_every < 1 .or. cfg%qr_every > cfg%cycles) then
+            call set_error(err, "&lyapunov: qr_every = "//fmt_int(cfg%qr_every)// &
+                           " is outside [1, cycles = "//fmt_int8(cfg%cycles)//"]")
+            return
+        end if
+        if (cfg%jacobian_cycles < 1 .or. cfg%jacobian_cycles > 1000) then
+            call set_error(err, "&lyapunov: jacobian_cycles = "//fmt_int(cfg%jacobian_cycles) &
+                           //" is outside [1, 1000]")
+            return
+        end if
+        if (len_trim(cfg%output_file) == 0) then
+            call set_error(err, "&output: file must not be empty")
+            return
+        end if
+        call check_range(err, 'output', 'max_size_mb', cfg%max_size_mb, 0.0_wp, 1.0e9_wp, &
+                         '(0, 1e9]')
+        if (allocated(err)) return
+        if (cfg%sweep) call validate_sweep(cfg, err)
+    end subroutine validate_config
+
+    subroutine validate_sweep(cfg, err)
+        type(run_config_t), intent(in) :: cfg
+        type(error_t), allocatable, intent(out) :: err
+
+        if (.not. any(sweep_parameters == cfg%sweep_parameter)) then
+            call set_error(err, "&sweep: parameter = '"//cfg%sweep_parameter//"' is not one "// &
+                           "of 'amplitude', 'omega', 'damping', 'restitution', 'spacing'")
+            return
+        end if
+        if (cfg%sweep_mode /= 'continuation' .and. cfg%sweep_mode /= 'independent') then
+            call set_error(err, "&sweep: mode = '"//cfg%sweep_mode//"' is not one of "// &
+                           "'continuation', 'independent'")
+            return
+        end if
+        call check_axis(err, '', cfg%sweep_start, cfg%sweep_stop, cfg%sweep_step)
+        if (allocated(err)) return
+        if (len(cfg%sweep_parameter2) > 0) then
+            if (.not. any(sweep_parameters == cfg%sweep_parameter2) .or. &
+                cfg%sweep_parameter2 == cfg%sweep_parameter) then
+                call set_error(err, "&sweep: parameter2 = '"//cfg%sweep_parameter2// &
+                               "' must be another of 'amplitude', 'omega', 'damping', "// &
+                               "'restitution', 'spacing'")
+                return
+            end if
+            call check_axis(err, '2', cfg%sweep_start2, cfg%sweep_stop2, cfg%sweep_step2)
+        end if
+    end subroutine validate_sweep
+
+    subroutine check_axis(err, suffix, start, stop, step)
+        type(error_t), allocatable, intent(out) :: err
+        character(len=*), intent(in) :: suffix
+        real(wp), intent(in) :: start, stop, step
+
+        if (.not. (ieee_is_finite(start) .and. ieee_is_finite(stop) .and. &
+                   ieee_is_finite(step))) then
+            call set_error(err, "&sweep: start"//suffix//", stop"//suffix//" and step"// &
+                           suffix//" must be finite")
+        else if (step == 0 .or. (stop - start)*step < 0) then
+            call set_error(err, "&sweep: step"//suffix//" = "//fmt_real(step)// &
+                           " must be nonzero and point from start"//suffix//" to stop"//suffix)
+        else if ((stop - start)/step > 1.0e7_wp) then
+            call set_error(err, "&sweep: more than 1e7 points along parameter"//suffix)
+        end if
+    end subroutine check_axis
+
+    !> One line per key of the configuration actually used, in namelist form.
+    function config_summary(cfg) result(text)
+        type(run_config_t), intent(in) :: cfg
+        character(len=:), allocatable :: text
+        character(len=1), parameter :: nl = achar(10)
+
+        text = "&chain n = "//fmt_int(cfg%n)//", damping = "//fmt_real(cfg%damping)// &
+               ", restitution = "//fmt_real(cfg%restitution)//", amplitude = "// &
+               fmt_real(cfg%amplitude)//", omega = "//fmt_real(cfg%omega)// &
+               ", boundary = '"//cfg%boundary//"' /"//nl// &
+               "&initial kind = '"//cfg%initial_kind//"', seed = "//fmt_int(cfg%seed)// &
+               ", x_amp = "//fmt_real(cfg%x_amp)//", v_amp = "//fmt_real(cfg%v_amp)//" /"//nl// &
+               "&run transient = "//fmt_int8(cfg%transient)//", cycles = "// &
+               fmt_int8(cfg%cycles)//", phase = "//fmt_real(cfg%phase)// &
+               ", record_events = "//merge('T', 'F', cfg%record_events)// &
+               ", stick_speed = "//fmt_real(cfg%stick_speed)//", max_period = "// &
+               fmt_int(cfg%max_period)//", period_tol = "//fmt_real(cfg%period_tol)//" /"//nl// &
+               "&lyapunov enabled = "//merge('T', 'F', cfg%lyapunov)//", vectors = "// &
+               fmt_int(cfg%vectors)//", qr_every = "//fmt_int(cfg%qr_every)// &
+               ", jacobian = "//merge('T', 'F', cfg%jacobian)//", jacobian_cycles = "// &
+               fmt_int(cfg%jacobian_cycles)//" /"//nl// &
+               "&output file = '"//cfg%output_file//"', overwrite = "// &
+               merge('T', 'F', cfg%overwrite)//", max_size_mb = "//fmt_real(cfg%max_size_mb)// &
+               " /"//nl
+    end function config_summary
+
+    subroutine check_range(err, group, key, value, low, high, allowed, open_high)
+        type(error_t), allocatable, intent(out) :: err
+        character(len=*), intent(in) :: group, key, allowed
+        real(wp), intent(in) :: value, low, high
+        logical, intent(in), optional :: open_high
+        logical :: inside
+
+        inside = ieee_is_finite(value) .and. value >= low .and. value <= high
+        if (present(open_high)) then
+            if (open_high) inside = inside .and. value < high
+        end if
+        if (.not. inside) call set_error(err, "&"//group//": "//key//" = "//fmt_real(value)// &
+                                         " is outside "//allowed)
+    end subroutine check_range
+
+    !> How many leading entries of a namelist list were given; -1 if they are not consecutive.
+    pure integer function count_given(values)
+        real(wp), intent(in) :: values(:)
+        integer :: m
+
+        m = 0
+        do while (m < size(values))
+            if (values(m + 1) == unset) exit
+            m = m + 1
+        end do
+        count_given = m
+        if (m < size(values)) then
+            if (any(values(m + 1:) /= unset)) count_given = -1
+        end if
+    end function count_given
+
+    subroutine group_error(err, group, ios, msg)
+        type(error_t), allocatable, intent(out) :: err
+        character(len=*), intent(in) :: group, msg
+        integer, intent(in) :: ios
+
+        if (ios == iostat_end) then
+            call set_error(err, "&"//group//": the group is incomplete (no closing '/') or "// &
+                           "a value is malformed")
+        else
+            call set_error(err, "&"//group//": "//trim(msg))
+        end if
+    end subroutine group_error
+
+    !> `run.nml` -> `run.h5` in the current directory.
+    pure function default_output(path) result(out)
+        character(len=*), intent(in) :: path
+        character(len=:), allocatable :: out
+        integer :: slash, dot
+
+        slash = index(path, '/', back=.true.)
+        out = path(slash + 1:)
+        dot = index(out, '.', back=.true.)
+        if (dot > 1) out = out(:dot - 1)
+        out = out//'.h5'
+    end function default_output
+
+    pure function lower(s) result(t)
+        character(len=*), intent(in) :: s
+        character(len=len(s)) :: t
+        integer :: j
+
+        t = s
+        do j = 1, len(s)
+            if (iachar(s(j:j)) >= iachar('A') .and. iachar(s(j:j)) <= iachar('Z')) &
+                t(j:j) = achar(iachar(s(j:j)) + 32)
+        end do
+    end function lower
+
+    pure function fmt_real(x) result(s)
+        real(wp), intent(in) :: x
+        character(len=:), allocatable :: s
+        character(len=40) :: buf
+
+        write (buf, '(g0.8)') x
+        s = trim(adjustl(buf))
+    end function fmt_real
+
+    pure function fmt_int(i) result(s)
+        integer, intent(in) :: i
+        character(len=:), allocatable :: s
+        character(len=24) :: buf
+
+        write (buf, '(i0)') i
+        s = trim(buf)
+    end function fmt_int
+
+    pure function fmt_int8(i) result(s)
+        integer(i8), intent(in) :: i
+        character(len=:), allocatable :: s
+        character(len=24) :: buf
+
+        write (buf, '(i0)') i
+        s = trim(buf)
+    end function fmt_int8
+
+end module chain_config

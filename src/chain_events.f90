@@ -1,0 +1,76 @@
+!> The collision event stream: a growable buffer of (time, site, speed, kind) that the run
+!> driver drains to the output file in chunks, so memory does not grow with the run length.
+module chain_events
+    use chain_kinds, only: wp
+    implicit none
+    private
+    public :: event_log_t, event_log_init, event_log_append, event_log_clear
+    public :: event_impact, event_stick, event_release
+
+    integer, parameter :: event_impact = 0  !! an impact
+    integer, parameter :: event_stick = 1   !! an impact that ends chatter: the contact sticks
+    integer, parameter :: event_release = 2 !! a sticking contact lets go
+
+    type :: event_log_t
+        logical :: enabled = .false.
+        integer :: count = 0
+        real(wp), allocatable :: time(:)  !! from the start of the run
+        real(wp), allocatable :: speed(:) !! approach speed >= 0
+        integer, allocatable :: site(:)   !! bond 0..n
+        integer, allocatable :: kind(:)   !! event_impact, event_stick or event_release
+    end type event_log_t
+
+contains
+
+    pure subroutine event_log_init(log, enabled, capacity)
+        type(event_log_t), intent(out) :: log
+        logical, intent(in) :: enabled
+        integer, intent(in) :: capacity
+
+        log%enabled = enabled
+        log%count = 0
+        if (enabled) allocate (log%time(capacity), log%speed(capacity), &
+                               log%site(capacity), log%kind(capacity))
+    end subroutine event_log_init
+
+    pure subroutine event_log_append(log, time, site, speed, kind)
+        type(event_log_t), intent(inout) :: log
+        real(wp), intent(in) :: time, speed
+        integer, intent(in) :: site, kind
+
+        if (.not. log%enabled) return
+        if (log%count == size(log%time)) call grow(log)
+        log%count = log%count + 1
+        log%time(log%count) = time
+        log%site(log%count) = site
+        log%speed(log%count) = speed
+        log%kind(log%count) = kind
+    end subroutine event_log_append
+
+    pure subroutine event_log_clear(log)
+        type(event_log_t), intent(inout) :: log
+        log%count = 0
+    end subroutine event_log_clear
+
+    pure subroutine grow(log)
+        type(event_log_t), intent(inout) :: log
+        integer :: m
+        real(wp), allocatable :: rtmp(:)
+        integer, allocatable :: itmp(:)
+
+        m = max(16, 2*size(log%time))
+        allocate (rtmp(m))
+        rtmp(:log%count) = log%time(:log%count)
+        call move_alloc(rtmp, log%time)
+        allocate (rtmp(m))
+        rtmp(:log%count) = log%speed(:log%count)
+        call move_alloc(rtmp, log%speed)
+        allocate (itmp(m))
+        itmp(:log%count) = log%site(:log%count)
+        call move_alloc(itmp, log%site)
+        allocate (itmp(m))
+        itmp(:log%count) = log%kind(:log%count)
+        call move_alloc(itmp, log%kind)
+    end subroutine grow
+
+end module chain_events

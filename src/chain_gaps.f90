@@ -1,0 +1,234 @@
+!> The next zero of a gap function (MODEL.md sections 1-2): when does a bond close?
+!>
+!> Every gap the chain can have is g(tau) = c + y(tau) + beta*xp(s0 + tau), with y a free
+!> damped oscillation and beta in {-1, 0, 1} the multiple of the forced response:
+!>   - a pair of free oscillators: beta = 0 (the drive cancels), y = y(k+1) - y(k);
+!>   - a wall, or a pair whose other oscillator rests on a wall: beta = +-1.
+!> For beta = 0 the extrema of y are known in closed form, so the first minimum that reaches
+!> -c brackets the first zero on a monotone branch, refined by safeguarded Newton.
+!> For beta /= 0 we advance conservatively: a Taylor polynomial with a bound on the next
+!> derivative (|y^(m)| <= R exp(-b tau), |xp^(m)| <= w^m Rp) gives a step that cannot jump over
+!> a zero, and converges quadratically onto transversal zeros. No sign-change sampling.
+module chain_gaps
+    use chain_kinds, only: wp, pi, two_pi
+    use chain_flow, only: flow_t, forced_response, propagator
+    implicit none
+    private
+    public :: gap_t, gap_search_t, next_gap_zero, gap_value
+    public :: search_none, search_root, search_horizon, time_tolerance
+
+    integer, parameter :: search_none = 0    !! the gap never closes
+    integer, parameter :: search_root = 1    !! the gap closes at tau
+    integer, parameter :: search_horizon = 2 !! no zero before tau = horizon; search again there
+    real(wp), parameter :: time_tolerance = 1.0e-13_wp !! accuracy of a located zero
+    integer, parameter :: max_steps = 200000
+
+    type :: gap_t
+        real(wp) :: offset = 0 !! c: constant part of the gap (a sum of spacings)
+        real(wp) :: y = 0      !! free damped part at tau = 0
+        real(wp) :: vy = 0     !! its rate at tau = 0
+        real(wp) :: beta = 0   !! multiple of the forced response in the gap
+    end type gap_t
+
+    type :: gap_search_t
+        integer :: status = search_none
+        real(wp) :: tau = huge(1.0_wp)  !! time of the zero (or of the horizon) after s0
+        integer :: info = 0             !! 0 fine; 1 the step limit was hit (report it)
+    end type gap_search_t
+
+contains
+
+    !> Gap value and rate at time s0 + tau.
+    pure subroutine gap_value(flow, gap, s0, tau, g, g1)
+        type(flow_t), intent(in) :: flow
+        type(gap_t), intent(in) :: gap
+        real(wp), intent(in) :: s0, tau
+        real(wp), intent(out) :: g, g1
+        real(wp) :: m(2, 2), xp, vp
+
+        m = propagator(flow, tau)
+        g = gap%offset + m(1, 1)*gap%y + m(1, 2)*gap%vy
+        g1 = m(2, 1)*gap%y + m(2, 2)*gap%vy
+        if (gap%beta /= 0) then
+            call forced_response(flow, s0 + tau, xp, vp)
+            g = g + gap%beta*xp
+            g1 = g1 + gap%beta*vp
+        end if
+    end subroutine gap_value
+
+    !> First zero of the gap after s0 at which the gap is closing (or touching), up to horizon.
+    pure function next_gap_zero(flow, gap, s0, horizon) result(res)
+        type(flow_t), intent(in) :: flow
+        type(gap_t), intent(in) :: gap
+        real(wp), intent(in) :: s0      !! time within the cycle at tau = 0
+        real(wp), intent(in) :: horizon !! forced gaps are searched up to tau = horizon
+        type(gap_search_t) :: res
+
+        if (gap%beta == 0) then
+            res = free_gap_zero(flow, gap)
+        else
+            res = forced_gap_zero(flow, gap, s0, horizon)
+        end if
+    end function next_gap_zero
+
+    !> Zero of c + y(tau) with y a free damped oscillation: closed-form bracket, then Newton.
+    pure function free_gap_zero(flow, gap) result(res)
+        type(flow_t), intent(in) :: flow
+        type(gap_t), intent(in) :: gap
+        type(gap_search_t) :: res
+        real(wp) :: b, gam, cc, ss, amp, phi, alpha, tau_min, tau_max, lo, hi, tau
+        real(wp) :: g, g1, step, e, cs, sn
+        integer :: it
+
+        b = flow%damping
+        gam = flow%gam
+        cc = gap%y
+        ss = (gap%vy + b*gap%y)*flow%inv_gam
+        amp = hypot(cc, ss)
+        res%status = search_none
+        res%tau = huge(1.0_wp)
+        if (gap%offset - amp > 0) return
+        g = gap%offset + gap%y
+        if (g <= noise(gap%offset, amp) .and. gap%vy < 0) then
+            res%status = search_root
+            res%tau = 0
+            return
+        end if
+        ! y = amp exp(-b tau) cos(gam tau - phi); minima where gam tau - phi = pi - alpha (2 pi)
+        phi = atan2(ss, cc)
+        alpha = asin(b)
+        tau_min = modulo(pi - alpha + phi, two_pi) / gam
+        if (gap%offset - amp*gam*exp(-b*tau_min) > 0) return
+        tau_max = tau_min - pi/gam
+        lo = max(0.0_wp, tau_max)
+        hi = tau_min
+        tau = 0.5_wp*(lo + hi)
+        res%status = search_root
+        res%tau = lo
+        do it = 1, 200
+            e = exp(-b*tau)
+            cs = cos(gam*tau)
+            sn = sin(gam*tau)
+            g = gap%offset + e*(cc*cs + ss*sn)
+            g1 = e*((gam*ss - b*cc)*cs - (gam*cc + b*ss)*sn)
+            if (g > 0) then
+                lo = tau
+            else
+                hi = tau
+            end if
+            if (hi - lo <= time_tolerance) then
+                res%tau = lo
+                return
+            end if
+            if (g1 < 0) then
+                step = -g/g1
+            else
+                step = huge(1.0_wp)
+            end if
+            if (tau + step <= lo .or. tau + step >= hi) then
+                tau = 0.5_wp*(lo + hi)
+            else
+                tau = tau + step
+                if (abs(step) <= 0.25_wp*time_tolerance) then
+                    res%tau = tau
+                    return
+                end if
+            end if
+        end do
+        res%tau = lo
+    end function free_gap_zero
+
+    !> Zero of c + y(tau) + beta xp(s0 + tau) by Taylor-bounded conservative advancement.
+    pure function forced_gap_zero(flow, gap, s0, horizon) result(res)
+        type(flow_t), intent(in) :: flow
+        type(gap_t), intent(in) :: gap
+        real(wp), intent(in) :: s0, horizon
+        type(gap_search_t) :: res
+        real(wp) :: b, w, ry0, rp, tau, e, ry, g, g1, g2, g3, m2, m4, h, tol
+        real(wp) :: mm(2, 2), y, vy, ay, jy, xp, vp
+        integer :: it
+
+        b = flow%damping
+        w = flow%omega
+        ry0 = hypot(gap%y, (gap%vy + b*gap%y)*flow%inv_gam)
+        rp = abs(gap%beta)*hypot(flow%p_sin, flow%q_cos)
+        tol = noise(gap%offset, ry0 + rp)
+        tau = 0
+        do it = 1, max_steps
+            e = exp(-b*tau)
+            ry = ry0*e
+            if (gap%offset - ry - rp > 0) then
+                res%status = search_none
+                res%tau = huge(1.0_wp)
+                return
+            end if
+            mm = propagator(flow, tau)
+            y = mm(1, 1)*gap%y + mm(1, 2)*gap%vy
+            vy = mm(2, 1)*gap%y + mm(2, 2)*gap%vy
+            ay = -2*b*vy - y
+            jy = -2*b*ay - vy
+            call forced_response(flow, s0 + tau, xp, vp)
+            g = gap%offset + y + gap%beta*xp
+            g1 = vy + gap%beta*vp
+            g2 = ay - gap%beta*w**2*xp
+            g3 = jy - gap%beta*w**2*vp
+            m2 = ry + w**2*rp
+            m4 = ry + w**4*rp
+            if (g <= tol) then
+                if (g1 < 0) exit
+                ! in contact and not closing: g, g1 >= 0 only help, so bound by the rest
+                h = max(quadratic_step(max(g, 0.0_wp), g1, m2), quartic_step(g2, g3, m4, tol))
+                if (h <= 0) exit
+            else
+                h = quadratic_step(g, g1, m2)
+                if (g1 < 0 .and. h <= time_tolerance) exit
+            end if
+            if (tau + h >= horizon) then
+                res%status = search_horizon
+                res%tau = horizon
+                return
+            end if
+            tau = tau + h
+        end do
+        res%status = search_root
+        res%tau = tau
+        if (it > max_steps) res%info = 1
+    end function forced_gap_zero
+
+    !> Largest h with g + g1 h - m h**2/2 >= 0 on [0, h] (g >= 0, m > 0).
+    pure function quadratic_step(g, g1, m) result(h)
+        real(wp), intent(in) :: g, g1, m
+        real(wp) :: h, disc
+
+        disc = sqrt(g1**2 + 2*m*g)
+        if (g1 >= 0) then
+            h = (g1 + disc)/m
+        else if (disc - g1 > 0) then
+            h = 2*g/(disc - g1)
+        else
+            h = 0
+        end if
+    end function quadratic_step
+
+    !> Largest h with g2/2 + g3 h/6 - m h**2/24 >= 0 on [0, h]; zero if the gap curls inwards.
+    pure function quartic_step(g2, g3, m, tol) result(h)
+        real(wp), intent(in) :: g2, g3, m, tol
+        real(wp) :: h, g2c
+
+        g2c = g2
+        if (abs(g2c) <= tol) g2c = 0
+        h = 0
+        if (g2c < 0) return
+        if (g2c == 0 .and. g3 <= 0) return
+        h = (g3/6 + sqrt((g3/6)**2 + m*g2c/12))*12/m
+    end function quartic_step
+
+    !> Rounding level of a gap built from terms of size `offset` and `amplitude`.
+    pure function noise(offset, amplitude) result(tol)
+        real(wp), intent(in) :: offset, amplitude
+        real(wp) :: tol
+
+        tol = 64*epsilon(1.0_wp)*(abs(offset) + amplitude)
+    end function noise
+
+end module chain_gaps

@@ -1,0 +1,162 @@
+!> Lyapunov spectra by QR re-orthonormalisation of a tangent frame (MODEL.md section 5), the
+!> Kaplan-Yorke dimension, and Floquet multipliers from a Poincare-map Jacobian.
+!>
+!> The frame itself is carried by the engine (exact propagators between impacts, saltation
+!> matrices at impacts); this module only turns frames into numbers. Block averages of the
+!> per-step growth rates give the standard error of each exponent.
+module chain_lyapunov
+    use chain_kinds, only: wp
+    use chain_lapack, only: qr_orthonormalise, general_eigenvalues
+    implicit none
+    private
+    public :: lyapunov_acc_t, lyapunov_start, lyapunov_step, lyapunov_result_t
+    public :: lyapunov_result, ky_dimension, floquet_multipliers
+
+    integer, parameter :: max_blocks = 20
+
+    type :: lyapunov_acc_t
+        integer :: k = 0              !! number of exponents
+        integer :: steps = 0          !! QR steps done
+        integer :: planned = 0        !! QR steps planned (sets the blocks)
+        real(wp), allocatable :: total(:)        !! total(k): sum of ln|R(j,j)|
+        real(wp), allocatable :: block_sum(:, :) !! block_sum(k, n_blocks)
+        integer, allocatable :: block_len(:)     !! steps in each block
+        real(wp), allocatable :: running(:, :)   !! running(k, planned): total / steps so far
+    end type lyapunov_acc_t
+
+    type :: lyapunov_result_t
+        real(wp), allocatable :: bits_per_cycle(:)  !! descending
+        real(wp), allocatable :: nats_per_time(:)
+        real(wp), allocatable :: stderr_bits(:)     !! standard error from block means
+        real(wp), allocatable :: running_bits(:, :) !! running(k, steps), bits per cycle
+        real(wp) :: ky_dimension = 0
+        real(wp) :: positive_sum = 0                !! bits per cycle
+    end type lyapunov_result_t
+
+contains
+
+    pure subroutine lyapunov_start(acc, k, planned_steps)
+        type(lyapunov_acc_t), intent(out) :: acc
+        integer, intent(in) :: k, planned_steps
+        integer :: n_blocks
+
+        acc%k = k
+        acc%planned = planned_steps
+        n_blocks = max(1, min(max_blocks, planned_steps))
+        allocate (acc%total(k), acc%block_sum(k, n_blocks), acc%block_len(n_blocks))
+        allocate (acc%running(k, planned_steps))
+        acc%total = 0
+        acc%block_sum = 0
+        acc%block_len = 0
+    end subroutine lyapunov_start
+
+    !> Re-orthonormalise the frame (stored transposed, frame_t(k, m)) and accumulate.
+    subroutine lyapunov_step(acc, frame_t, info)
+        type(lyapunov_acc_t), intent(inout) :: acc
+        real(wp), intent(inout) :: frame_t(:, :)
+        integer, intent(out) :: info
+        real(wp), allocatable :: a(:, :)
+        real(wp) :: r_diag(acc%k), growth(acc%k)
+        integer :: b, n_blocks
+
+        a = transpose(frame_t)
+        call qr_orthonormalise(a, r_diag, info)
+        if (info /= 0) return
+        frame_t = transpose(a)
+        growth = log(abs(r_diag))
+        acc%steps = acc%steps + 1
+        acc%total = acc%total + growth
+        n_blocks = size(acc%block_len)
+        b = min(n_blocks, 1 + (acc%steps - 1)*n_blocks/max(1, acc%planned))
+        acc%block_sum(:, b) = acc%block_sum(:, b) + growth
+        acc%block_len(b) = acc%block_len(b) + 1
+        if (acc%steps <= acc%planned) acc%running(:, acc%steps) = acc%total/acc%steps
+    end subroutine lyapunov_step
+
+    !> Exponents in the paper's units (bits per drive cycle) and per unit time, sorted
+    !> descending, with standard errors and the running estimates.
+    pure function lyapunov_result(acc, cycles_per_step, period) result(res)
+        type(lyapunov_acc_t), intent(in) :: acc
+        integer, intent(in) :: cycles_per_step
+        real(wp), intent(in) :: period
+        type(lyapunov_result_t) :: res
+        real(wp) :: nats(acc%k), err(acc%k), mean(acc%k), to_bits
+        integer :: order(acc%k), j, b, nb, used
+
+        to_bits = 1/(log(2.0_wp)*cycles_per_step)
+        nats = acc%total/max(1, acc%steps)
+        err = 0
+        nb = count(acc%block_len > 0)
+        if (nb > 1) then
+            mean = 0
+            do b = 1, nb
+                mean = mean + acc%block_sum(:, b)/acc%block_len(b)
+            end do
+            mean = mean/nb
+            do b = 1, nb
+                err = err + (acc%block_sum(:, b)/acc%block_len(b) - mean)**2
+            end do
+            err = sqrt(err/(nb - 1)/nb)
+        end if
+        order = descending_order(nats)
+        res%bits_per_cycle = nats(order)*to_bits
+        res%nats_per_time = nats(order)/(cycles_per_step*period)
+        res%stderr_bits = err(order)*to_bits
+        used = min(acc%steps, acc%planned)
+        allocate (res%running_bits(acc%k, used))
+        do j = 1, used
+            res%running_bits(:, j) = acc%running(order, j)*to_bits
+        end do
+        res%ky_dimension = ky_dimension(res%bits_per_cycle)
+        res%positive_sum = sum(res%bits_per_cycle, mask=res%bits_per_cycle > 0)
+    end function lyapunov_result
+
+    !> Kaplan-Yorke dimension of a spectrum sorted descending: j + S(j)/|l(j+1)| with j the
+    !> largest index whose partial sum S(j) >= 0 (0 if l(1) < 0; k if every partial sum >= 0).
+    pure function ky_dimension(exponents) result(dim)
+        real(wp), intent(in) :: exponents(:)
+        real(wp) :: dim, partial
+        integer :: j
+
+        partial = 0
+        dim = 0
+        do j = 1, size(exponents)
+            if (partial + exponents(j) < 0) then
+                dim = (j - 1) + partial/abs(exponents(j))
+                return
+            end if
+            partial = partial + exponents(j)
+        end do
+        dim = size(exponents)
+    end function ky_dimension
+
+    !> Eigenvalues of a Poincare-map Jacobian (Floquet multipliers), by LAPACK dgeev.
+    subroutine floquet_multipliers(jacobian, re, im, info)
+        real(wp), intent(in) :: jacobian(:, :)
+        real(wp), intent(out) :: re(:), im(:)
+        integer, intent(out) :: info
+        real(wp), allocatable :: a(:, :)
+
+        a = jacobian
+        call general_eigenvalues(a, re, im, info)
+    end subroutine floquet_multipliers
+
+    !> Indices that sort `values` descending (insertion sort: spectra are short).
+    pure function descending_order(values) result(order)
+        real(wp), intent(in) :: values(:)
+        integer :: order(size(values)), i, j, t
+
+        order = [(i, i=1, size(values))]
+        do i = 2, size(values)
+            t = order(i)
+            j = i - 1
+            do while (j >= 1)
+                if (values(order(j)) >= values(t)) exit
+                order(j + 1) = order(j)
+                j = j - 1
+            end do
+            order(j + 1) = t
+        end do
+    end function descending_order
+
+end module chain_lyapunov

@@ -1,0 +1,111 @@
+!> An indexed binary min-heap of the next event time of every bond (0..n), so that an impact
+!> costs O(log n) whatever the length of the chain. Ties are broken by the bond index, which
+!> makes the order of events independent of how the heap was filled.
+module chain_queue
+    use chain_kinds, only: wp
+    implicit none
+    private
+    public :: queue_t, queue_init, queue_set, queue_top, queue_shift
+
+    type :: queue_t
+        integer :: size = 0
+        real(wp), allocatable :: time(:) !! time(0:n): event time of each bond
+        integer, allocatable :: heap(:)  !! heap(1:size): bonds in heap order
+        integer, allocatable :: slot(:)  !! slot(0:n): position of each bond in heap
+    end type queue_t
+
+contains
+
+    !> A queue for bonds 0..n_bonds-1, all at time `never`.
+    pure subroutine queue_init(q, n_bonds, never)
+        type(queue_t), intent(out) :: q
+        integer, intent(in) :: n_bonds
+        real(wp), intent(in) :: never
+        integer :: j
+
+        q%size = n_bonds
+        allocate (q%time(0:n_bonds - 1), q%heap(n_bonds), q%slot(0:n_bonds - 1))
+        q%time = never
+        do j = 1, n_bonds
+            q%heap(j) = j - 1
+            q%slot(j - 1) = j
+        end do
+    end subroutine queue_init
+
+    !> Bond with the earliest event, and its time.
+    pure subroutine queue_top(q, bond, time)
+        type(queue_t), intent(in) :: q
+        integer, intent(out) :: bond
+        real(wp), intent(out) :: time
+
+        bond = q%heap(1)
+        time = q%time(bond)
+    end subroutine queue_top
+
+    !> Set the event time of `bond` and restore the heap order.
+    pure subroutine queue_set(q, bond, time)
+        type(queue_t), intent(inout) :: q
+        integer, intent(in) :: bond
+        real(wp), intent(in) :: time
+        q%time(bond) = time
+        call sift_up(q, q%slot(bond))
+        call sift_down(q, q%slot(bond))
+    end subroutine queue_set
+
+    !> Subtract `dt` from every time (order is unchanged): the start of a new drive cycle.
+    pure subroutine queue_shift(q, dt, never)
+        type(queue_t), intent(inout) :: q
+        real(wp), intent(in) :: dt, never
+        where (q%time < never) q%time = q%time - dt
+    end subroutine queue_shift
+
+    pure logical function earlier(q, a, b)
+        type(queue_t), intent(in) :: q
+        integer, intent(in) :: a, b
+        earlier = q%time(a) < q%time(b) .or. (q%time(a) == q%time(b) .and. a < b)
+    end function earlier
+
+    pure subroutine swap(q, i, j)
+        type(queue_t), intent(inout) :: q
+        integer, intent(in) :: i, j
+        integer :: t
+
+        t = q%heap(i)
+        q%heap(i) = q%heap(j)
+        q%heap(j) = t
+        q%slot(q%heap(i)) = i
+        q%slot(q%heap(j)) = j
+    end subroutine swap
+
+    pure subroutine sift_up(q, start)
+        type(queue_t), intent(inout) :: q
+        integer, intent(in) :: start
+        integer :: j
+
+        j = start
+        do while (j > 1)
+            if (.not. earlier(q, q%heap(j), q%heap(j/2))) exit
+            call swap(q, j, j/2)
+            j = j/2
+        end do
+    end subroutine sift_up
+
+    pure subroutine sift_down(q, start)
+        type(queue_t), intent(inout) :: q
+        integer, intent(in) :: start
+        integer :: j, c
+
+        j = start
+        do
+            c = 2*j
+            if (c > q%size) exit
+            if (c + 1 <= q%size) then
+                if (earlier(q, q%heap(c + 1), q%heap(c))) c = c + 1
+            end if
+            if (.not. earlier(q, q%heap(c), q%heap(j))) exit
+            call swap(q, j, c)
+            j = c
+        end do
+    end subroutine sift_down
+
+end module chain_queue

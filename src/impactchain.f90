@@ -1,0 +1,29 @@
+!> The public API of impactchain in one module.
+module impactchain
+    use chain_kinds, only: wp, i8, pi, two_pi
+    use chain_error, only: error_t, set_error
+    use chain_flow, only: flow_t, make_flow, forced_response, propagator, advance_state
+    use chain_gaps, only: gap_t, gap_search_t, next_gap_zero, gap_value, search_none, &
+                          search_root, search_horizon
+    use chain_impact, only: pair_impact, wall_impact, saltation_matrix
+    use chain_engine, only: chain_t, chain_init, chain_advance, chain_sync, chain_new_cycle, &
+                            chain_set_tangent, chain_gaps_now
+    use chain_events, only: event_log_t, event_log_init
+    use chain_lyapunov, only: ky_dimension, floquet_multipliers
+    use chain_period, only: detect_period
+    use chain_config, only: run_config_t, read_config, validate_config
+    use chain_sim, only: run_simulation, run_summary_t, start_chain, poincare_jacobian, &
+                         progress_callback
+    implicit none
+    private
+    public :: wp, i8, pi, two_pi, error_t, set_error
+    public :: flow_t, make_flow, forced_response, propagator, advance_state
+    public :: gap_t, gap_search_t, next_gap_zero, gap_value, search_none, search_root
+    public :: search_horizon, pair_impact, wall_impact, saltation_matrix
+    public :: chain_t, chain_init, chain_advance, chain_sync, chain_new_cycle
+    public :: chain_set_tangent, chain_gaps_now, event_log_t, event_log_init
+    public :: ky_dimension, floquet_multipliers, detect_period
+    public :: run_config_t, read_config, validate_config
+    public :: run_simulation, run_summary_t, start_chain, poincare_jacobian, progress_callback
+
+end module impactchain
