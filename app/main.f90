@@ -3,10 +3,10 @@
 program main
     use, intrinsic :: iso_fortran_env, only: error_unit, output_unit, int64
     use impactchain, only: wp, i8, error_t, run_config_t, read_config, run_simulation, &
-                           run_summary_t
+                           run_result_t
     implicit none
     type(run_config_t) :: cfg
-    type(run_summary_t) :: summary
+    type(run_result_t) :: summary
     type(error_t), allocatable :: err
     character(len=:), allocatable :: input
     logical :: quiet
@@ -19,7 +19,7 @@ program main
     clock_last = clock_start
     call run_simulation(cfg, summary, err, progress)
     if (allocated(err)) call fail(err%message)
-    call report(summary)
+    call report(summary, cfg%output_file)
     if (.not. summary%complete) error stop 3
 
 contains
@@ -89,15 +89,17 @@ contains
             total, ', ', rate, ' cycles/s, ', (total - done)/max(rate, 1.0e-9_wp), ' s left'
     end function progress
 
-    subroutine report(summary)
-        type(run_summary_t), intent(in) :: summary
+    subroutine report(summary, output_file)
+        type(run_result_t), intent(in) :: summary
+        character(len=*), intent(in) :: output_file
 
-        write (output_unit, '(a)') 'impactchain: wrote '//summary%output_file
+        write (output_unit, '(a)') 'impactchain: wrote '//output_file
         write (output_unit, '(a,i0,a,f0.4,a,i0,a,i0,a)') '  cycles recorded ', &
             summary%cycles_done, ', collisions per cycle ', summary%collisions_per_cycle, &
             ', sticking contacts ', summary%sticks, ', releases ', summary%releases, ''
-        if (allocated(summary%exponents)) write (output_unit, '(a,es12.4,a)') &
-            '  largest Lyapunov exponent ', summary%exponents(1), ' bits/cycle'
+        if (summary%has_lyapunov) write (output_unit, '(a,es12.4,a,f0.3)') &
+            '  largest Lyapunov exponent ', summary%lyapunov%bits_per_cycle(1), &
+            ' bits/cycle, Kaplan-Yorke dimension ', summary%lyapunov%ky_dimension
         if (.not. summary%complete) write (error_unit, '(a)') &
             'impactchain: the run was stopped early; the file is marked complete = 0'
     end subroutine report

@@ -295,7 +295,10 @@ def bifurcation(run: Run, sites: Sequence[int] | None = None) -> Figure:
         _bifurcation_points(ax, sweep, site)
         ax.set_ylabel(f"$x_{{{site}}}$")
         ax.set_title(f"oscillator {site}", fontsize="small")
-        ax.set_xlabel(_parameter_label(sweep.parameter), fontsize="small")
+        if index + n_cols < len(sites):
+            ax.tick_params(labelbottom=False)
+        else:
+            ax.set_xlabel(_parameter_label(sweep.parameter), fontsize="small")
     fig.suptitle(_title(run, skip=sweep.parameter), fontsize="medium")
     return fig
 

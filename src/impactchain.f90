@@ -12,8 +12,9 @@ module impactchain
     use chain_lyapunov, only: ky_dimension, floquet_multipliers
     use chain_period, only: detect_period
     use chain_config, only: run_config_t, read_config, validate_config
-    use chain_sim, only: run_simulation, run_summary_t, start_chain, poincare_jacobian, &
-                         progress_callback
+    use chain_run, only: record_sink_t, memory_sink_t, run_result_t, record_run, &
+                         progress_callback, poincare_jacobian, advance_to_point, section_target
+    use chain_sim, only: run_simulation, start_chain, initial_state
     implicit none
     private
     public :: wp, i8, pi, two_pi, error_t, set_error
@@ -24,6 +25,8 @@ module impactchain
     public :: chain_set_tangent, chain_gaps_now, event_log_t, event_log_init
     public :: ky_dimension, floquet_multipliers, detect_period
     public :: run_config_t, read_config, validate_config
-    public :: run_simulation, run_summary_t, start_chain, poincare_jacobian, progress_callback
+    public :: record_sink_t, memory_sink_t, run_result_t, record_run, progress_callback
+    public :: poincare_jacobian, advance_to_point, section_target
+    public :: run_simulation, start_chain, initial_state
 
 end module impactchain

@@ -83,3 +83,11 @@ def test_panel_ranges_reject_bad_input() -> None:
         panel_ranges(np.arange(5), 0)
     with pytest.raises(ValueError, match="no recorded cycles"):
         panel_ranges(np.array([]), 10)
+
+
+def test_panel_ranges_from_a_start_cycle() -> None:
+    cycles = np.arange(0, 480)
+    assert panel_ranges(cycles, 60, start=240) == [(240 + 60 * p, 300 + 60 * p) for p in range(4)]
+    assert panel_ranges(cycles, 60, panels=1, start=479) == [(479, 539)]
+    with pytest.raises(ValueError, match="start cycle 480 is outside"):
+        panel_ranges(cycles, 60, start=480)

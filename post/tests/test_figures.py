@@ -282,3 +282,32 @@ def test_figures_do_not_use_pyplot(run_file: Path) -> None:
 
     figures.space_amplitude([read_run(run_file)])
     assert plt.get_fignums() == []
+
+
+def test_shock_wave_keeps_history_before_the_start(make_run: MakeRun) -> None:
+    period = 2 * np.pi / 1.5
+    time = np.array([9.9, 10.2, 10.4, 10.5]) * period
+    run = read_run(make_run(n=4, records=4, first_cycle=9,
+                            events={"time": time, "site": [0, 1, 2, 3]}))
+    fig = figures.shock_wave(run, panel_cycles=2, start=10)
+    assert len(fig.axes) == 4  # panels [10, 12) and [12, 14), two axes each
+    offsets = np.asarray(_scatter(_axes(fig, "shock-left-0"), "collisions").get_offsets())
+    np.testing.assert_allclose(offsets, [[1.0, 10.2], [2.0, 10.4], [3.0, 10.5]])
+    assert len(_scatter(_axes(fig, "shock-right-0"), "collisions").get_offsets()) == 0
+
+
+def test_shock_wave_of_a_free_chain_is_empty(make_run: MakeRun, tmp_path: Path) -> None:
+    events = {"time": [0.1, 0.2, 0.3], "site": [1, 2, 3]}
+    run = read_run(make_run(boundary="free", records=3, first_cycle=0, events=events))
+    fig = figures.shock_wave(run)
+    ax = _axes(fig, "shock-left-0")
+    assert len(_scatter(ax, "collisions").get_offsets()) == 0 and _walls(ax) == []
+    fig.savefig(tmp_path / "empty.png")
+
+
+def test_space_time_amplitude_from_a_start_cycle(make_run: MakeRun) -> None:
+    run = read_run(make_run(records=30, first_cycle=100, events=False))
+    fig = figures.space_time_amplitude(run, panel_cycles=10, start=110)
+    assert [ax.get_ylim() for ax in fig.axes] == [(110, 120), (120, 130)]
+    with pytest.raises(figures.FigureError, match="start cycle 5 is outside"):
+        figures.space_time_amplitude(run, start=5)

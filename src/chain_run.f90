@@ -1,0 +1,319 @@
+!> The recorded part of a run, independent of where the records go (MODEL.md section 5):
+!> strobe records at the section, the event stream, the Lyapunov spectrum, periods, and the
+!> Poincare-map Jacobian. The CLI sends records to an HDF5 file, sweeps and the Python
+!> extension keep them in memory; all go through `record_run`, so their numbers agree bit for
+!> bit.
+!>
+!> Strobe record j (j = 1..cycles) is the state at elapsed time (transient + j) T + delta, with
+!> delta the offset from the initial drive phase to the section phase (0 for a fresh run with
+!> phase = 0).
+module chain_run
+    use chain_kinds, only: wp, i8
+    use chain_error, only: error_t, set_error
+    use chain_engine, only: chain_t, chain_advance, chain_sync, chain_new_cycle, &
+                            chain_set_tangent
+    use chain_events, only: event_log_t, event_log_init, event_log_clear, event_log_append
+    use chain_lyapunov, only: lyapunov_acc_t, lyapunov_start, lyapunov_step, &
+                              lyapunov_result_t, lyapunov_result, floquet_multipliers
+    use chain_period, only: detect_period
+    use chain_config, only: run_config_t, fmt_real
+    implicit none
+    private
+    public :: record_sink_t, memory_sink_t, run_result_t, record_run, progress_callback
+    public :: section_target, advance_to_point, poincare_jacobian, check_size
+    public :: period_window
+
+    !> Records kept in memory for period detection (the last ones of the run).
+    integer, parameter :: period_window = 1024
+    integer, parameter :: event_flush = 65536
+
+    !> Where strobe records and events go, chunk by chunk.
+    type, abstract :: record_sink_t
+    contains
+        procedure(put_strobe_i), deferred :: put_strobe
+        procedure(put_events_i), deferred :: put_events
+    end type record_sink_t
+
+    abstract interface
+        subroutine put_strobe_i(sink, n_records, first, x, v, cycle, err)
+            import :: record_sink_t, wp, i8, error_t
+            class(record_sink_t), intent(inout) :: sink
+            integer(i8), intent(in) :: n_records, first
+            real(wp), intent(in) :: x(:, :), v(:, :)
+            integer(i8), intent(in) :: cycle(:)
+            type(error_t), allocatable, intent(out) :: err
+        end subroutine put_strobe_i
+        subroutine put_events_i(sink, log, err)
+            import :: record_sink_t, event_log_t, error_t
+            class(record_sink_t), intent(inout) :: sink
+            type(event_log_t), intent(in) :: log
+            type(error_t), allocatable, intent(out) :: err
+        end subroutine put_events_i
+        !> Called after every strobe record; return .false. to stop the run early.
+        function progress_callback(done, total) result(keep_going)
+            import :: i8
+            integer(i8), intent(in) :: done, total
+            logical :: keep_going
+        end function progress_callback
+    end interface
+
+    !> Keeps every record in memory: x(n, cycles), v(n, cycles), and all events.
+    type, extends(record_sink_t) :: memory_sink_t
+        logical :: keep_strobe = .true.
+        real(wp), allocatable :: x(:, :), v(:, :)
+        integer(i8), allocatable :: cycle(:)
+        type(event_log_t) :: events
+    contains
+        procedure :: put_strobe => memory_put_strobe
+        procedure :: put_events => memory_put_events
+    end type memory_sink_t
+
+    type :: run_result_t
+        integer(i8) :: cycles_done = 0
+        logical :: complete = .false.
+        real(wp) :: collisions_per_cycle = 0
+        integer(i8) :: impacts = 0, sticks = 0, releases = 0
+        integer(i8), allocatable :: site_counts(:) !! site_counts(n+1): impacts per bond 0..n
+        integer, allocatable :: periods(:)         !! periods(n): 0 = aperiodic
+        logical :: has_lyapunov = .false.
+        type(lyapunov_result_t) :: lyapunov
+        real(wp), allocatable :: jacobian(:, :)    !! jacobian(2n, 2n) of the Poincare map
+        real(wp), allocatable :: multipliers_re(:), multipliers_im(:)
+    end type run_result_t
+
+contains
+
+    !> Cycle and in-cycle time of strobe point j (j = 0: the end of the transient).
+    pure subroutine section_target(chain, transient, phase, j, cycle, s)
+        type(chain_t), intent(in) :: chain
+        integer(i8), intent(in) :: transient, j
+        real(wp), intent(in) :: phase
+        integer(i8), intent(out) :: cycle
+        real(wp), intent(out) :: s
+        real(wp) :: s_section
+
+        s_section = phase/chain%flow%omega
+        cycle = chain%start_cycle + transient + j
+        s = s_section
+        ! the start is already on the section (a continued run): keep its exact time
+        if (abs(s_section - chain%start_s) <= 1.0e-12_wp*chain%flow%period) then
+            s = chain%start_s
+        else if (s_section < chain%start_s) then
+            cycle = cycle + 1
+        end if
+    end subroutine section_target
+
+    !> Run the chain to (cycle, s) and bring every oscillator there.
+    subroutine advance_to_point(chain, cycle, s, log, err)
+        type(chain_t), intent(inout) :: chain
+        integer(i8), intent(in) :: cycle
+        real(wp), intent(in) :: s
+        type(event_log_t), intent(inout) :: log
+        type(error_t), allocatable, intent(out) :: err
+
+        do while (chain%cycle < cycle)
+            call chain_advance(chain, chain%flow%period, log, err)
+            if (allocated(err)) return
+            call chain_new_cycle(chain)
+        end do
+        call chain_advance(chain, s, log, err)
+        if (allocated(err)) return
+        call chain_sync(chain)
+    end subroutine advance_to_point
+
+    !> Jacobian (2n x 2n) of the p-cycle Poincare map at the chain's current (synced) state;
+    !> the chain itself is not moved.
+    subroutine poincare_jacobian(chain, cycles, jacobian, err)
+        type(chain_t), intent(in) :: chain
+        integer, intent(in) :: cycles
+        real(wp), allocatable, intent(out) :: jacobian(:, :)
+        type(error_t), allocatable, intent(out) :: err
+        type(chain_t) :: copy
+        type(event_log_t) :: log
+        real(wp), allocatable :: frame(:, :)
+        integer :: i, m
+
+        copy = chain
+        m = 2*chain%n
+        allocate (frame(m, m))
+        frame = 0
+        do i = 1, m
+            frame(i, i) = 1
+        end do
+        call chain_set_tangent(copy, frame)
+        call event_log_init(log, .false., 0)
+        call advance_to_point(copy, copy%cycle + cycles, copy%s, log, err)
+        if (allocated(err)) return
+        jacobian = transpose(copy%tangent)
+    end subroutine poincare_jacobian
+
+    !> Transient, then `cfg%cycles` recorded cycles sent to `sink`; the chain ends in the final
+    !> state. Summary numbers, periods, spectrum and Jacobian come back in `res`.
+    subroutine record_run(cfg, chain, sink, res, err, progress)
+        type(run_config_t), intent(in) :: cfg
+        type(chain_t), intent(inout) :: chain
+        class(record_sink_t), intent(inout) :: sink
+        type(run_result_t), intent(out) :: res
+        type(error_t), allocatable, intent(out) :: err
+        procedure(progress_callback), optional :: progress
+        type(event_log_t) :: log
+        type(lyapunov_acc_t) :: acc
+        real(wp), allocatable :: xbuf(:, :), vbuf(:, :), xwin(:, :), vwin(:, :), frame(:, :)
+        integer(i8), allocatable :: cbuf(:)
+        integer(i8) :: j, target_cycle, first
+        real(wp) :: target_s
+        integer :: m, k, info, i, nwin, w
+        logical :: stop_now
+
+        call event_log_init(log, .false., 0)
+        call section_target(chain, cfg%transient, cfg%phase, 0_i8, target_cycle, target_s)
+        call advance_to_point(chain, target_cycle, target_s, log, err)
+        if (allocated(err)) return
+        call event_log_init(log, cfg%record_events, 1024)
+        chain%impacts = 0
+        chain%sticks = 0
+        chain%releases = 0
+        chain%site_counts = 0
+        if (cfg%lyapunov) then
+            k = cfg%vectors
+            if (k == 0) k = 2*cfg%n
+            allocate (frame(2*cfg%n, k))
+            frame = 0
+            do i = 1, k
+                frame(i, i) = 1
+            end do
+            call chain_set_tangent(chain, frame)
+            call lyapunov_start(acc, k, int(cfg%cycles/cfg%qr_every))
+        end if
+        m = int(max(1_i8, min(cfg%cycles, int(2**20/cfg%n, i8))))
+        allocate (xbuf(cfg%n, m), vbuf(cfg%n, m), cbuf(m))
+        nwin = int(min(cfg%cycles, int(period_window, i8)))
+        allocate (xwin(nwin, cfg%n), vwin(nwin, cfg%n))
+        first = 1
+        do j = 1, cfg%cycles
+            call section_target(chain, cfg%transient, cfg%phase, j, target_cycle, target_s)
+            call advance_to_point(chain, target_cycle, target_s, log, err)
+            if (allocated(err)) return
+            i = int(j - first) + 1
+            xbuf(:, i) = chain%x
+            vbuf(:, i) = chain%v
+            cbuf(i) = chain%cycle
+            w = int(modulo(j - 1, int(nwin, i8))) + 1
+            xwin(w, :) = chain%x
+            vwin(w, :) = chain%v
+            if (cfg%lyapunov .and. modulo(j, int(cfg%qr_every, i8)) == 0) then
+                call lyapunov_step(acc, chain%tangent, info)
+                if (info /= 0) then
+                    call set_error(err, "lyapunov: QR factorisation failed (LAPACK info "// &
+                                   fmt_real(real(info, wp))//")")
+                    return
+                end if
+            end if
+            res%cycles_done = j
+            stop_now = .false.
+            if (present(progress)) stop_now = .not. progress(j, cfg%cycles)
+            if (i == m .or. j == cfg%cycles .or. log%count >= event_flush .or. stop_now) then
+                call sink%put_strobe(cfg%cycles, first, xbuf(:, :i), vbuf(:, :i), cbuf(:i), err)
+                if (.not. allocated(err) .and. log%enabled) call sink%put_events(log, err)
+                if (allocated(err)) return
+                call event_log_clear(log)
+                first = j + 1
+            end if
+            if (stop_now) exit
+        end do
+        res%complete = res%cycles_done == cfg%cycles
+        res%impacts = chain%impacts
+        res%sticks = chain%sticks
+        res%releases = chain%releases
+        res%site_counts = chain%site_counts
+        res%collisions_per_cycle = real(chain%impacts, wp)/max(1_i8, res%cycles_done)
+        nwin = int(min(res%cycles_done, int(nwin, i8)))
+        allocate (res%periods(cfg%n))
+        res%periods = 0
+        if (nwin > 0) then
+            do i = 1, cfg%n
+                res%periods(i) = detect_period(in_order(xwin(:, i), res%cycles_done, nwin), &
+                                               in_order(vwin(:, i), res%cycles_done, nwin), &
+                                               cfg%max_period, cfg%period_tol)
+            end do
+        end if
+        if (cfg%lyapunov .and. acc%steps > 0) then
+            res%has_lyapunov = .true.
+            res%lyapunov = lyapunov_result(acc, cfg%qr_every, chain%flow%period)
+        end if
+        if (cfg%jacobian) then
+            call poincare_jacobian(chain, cfg%jacobian_cycles, res%jacobian, err)
+            if (allocated(err)) return
+            allocate (res%multipliers_re(2*cfg%n), res%multipliers_im(2*cfg%n))
+            call floquet_multipliers(res%jacobian, res%multipliers_re, res%multipliers_im, info)
+            if (info /= 0) call set_error(err, "floquet: the eigenvalue solver (LAPACK dgeev) "// &
+                                          "failed")
+        end if
+    end subroutine record_run
+
+    !> Refuse, before anything is written, records larger than &output max_size_mb.
+    subroutine check_size(cfg, err)
+        type(run_config_t), intent(in) :: cfg
+        type(error_t), allocatable, intent(out) :: err
+        real(wp) :: mb
+        integer :: k
+
+        k = 0
+        if (cfg%lyapunov) k = merge(2*cfg%n, cfg%vectors, cfg%vectors == 0)
+        mb = (16.0_wp*cfg%n + 8)*real(cfg%cycles, wp)/1.0e6_wp &
+             + 8.0_wp*k*real(cfg%cycles/cfg%qr_every, wp)/1.0e6_wp
+        if (mb > cfg%max_size_mb) then
+            call set_error(err, "&output: the strobe records of this run need about "// &
+                           fmt_real(mb)//" MB (n x cycles x 16 bytes, plus Lyapunov "// &
+                           "estimates), more than max_size_mb = "//fmt_real(cfg%max_size_mb)// &
+                           "; lower &run cycles or raise &output max_size_mb")
+        end if
+    end subroutine check_size
+
+    subroutine memory_put_strobe(sink, n_records, first, x, v, cycle, err)
+        class(memory_sink_t), intent(inout) :: sink
+        integer(i8), intent(in) :: n_records, first
+        real(wp), intent(in) :: x(:, :), v(:, :)
+        integer(i8), intent(in) :: cycle(:)
+        type(error_t), allocatable, intent(out) :: err
+        integer(i8) :: last
+
+        if (.not. sink%keep_strobe) return
+        if (.not. allocated(sink%x)) then
+            allocate (sink%x(size(x, 1), n_records), sink%v(size(x, 1), n_records))
+            allocate (sink%cycle(n_records))
+        end if
+        last = first + size(x, 2) - 1
+        sink%x(:, first:last) = x
+        sink%v(:, first:last) = v
+        sink%cycle(first:last) = cycle
+    end subroutine memory_put_strobe
+
+    subroutine memory_put_events(sink, log, err)
+        class(memory_sink_t), intent(inout) :: sink
+        type(event_log_t), intent(in) :: log
+        type(error_t), allocatable, intent(out) :: err
+        integer :: j
+
+        if (.not. sink%events%enabled) call event_log_init(sink%events, .true., 1024)
+        do j = 1, log%count
+            call event_log_append(sink%events, log%time(j), log%site(j), log%speed(j), &
+                                  log%kind(j))
+        end do
+    end subroutine memory_put_events
+
+    !> The last `nwin` values of a ring buffer in time order.
+    pure function in_order(ring, done, nwin) result(series)
+        real(wp), intent(in) :: ring(:)
+        integer(i8), intent(in) :: done
+        integer, intent(in) :: nwin
+        real(wp) :: series(nwin)
+        integer :: j, w
+
+        do j = 1, nwin
+            w = int(modulo(done - nwin + j - 1, int(size(ring), i8))) + 1
+            series(j) = ring(w)
+        end do
+    end function in_order
+
+end module chain_run
