@@ -37,6 +37,7 @@ __all__ = [
     "lyapunov",
     "ky_dimension",
     "spectrum",
+    "wave_points",
 ]
 
 WALL_STYLE = {"color": "0.25", "linewidth": 4.0, "solid_capstyle": "butt", "zorder": 0.5}
@@ -211,14 +212,17 @@ def shock_wave(
             ax.set_xlim(*x_limits)
             ax.set_ylabel("time / T (cycles)", fontsize="small")
             ax.tick_params(labelsize="x-small")
-            ax.text(0.5, 0.97, f"waves from the {side} wall", transform=ax.transAxes,
-                    ha="center", va="top", fontsize="x-small", color=colour,
-                    bbox={"facecolor": "white", "edgecolor": "none", "alpha": 0.8, "pad": 1})
+            ax.text(1.01, 0.5, f"from the {side} wall", transform=ax.transAxes,
+                    rotation=90, ha="left", va="center", fontsize="small", color=colour)
         upper.tick_params(labelbottom=False)
         lower.set_xlabel("equilibrium position of the colliding site", fontsize="small")
         upper.set_title(f"({chr(ord('a') + p)}) cycles {start}-{stop - 1}", fontsize="small")
-    fig.suptitle(f"{_title(run)}; wave dies after {max_wait:g} T without a collision",
-                 fontsize="medium")
+    title = f"{_title(run)}; wave dies after {max_wait:g} T without a collision"
+    shown = events.time[before_end] >= (ranges[0][0] + params.section_offset) * period
+    if events.time.size and not shown.any():
+        title += (f"\nno collision in the shown cycles: the events span t/T = "
+                  f"{events.time.min() / period:.6g} to {events.time.max() / period:.6g}")
+    fig.suptitle(title, fontsize="medium")
     return fig
 
 

@@ -6,12 +6,15 @@
 !> two oscillators involved and reschedules only the neighbouring bonds. Times are times within
 !> the current drive cycle; `chain_new_cycle` moves the frame on by one period.
 !>
-!> Chatter and sticking: a wall impact whose rebound speed K*u falls below `stick_speed` while
-!> the drive presses the oscillator against the wall ends the (otherwise infinite) chatter
-!> sequence: the oscillator rests on the wall (x = -a(0) or a(n), v = 0) until the contact
-!> force a(0) + A sin(w t) (left) or a(n) - A sin(w t) (right) changes sign, a time known in
-!> closed form. A pair contact always pushes apart (the springs differ by a at contact), so
-!> pairs never stick.
+!> Chatter and sticking: an oscillator that arrives at a wall with approach speed below
+!> `stick_speed` while the net force presses it there ends the (otherwise infinite) chatter
+!> sequence and rests on the wall (x = -a(0), v = 0). Oscillators can stack on a resting one:
+!> oscillator i rests at x = -(a(0) + ... + a(i-1)), where its acceleration is
+!> a(0) + ... + a(i-1) + A sin(w t) (mirror image on the right wall). Each resting oscillator
+!> leaves when that force turns away from the wall, a time known in closed form; the top of a
+!> stack always leaves first. An impact on a resting oscillator sets it moving again. Two
+!> moving oscillators in contact always separate (their springs differ by a at contact), so
+!> sticking happens only against walls.
 !>
 !> Simultaneous contacts (triple contacts) are resolved as a sequence of pair impacts in time
 !> order, ties by bond index; after each, the neighbouring bonds are re-examined and any that
@@ -43,7 +46,9 @@ module chain_engine
     integer, parameter :: action_recheck = 3 !! the search horizon: look again from here
 
     real(wp), parameter :: never = huge(1.0_wp)
-    !> More impacts than this at one instant means inelastic collapse of a multi-body contact.
+    !> After this many impacts at one instant, a touching cluster is resolved at once (its
+    !> inelastic collapse); far more means the engine is stuck, which is reported.
+    integer, parameter :: collapse_after = 1000
     integer, parameter :: max_same_instant = 100000
 
     type :: chain_t
@@ -183,13 +188,14 @@ contains
             chain%s = time
             call count_instant(chain, time, err)
             if (allocated(err)) return
+            if (chain%same_instant > 0 .and. modulo(chain%same_instant, collapse_after) == 0) then
+                call collapse_cluster(chain, bond, log, err)
+                if (allocated(err)) return
+                cycle
+            end if
             select case (chain%action(bond))
             case (action_impact)
-                if (bond == 0 .or. bond == chain%n) then
-                    call wall_event(chain, bond, log, err)
-                else
-                    call pair_event(chain, bond, log, err)
-                end if
+                call impact_event(chain, bond, log, err)
             case (action_release)
                 call release_event(chain, bond, log, err)
             case default
@@ -217,7 +223,6 @@ contains
         call chain_sync(chain)
         chain%t = 0
         chain%s = 0
-        chain%start_s = chain%start_s - chain%flow%period
         call queue_shift(chain%queue, chain%flow%period, never)
         chain%cycle = chain%cycle + 1
         chain%last_event = chain%last_event - chain%flow%period
@@ -257,12 +262,12 @@ contains
         type(gap_t) :: gap
         type(gap_search_t) :: found
         logical :: closes
-        integer :: side
+        integer :: resting
 
-        call gap_now(chain, bond, gap, closes, side)
-        if (side /= contact_free) then
+        call gap_now(chain, bond, gap, closes, resting)
+        if (resting /= 0) then
             chain%action(bond) = action_release
-            call queue_set(chain%queue, bond, release_time(chain, side))
+            call queue_set(chain%queue, bond, release_time(chain, resting))
             return
         end if
         if (.not. closes) then
@@ -289,93 +294,144 @@ contains
         end select
     end subroutine schedule
 
-    !> The gap function of a bond as it stands now. `closes` is false when the bond can never
-    !> close (free boundary, or constant gap); `side` /= contact_free when the bond is a wall
-    !> on which its oscillator rests (its next event is the release).
-    subroutine gap_now(chain, bond, gap, closes, side)
+    !> The gap function of a bond as it stands now: a(bond) + x(right) - x(left), where each
+    !> side is a moving oscillator or a fixed position (a wall, or an oscillator resting in a
+    !> stack on a wall). `closes` is false when both sides are fixed or the bond is a free end;
+    !> `resting` /= 0 names the oscillator that rests on this bond (its next event is release).
+    subroutine gap_now(chain, bond, gap, closes, resting)
         type(chain_t), intent(inout) :: chain
         integer, intent(in) :: bond
         type(gap_t), intent(out) :: gap
         logical, intent(out) :: closes
-        integer, intent(out) :: side
-        integer :: n, l, r
-        real(wp) :: xp, vp
+        integer, intent(out) :: resting
+        integer :: l, r
+        real(wp) :: xp, vp, fixed_l, fixed_r
+        logical :: moving_l, moving_r
 
-        n = chain%n
-        closes = .true.
-        side = contact_free
-        call forced_response(chain%flow, chain%s, xp, vp)
-        if (bond == 0 .or. bond == n) then
-            closes = chain%walls
-            if (.not. closes) return
-            if (bond == 0) then
-                call bring(chain, 1)
-                if (chain%contact(1) == contact_left) side = contact_left
-                closes = chain%contact(1) /= contact_right
-                gap = gap_t(chain%spacing(0), chain%x(1) - xp, chain%v(1) - vp, 1.0_wp)
-            else
-                call bring(chain, n)
-                if (chain%contact(n) == contact_right) side = contact_right
-                closes = chain%contact(n) /= contact_left
-                gap = gap_t(chain%spacing(n), xp - chain%x(n), vp - chain%v(n), -1.0_wp)
-            end if
-            return
-        end if
         l = bond
         r = bond + 1
-        call bring(chain, l)
-        call bring(chain, r)
-        if (chain%contact(l) == contact_free .and. chain%contact(r) == contact_free) then
+        resting = 0
+        closes = .true.
+        if (.not. chain%walls .and. (bond == 0 .or. bond == chain%n)) then
+            closes = .false.
+            return
+        end if
+        if (r <= chain%n) then
+            if (chain%contact(r) == contact_left) then
+                resting = r
+                return
+            end if
+        end if
+        if (l >= 1) then
+            if (chain%contact(l) == contact_right) then
+                resting = l
+                return
+            end if
+        end if
+        call side_position(chain, l, moving_l, fixed_l)
+        call side_position(chain, r, moving_r, fixed_r)
+        call forced_response(chain%flow, chain%s, xp, vp)
+        if (moving_l .and. moving_r) then
             gap = gap_t(chain%spacing(bond), chain%x(r) - chain%x(l), &
                         chain%v(r) - chain%v(l), 0.0_wp)
-        else if (chain%contact(l) /= contact_free .and. chain%contact(r) /= contact_free) then
-            closes = .false.
-        else if (chain%contact(l) /= contact_free) then
-            ! l rests on the left wall at x = -a(0)
-            gap = gap_t(chain%spacing(bond) + chain%spacing(0), chain%x(r) - xp, &
-                        chain%v(r) - vp, 1.0_wp)
+        else if (moving_r) then
+            gap = gap_t(chain%spacing(bond) - fixed_l, chain%x(r) - xp, chain%v(r) - vp, 1.0_wp)
+        else if (moving_l) then
+            gap = gap_t(chain%spacing(bond) + fixed_r, xp - chain%x(l), vp - chain%v(l), -1.0_wp)
         else
-            ! r rests on the right wall at x = a(n)
-            gap = gap_t(chain%spacing(bond) + chain%spacing(n), xp - chain%x(l), &
-                        vp - chain%v(l), -1.0_wp)
+            closes = .false.
         end if
     end subroutine gap_now
 
-    !> Wall impact of oscillator 1 (bond 0) or n (bond n).
-    subroutine wall_event(chain, bond, log, err)
+    !> Is side i of a bond a moving oscillator, or a fixed position (wall at x = 0 in the
+    !> bond's frame, or a resting oscillator at its rest position)?
+    subroutine side_position(chain, i, moving, fixed)
+        type(chain_t), intent(inout) :: chain
+        integer, intent(in) :: i
+        logical, intent(out) :: moving
+        real(wp), intent(out) :: fixed
+
+        moving = .false.
+        fixed = 0
+        if (i < 1 .or. i > chain%n) return
+        call bring(chain, i)
+        if (chain%contact(i) == contact_free) then
+            moving = .true.
+        else
+            fixed = rest_position(chain, i, chain%contact(i))
+        end if
+    end subroutine side_position
+
+    !> Position x of oscillator i resting in a stack on the left (-a(0) - ... - a(i-1)) or the
+    !> right wall (a(i) + ... + a(n)).
+    pure function rest_position(chain, i, side) result(x)
+        type(chain_t), intent(in) :: chain
+        integer, intent(in) :: i, side
+        real(wp) :: x
+
+        if (side == contact_left) then
+            x = -sum(chain%spacing(0:i - 1))
+        else
+            x = sum(chain%spacing(i:chain%n))
+        end if
+    end function rest_position
+
+    !> An impact on a bond: two moving oscillators, or one moving against a fixed side.
+    subroutine impact_event(chain, bond, log, err)
         type(chain_t), intent(inout) :: chain
         integer, intent(in) :: bond
         type(event_log_t), intent(inout) :: log
         type(error_t), allocatable, intent(out) :: err
-        integer :: i, side, kind, info
-        real(wp) :: sgn, v_minus, u, acc_minus, acc_plus, s(2, 2)
+        integer :: l, r
+        logical :: moving_l, moving_r
+        real(wp) :: fixed_l, fixed_r
 
-        if (bond == 0) then
-            i = 1
-            side = contact_left
-            sgn = -1
+        l = bond
+        r = bond + 1
+        call side_position(chain, l, moving_l, fixed_l)
+        call side_position(chain, r, moving_r, fixed_r)
+        if (moving_l .and. moving_r) then
+            call pair_event(chain, bond, log, err)
+        else if (moving_r) then
+            call contact_event(chain, bond, r, contact_left, log, err)
+        else if (moving_l) then
+            call contact_event(chain, bond, l, contact_right, log, err)
         else
-            i = chain%n
-            side = contact_right
-            sgn = 1
+            call schedule(chain, bond, err)
         end if
-        call bring(chain, i)
+    end subroutine impact_event
+
+    !> Oscillator i reaches the fixed side of a bond (a wall, or the top of a resting stack) on
+    !> the `side` wall: a slow arrival while the drive presses it there ends chatter in rest;
+    !> otherwise it bounces off a wall, or hits the resting oscillator (which then moves).
+    subroutine contact_event(chain, bond, i, side, log, err)
+        type(chain_t), intent(inout) :: chain
+        integer, intent(in) :: bond, i, side
+        type(event_log_t), intent(inout) :: log
+        type(error_t), allocatable, intent(out) :: err
+        real(wp) :: sgn, v_minus, u, acc_minus, acc_plus, s(2, 2)
+        integer :: info
+
+        sgn = merge(-1.0_wp, 1.0_wp, side == contact_left)
         v_minus = chain%v(i)
         u = sgn*v_minus
-        if (u > 0) then
+        if (u < chain%stick_speed .and. pressed(chain, i, side)) then
+            chain%contact(i) = side
+            chain%x(i) = rest_position(chain, i, side)
+            chain%v(i) = 0
+            chain%sticks = chain%sticks + 1
+            if (chain%n_vectors > 0) chain%tangent(:, 2*i - 1:2*i) = 0
+            if (u > 0) then
+                chain%impacts = chain%impacts + 1
+                chain%site_counts(bond) = chain%site_counts(bond) + 1
+            end if
+            call event_log_append(log, chain_elapsed(chain, chain%s), bond, max(u, 0.0_wp), &
+                                  event_stick)
+        else if (u > 0 .and. (bond == 0 .or. bond == chain%n)) then
             acc_minus = forced_acceleration(chain%flow, chain%s, chain%x(i), v_minus)
             call wall_impact(chain%restitution, chain%v(i))
             acc_plus = forced_acceleration(chain%flow, chain%s, chain%x(i), chain%v(i))
-            kind = event_impact
-            if (chain%restitution*u < chain%stick_speed .and. &
-                pressed_on_wall(chain, side)) then
-                kind = event_stick
-                chain%contact(i) = side
-                chain%x(i) = sgn*chain%spacing(bond)
-                chain%v(i) = 0
-                chain%sticks = chain%sticks + 1
-                if (chain%n_vectors > 0) chain%tangent(:, 2*i - 1:2*i) = 0
-            else if (chain%n_vectors > 0) then
+            if (chain%n_vectors > 0) then
                 call saltation_matrix(wall_reset_jacobian(chain%restitution), &
                                       [v_minus, acc_minus], [chain%v(i), acc_plus], &
                                       [-sgn, 0.0_wp], s, info)
@@ -383,12 +439,15 @@ contains
             end if
             chain%impacts = chain%impacts + 1
             chain%site_counts(bond) = chain%site_counts(bond) + 1
-            call event_log_append(log, chain_elapsed(chain, chain%s), bond, u, kind)
+            call event_log_append(log, chain_elapsed(chain, chain%s), bond, u, event_impact)
+        else if (u > 0) then
+            call pair_event(chain, bond, log, err)
+            return
         end if
         call schedule_around(chain, i, i, err)
-    end subroutine wall_event
+    end subroutine contact_event
 
-    !> Impact of oscillators `bond` and `bond`+1 (either may be resting on a wall).
+    !> Impact of oscillators `bond` and `bond`+1 (either may be resting; it then moves).
     subroutine pair_event(chain, bond, log, err)
         type(chain_t), intent(inout) :: chain
         integer, intent(in) :: bond
@@ -420,7 +479,7 @@ contains
         call schedule_around(chain, l, r, err)
     end subroutine pair_event
 
-    !> A resting oscillator leaves the wall.
+    !> A resting oscillator leaves its stack.
     subroutine release_event(chain, bond, log, err)
         type(chain_t), intent(inout) :: chain
         integer, intent(in) :: bond
@@ -428,7 +487,11 @@ contains
         type(error_t), allocatable, intent(out) :: err
         integer :: i
 
-        i = merge(1, chain%n, bond == 0)
+        ! the oscillator above the bond rests on the left stack, or the one below on the right
+        i = bond
+        if (bond < chain%n) then
+            if (chain%contact(bond + 1) == contact_left) i = bond + 1
+        end if
         call bring(chain, i)
         chain%contact(i) = contact_free
         chain%releases = chain%releases + 1
@@ -469,42 +532,96 @@ contains
         chain%tangent(:, rows) = matmul(chain%tangent(:, rows), transpose(s))
     end subroutine apply_jump
 
-    !> Does the contact force press an oscillator at rest on this wall (now, or from now on)?
-    pure logical function pressed_on_wall(chain, side)
+    !> Does the net force press oscillator i, at rest in a stack on the `side` wall, towards
+    !> that wall (now, or from now on)? At rest x = -S (left), so its acceleration is
+    !> S + A sin(w t); on the right, x = S and it is A sin(w t) - S.
+    pure logical function pressed(chain, i, side)
         type(chain_t), intent(in) :: chain
-        integer, intent(in) :: side
-        real(wp) :: a, push, rate, tol, phase
+        integer, intent(in) :: i, side
+        real(wp) :: depth, push, rate, tol, phase
 
         phase = chain%flow%omega*chain%s
+        depth = abs(rest_position(chain, i, side))
         if (side == contact_left) then
-            a = chain%spacing(0)
-            push = a + chain%flow%amplitude*sin(phase)
+            push = depth + chain%flow%amplitude*sin(phase)
             rate = chain%flow%amplitude*chain%flow%omega*cos(phase)
         else
-            a = chain%spacing(chain%n)
-            push = a - chain%flow%amplitude*sin(phase)
+            push = depth - chain%flow%amplitude*sin(phase)
             rate = -chain%flow%amplitude*chain%flow%omega*cos(phase)
         end if
-        tol = 64*epsilon(1.0_wp)*(a + chain%flow%amplitude)
-        pressed_on_wall = push < -tol .or. (abs(push) <= tol .and. rate <= 0)
-    end function pressed_on_wall
+        tol = 64*epsilon(1.0_wp)*(depth + chain%flow%amplitude)
+        pressed = push < -tol .or. (abs(push) <= tol .and. rate <= 0)
+    end function pressed
 
-    !> Next time the wall contact force changes sign towards letting go (closed form).
-    pure function release_time(chain, side) result(s_release)
+    !> Next time the force on resting oscillator i turns away from its wall (closed form).
+    pure function release_time(chain, i) result(s_release)
         type(chain_t), intent(in) :: chain
-        integer, intent(in) :: side
+        integer, intent(in) :: i
         real(wp) :: s_release, ratio, target_phase
+        integer :: side
 
+        side = chain%contact(i)
+        ratio = min(1.0_wp, abs(rest_position(chain, i, side))/chain%flow%amplitude)
         if (side == contact_left) then
-            ratio = min(1.0_wp, chain%spacing(0)/chain%flow%amplitude)
             target_phase = -asin(ratio)
         else
-            ratio = min(1.0_wp, chain%spacing(chain%n)/chain%flow%amplitude)
             target_phase = asin(ratio) + 0.5_wp*two_pi
         end if
         s_release = chain%s + modulo(target_phase - chain%flow%omega*chain%s, two_pi) &
                     /chain%flow%omega
     end function release_time
+
+    !> Inelastic collapse: a cluster of touching oscillators meets infinitely many impacts in
+    !> no time (a crowded chain with small K). Its limit is applied at once: the cluster moves
+    !> with its mean velocity, or comes to rest if it is pressed into a wall or a resting stack.
+    !> The tangent rows of the cluster are averaged like the velocities (no saltation term).
+    subroutine collapse_cluster(chain, bond, log, err)
+        type(chain_t), intent(inout) :: chain
+        integer, intent(in) :: bond
+        type(event_log_t), intent(inout) :: log
+        type(error_t), allocatable, intent(out) :: err
+        integer :: first, last, i, j, m
+        real(wp) :: mean, tol, gaps(0:chain%n)
+        logical :: against_left, against_right
+        real(wp), allocatable :: rows(:)
+
+        gaps = chain_gaps_now(chain)
+        tol = 1.0e-12_wp
+        first = max(1, bond)
+        last = min(chain%n, bond + 1)
+        do while (first > 1)
+            if (gaps(first - 1) > tol .or. chain%contact(first - 1) /= contact_free) exit
+            first = first - 1
+        end do
+        do while (last < chain%n)
+            if (gaps(last) > tol .or. chain%contact(last + 1) /= contact_free) exit
+            last = last + 1
+        end do
+        m = last - first + 1
+        mean = sum(chain%v(first:last))/m
+        against_left = gaps(first - 1) <= tol .and. (first == 1 .and. chain%walls .or. first > 1)
+        against_right = gaps(last) <= tol .and. &
+                        (last == chain%n .and. chain%walls .or. last < chain%n)
+        if ((against_left .and. mean < 0) .or. (against_right .and. mean > 0)) mean = 0
+        chain%v(first:last) = mean
+        if (chain%n_vectors > 0) then
+            allocate (rows(chain%n_vectors))
+            rows = 0
+            do i = first, last
+                rows = rows + chain%tangent(:, 2*i)
+            end do
+            do i = first, last
+                chain%tangent(:, 2*i) = rows/m
+            end do
+        end if
+        chain%impacts = chain%impacts + 1
+        chain%site_counts(bond) = chain%site_counts(bond) + 1
+        call event_log_append(log, chain_elapsed(chain, chain%s), bond, 0.0_wp, event_impact)
+        do j = first - 1, last
+            call schedule(chain, j, err)
+            if (allocated(err)) return
+        end do
+    end subroutine collapse_cluster
 
     !> Guard against an unbounded number of impacts at one instant.
     subroutine count_instant(chain, time, err)

@@ -98,6 +98,9 @@ contains
         phi = atan2(ss, cc)
         alpha = asin(b)
         tau_min = modulo(pi - alpha + phi, two_pi) / gam
+        ! in contact and not closing: the minimum we sit at is not a new impact
+        if (g <= noise(gap%offset, amp) .and. tau_min < 0.5_wp*pi/gam) &
+            tau_min = tau_min + two_pi/gam
         if (gap%offset - amp*gam*exp(-b*tau_min) > 0) return
         tau_max = tau_min - pi/gam
         lo = max(0.0_wp, tau_max)

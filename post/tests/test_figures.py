@@ -311,3 +311,13 @@ def test_space_time_amplitude_from_a_start_cycle(make_run: MakeRun) -> None:
     assert [ax.get_ylim() for ax in fig.axes] == [(110, 120), (120, 130)]
     with pytest.raises(figures.FigureError, match="start cycle 5 is outside"):
         figures.space_time_amplitude(run, start=5)
+
+
+def test_shock_wave_says_when_no_event_falls_in_the_panels(make_run: MakeRun) -> None:
+    period = 2 * np.pi / 1.5
+    run = read_run(make_run(records=4, first_cycle=10,
+                            events={"time": [90.1 * period, 90.2 * period], "site": [0, 1]}))
+    title = figures.shock_wave(run).get_suptitle()
+    assert "no collision in the shown cycles: the events span t/T = 90.1 to 90.2" in title
+    normal = figures.shock_wave(read_run(make_run("ok.h5", records=4)))
+    assert "no collision" not in normal.get_suptitle()

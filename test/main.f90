@@ -1,0 +1,21 @@
+!> fpm test: every physics suite of impactchain; prints "N passed, M failed".
+program main
+    use testing, only: tally_t, report
+    use test_flow, only: run_flow_tests
+    use test_gaps, only: run_gap_tests
+    use test_impact, only: run_impact_tests
+    use test_engine, only: run_engine_tests
+    implicit none
+    type(tally_t) :: t, before
+
+    call run_flow_tests(t)
+    call report(t, before, 'flow')
+    call run_gap_tests(t)
+    call report(t, before, 'gaps')
+    call run_impact_tests(t)
+    call report(t, before, 'impact')
+    call run_engine_tests(t)
+    call report(t, before, 'engine')
+    write (*, '(i0,a,i0,a)') t%passed, ' passed, ', t%failed, ' failed'
+    if (t%failed > 0) error stop 1
+end program main
