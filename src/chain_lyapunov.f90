@@ -10,7 +10,7 @@ module chain_lyapunov
     implicit none
     private
     public :: lyapunov_acc_t, lyapunov_start, lyapunov_step, lyapunov_result_t
-    public :: lyapunov_result, ky_dimension, floquet_multipliers
+    public :: lyapunov_result, ky_dimension, floquet_multipliers, initial_frame
 
     integer, parameter :: max_blocks = 20
 
@@ -110,6 +110,28 @@ contains
         res%ky_dimension = ky_dimension(res%bits_per_cycle)
         res%positive_sum = sum(res%bits_per_cycle, mask=res%bits_per_cycle > 0)
     end function lyapunov_result
+
+    !> A generic orthonormal frame of k vectors in dimension m. Unit vectors would be a poor
+    !> start: a chain that splits into independent pieces (a bond that never closes) keeps
+    !> them inside one piece. Entry (i, j) depends on i and j only, so the first k vectors
+    !> are the same whatever k: a frame of k vectors gives exactly the leading k exponents
+    !> of the full spectrum.
+    subroutine initial_frame(m, k, frame, info)
+        integer, intent(in) :: m, k
+        real(wp), allocatable, intent(out) :: frame(:, :)
+        integer, intent(out) :: info
+        real(wp) :: r_diag(k), h
+        integer :: i, j
+
+        allocate (frame(m, k))
+        do j = 1, k
+            do i = 1, m
+                h = sin(12.9898_wp*i + 78.233_wp*j)*43758.5453_wp
+                frame(i, j) = h - floor(h) - 0.5_wp
+            end do
+        end do
+        call qr_orthonormalise(frame, r_diag, info)
+    end subroutine initial_frame
 
     !> Kaplan-Yorke dimension of a spectrum sorted descending: j + S(j)/|l(j+1)| with j the
     !> largest index whose partial sum S(j) >= 0 (0 if l(1) < 0; k if every partial sum >= 0).

@@ -14,7 +14,8 @@ module chain_run
                             chain_set_tangent
     use chain_events, only: event_log_t, event_log_init, event_log_clear, event_log_append
     use chain_lyapunov, only: lyapunov_acc_t, lyapunov_start, lyapunov_step, &
-                              lyapunov_result_t, lyapunov_result, floquet_multipliers
+                              lyapunov_result_t, lyapunov_result, floquet_multipliers, &
+                              initial_frame
     use chain_period, only: detect_period
     use chain_config, only: run_config_t, fmt_real
     implicit none
@@ -177,11 +178,11 @@ contains
         if (cfg%lyapunov) then
             k = cfg%vectors
             if (k == 0) k = 2*cfg%n
-            allocate (frame(2*cfg%n, k))
-            frame = 0
-            do i = 1, k
-                frame(i, i) = 1
-            end do
+            call initial_frame(2*cfg%n, k, frame, info)
+            if (info /= 0) then
+                call set_error(err, "lyapunov: cannot build the initial tangent frame")
+                return
+            end if
             call chain_set_tangent(chain, frame)
             call lyapunov_start(acc, k, int(cfg%cycles/cfg%qr_every))
         end if

@@ -5,6 +5,7 @@ program main
     use test_gaps, only: run_gap_tests
     use test_impact, only: run_impact_tests
     use test_engine, only: run_engine_tests
+    use test_lyapunov, only: run_lyapunov_tests
     implicit none
     type(tally_t) :: t, before
 
@@ -16,6 +17,8 @@ program main
     call report(t, before, 'impact')
     call run_engine_tests(t)
     call report(t, before, 'engine')
+    call run_lyapunov_tests(t)
+    call report(t, before, 'lyapunov')
     write (*, '(i0,a,i0,a)') t%passed, ' passed, ', t%failed, ' failed'
     if (t%failed > 0) error stop 1
 end program main

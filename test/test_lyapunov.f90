@@ -1,0 +1,292 @@
+!> Lyapunov spectra and Poincare-map Jacobians (MODEL.md sections 4-5): the exact sum rule,
+!> the spectrum without impacts, finite differences of the one-cycle map, leading vectors
+!> against the full spectrum, Floquet multipliers of a period-1 state, and a chaotic and a
+!> periodic case of the paper separated by their error bars.
+module test_lyapunov
+    use chain_kinds, only: wp, i8
+    use chain_error, only: error_t
+    use chain_engine, only: chain_t, chain_init, chain_set_tangent
+    use chain_events, only: event_log_t, event_log_init
+    use chain_config, only: run_config_t
+    use chain_run, only: record_run, memory_sink_t, run_result_t, advance_to_point, &
+                         poincare_jacobian
+    use chain_lyapunov, only: ky_dimension, floquet_multipliers
+    use test_engine, only: make_chain
+    use testing, only: tally_t, check, check_close
+    implicit none
+    private
+    public :: run_lyapunov_tests
+
+contains
+
+    subroutine run_lyapunov_tests(t)
+        type(tally_t), intent(inout) :: t
+
+        call sum_rule(t, 4, 1.35_wp, 1.35_wp)
+        call sum_rule(t, 16, 1.7_wp, 1.5_wp)
+        call no_impacts(t)
+        call finite_differences(t, 2, .true.)
+        call finite_differences(t, 4, .true.)
+        call finite_differences(t, 16, .true.)
+        call finite_differences(t, 4, .false.)
+        call finite_differences(t, 16, .false.)
+        call leading_vectors(t)
+        call floquet_period_one(t)
+        call chaotic_and_periodic(t)
+        call kaplan_yorke(t)
+    end subroutine run_lyapunov_tests
+
+    !> A configuration for record_run: transient, recorded cycles, Lyapunov vectors (0 = all).
+    function spectrum_config(n, transient, cycles, vectors) result(cfg)
+        integer, intent(in) :: n, vectors
+        integer(i8), intent(in) :: transient, cycles
+        type(run_config_t) :: cfg
+
+        cfg%n = n
+        cfg%transient = transient
+        cfg%cycles = cycles
+        cfg%record_events = .false.
+        cfg%lyapunov = .true.
+        cfg%vectors = vectors
+        cfg%qr_every = 1
+    end function spectrum_config
+
+    subroutine spectrum(chain, cfg, res, err)
+        type(chain_t), intent(inout) :: chain
+        type(run_config_t), intent(in) :: cfg
+        type(run_result_t), intent(out) :: res
+        type(error_t), allocatable, intent(out) :: err
+        type(memory_sink_t) :: sink
+
+        sink%keep_strobe = .false.
+        call record_run(cfg, chain, sink, res, err)
+    end subroutine spectrum
+
+    !> Sum of all 2n exponents (nats per cycle) = -2 b n T + 2 ln(K) c, c = impacts per cycle.
+    subroutine sum_rule(t, n, amplitude, omega)
+        type(tally_t), intent(inout) :: t
+        integer, intent(in) :: n
+        real(wp), intent(in) :: amplitude, omega
+        type(chain_t) :: chain
+        type(error_t), allocatable :: err
+        type(run_result_t) :: res
+        real(wp) :: total, expected
+        character(len=8) :: label
+
+        write (label, '(i0)') n
+        call make_chain(chain, n, amplitude, omega, 0.05_wp, 0.7_wp, .true., 0.3_wp, 0.5_wp, err)
+        call spectrum(chain, spectrum_config(n, 200_i8, 1000_i8, 0), res, err)
+        call check(t, .not. allocated(err) .and. res%sticks == 0, &
+                   'sum rule run n = '//trim(label)//' completes without sticking')
+        if (allocated(err)) return
+        total = sum(res%lyapunov%bits_per_cycle)*log(2.0_wp)
+        expected = -2*chain%flow%damping*n*chain%flow%period &
+                   + 2*log(chain%restitution)*res%collisions_per_cycle
+        call check(t, res%collisions_per_cycle > 1, 'sum rule run n = '//trim(label)//' impacts')
+        call check(t, res%lyapunov%bits_per_cycle(1) > 0, &
+                   'sum rule run n = '//trim(label)//' is chaotic')
+        call check_close(t, total, expected, 'sum rule n = '//trim(label), rel_tol=1.0e-9_wp)
+    end subroutine sum_rule
+
+    !> Without impacts every exponent tends to -b T nats per cycle; their mean is exact.
+    subroutine no_impacts(t)
+        type(tally_t), intent(inout) :: t
+        type(chain_t) :: chain
+        type(error_t), allocatable :: err
+        type(run_result_t) :: res
+        real(wp) :: bt, nats(6)
+
+        call make_chain(chain, 3, 0.2_wp, 1.5_wp, 0.05_wp, 0.7_wp, .true., 0.2_wp, 0.1_wp, err)
+        call spectrum(chain, spectrum_config(3, 0_i8, 2000_i8, 0), res, err)
+        bt = chain%flow%damping*chain%flow%period
+        nats = res%lyapunov%bits_per_cycle*log(2.0_wp)
+        call check(t, res%impacts == 0, 'no-impact spectrum run has no impacts')
+        call check_close(t, sum(nats)/6, -bt, 'no impacts: mean exponent is -b T', 1.0e-12_wp)
+        call check(t, maxval(abs(nats + bt)) < 1.0e-4_wp, &
+                   'no impacts: every exponent within 1e-4 of -b T after 2000 cycles')
+    end subroutine no_impacts
+
+    !> The analytic Poincare-map Jacobian equals central differences of the one-cycle map.
+    subroutine finite_differences(t, n, walls)
+        type(tally_t), intent(inout) :: t
+        integer, intent(in) :: n
+        logical, intent(in) :: walls
+        type(chain_t) :: chain, plus, minus
+        type(error_t), allocatable :: err
+        type(event_log_t) :: events
+        real(wp), allocatable :: jac(:, :), fd(:, :)
+        real(wp) :: h, worst, scale
+        integer :: j, m, attempts
+        integer(i8) :: start
+        logical :: same, found
+        character(len=40) :: label
+
+        write (label, '(a,i0,a)') 'n = ', n, merge(' fixed', ' free ', walls)
+        ! free ends: collisions die out, so start hard and look at the first cycles
+        call make_chain(chain, n, 1.7_wp, 1.5_wp, 0.05_wp, 0.7_wp, walls, 0.3_wp, &
+                        merge(1.2_wp, 3.0_wp, walls), err)
+        call event_log_init(events, .false., 0)
+        h = 1.0e-7_wp
+        m = 2*n
+        start = merge(2, 0, walls)
+        found = .false.
+        do attempts = 1, 40
+            call advance_to_point(chain, start + attempts, 0.0_wp, events, err)
+            call poincare_jacobian(chain, 1, jac, err)
+            allocate (fd(m, m))
+            same = .true.
+            do j = 1, m
+                call perturbed_map(chain, j, h, plus, same)
+                call perturbed_map(chain, j, -h, minus, same)
+                fd(:, j) = (state_of(plus) - state_of(minus))/(2*h)
+            end do
+            found = same .and. chain_impacts_one_cycle(chain) > 0
+            if (found) exit
+            deallocate (fd)
+        end do
+        call check(t, found, 'finite differences '//trim(label)//': a cycle with impacts and '// &
+                   'one impact sequence for all perturbations')
+        if (.not. found) return
+        scale = max(1.0_wp, maxval(abs(jac)))
+        worst = maxval(abs(jac - fd))
+        call check_close(t, worst/scale, 0.0_wp, 'Jacobian equals finite differences '// &
+                         trim(label), 2.0e-6_wp)
+    end subroutine finite_differences
+
+    function state_of(chain) result(state)
+        type(chain_t), intent(in) :: chain
+        real(wp) :: state(2*chain%n)
+
+        state(1::2) = chain%x
+        state(2::2) = chain%v
+    end function state_of
+
+    !> The one-cycle map from the chain's state with coordinate j moved by h (a fresh chain,
+    !> so the schedule is searched anew); `same` turns false if the impact sequence differs.
+    subroutine perturbed_map(chain, j, h, moved, same)
+        type(chain_t), intent(in) :: chain
+        integer, intent(in) :: j
+        real(wp), intent(in) :: h
+        type(chain_t), intent(out) :: moved
+        logical, intent(inout) :: same
+        type(error_t), allocatable :: err
+        type(event_log_t) :: events, base_log
+        real(wp) :: x(chain%n), v(chain%n)
+        type(chain_t) :: base
+
+        x = chain%x
+        v = chain%v
+        if (modulo(j, 2) == 1) then
+            x((j + 1)/2) = x((j + 1)/2) + h
+        else
+            v(j/2) = v(j/2) + h
+        end if
+        call chain_init(moved, chain%flow, chain%restitution, chain%spacing, chain%walls, &
+                        chain%stick_speed, x, v, chain%cycle, chain%s, err)
+        call chain_init(base, chain%flow, chain%restitution, chain%spacing, chain%walls, &
+                        chain%stick_speed, chain%x, chain%v, chain%cycle, chain%s, err)
+        call event_log_init(events, .true., 64)
+        call event_log_init(base_log, .true., 64)
+        call advance_to_point(moved, chain%cycle + 1, chain%s, events, err)
+        call advance_to_point(base, chain%cycle + 1, chain%s, base_log, err)
+        if (events%count /= base_log%count) then
+            same = .false.
+        else if (any(events%site(:events%count) /= base_log%site(:events%count))) then
+            same = .false.
+        end if
+    end subroutine perturbed_map
+
+    integer function chain_impacts_one_cycle(chain)
+        type(chain_t), intent(in) :: chain
+        type(chain_t) :: copy
+        type(error_t), allocatable :: err
+        type(event_log_t) :: events
+
+        copy = chain
+        copy%impacts = 0
+        call event_log_init(events, .false., 0)
+        call advance_to_point(copy, chain%cycle + 1, chain%s, events, err)
+        chain_impacts_one_cycle = int(copy%impacts)
+    end function chain_impacts_one_cycle
+
+    !> The k leading exponents from a frame of k vectors equal the first k of the spectrum.
+    subroutine leading_vectors(t)
+        type(tally_t), intent(inout) :: t
+        type(chain_t) :: chain, copy
+        type(error_t), allocatable :: err
+        type(run_result_t) :: full, lead
+
+        call make_chain(chain, 16, 1.7_wp, 1.5_wp, 0.05_wp, 0.7_wp, .true., 0.3_wp, 0.5_wp, err)
+        copy = chain
+        call spectrum(chain, spectrum_config(16, 100_i8, 300_i8, 0), full, err)
+        call spectrum(copy, spectrum_config(16, 100_i8, 300_i8, 6), lead, err)
+        call check(t, size(lead%lyapunov%bits_per_cycle) == 6, 'six leading exponents')
+        call check_close(t, maxval(abs(lead%lyapunov%bits_per_cycle - &
+                                       full%lyapunov%bits_per_cycle(1:6))), 0.0_wp, &
+                         'k leading exponents equal the first k of the full spectrum', 1.0e-10_wp)
+    end subroutine leading_vectors
+
+    !> Fig. 10's chain (n = 8, K = 0.5, w = 1.9, b = 0.05) at A = 3 from rest: a period-1 state
+    !> with 8 impacts per cycle. Its multipliers lie inside the unit circle and their product
+    !> is exp(-2 b n T) K**(2 c).
+    subroutine floquet_period_one(t)
+        type(tally_t), intent(inout) :: t
+        type(chain_t) :: chain
+        type(error_t), allocatable :: err
+        type(event_log_t) :: events
+        real(wp), allocatable :: jac(:, :), re(:), im(:), before(:)
+        real(wp) :: log_det, expected
+        integer :: info, c
+
+        call make_chain(chain, 8, 3.0_wp, 1.9_wp, 0.05_wp, 0.5_wp, .true., 0.0_wp, 0.0_wp, err)
+        call event_log_init(events, .false., 0)
+        call advance_to_point(chain, 1000_i8, 0.0_wp, events, err)
+        before = [chain%x, chain%v]
+        c = chain_impacts_one_cycle(chain)
+        call poincare_jacobian(chain, 1, jac, err)
+        call advance_to_point(chain, 1001_i8, 0.0_wp, events, err)
+        call check(t, maxval(abs([chain%x, chain%v] - before)) < 1.0e-9_wp .and. &
+                   chain%sticks == 0 .and. c == 8, 'fig. 10 chain at A = 3 settles on a '// &
+                   'period-1 state with 8 impacts per cycle')
+        allocate (re(16), im(16))
+        call floquet_multipliers(jac, re, im, info)
+        call check(t, info == 0 .and. maxval(hypot(re, im)) < 1, &
+                   'period-1 multipliers lie inside the unit circle')
+        log_det = sum(log(hypot(re, im)))
+        expected = -2*chain%flow%damping*8*chain%flow%period + 2*c*log(chain%restitution)
+        call check_close(t, log_det, expected, 'product of multipliers is exp(-2bnT) K**(2c)', &
+                         rel_tol=1.0e-8_wp)
+    end subroutine floquet_period_one
+
+    !> Fig. 1c (n = 16, A = 1.7, w = 1.5) is chaotic; fig. 10's chain at A = 3 is periodic: the
+    !> largest exponent and its standard error separate both from zero (3 sigma).
+    subroutine chaotic_and_periodic(t)
+        type(tally_t), intent(inout) :: t
+        type(chain_t) :: chain
+        type(error_t), allocatable :: err
+        type(run_result_t) :: res
+        real(wp) :: l1, s1
+
+        call make_chain(chain, 16, 1.7_wp, 1.5_wp, 0.05_wp, 0.7_wp, .true., 0.3_wp, 0.5_wp, err)
+        call spectrum(chain, spectrum_config(16, 500_i8, 2000_i8, 2), res, err)
+        l1 = res%lyapunov%bits_per_cycle(1)
+        s1 = res%lyapunov%stderr_bits(1)
+        call check(t, l1 - 3*s1 > 0, 'fig. 1c: largest exponent positive beyond 3 sigma')
+        call make_chain(chain, 8, 3.0_wp, 1.9_wp, 0.05_wp, 0.5_wp, .true., 0.0_wp, 0.0_wp, err)
+        call spectrum(chain, spectrum_config(8, 500_i8, 2000_i8, 2), res, err)
+        l1 = res%lyapunov%bits_per_cycle(1)
+        s1 = res%lyapunov%stderr_bits(1)
+        call check(t, l1 + 3*s1 < 0, 'fig. 10 at A = 3: largest exponent negative beyond 3 sigma')
+    end subroutine chaotic_and_periodic
+
+    subroutine kaplan_yorke(t)
+        type(tally_t), intent(inout) :: t
+
+        call check_close(t, ky_dimension([1.0_wp, -0.5_wp, -2.0_wp]), 2.25_wp, 'D_KY example', &
+                         1.0e-15_wp)
+        call check_close(t, ky_dimension([-0.1_wp, -0.5_wp]), 0.0_wp, 'D_KY all negative', &
+                         1.0e-15_wp)
+        call check_close(t, ky_dimension([0.3_wp, -0.1_wp]), 2.0_wp, 'D_KY full', 1.0e-15_wp)
+    end subroutine kaplan_yorke
+
+end module test_lyapunov
