@@ -20,7 +20,7 @@ program main
     call run_simulation(cfg, summary, err, progress)
     if (allocated(err)) call fail(err%message)
     call report(summary, cfg%output_file)
-    if (.not. summary%complete) error stop 3
+    if (.not. summary%complete) stop 3, quiet=.true.
 
 contains
 
@@ -56,7 +56,7 @@ contains
         end do
         if (len(input) == 0) then
             call usage(error_unit)
-            error stop 2
+            stop 2, quiet=.true.
         end if
     end subroutine parse_arguments
 
@@ -108,7 +108,7 @@ contains
         character(len=*), intent(in) :: message
 
         write (error_unit, '(a)') 'impactchain: error: '//message
-        error stop 1
+        stop 1, quiet=.true.
     end subroutine fail
 
 end program main

@@ -84,10 +84,12 @@ contains
             call set_error(err, trim(path)//": the required group &chain is missing")
             return
         end if
-        open (newunit=u, file=path, status='old', action='read', form='formatted', &
+        ! read the groups from a scratch copy that surely ends with a newline
+        open (newunit=u, status='scratch', action='readwrite', form='formatted', &
               iostat=ios, iomsg=msg)
+        if (ios == 0) write (u, '(a)', iostat=ios, iomsg=msg) cfg%input_text
         if (ios /= 0) then
-            call set_error(err, trim(path)//": cannot open: "//trim(msg))
+            call set_error(err, trim(path)//": cannot read: "//trim(msg))
             return
         end if
         call read_chain(u, cfg, err)

@@ -1,0 +1,34 @@
+"""The built simulator for tests: a fixture with its path, and a runner for namelist texts."""
+from __future__ import annotations
+
+import subprocess
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[2]
+FPM = ROOT / ".venv" / "bin" / "fpm"
+
+
+@pytest.fixture(scope="session")
+def impactchain_exe() -> Path:
+    """Path of the release build of the simulator (built if needed)."""
+    out = subprocess.run(
+        [str(FPM), "run", "--profile", "release", "--runner", "echo"],
+        cwd=ROOT, capture_output=True, text=True, check=True,
+    )
+    path = ROOT / out.stdout.strip().splitlines()[-1]
+    assert path.exists(), out.stdout + out.stderr
+    return path
+
+
+
+def run_namelist(exe: Path, text: str, workdir: Path, name: str = "input.nml",
+                 check: bool = True) -> subprocess.CompletedProcess:
+    """Write `text` as a namelist in `workdir` and run the simulator on it there."""
+    (workdir / name).write_text(text)
+    result = subprocess.run([str(exe), "--quiet", name], cwd=workdir,
+                            capture_output=True, text=True, timeout=120)
+    if check and result.returncode != 0:
+        raise AssertionError(f"impactchain failed: {result.stderr}")
+    return result

@@ -1,0 +1,133 @@
+"""The simulator's command line: output layout, refusals of bad input with a message naming
+the key and a non-zero exit and no output file, overwrite protection, and bit-identical
+continuation from a file."""
+from __future__ import annotations
+
+import h5py
+import numpy as np
+import pytest
+
+from simulator import impactchain_exe, run_namelist  # noqa: F401 (fixture)
+
+BASE = """
+&chain n = 6, amplitude = 1.7, omega = 1.5 /
+&initial kind = 'random', seed = 3, x_amp = 0.3, v_amp = 0.3 /
+&run transient = 10, cycles = 20 /
+&output file = 'run.h5' /
+"""
+
+
+def test_output_layout(impactchain_exe, tmp_path):
+    result = run_namelist(impactchain_exe, BASE, tmp_path)
+    assert "collisions per cycle" in result.stdout
+    with h5py.File(tmp_path / "run.h5") as f:
+        assert f.attrs["schema_version"] == 1
+        assert int(np.ravel(f.attrs["complete"])[0]) == 1
+        assert "&chain" in f.attrs["input_namelist"].decode() if isinstance(
+            f.attrs["input_namelist"], bytes) else "&chain" in str(f.attrs["input_namelist"])
+        assert f["strobe/x"].shape == (20, 6)
+        assert f["strobe/v"].shape == (20, 6)
+        np.testing.assert_array_equal(f["strobe/cycle"][:], np.arange(11, 31))
+        assert f["params/spacing"].shape == (7,)
+        assert f["initial/x"].shape == (6,)
+        assert f["final/x"].shape == (6,)
+        assert f["strobe/period"].shape == (6,)
+        sites = f["events/site"][:]
+        assert sites.min() >= 0 and sites.max() <= 6
+        assert np.all(f["events/speed"][:] >= 0)
+        times = f["events/time"][:]
+        period = 2 * np.pi / 1.5
+        assert np.all(np.diff(times) >= 0)
+        assert times[0] >= 10 * period and times[-1] <= 30 * period
+        assert f["stats/site_counts"][:].sum() == int(np.ravel(f["stats"].attrs["impacts"])[0])
+    assert not (tmp_path / "run.h5.part").exists()
+
+
+BAD_INPUTS = {
+    "damping = 1.2": ("&chain n=4, amplitude=1, omega=1.5, damping=1.2 /", "damping"),
+    "negative damping": ("&chain n=4, amplitude=1, omega=1.5, damping=-0.1 /", "damping"),
+    "restitution > 1": ("&chain n=4, amplitude=1, omega=1.5, restitution=1.3 /", "restitution"),
+    "n = 0": ("&chain n=0, amplitude=1, omega=1.5 /", "n = 0"),
+    "missing n": ("&chain amplitude=1, omega=1.5 /", "n (number"),
+    "missing amplitude": ("&chain n=4, omega=1.5 /", "amplitude"),
+    "omega = 0": ("&chain n=4, amplitude=1, omega=0 /", "omega"),
+    "NaN spacing": ("&chain n=4, amplitude=1, omega=1.5, spacing=NaN /", "spacing"),
+    "wrong spacing count": ("&chain n=4, amplitude=1, omega=1.5, spacing=1,1,1 /", "spacing"),
+    "boundary": ("&chain n=4, amplitude=1, omega=1.5, boundary='open' /", "boundary"),
+    "misspelt key": ("&chain n=4, amplitude=1, omega=1.5, dampin=0.1 /", "&chain"),
+    "unknown group": ("&chain n=4, amplitude=1, omega=1.5 /\n&chian n=3 /", "&chian"),
+    "duplicate group": ("&chain n=4, amplitude=1, omega=1.5 /\n&chain n=3 /", "more than once"),
+    "no chain": ("&run cycles=3 /", "&chain"),
+    "resonance": ("&chain n=4, amplitude=1, omega=1, damping=0 /", "resonance"),
+    "initial kind": ("&chain n=4, amplitude=1, omega=1.5 /\n&initial kind='zero' /", "kind"),
+    "overlap": ("&chain n=2, amplitude=1, omega=1.5 /\n&initial kind='explicit', "
+                "x0=0.8,-0.8 /", "bond 1"),
+    "explicit count": ("&chain n=3, amplitude=1, omega=1.5 /\n&initial kind='explicit', "
+                       "x0=0.1 /", "x0"),
+    "x_amp too big": ("&chain n=3, amplitude=1, omega=1.5 /\n&initial kind='random', "
+                      "x_amp=0.7 /", "x_amp"),
+    "cycles": ("&chain n=3, amplitude=1, omega=1.5 /\n&run cycles=0 /", "cycles"),
+    "phase": ("&chain n=3, amplitude=1, omega=1.5 /\n&run phase=7 /", "phase"),
+    "vectors": ("&chain n=3, amplitude=1, omega=1.5 /\n&lyapunov vectors=7 /", "vectors"),
+    "missing file start": ("&chain n=3, amplitude=1, omega=1.5 /\n&initial kind='file', "
+                           "file='nothere.h5' /", "nothere.h5"),
+    "truncated group": ("&chain n=3, amplitude=1, omega=1.5", "&chain"),
+    "size limit": ("&chain n=1000, amplitude=1, omega=1.5 /\n&run cycles=1000000 /\n"
+                   "&output max_size_mb=10 /", "max_size_mb"),
+}
+
+
+@pytest.mark.parametrize("case", sorted(BAD_INPUTS))
+def test_bad_input_is_refused(impactchain_exe, tmp_path, case):
+    text, needle = BAD_INPUTS[case]
+    text += "\n&output file='bad.h5' /\n" if "&output" not in text else ""
+    result = run_namelist(impactchain_exe, text, tmp_path, check=False)
+    assert result.returncode != 0
+    assert "impactchain: error:" in result.stderr
+    assert needle in result.stderr, result.stderr
+    assert "Backtrace" not in result.stderr
+    assert not list(tmp_path.glob("*.h5*")), "no output may be left behind"
+
+
+def test_existing_output_is_not_overwritten(impactchain_exe, tmp_path):
+    (tmp_path / "run.h5").write_bytes(b"precious")
+    result = run_namelist(impactchain_exe, BASE, tmp_path, check=False)
+    assert result.returncode != 0
+    assert "exists" in result.stderr
+    assert (tmp_path / "run.h5").read_bytes() == b"precious"
+    run_namelist(impactchain_exe, BASE.replace("'run.h5' /", "'run.h5', overwrite=.true. /"),
+                 tmp_path)
+    assert h5py.is_hdf5(tmp_path / "run.h5")
+
+
+def test_unwritable_output_directory_is_refused(impactchain_exe, tmp_path):
+    result = run_namelist(impactchain_exe, BASE.replace("'run.h5'", "'missing/dir/run.h5'"),
+                          tmp_path, check=False)
+    assert result.returncode != 0
+    assert "cannot create" in result.stderr
+
+
+@pytest.mark.parametrize("phase", [0.0, 1.1])
+def test_continuation_is_bit_identical(impactchain_exe, tmp_path, phase):
+    chain = "&chain n = 8, amplitude = 1.7, omega = 1.5 /\n"
+    start = "&initial kind = 'random', seed = 5, x_amp = 0.3, v_amp = 0.5 /\n"
+    run_namelist(impactchain_exe, chain + start +
+                 f"&run transient = 5, cycles = 30, phase = {phase} /\n&output file = 'a.h5' /",
+                 tmp_path, "a.nml")
+    run_namelist(impactchain_exe, chain + start +
+                 f"&run transient = 5, cycles = 12, phase = {phase} /\n&output file = 'b.h5' /",
+                 tmp_path, "b.nml")
+    run_namelist(impactchain_exe, chain + "&initial kind = 'file', file = 'b.h5' /\n" +
+                 f"&run transient = 0, cycles = 18, phase = {phase} /\n&output file = 'c.h5' /",
+                 tmp_path, "c.nml")
+    with h5py.File(tmp_path / "a.h5") as a, h5py.File(tmp_path / "c.h5") as c:
+        np.testing.assert_array_equal(a["strobe/x"][12:], c["strobe/x"][:])
+        np.testing.assert_array_equal(a["strobe/v"][12:], c["strobe/v"][:])
+        np.testing.assert_array_equal(a["strobe/cycle"][12:], c["strobe/cycle"][:])
+        np.testing.assert_array_equal(a["final/x"][:], c["final/x"][:])
+        n_c = len(c["events/time"])
+        np.testing.assert_array_equal(a["events/site"][-n_c:], c["events/site"][:])
+        period = 2 * np.pi / 1.5
+        np.testing.assert_allclose(a["events/time"][-n_c:] - 17 * period - phase / 1.5,
+                                   c["events/time"][:],
+                                   rtol=0, atol=1e-9)
