@@ -1,9 +1,52 @@
 !> impactchain command line: `impactchain [--quiet] input.nml`. Parses arguments, runs the
 !> library, reports progress and errors, and sets the exit code. No physics here.
+!> SIGINT / SIGTERM ask a running simulation to stop at the next strobe record; the file is
+!> then closed cleanly and marked complete = 0. A signal handler can only talk through a flag
+!> that outlives every call, hence the one piece of module state in the project.
+module interrupt_flag
+    use, intrinsic :: iso_c_binding, only: c_int, c_funptr, c_funloc
+    implicit none
+    private
+    public :: catch_interrupts, interrupted
+
+    integer(c_int), parameter :: sigint = 2, sigterm = 15
+    logical, volatile :: stop_requested = .false.
+
+    interface
+        function c_signal(signum, handler) bind(C, name='signal') result(previous)
+            import :: c_int, c_funptr
+            integer(c_int), value :: signum
+            type(c_funptr), value :: handler
+            type(c_funptr) :: previous
+        end function c_signal
+    end interface
+
+contains
+
+    subroutine catch_interrupts()
+        type(c_funptr) :: previous
+
+        previous = c_signal(sigint, c_funloc(on_signal))
+        previous = c_signal(sigterm, c_funloc(on_signal))
+    end subroutine catch_interrupts
+
+    logical function interrupted()
+        interrupted = stop_requested
+    end function interrupted
+
+    subroutine on_signal(signum) bind(C)
+        integer(c_int), value :: signum
+
+        if (signum > 0) stop_requested = .true.
+    end subroutine on_signal
+
+end module interrupt_flag
+
 program main
     use, intrinsic :: iso_fortran_env, only: error_unit, output_unit, int64
     use impactchain, only: wp, i8, error_t, run_config_t, read_config, run_simulation, &
                            run_result_t
+    use interrupt_flag, only: catch_interrupts, interrupted
     implicit none
     type(run_config_t) :: cfg
     type(run_result_t) :: summary
@@ -17,6 +60,7 @@ program main
     if (allocated(err)) call fail(err%message)
     call system_clock(clock_start, clock_rate)
     clock_last = clock_start
+    call catch_interrupts()
     call run_simulation(cfg, summary, err, progress)
     if (allocated(err)) call fail(err%message)
     call report(summary, cfg%output_file)
@@ -76,7 +120,7 @@ contains
         integer(int64) :: now
         real(wp) :: elapsed, rate
 
-        keep_going = .true.
+        keep_going = .not. interrupted()
         if (quiet) return
         call system_clock(now)
         if (now - clock_last < clock_rate .and. done < total) return
@@ -101,7 +145,8 @@ contains
             '  largest Lyapunov exponent ', summary%lyapunov%bits_per_cycle(1), &
             ' bits/cycle, Kaplan-Yorke dimension ', summary%lyapunov%ky_dimension
         if (.not. summary%complete) write (error_unit, '(a)') &
-            'impactchain: the run was stopped early; the file is marked complete = 0'
+            'impactchain: the run was stopped early; the file holds the finished records '// &
+            'and is marked complete = 0'
     end subroutine report
 
     subroutine fail(message)

@@ -15,7 +15,7 @@ module chain_output
     public :: output_t, output_begin, output_header, output_strobe_write, output_events_append
     public :: output_final, output_stats, output_periods, output_lyapunov, output_jacobian
     public :: output_end, output_abort, read_final_state, output_sweep_write, output_group
-    public :: schema_version, code_version
+    public :: schema_version, code_version, output_truncate_strobe
 
     integer, parameter :: schema_version = 1
     character(len=*), parameter :: code_version = '0.1.0'
@@ -320,6 +320,39 @@ contains
         if (e < 0) call set_error(err, "output: cannot write /"//name)
     end subroutine output_sweep_write
 
+    !> A run stopped early keeps only its finished records: shrink /strobe to them.
+    subroutine output_truncate_strobe(out, records_done, err)
+        type(output_t), intent(inout) :: out
+        integer(i8), intent(in) :: records_done
+        type(error_t), allocatable, intent(out) :: err
+        character(len=12), parameter :: names(3) = &
+            [character(len=12) :: 'strobe/x', 'strobe/v', 'strobe/cycle']
+        integer(hid_t) :: dset
+        integer :: j, e, e2, rank
+        integer(hsize_t) :: dims(2)
+        logical :: exists
+
+        call h5lexists_f(out%file, 'strobe', exists, e)
+        if (.not. exists) return
+        do j = 1, size(names)
+            rank = merge(1, 2, j == 3)
+            dims = [int(out%n, hsize_t), int(records_done, hsize_t)]
+            call h5dopen_f(out%file, trim(names(j)), dset, e)
+            if (e >= 0) then
+                if (rank == 1) then
+                    call h5dset_extent_f(dset, dims(2:2), e)
+                else
+                    call h5dset_extent_f(dset, dims, e)
+                end if
+                call h5dclose_f(dset, e2)
+            end if
+            if (e < 0) then
+                call set_error(err, "output: cannot shrink /"//trim(names(j)))
+                return
+            end if
+        end do
+    end subroutine output_truncate_strobe
+
     !> Mark complete (or partial), close, and move `.part` to the final name.
     subroutine output_end(out, complete, err)
         type(output_t), intent(inout) :: out
@@ -505,7 +538,7 @@ contains
         integer(hsize_t), intent(in) :: dims(:)
         type(error_t), allocatable, intent(out) :: err
         integer(hid_t) :: space, dset, plist
-        integer(hsize_t) :: chunk(size(dims))
+        integer(hsize_t) :: chunk(size(dims)), maxdims(size(dims))
         integer :: e, e2
 
         chunk = dims
@@ -513,7 +546,9 @@ contains
                                                int(262144/max(1_hsize_t, product(dims) &
                                                               /max(1_hsize_t, dims(size(dims)))) &
                                                    , hsize_t)))
-        call h5screate_simple_f(size(dims), dims, space, e)
+        maxdims = dims
+        maxdims(size(dims)) = H5S_UNLIMITED_F
+        call h5screate_simple_f(size(dims), dims, space, e, maxdims=maxdims)
         call h5pcreate_f(H5P_DATASET_CREATE_F, plist, e2)
         call h5pset_chunk_f(plist, size(dims), chunk, e2)
         call h5dcreate_f(out%file, name, dtype, space, dset, e, dcpl_id=plist)

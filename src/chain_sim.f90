@@ -14,7 +14,7 @@ module chain_sim
     use chain_output, only: output_t, output_begin, output_header, output_strobe_write, &
                             output_events_append, output_final, output_stats, output_periods, &
                             output_lyapunov, output_jacobian, output_end, output_abort, &
-                            read_final_state
+                            read_final_state, output_truncate_strobe
     implicit none
     private
     public :: run_simulation, initial_state, start_chain
@@ -109,6 +109,8 @@ contains
                            cfg%cycles, chain%x, chain%v, err)
         if (.not. allocated(err)) call record_run(cfg, chain, sink, res, err, progress)
         if (.not. allocated(err)) call write_results(sink%out, chain, res, cfg%jacobian_cycles, err)
+        if (.not. allocated(err) .and. .not. res%complete) &
+            call output_truncate_strobe(sink%out, res%cycles_done, err)
         if (allocated(err)) then
             call output_abort(sink%out)
             return

@@ -131,3 +131,49 @@ def test_continuation_is_bit_identical(impactchain_exe, tmp_path, phase):
         np.testing.assert_allclose(a["events/time"][-n_c:] - 17 * period - phase / 1.5,
                                    c["events/time"][:],
                                    rtol=0, atol=1e-9)
+
+
+LONG = """
+&chain n = 16, amplitude = 1.7, omega = 1.5 /
+&initial kind = 'random', x_amp = 0.3, v_amp = 0.3 /
+&run cycles = 50000000 /
+&output file = 'long.h5', max_size_mb = 1e6 /
+"""
+
+
+def _start_long_run(exe, tmp_path):
+    import subprocess
+    import time
+    (tmp_path / "long.nml").write_text(LONG)
+    proc = subprocess.Popen([str(exe), "--quiet", "long.nml"], cwd=tmp_path,
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    deadline = time.time() + 20
+    while not (tmp_path / "long.h5.part").exists() and time.time() < deadline:
+        time.sleep(0.05)
+    time.sleep(1.0)
+    return proc
+
+
+@pytest.mark.parametrize("signal_name", ["SIGINT", "SIGTERM"])
+def test_interrupt_keeps_finished_records(impactchain_exe, tmp_path, signal_name):
+    import signal
+    proc = _start_long_run(impactchain_exe, tmp_path)
+    proc.send_signal(getattr(signal, signal_name))
+    _, err = proc.communicate(timeout=60)
+    assert proc.returncode == 3, err
+    assert "stopped early" in err
+    with h5py.File(tmp_path / "long.h5") as f:
+        assert int(np.ravel(f.attrs["complete"])[0]) == 0
+        cycles = f["strobe/cycle"][:]
+        assert len(cycles) > 0 and f["strobe/x"].shape == (len(cycles), 16)
+        np.testing.assert_array_equal(cycles, np.arange(1, len(cycles) + 1))
+        assert "final" in f
+    assert not (tmp_path / "long.h5.part").exists()
+
+
+def test_killed_run_leaves_no_file_that_claims_completion(impactchain_exe, tmp_path):
+    proc = _start_long_run(impactchain_exe, tmp_path)
+    proc.kill()
+    proc.communicate(timeout=60)
+    assert not (tmp_path / "long.h5").exists()
+    assert (tmp_path / "long.h5.part").exists()
