@@ -22,7 +22,7 @@
 module chain_engine
     use chain_kinds, only: wp, i8, two_pi
     use chain_error, only: error_t, set_error
-    use chain_flow, only: flow_t, forced_response, forced_acceleration, propagator
+    use chain_flow, only: flow_t, forced_response, propagator
     use chain_gaps, only: gap_t, gap_search_t, next_gap_zero, search_root, search_horizon
     use chain_impact, only: pair_impact, wall_impact, pair_reset_jacobian, &
                             wall_reset_jacobian, saltation_matrix
@@ -64,6 +64,9 @@ module chain_engine
         real(wp) :: start_s = 0             !! time within the cycle of the run's initial state
         real(wp), allocatable :: x(:), v(:) !! x(n), v(n): state of each oscillator at t(i)
         real(wp), allocatable :: t(:)       !! t(n): last-update time of each oscillator
+        real(wp), allocatable :: xp_t(:), vp_t(:) !! forced response at t(i), reused by bring
+        real(wp) :: drive_s = -huge(1.0_wp) !! time of the cached forced response below
+        real(wp) :: drive_x = 0, drive_v = 0, drive_sin = 0 !! xp, vp, sin(w s) at drive_s
         integer, allocatable :: contact(:)  !! contact(n): contact_free / left / right
         type(queue_t) :: queue              !! next event time of each bond
         integer, allocatable :: action(:)   !! action(0:n): what that event is
@@ -109,6 +112,9 @@ contains
         chain%start_s = s
         allocate (chain%t(n), chain%contact(n), chain%action(0:n), chain%site_counts(0:n))
         chain%t = s
+        call drive_now(chain)
+        chain%xp_t = [(chain%drive_x, j=1, n)]
+        chain%vp_t = [(chain%drive_v, j=1, n)]
         chain%contact = contact_free
         if (present(contact)) chain%contact = contact
         chain%site_counts = 0
@@ -223,6 +229,9 @@ contains
         call chain_sync(chain)
         chain%t = 0
         chain%s = 0
+        call drive_now(chain)
+        chain%xp_t = chain%drive_x
+        chain%vp_t = chain%drive_v
         call queue_shift(chain%queue, chain%flow%period, never)
         chain%cycle = chain%cycle + 1
         chain%last_event = chain%last_event - chain%flow%period
@@ -232,19 +241,18 @@ contains
     pure subroutine bring(chain, i)
         type(chain_t), intent(inout) :: chain
         integer, intent(in) :: i
-        real(wp) :: m(2, 2), xp0, vp0, xp1, vp1, y, vy, tau, c1
+        real(wp) :: m(2, 2), y, vy, tau, c1
         integer :: j
 
         tau = chain%s - chain%t(i)
         if (tau == 0) return
+        call drive_now(chain)
         if (chain%contact(i) == contact_free) then
             m = propagator(chain%flow, tau)
-            call forced_response(chain%flow, chain%t(i), xp0, vp0)
-            call forced_response(chain%flow, chain%s, xp1, vp1)
-            y = chain%x(i) - xp0
-            vy = chain%v(i) - vp0
-            chain%x(i) = m(1, 1)*y + m(1, 2)*vy + xp1
-            chain%v(i) = m(2, 1)*y + m(2, 2)*vy + vp1
+            y = chain%x(i) - chain%xp_t(i)
+            vy = chain%v(i) - chain%vp_t(i)
+            chain%x(i) = m(1, 1)*y + m(1, 2)*vy + chain%drive_x
+            chain%v(i) = m(2, 1)*y + m(2, 2)*vy + chain%drive_v
             do j = 1, chain%n_vectors
                 c1 = chain%tangent(j, 2*i - 1)
                 chain%tangent(j, 2*i - 1) = m(1, 1)*c1 + m(1, 2)*chain%tangent(j, 2*i)
@@ -252,7 +260,28 @@ contains
             end do
         end if
         chain%t(i) = chain%s
+        chain%xp_t(i) = chain%drive_x
+        chain%vp_t(i) = chain%drive_v
     end subroutine bring
+
+    !> The forced response at the current time, computed once per event time.
+    pure subroutine drive_now(chain)
+        type(chain_t), intent(inout) :: chain
+
+        if (chain%drive_s == chain%s) return
+        chain%drive_s = chain%s
+        call forced_response(chain%flow, chain%s, chain%drive_x, chain%drive_v)
+        chain%drive_sin = sin(chain%flow%omega*chain%s)
+    end subroutine drive_now
+
+    !> Acceleration of a free oscillator in state (x, v) now (after `drive_now`).
+    pure function acceleration_now(chain, x, v) result(acc)
+        type(chain_t), intent(in) :: chain
+        real(wp), intent(in) :: x, v
+        real(wp) :: acc
+
+        acc = -2*chain%flow%damping*v - x + chain%flow%amplitude*chain%drive_sin
+    end function acceleration_now
 
     !> Find and queue the next event of a bond from the current time.
     subroutine schedule(chain, bond, err)
@@ -330,7 +359,9 @@ contains
         end if
         call side_position(chain, l, moving_l, fixed_l)
         call side_position(chain, r, moving_r, fixed_r)
-        call forced_response(chain%flow, chain%s, xp, vp)
+        call drive_now(chain)
+        xp = chain%drive_x
+        vp = chain%drive_v
         if (moving_l .and. moving_r) then
             gap = gap_t(chain%spacing(bond), chain%x(r) - chain%x(l), &
                         chain%v(r) - chain%v(l), 0.0_wp)
@@ -428,9 +459,9 @@ contains
             call event_log_append(log, chain_elapsed(chain, chain%s), bond, max(u, 0.0_wp), &
                                   event_stick)
         else if (u > 0 .and. (bond == 0 .or. bond == chain%n)) then
-            acc_minus = forced_acceleration(chain%flow, chain%s, chain%x(i), v_minus)
+            acc_minus = acceleration_now(chain, chain%x(i), v_minus)
             call wall_impact(chain%restitution, chain%v(i))
-            acc_plus = forced_acceleration(chain%flow, chain%s, chain%x(i), chain%v(i))
+            acc_plus = acceleration_now(chain, chain%x(i), chain%v(i))
             if (chain%n_vectors > 0) then
                 call saltation_matrix(wall_reset_jacobian(chain%restitution), &
                                       [v_minus, acc_minus], [chain%v(i), acc_plus], &
@@ -519,8 +550,7 @@ contains
         real(wp) :: acc
 
         acc = 0
-        if (chain%contact(i) == contact_free) &
-            acc = forced_acceleration(chain%flow, chain%s, chain%x(i), chain%v(i))
+        if (chain%contact(i) == contact_free) acc = acceleration_now(chain, chain%x(i), chain%v(i))
     end function field
 
     !> Replace the tangent rows `rows` by S times them.

@@ -16,6 +16,7 @@ module chain_flow
         real(wp) :: omega = 1       !! w
         real(wp) :: gam = 1         !! sqrt(1 - b**2), the damped angular frequency
         real(wp) :: inv_gam = 1     !! 1 / gam
+        real(wp) :: alpha = 0       !! asin(b): phase lag of the extrema of a free oscillation
         real(wp) :: period = two_pi !! T = 2 pi / w
         real(wp) :: p_sin = 0       !! P of the steady state
         real(wp) :: q_cos = 0       !! Q of the steady state
@@ -34,6 +35,7 @@ contains
         flow%omega = omega
         flow%gam = sqrt(1 - damping**2)
         flow%inv_gam = 1 / flow%gam
+        flow%alpha = asin(damping)
         flow%period = two_pi / omega
         d2 = (1 - omega**2)**2 + (2*damping*omega)**2
         flow%p_sin = amplitude*(1 - omega**2) / d2

@@ -77,7 +77,7 @@ contains
         type(gap_t), intent(in) :: gap
         type(gap_search_t) :: res
         real(wp) :: b, gam, cc, ss, amp, phi, alpha, tau_min, tau_max, lo, hi, tau
-        real(wp) :: g, g1, step, e, cs, sn
+        real(wp) :: g, g1, g2, denom, step, e, cs, sn
         integer :: it
 
         b = flow%damping
@@ -95,25 +95,30 @@ contains
             return
         end if
         ! y = amp exp(-b tau) cos(gam tau - phi); minima where gam tau - phi = pi - alpha (2 pi)
+        ! with value -amp gam exp(-b tau); each minimum is shallower than the one before
         phi = atan2(ss, cc)
-        alpha = asin(b)
+        alpha = flow%alpha
         tau_min = modulo(pi - alpha + phi, two_pi) / gam
         ! in contact and not closing: the minimum we sit at is not a new impact
         if (g <= noise(gap%offset, amp) .and. tau_min < 0.5_wp*pi/gam) &
             tau_min = tau_min + two_pi/gam
-        if (gap%offset - amp*gam*exp(-b*tau_min) > 0) return
-        tau_max = tau_min - pi/gam
-        lo = max(0.0_wp, tau_max)
+        e = exp(-b*tau_min)
+        if (gap%offset - amp*gam*e > 0) return
+        lo = max(0.0_wp, tau_min - pi/gam)
         hi = tau_min
-        tau = 0.5_wp*(lo + hi)
+        ! first guess: the zero of the same branch with the decay frozen at tau_min; it lies at
+        ! or after the true zero, whose |cos| is smaller
+        tau = tau_min - (pi - alpha - acos(max(-1.0_wp, -gap%offset/(amp*e))))/gam
+        tau = min(hi, max(lo, tau))
         res%status = search_root
         res%tau = lo
-        do it = 1, 200
+        do it = 1, 100
             e = exp(-b*tau)
             cs = cos(gam*tau)
             sn = sin(gam*tau)
             g = gap%offset + e*(cc*cs + ss*sn)
             g1 = e*((gam*ss - b*cc)*cs - (gam*cc + b*ss)*sn)
+            g2 = -2*b*g1 - (g - gap%offset)
             if (g > 0) then
                 lo = tau
             else
@@ -123,19 +128,18 @@ contains
                 res%tau = lo
                 return
             end if
-            if (g1 < 0) then
-                step = -g/g1
-            else
-                step = huge(1.0_wp)
+            ! Halley's step (cubic convergence; g'' comes free from the oscillator equation)
+            denom = 2*g1**2 - g*g2
+            step = huge(1.0_wp)
+            if (denom /= 0) step = -2*g*g1/denom
+            if (.not. (tau + step > lo .and. tau + step < hi)) then
+                step = 0.5_wp*(lo + hi) - tau
             end if
-            if (tau + step <= lo .or. tau + step >= hi) then
-                tau = 0.5_wp*(lo + hi)
-            else
-                tau = tau + step
-                if (abs(step) <= 0.25_wp*time_tolerance) then
-                    res%tau = tau
-                    return
-                end if
+            tau = tau + step
+            ! cubic convergence: after a step this small the error is below 1e-15
+            if (abs(step) <= 1.0e-5_wp) then
+                res%tau = min(hi, max(lo, tau))
+                return
             end if
         end do
         res%tau = lo
