@@ -7,6 +7,8 @@ VENV := .venv
 PY := $(VENV)/bin/python
 FPM := $(abspath $(VENV))/bin/fpm
 RELEASE := --profile release
+# gfortran's runtime checks: bounds, and traps on invalid operations, division by zero, overflow
+CHECKED := --flag "-g -O1 -fcheck=all -ffpe-trap=invalid,zero,overflow -fbacktrace"
 APT_PACKAGES := gfortran libhdf5-dev liblapack-dev libblas-dev pkg-config \
                 libopenmpi-dev openmpi-bin
 PY_STAMP := $(VENV)/.requirements-installed
@@ -63,9 +65,14 @@ run: build
 
 fortran-test: build
 	$(FPM) test $(RELEASE)
+	@echo "impactchain: the same tests with runtime checks"
+	$(FPM) test $(CHECKED)
 
 python-test: build
 	IMPACTCHAIN_REQUIRE_EXTENSION=1 $(PY) -m pytest
+	@echo "impactchain: the simulator tests again against the runtime-checked build"
+	IMPACTCHAIN_FPM_FLAGS='-g -O1 -fcheck=all -ffpe-trap=invalid,zero,overflow -fbacktrace' \
+	    $(PY) -m pytest -q test/python
 
 test: fortran-test python-test
 

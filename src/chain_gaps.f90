@@ -136,8 +136,10 @@ contains
                 step = 0.5_wp*(lo + hi) - tau
             end if
             tau = tau + step
-            ! cubic convergence: after a step this small the error is below 1e-15
-            if (abs(step) <= 1.0e-5_wp) then
+            ! cubic convergence on a transversal zero: after a step this small the error is
+            ! below 1e-15; near grazing (small slope) iterate to the tolerance instead
+            if (abs(step) <= 0.25_wp*time_tolerance .or. &
+                (abs(step) <= 1.0e-5_wp .and. abs(g1) >= 1.0e-3_wp*amp)) then
                 res%tau = min(hi, max(lo, tau))
                 return
             end if

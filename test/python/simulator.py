@@ -1,6 +1,7 @@
 """The built simulator for tests: a fixture with its path, and a runner for namelist texts."""
 from __future__ import annotations
 
+import os
 import subprocess
 from pathlib import Path
 
@@ -12,9 +13,12 @@ FPM = ROOT / ".venv" / "bin" / "fpm"
 
 @pytest.fixture(scope="session")
 def impactchain_exe() -> Path:
-    """Path of the release build of the simulator (built if needed)."""
+    """Path of the simulator (built if needed): the release build, or the build with the
+    compiler flags in IMPACTCHAIN_FPM_FLAGS (e.g. gfortran's runtime checks)."""
+    flags = os.environ.get("IMPACTCHAIN_FPM_FLAGS")
+    profile = ["--flag", flags] if flags else ["--profile", "release"]
     out = subprocess.run(
-        [str(FPM), "run", "--profile", "release", "--runner", "echo"],
+        [str(FPM), "run", *profile, "--runner", "echo"],
         cwd=ROOT, capture_output=True, text=True, check=True,
     )
     path = ROOT / out.stdout.strip().splitlines()[-1]
