@@ -8,7 +8,7 @@ module chain_config
     use, intrinsic :: iso_fortran_env, only: iostat_end
     use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
     use chain_kinds, only: wp, i8, two_pi
-    use chain_error, only: error_t, set_error
+    use chain_error, only: error_t, set_error, fmt_real, fmt_int, fmt_int8
     implicit none
     private
     public :: run_config_t, read_config, validate_config, config_summary
@@ -712,32 +712,5 @@ contains
                 t(j:j) = achar(iachar(s(j:j)) + 32)
         end do
     end function lower
-
-    pure function fmt_real(x) result(s)
-        real(wp), intent(in) :: x
-        character(len=:), allocatable :: s
-        character(len=40) :: buf
-
-        write (buf, '(g0.8)') x
-        s = trim(adjustl(buf))
-    end function fmt_real
-
-    pure function fmt_int(i) result(s)
-        integer, intent(in) :: i
-        character(len=:), allocatable :: s
-        character(len=24) :: buf
-
-        write (buf, '(i0)') i
-        s = trim(buf)
-    end function fmt_int
-
-    pure function fmt_int8(i) result(s)
-        integer(i8), intent(in) :: i
-        character(len=:), allocatable :: s
-        character(len=24) :: buf
-
-        write (buf, '(i0)') i
-        s = trim(buf)
-    end function fmt_int8
 
 end module chain_config

@@ -21,7 +21,7 @@
 !> is closed and closing fires at the same instant.
 module chain_engine
     use chain_kinds, only: wp, i8, two_pi
-    use chain_error, only: error_t, set_error
+    use chain_error, only: error_t, set_error, fmt_int
     use chain_flow, only: flow_t, forced_response, propagator
     use chain_gaps, only: gap_t, gap_search_t, next_gap_zero, search_root, search_horizon
     use chain_impact, only: pair_impact, wall_impact, pair_reset_jacobian, &
@@ -122,7 +122,7 @@ contains
         do j = 0, n
             if (gaps(j) < 0) then
                 write (buf, '(es12.4)') gaps(j)
-                call set_error(err, "initial state: the gap of bond "//itoa(j)//" is " &
+                call set_error(err, "initial state: the gap of bond "//fmt_int(j)//" is " &
                                //trim(adjustl(buf))//" < 0 (oscillators overlap a neighbour " &
                                //"or a wall); bond k lies between oscillators k and k+1")
                 return
@@ -306,7 +306,7 @@ contains
         end if
         found = next_gap_zero(chain%flow, gap, chain%s, chain%flow%period)
         if (found%info /= 0) then
-            call set_error(err, "impact search: no convergence on bond "//itoa(bond)// &
+            call set_error(err, "impact search: no convergence on bond "//fmt_int(bond)// &
                            " (a gap grazing zero for too long); please report the input")
             return
         end if
@@ -664,7 +664,7 @@ contains
             chain%same_instant = chain%same_instant + 1
             if (chain%same_instant > max_same_instant) then
                 write (buf, '(es14.6)') chain_elapsed(chain, time)
-                call set_error(err, "event loop: more than "//itoa(max_same_instant)// &
+                call set_error(err, "event loop: more than "//fmt_int(max_same_instant)// &
                                " impacts at t = "//trim(adjustl(buf))//" (inelastic collapse "// &
                                "of a multi-body contact); raise restitution")
             end if
@@ -673,14 +673,5 @@ contains
             chain%last_event = time
         end if
     end subroutine count_instant
-
-    pure function itoa(i) result(str)
-        integer, intent(in) :: i
-        character(len=:), allocatable :: str
-        character(len=16) :: buf
-
-        write (buf, '(i0)') i
-        str = trim(buf)
-    end function itoa
 
 end module chain_engine

@@ -1,10 +1,11 @@
 !> Error reporting without `stop`: library procedures return an allocated `error_t` whose
 !> message reads "where: what (offending value, allowed range)"; only app/ turns it into an
-!> exit code.
+!> exit code. Also the formatting of numbers inside such messages.
 module chain_error
+    use chain_kinds, only: wp, i8
     implicit none
     private
-    public :: error_t, set_error
+    public :: error_t, set_error, fmt_real, fmt_int, fmt_int8
 
     type :: error_t
         character(len=:), allocatable :: message
@@ -19,5 +20,33 @@ contains
         allocate (err)
         err%message = message
     end subroutine set_error
+
+    !> Numbers as message text.
+    pure function fmt_real(x) result(s)
+        real(wp), intent(in) :: x
+        character(len=:), allocatable :: s
+        character(len=40) :: buf
+
+        write (buf, '(g0.8)') x
+        s = trim(adjustl(buf))
+    end function fmt_real
+
+    pure function fmt_int(i) result(s)
+        integer, intent(in) :: i
+        character(len=:), allocatable :: s
+        character(len=24) :: buf
+
+        write (buf, '(i0)') i
+        s = trim(buf)
+    end function fmt_int
+
+    pure function fmt_int8(i) result(s)
+        integer(i8), intent(in) :: i
+        character(len=:), allocatable :: s
+        character(len=24) :: buf
+
+        write (buf, '(i0)') i
+        s = trim(buf)
+    end function fmt_int8
 
 end module chain_error

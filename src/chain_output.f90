@@ -9,7 +9,7 @@ module chain_output
     use hdf5
     use h5lt
     use chain_kinds, only: wp, i8
-    use chain_error, only: error_t, set_error
+    use chain_error, only: error_t, set_error, fmt_int
     implicit none
     private
     public :: output_t, output_begin, output_header, output_strobe_write, output_events_append
@@ -135,8 +135,8 @@ contains
     subroutine output_strobe_write(out, n_records, first, x, v, cycle, err)
         type(output_t), intent(inout) :: out
         integer(i8), intent(in) :: n_records, first
-        real(wp), intent(in) :: x(:, :), v(:, :)
-        integer(i8), intent(in) :: cycle(:)
+        real(wp), intent(in), target, contiguous :: x(:, :), v(:, :)
+        integer(i8), intent(in), target, contiguous :: cycle(:)
         type(error_t), allocatable, intent(out) :: err
         integer(hsize_t) :: dims(2), block(2), offset(2)
         integer :: m
@@ -155,18 +155,19 @@ contains
             call create_fixed(out, 'strobe/cycle', H5T_STD_I64LE, dims(2:2), 'drive cycles', err)
             if (allocated(err)) return
         end if
-        call write_block_real(out, 'strobe/x', offset, block, x, err)
+        call write_slab(out, 'strobe/x', offset, block, .false., H5T_NATIVE_DOUBLE, c_loc(x), err)
         if (allocated(err)) return
-        call write_block_real(out, 'strobe/v', offset, block, v, err)
+        call write_slab(out, 'strobe/v', offset, block, .false., H5T_NATIVE_DOUBLE, c_loc(v), err)
         if (allocated(err)) return
-        call write_block_int8(out, 'strobe/cycle', offset(2:2), block(2:2), cycle, err)
+        call write_slab(out, 'strobe/cycle', offset(2:2), block(2:2), .false., &
+                        h5kind_to_type(i8, H5_INTEGER_KIND), c_loc(cycle), err)
     end subroutine output_strobe_write
 
     !> Append events to the extendible /events datasets.
     subroutine output_events_append(out, time, site, speed, kind, err)
         type(output_t), intent(inout) :: out
-        real(wp), intent(in) :: time(:), speed(:)
-        integer, intent(in) :: site(:), kind(:)
+        real(wp), intent(in), target, contiguous :: time(:), speed(:)
+        integer, intent(in), target, contiguous :: site(:), kind(:)
         type(error_t), allocatable, intent(out) :: err
         integer(hsize_t) :: offset(1), block(1)
 
@@ -189,11 +190,14 @@ contains
         if (size(time) == 0) return
         offset = [int(out%n_events, hsize_t)]
         block = [int(size(time), hsize_t)]
-        call extend_write_real(out, 'events/time', offset, block, time, err)
-        if (.not. allocated(err)) call extend_write_int(out, 'events/site', offset, block, site, err)
-        if (.not. allocated(err)) &
-            call extend_write_real(out, 'events/speed', offset, block, speed, err)
-        if (.not. allocated(err)) call extend_write_int(out, 'events/kind', offset, block, kind, err)
+        call write_slab(out, 'events/time', offset, block, .true., H5T_NATIVE_DOUBLE, &
+                        c_loc(time), err)
+        if (.not. allocated(err)) call write_slab(out, 'events/site', offset, block, .true., &
+                                                  H5T_NATIVE_INTEGER, c_loc(site), err)
+        if (.not. allocated(err)) call write_slab(out, 'events/speed', offset, block, .true., &
+                                                  H5T_NATIVE_DOUBLE, c_loc(speed), err)
+        if (.not. allocated(err)) call write_slab(out, 'events/kind', offset, block, .true., &
+                                                  H5T_NATIVE_INTEGER, c_loc(kind), err)
         if (.not. allocated(err)) out%n_events = out%n_events + size(time)
     end subroutine output_events_append
 
@@ -425,8 +429,8 @@ contains
             call h5ltget_attribute_int_f(f, '/', 'complete', complete, e)
             call h5ltget_attribute_int_f(f, 'params', 'n', n_file, e)
             if (n_file(1) /= n) call set_error(err, "&initial: file = '"//path//"' has n = "// &
-                                                itoa(n_file(1))//" oscillators, the input n = "// &
-                                                itoa(n))
+                                                fmt_int(n_file(1))//" oscillators, the input n = "// &
+                                                fmt_int(n))
         end if
         if (.not. allocated(err)) then
             call h5lexists_f(f, 'final', exists, e)
@@ -607,79 +611,24 @@ contains
         call h5dclose_f(dset, e)
     end subroutine close_slab
 
-    subroutine write_block_real(out, name, offset, block, values, err)
+    !> Write `buf` (memory type `mem_type`) into the hyperslab offset/block of dataset
+    !> `name`, first growing the dataset to hold it when `extend`.
+    subroutine write_slab(out, name, offset, block, extend, mem_type, buf, err)
         type(output_t), intent(in) :: out
         character(len=*), intent(in) :: name
         integer(hsize_t), intent(in) :: offset(:), block(:)
-        real(wp), intent(in) :: values(*)
+        logical, intent(in) :: extend
+        integer(hid_t), intent(in) :: mem_type
+        type(c_ptr), intent(in) :: buf
         type(error_t), allocatable, intent(out) :: err
         integer(hid_t) :: dset, fspace, mspace
         integer :: e
 
-        call open_slab(out, name, offset, block, .false., dset, fspace, mspace, e)
-        if (e >= 0) call h5dwrite_f(dset, H5T_NATIVE_DOUBLE, values, block, e, &
-                                    mem_space_id=mspace, file_space_id=fspace)
+        call open_slab(out, name, offset, block, extend, dset, fspace, mspace, e)
+        if (e >= 0) call h5dwrite_f(dset, mem_type, buf, e, mem_space_id=mspace, &
+                                    file_space_id=fspace)
         call close_slab(dset, fspace, mspace)
         if (e < 0) call set_error(err, "output: cannot write /"//name)
-    end subroutine write_block_real
-
-    subroutine write_block_int8(out, name, offset, block, values, err)
-        type(output_t), intent(in) :: out
-        character(len=*), intent(in) :: name
-        integer(hsize_t), intent(in) :: offset(:), block(:)
-        integer(i8), intent(in), target :: values(*)
-        type(error_t), allocatable, intent(out) :: err
-        integer(hid_t) :: dset, fspace, mspace
-        integer :: e
-        type(c_ptr) :: buf
-
-        buf = c_loc(values)
-        call open_slab(out, name, offset, block, .false., dset, fspace, mspace, e)
-        if (e >= 0) call h5dwrite_f(dset, h5kind_to_type(i8, H5_INTEGER_KIND), buf, e, &
-                                    mem_space_id=mspace, file_space_id=fspace)
-        call close_slab(dset, fspace, mspace)
-        if (e < 0) call set_error(err, "output: cannot write /"//name)
-    end subroutine write_block_int8
-
-    subroutine extend_write_real(out, name, offset, block, values, err)
-        type(output_t), intent(in) :: out
-        character(len=*), intent(in) :: name
-        integer(hsize_t), intent(in) :: offset(:), block(:)
-        real(wp), intent(in) :: values(*)
-        type(error_t), allocatable, intent(out) :: err
-        integer(hid_t) :: dset, fspace, mspace
-        integer :: e
-
-        call open_slab(out, name, offset, block, .true., dset, fspace, mspace, e)
-        if (e >= 0) call h5dwrite_f(dset, H5T_NATIVE_DOUBLE, values, block, e, &
-                                    mem_space_id=mspace, file_space_id=fspace)
-        call close_slab(dset, fspace, mspace)
-        if (e < 0) call set_error(err, "output: cannot append to /"//name)
-    end subroutine extend_write_real
-
-    subroutine extend_write_int(out, name, offset, block, values, err)
-        type(output_t), intent(in) :: out
-        character(len=*), intent(in) :: name
-        integer(hsize_t), intent(in) :: offset(:), block(:)
-        integer, intent(in) :: values(*)
-        type(error_t), allocatable, intent(out) :: err
-        integer(hid_t) :: dset, fspace, mspace
-        integer :: e
-
-        call open_slab(out, name, offset, block, .true., dset, fspace, mspace, e)
-        if (e >= 0) call h5dwrite_f(dset, H5T_NATIVE_INTEGER, values, block, e, &
-                                    mem_space_id=mspace, file_space_id=fspace)
-        call close_slab(dset, fspace, mspace)
-        if (e < 0) call set_error(err, "output: cannot append to /"//name)
-    end subroutine extend_write_int
-
-    pure function itoa(i) result(str)
-        integer, intent(in) :: i
-        character(len=:), allocatable :: str
-        character(len=16) :: buf
-
-        write (buf, '(i0)') i
-        str = trim(buf)
-    end function itoa
+    end subroutine write_slab
 
 end module chain_output

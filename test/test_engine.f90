@@ -185,14 +185,7 @@ contains
         integer :: j
 
         call make_chain(chain, 1, 3.0_wp, 0.6_wp, 0.05_wp, 0.5_wp, .true., 0.0_wp, 0.0_wp, err)
-        call event_log_init(log, .false., 0)
-        worst = 0
-        do j = 1, 300
-            call advance_to_point(chain, int(j, i8), 0.0_wp, log, err)
-            if (allocated(err)) exit
-            worst = min(worst, minval(chain_gaps_now(chain)))
-        end do
-        if (allocated(err)) print *, err%message
+        call run_watching_gaps(chain, 300, worst, err)
         call check(t, .not. allocated(err), 'chatter run completes')
         call check(t, chain%sticks > 100 .and. chain%releases > 100, &
                    'chatter ends in sticking contacts that release')
@@ -216,13 +209,7 @@ contains
         call forced_response(flow, 0.0_wp, xp, vp)
         call chain_init(chain, flow, 0.7_wp, [1.0_wp, 1.0_wp], .true., 1.0e-9_wp, [xp], [vp], &
                         0_i8, 0.0_wp, err)
-        call event_log_init(log, .false., 0)
-        worst = 0
-        do j = 1, 500
-            call advance_to_point(chain, int(j, i8), 0.0_wp, log, err)
-            if (allocated(err)) exit
-            worst = min(worst, minval(chain_gaps_now(chain)))
-        end do
+        call run_watching_gaps(chain, 500, worst, err)
         call check(t, .not. allocated(err), 'exact grazing run completes')
         call check(t, worst >= -1.0e-12_wp, 'exact grazing: gaps never below -1e-12')
         call check(t, chain%impacts <= 2*500*4, 'exact grazing: at most a few touches per cycle')
@@ -239,16 +226,27 @@ contains
 
         call make_chain(chain, 6, 2.0_wp, 1.2_wp, 0.05_wp, 0.0_wp, .true., 0.05_wp, 2.0_wp, &
                         err, spacing=0.2_wp)
-        call event_log_init(log, .false., 0)
-        worst = 0
-        do j = 1, 200
-            call advance_to_point(chain, int(j, i8), 0.0_wp, log, err)
-            if (allocated(err)) exit
-            worst = min(worst, minval(chain_gaps_now(chain)))
-        end do
-        if (allocated(err)) print *, err%message
+        call run_watching_gaps(chain, 200, worst, err)
         call check(t, .not. allocated(err), 'plastic (K = 0) crowded chain completes')
         call check(t, worst >= -1.0e-12_wp, 'plastic chain: gaps never below -1e-12')
     end subroutine plastic_cluster
+
+    !> Run `cycles` drive cycles and return the smallest gap seen at any strobe point.
+    subroutine run_watching_gaps(chain, cycles, worst, err)
+        type(chain_t), intent(inout) :: chain
+        integer, intent(in) :: cycles
+        real(wp), intent(out) :: worst
+        type(error_t), allocatable, intent(out) :: err
+        type(event_log_t) :: log
+        integer :: j
+
+        call event_log_init(log, .false., 0)
+        worst = 0
+        do j = 1, cycles
+            call advance_to_point(chain, int(j, i8), 0.0_wp, log, err)
+            if (allocated(err)) return
+            worst = min(worst, minval(chain_gaps_now(chain)))
+        end do
+    end subroutine run_watching_gaps
 
 end module test_engine
