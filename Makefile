@@ -56,6 +56,7 @@ $(PY_STAMP): requirements.txt
 
 build: setup
 	$(FPM) build $(RELEASE)
+	$(PY) f2py/build.py
 
 run: build
 	@mkdir -p runs
@@ -76,5 +77,8 @@ python-test: build
 
 test: fortran-test python-test
 
+bench: build
+	$(PY) bench/run_bench.py --fpm $(FPM)
+
 clean:
-	rm -rf build runs/*.h5 runs/*.png
+	rm -rf build runs/*.h5 runs/*.png post/_kernels*

@@ -458,7 +458,8 @@ contains
         end if
         if (size(cfg%spacing) /= cfg%n + 1) then
             call set_error(err, "&chain: spacing has "//fmt_int(size(cfg%spacing))// &
-                           " values; give one (uniform) or n+1 = "//fmt_int(cfg%n + 1))
+                           " values; give one (uniform) or n+1 = "//fmt_int(cfg%n + 1)// &
+                           " (one per bond, 0..n)")
             return
         end if
         do j = 1, size(cfg%spacing)

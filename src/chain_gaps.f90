@@ -79,6 +79,7 @@ contains
         real(wp) :: b, gam, cc, ss, amp, phi, alpha, tau_min, tau_max, lo, hi, tau
         real(wp) :: g, g1, g2, denom, step, e, cs, sn
         integer :: it
+        logical :: halley
 
         b = flow%damping
         gam = flow%gam
@@ -132,14 +133,13 @@ contains
             denom = 2*g1**2 - g*g2
             step = huge(1.0_wp)
             if (denom /= 0) step = -2*g*g1/denom
-            if (.not. (tau + step > lo .and. tau + step < hi)) then
-                step = 0.5_wp*(lo + hi) - tau
-            end if
+            halley = tau + step > lo .and. tau + step < hi
+            if (.not. halley) step = 0.5_wp*(lo + hi) - tau
             tau = tau + step
-            ! cubic convergence on a transversal zero: after a step this small the error is
-            ! below 1e-15; near grazing (small slope) iterate to the tolerance instead
+            ! cubic convergence on a transversal zero: after a Halley step this small the error
+            ! is below 1e-15; near grazing (small slope) iterate to the tolerance instead
             if (abs(step) <= 0.25_wp*time_tolerance .or. &
-                (abs(step) <= 1.0e-5_wp .and. abs(g1) >= 1.0e-3_wp*amp)) then
+                (halley .and. abs(step) <= 1.0e-5_wp .and. abs(g1) >= 1.0e-3_wp*amp)) then
                 res%tau = min(hi, max(lo, tau))
                 return
             end if

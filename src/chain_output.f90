@@ -238,23 +238,27 @@ contains
                             site_counts, err)
         type(output_t), intent(inout) :: out
         real(wp), intent(in) :: collisions_per_cycle
-        integer(i8), intent(in) :: impacts, sticks, releases, site_counts(:)
+        integer(i8), intent(in) :: impacts, sticks, releases
+        integer(i8), intent(in), target, contiguous :: site_counts(:)
         type(error_t), allocatable, intent(out) :: err
         integer :: e(4)
+        integer(hsize_t) :: dims(1)
 
         call output_group(out, 'stats', err)
         if (allocated(err)) return
         call set_real_attr(out%file, 'stats', 'collisions_per_cycle', collisions_per_cycle, e(1))
-        call h5ltset_attribute_int_f(out%file, 'stats', 'impacts', [int(impacts)], &
-                                     1_size_t, e(2))
-        call h5ltset_attribute_int_f(out%file, 'stats', 'sticks', [int(sticks)], 1_size_t, e(3))
-        call h5ltset_attribute_int_f(out%file, 'stats', 'releases', [int(releases)], &
-                                     1_size_t, e(4))
+        call set_int8_attr(out%file, 'stats', 'impacts', impacts, e(2))
+        call set_int8_attr(out%file, 'stats', 'sticks', sticks, e(3))
+        call set_int8_attr(out%file, 'stats', 'releases', releases, e(4))
         if (any(e < 0)) then
             call set_error(err, "output: cannot write /stats")
             return
         end if
-        call write_int_1d(out%file, 'stats/site_counts', int(site_counts), 'impacts', err)
+        dims = [int(size(site_counts), hsize_t)]
+        call create_fixed(out, 'stats/site_counts', H5T_STD_I64LE, dims, 'impacts', err)
+        if (.not. allocated(err)) call write_slab(out, 'stats/site_counts', [0_hsize_t], dims, &
+                                                  .false., h5kind_to_type(i8, H5_INTEGER_KIND), &
+                                                  c_loc(site_counts), err)
     end subroutine output_stats
 
     subroutine output_periods(out, period, err)
@@ -476,6 +480,25 @@ contains
 
         call h5ltset_attribute_double_f(loc, obj, name, [value], 1_size_t, e)
     end subroutine set_real_attr
+
+    !> A 64-bit integer attribute (counters of long runs exceed 32 bits).
+    subroutine set_int8_attr(loc, obj, name, value, e)
+        integer(hid_t), intent(in) :: loc
+        character(len=*), intent(in) :: obj, name
+        integer(i8), intent(in), target :: value
+        integer, intent(out) :: e
+        integer(hid_t) :: space, attr
+        integer :: e2
+
+        call h5screate_f(H5S_SCALAR_F, space, e)
+        if (e < 0) return
+        call h5acreate_by_name_f(loc, obj, name, H5T_STD_I64LE, space, attr, e)
+        if (e >= 0) then
+            call h5awrite_f(attr, h5kind_to_type(i8, H5_INTEGER_KIND), c_loc(value), e)
+            call h5aclose_f(attr, e2)
+        end if
+        call h5sclose_f(space, e2)
+    end subroutine set_int8_attr
 
     subroutine write_real_1d(loc, name, values, units, err)
         integer(hid_t), intent(in) :: loc

@@ -24,8 +24,6 @@ module chain_run
     public :: section_target, advance_to_point, poincare_jacobian, check_size
     public :: period_window
 
-    !> Records kept in memory for period detection (the last ones of the run).
-    integer, parameter :: period_window = 1024
     integer, parameter :: event_flush = 65536
 
     !> Where strobe records and events go, chunk by chunk.
@@ -188,8 +186,8 @@ contains
         end if
         m = int(max(1_i8, min(cfg%cycles, int(2**20/cfg%n, i8))))
         allocate (xbuf(cfg%n, m), vbuf(cfg%n, m), cbuf(m))
-        nwin = int(min(cfg%cycles, int(period_window, i8)))
-        allocate (xwin(nwin, cfg%n), vwin(nwin, cfg%n))
+        nwin = int(min(cfg%cycles, int(period_window(cfg%max_period), i8)))
+        allocate (xwin(cfg%n, nwin), vwin(cfg%n, nwin))
         first = 1
         do j = 1, cfg%cycles
             call section_target(chain, cfg%transient, cfg%phase, j, target_cycle, target_s)
@@ -200,8 +198,8 @@ contains
             vbuf(:, i) = chain%v
             cbuf(i) = chain%cycle
             w = int(modulo(j - 1, int(nwin, i8))) + 1
-            xwin(w, :) = chain%x
-            vwin(w, :) = chain%v
+            xwin(:, w) = chain%x
+            vwin(:, w) = chain%v
             if (cfg%lyapunov .and. modulo(j, int(cfg%qr_every, i8)) == 0) then
                 call lyapunov_step(acc, chain%tangent, info)
                 if (info /= 0) then
@@ -233,8 +231,8 @@ contains
         res%periods = 0
         if (nwin > 0) then
             do i = 1, cfg%n
-                res%periods(i) = detect_period(in_order(xwin(:, i), res%cycles_done, nwin), &
-                                               in_order(vwin(:, i), res%cycles_done, nwin), &
+                res%periods(i) = detect_period(in_order(xwin(i, :), res%cycles_done, nwin), &
+                                               in_order(vwin(i, :), res%cycles_done, nwin), &
                                                cfg%max_period, cfg%period_tol)
             end do
         end if
@@ -268,6 +266,17 @@ contains
                            fmt_real(mb)//" MB (n x cycles x 16 bytes, plus Lyapunov "// &
                            "estimates), more than max_size_mb = "//fmt_real(cfg%max_size_mb)// &
                            "; lower &run cycles or raise &output max_size_mb")
+            return
+        end if
+        ! tangent frames in memory: the frame, the engine's transposed copy, the QR's copy and
+        ! its workspace; for the Poincare-map Jacobian the same for a full 2n x 2n frame
+        mb = 32.0_wp*k*2*cfg%n/1.0e6_wp
+        if (cfg%jacobian) mb = max(mb, 32.0_wp*(2.0_wp*cfg%n)**2/1.0e6_wp)
+        if (mb > cfg%max_size_mb) then
+            call set_error(err, "&lyapunov: the tangent vectors of this run need about "// &
+                           fmt_real(mb)//" MB of memory, more than &output max_size_mb = "// &
+                           fmt_real(cfg%max_size_mb)//"; lower vectors, leave jacobian off, "// &
+                           "or raise max_size_mb")
         end if
     end subroutine check_size
 
@@ -302,6 +311,14 @@ contains
                                   log%kind(j))
         end do
     end subroutine memory_put_events
+
+    !> Records kept in memory for period detection: enough to see every period up to
+    !> max_period repeat several times, and no more (memory is n x window x 16 bytes).
+    pure integer function period_window(max_period)
+        integer, intent(in) :: max_period
+
+        period_window = 4*max_period + 16
+    end function period_window
 
     !> The last `nwin` values of a ring buffer in time order.
     pure function in_order(ring, done, nwin) result(series)

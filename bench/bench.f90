@@ -1,0 +1,541 @@
+!> impactchain benchmark: `impactchain-bench [--case NAME] [--tsv] [--quick] [--list]`.
+!>
+!> Times the event engine through the same entry points as a real run (`start_chain`,
+!> `record_run` with an in-memory sink) and prints one Markdown table: collisions per cycle,
+!> microseconds per drive cycle, collisions per second, nanoseconds per collision and peak
+!> memory. Each case is warmed up, then run long enough (>= 0.5 s) three times; the best
+!> repetition is reported. `bench/run_bench.py` runs every case in its own process (so the
+!> peak memory is per case) and adds the scipy baseline; this program alone reports the
+!> process high-water mark after each case. Timings are never asserted.
+!>
+!> Not timed: HDF5 output and the event log (record_events = .false.); strobe records are
+!> kept in memory only where a sweep would keep them.
+program bench
+    use, intrinsic :: iso_fortran_env, only: int64, output_unit, error_unit
+    use impactchain, only: wp, i8, error_t, run_config_t, validate_config, chain_t, &
+                           chain_init, chain_advance, chain_sync, chain_new_cycle, &
+                           event_log_t, event_log_init, memory_sink_t, run_result_t, &
+                           record_run, start_chain, make_flow
+    use bench_kit, only: row_t, wall_seconds, peak_memory_kib, print_machine, &
+                         print_table_head, print_row_markdown, print_row_tsv
+    implicit none
+
+    character(len=*), parameter :: case_names(10) = [character(len=16) :: &
+        'default', 'default-lyap', 'heavy-16', 'heavy-1024', 'heavy-16384', 'n1024-lyap10', &
+        'fig10-sweep', 'fig13-scan', 'strobe', 'strobe-record']
+    character(len=:), allocatable :: only
+    logical :: tsv, quick
+    real(wp) :: min_time
+    integer :: reps, j
+
+    call parse_arguments(only, tsv, quick)
+    min_time = 0.5_wp
+    reps = 3
+    if (quick) then
+        min_time = 0.02_wp
+        reps = 1
+    end if
+    call print_machine(tsv)
+    if (.not. tsv) call print_table_head()
+    do j = 1, size(case_names)
+        if (len(only) > 0 .and. only /= trim(case_names(j))) cycle
+        call run_case(trim(case_names(j)))
+    end do
+    if (.not. tsv) then
+        write (output_unit, '(a)') ''
+        write (output_unit, '(a)') 'Best of '//itoa(reps)//' repetitions of >= '// &
+            trim(real_fmt(min_time))//' s each after a warm-up; peak memory is the '// &
+            'process high-water mark (VmHWM) after the case.'
+    end if
+
+contains
+
+    subroutine run_case(name)
+        character(len=*), intent(in) :: name
+        type(row_t) :: row
+
+        row%name = name
+        row%unit_name = ''
+        select case (name)
+        case ('default')
+            call case_chain(row, 'paper default (A=1.7, w=1.5, b=0.05, K=0.7), no exponents', &
+                            16, 1.7_wp, 1.5_wp, 0.05_wp, 0.7_wp, 0.3_wp, 0.3_wp, 500_i8, 0, &
+                            emit_state=.true.)
+        case ('default-lyap')
+            call case_chain(row, 'paper default, all 32 exponents (QR every cycle)', &
+                            16, 1.7_wp, 1.5_wp, 0.05_wp, 0.7_wp, 0.3_wp, 0.3_wp, 500_i8, 32)
+        case ('heavy-16', 'heavy-1024', 'heavy-16384')
+            call case_heavy(row, name)
+        case ('n1024-lyap10')
+            call case_chain(row, 'paper default parameters, 10 leading exponents', &
+                            1024, 1.7_wp, 1.5_wp, 0.05_wp, 0.7_wp, 0.3_wp, 0.3_wp, 200_i8, 10)
+        case ('fig10-sweep')
+            call case_fig10(row)
+        case ('fig13-scan')
+            call case_fig13(row)
+        case ('strobe')
+            call case_strobe(row)
+        case ('strobe-record')
+            call case_strobe_record(row)
+        end select
+        row%peak_kib = peak_memory_kib()
+        if (tsv) then
+            call print_row_tsv(row)
+        else
+            call print_row_markdown(row)
+        end if
+        flush (output_unit)
+    end subroutine run_case
+
+    !> A configuration that passes `validate_config`: fixed walls, a = 1, seeded random start.
+    function make_config(n, amplitude, omega, damping, restitution, x_amp, v_amp) result(cfg)
+        integer, intent(in) :: n
+        real(wp), intent(in) :: amplitude, omega, damping, restitution, x_amp, v_amp
+        type(run_config_t) :: cfg
+        type(error_t), allocatable :: err
+        integer :: k
+
+        cfg%n = n
+        cfg%spacing = [(1.0_wp, k=0, n)]
+        cfg%amplitude = amplitude
+        cfg%omega = omega
+        cfg%damping = damping
+        cfg%restitution = restitution
+        cfg%boundary = 'fixed'
+        cfg%initial_kind = 'random'
+        if (x_amp == 0 .and. v_amp == 0) cfg%initial_kind = 'rest'
+        cfg%seed = 1
+        cfg%x_amp = x_amp
+        cfg%v_amp = v_amp
+        allocate (cfg%x0(0), cfg%v0(0))
+        cfg%initial_file = ''
+        cfg%output_file = 'bench.h5'
+        cfg%sweep_mode = 'continuation'
+        cfg%sweep_parameter = ''
+        cfg%sweep_parameter2 = ''
+        cfg%input_text = ''
+        cfg%record_events = .false.
+        cfg%transient = 0
+        cfg%cycles = 1
+        call validate_config(cfg, err)
+        if (allocated(err)) call fail(err%message)
+    end function make_config
+
+    function new_chain(cfg) result(chain)
+        type(run_config_t), intent(in) :: cfg
+        type(chain_t) :: chain
+        type(error_t), allocatable :: err
+
+        call start_chain(cfg, chain, err)
+        if (allocated(err)) call fail(err%message)
+    end function new_chain
+
+    !> `cycles` recorded cycles from where the chain stands (on the section), timed.
+    subroutine run_block(cfg, chain, cycles, seconds, res)
+        type(run_config_t), intent(inout) :: cfg
+        type(chain_t), intent(inout) :: chain
+        integer(int64), intent(in) :: cycles
+        real(wp), intent(out) :: seconds
+        type(run_result_t), intent(out) :: res
+        type(memory_sink_t) :: sink
+        type(error_t), allocatable :: err
+        real(wp) :: t0
+
+        sink%keep_strobe = .false.
+        cfg%transient = chain%cycle - chain%start_cycle
+        cfg%cycles = cycles
+        t0 = wall_seconds()
+        call record_run(cfg, chain, sink, res, err)
+        seconds = wall_seconds() - t0
+        if (allocated(err)) call fail(err%message)
+    end subroutine run_block
+
+    !> Warm-up and calibration (doubling until a block takes a fifth of min_time), then the
+    !> best of `reps` blocks of >= min_time.
+    subroutine time_cycles(cfg, chain, row)
+        type(run_config_t), intent(inout) :: cfg
+        type(chain_t), intent(inout) :: chain
+        type(row_t), intent(inout) :: row
+        type(run_result_t) :: res
+        integer(int64) :: cycles
+        real(wp) :: seconds
+        integer :: r
+
+        cycles = 4
+        do
+            call run_block(cfg, chain, cycles, seconds, res)
+            if (seconds >= 0.2_wp*min_time) exit
+            cycles = 2*cycles
+        end do
+        cycles = max(cycles, ceiling(1.1_wp*min_time*cycles/max(seconds, 1.0e-9_wp), int64))
+        row%seconds = huge(1.0_wp)
+        do r = 1, reps
+            call run_block(cfg, chain, cycles, seconds, res)
+            if (seconds < row%seconds) then
+                row%seconds = seconds
+                row%cycles = res%cycles_done
+                row%collisions = res%impacts
+                if (size(res%site_counts) > 2) row%min_bond_share = &
+                    real(minval(res%site_counts), wp)/max(1.0_wp, sum(res%site_counts) &
+                                                          /real(size(res%site_counts), wp))
+            end if
+        end do
+    end subroutine time_cycles
+
+    !> Cases 1, 2 and 4: one chain, a transient, then timed record_run blocks.
+    subroutine case_chain(row, label, n, amplitude, omega, damping, restitution, x_amp, &
+                          v_amp, transient, vectors, emit_state)
+        type(row_t), intent(inout) :: row
+        character(len=*), intent(in) :: label
+        integer, intent(in) :: n, vectors
+        real(wp), intent(in) :: amplitude, omega, damping, restitution, x_amp, v_amp
+        integer(int64), intent(in) :: transient
+        logical, intent(in), optional :: emit_state
+        type(run_config_t) :: cfg
+        type(chain_t) :: chain
+        type(run_result_t) :: res
+        real(wp) :: seconds
+
+        row%label = label
+        row%n = n
+        cfg = make_config(n, amplitude, omega, damping, restitution, x_amp, v_amp)
+        chain = new_chain(cfg)
+        call run_block(cfg, chain, transient, seconds, res)
+        if (present(emit_state) .and. tsv) then
+            if (emit_state) call print_state(chain)
+        end if
+        if (vectors > 0) then
+            cfg%lyapunov = .true.
+            cfg%vectors = vectors
+            cfg%qr_every = 1
+        end if
+        call time_cycles(cfg, chain, row)
+    end subroutine case_chain
+
+    !> Case 3: a collision-heavy chain. With A = 0, b = 0 and K = 1 the chain conserves
+    !> energy, so a random start with large velocities keeps every bond colliding for ever at
+    !> a stationary rate, the same per bond for every n: the cost per collision can be
+    !> compared across n. (With the drive on, b = 0 and K = 1 heat up through the walls, so
+    !> the rate drifts; with b > 0 or K < 1 the interior of a long chain falls silent.)
+    subroutine case_heavy(row, name)
+        type(row_t), intent(inout) :: row
+        character(len=*), intent(in) :: name
+        integer :: n
+
+        select case (name)
+        case ('heavy-16')
+            n = 16
+        case ('heavy-1024')
+            n = 1024
+        case default
+            n = 16384
+        end select
+        call case_chain(row, 'collision-heavy, conservative: A=0, b=0, K=1, random start '// &
+                        'x_amp=0.3, v_amp=4', n, 0.0_wp, 1.5_wp, 0.0_wp, 1.0_wp, 0.3_wp, &
+                        4.0_wp, 50_i8, 0)
+    end subroutine case_heavy
+
+    !> Figure 10 (n = 8, K = 0.5, w = 1.9, b = 0.05): A from 6 down to 1, 300 cycles per
+    !> point of which the last 50 are kept, continuing each point from the previous one's
+    !> final state. Step 0.01 instead of the figure's 0.001 (501 of its 5001 points: the same
+    !> range, a tenth of the points).
+    subroutine case_fig10(row)
+        type(row_t), intent(inout) :: row
+        integer, parameter :: points = 501
+        integer :: r
+        integer(int64) :: cycles, impacts, done
+        real(wp) :: seconds, t0, best
+
+        row%label = 'fig 10 sweep (n=8, K=0.5, w=1.9; A 6 -> 1 step 0.01, 300 cycles/point, '// &
+                    'continuation)'
+        row%n = 8
+        row%unit_name = 'points'
+        call fig10_pass(50, cycles, impacts)
+        best = huge(1.0_wp)
+        do r = 1, reps
+            t0 = wall_seconds()
+            done = 0
+            row%cycles = 0
+            row%collisions = 0
+            do
+                call fig10_pass(points, cycles, impacts)
+                done = done + points
+                row%cycles = row%cycles + cycles
+                row%collisions = row%collisions + impacts
+                seconds = wall_seconds() - t0
+                if (seconds >= min_time) exit
+            end do
+            if (seconds < best) then
+                best = seconds
+                row%units = done
+            end if
+        end do
+        row%seconds = best
+    end subroutine case_fig10
+
+    subroutine fig10_pass(points, cycles, impacts)
+        integer, intent(in) :: points
+        integer(int64), intent(out) :: cycles, impacts
+        type(run_config_t) :: cfg
+        type(chain_t) :: chain, next
+        type(memory_sink_t) :: sink
+        type(run_result_t) :: res
+        type(error_t), allocatable :: err
+        integer :: p
+
+        cfg = make_config(8, 6.0_wp, 1.9_wp, 0.05_wp, 0.5_wp, 0.3_wp, 0.3_wp)
+        cfg%transient = 250
+        cfg%cycles = 50
+        cycles = 0
+        impacts = 0
+        chain = new_chain(cfg)
+        do p = 1, points
+            cfg%amplitude = 6 - 0.01_wp*(p - 1)
+            if (p > 1) then
+                call chain_init(next, make_flow(cfg%damping, cfg%amplitude, cfg%omega), &
+                                cfg%restitution, cfg%spacing, .true., cfg%stick_speed, &
+                                chain%x, chain%v, 0_i8, 0.0_wp, err, chain%contact)
+                if (allocated(err)) call fail(err%message)
+                chain = next
+            end if
+            call record_run(cfg, chain, sink, res, err)
+            if (allocated(err)) call fail(err%message)
+            cycles = cycles + cfg%transient + cfg%cycles
+            impacts = impacts + res%impacts
+        end do
+    end subroutine fig10_pass
+
+    !> Figure 13 (n = 16, w = 1.9, b = 0.05, K = 0.7): all 32 exponents per point, 100
+    !> transient + 300 averaged cycles, each point from the same seeded start. The paper does
+    !> not give the A range; A = 1.0 .. 3.0 step 0.05 (41 points) stands in for it.
+    subroutine case_fig13(row)
+        type(row_t), intent(inout) :: row
+        integer, parameter :: points = 41
+        integer :: r
+        integer(int64) :: cycles, impacts, done
+        real(wp) :: seconds, t0, best
+
+        row%label = 'fig 13 scan (n=16, w=1.9, 32 exponents; A 1.0 -> 3.0 step 0.05, '// &
+                    '100 + 300 cycles/point, independent)'
+        row%n = 16
+        row%unit_name = 'points'
+        call fig13_pass(5, cycles, impacts)
+        best = huge(1.0_wp)
+        do r = 1, reps
+            t0 = wall_seconds()
+            done = 0
+            row%cycles = 0
+            row%collisions = 0
+            do
+                call fig13_pass(points, cycles, impacts)
+                done = done + points
+                row%cycles = row%cycles + cycles
+                row%collisions = row%collisions + impacts
+                seconds = wall_seconds() - t0
+                if (seconds >= min_time) exit
+            end do
+            if (seconds < best) then
+                best = seconds
+                row%units = done
+            end if
+        end do
+        row%seconds = best
+    end subroutine case_fig13
+
+    subroutine fig13_pass(points, cycles, impacts)
+        integer, intent(in) :: points
+        integer(int64), intent(out) :: cycles, impacts
+        type(run_config_t) :: cfg
+        type(chain_t) :: chain
+        type(memory_sink_t) :: sink
+        type(run_result_t) :: res
+        type(error_t), allocatable :: err
+        integer :: p
+
+        cfg = make_config(16, 1.0_wp, 1.9_wp, 0.05_wp, 0.7_wp, 0.3_wp, 0.3_wp)
+        cfg%transient = 100
+        cfg%cycles = 300
+        cfg%lyapunov = .true.
+        cfg%vectors = 0
+        cfg%qr_every = 1
+        sink%keep_strobe = .false.
+        cycles = 0
+        impacts = 0
+        do p = 1, points
+            cfg%amplitude = 1 + 0.05_wp*(p - 1)
+            chain = new_chain(cfg)
+            call record_run(cfg, chain, sink, res, err)
+            if (allocated(err)) call fail(err%message)
+            cycles = cycles + cfg%transient + cfg%cycles
+            impacts = impacts + res%impacts
+        end do
+    end subroutine fig13_pass
+
+    !> A strobe snapshot on its own: bring every oscillator to one time (`chain_sync`) and copy
+    !> x and v out, for n = 100000 with a drive too weak for any impact. Snapshots are taken at
+    !> 16 times within each cycle so every one of them finds every oscillator out of date.
+    subroutine case_strobe(row)
+        type(row_t), intent(inout) :: row
+        integer, parameter :: n = 100000, per_cycle = 16
+        type(run_config_t) :: cfg
+        type(chain_t) :: chain
+        type(event_log_t) :: log
+        type(error_t), allocatable :: err
+        real(wp), allocatable :: xs(:), vs(:)
+        real(wp) :: elapsed, t0, best, checksum
+        integer(int64) :: snaps
+        integer :: r, k
+
+        row%label = 'strobe snapshot: chain_sync + copy x, v (A=1e-3, no impacts)'
+        row%n = n
+        row%unit_name = 'oscillator snapshot'
+        cfg = make_config(n, 1.0e-3_wp, 1.5_wp, 0.05_wp, 0.7_wp, 0.0_wp, 0.0_wp)
+        chain = new_chain(cfg)
+        call event_log_init(log, .false., 0)
+        allocate (xs(n), vs(n))
+        checksum = 0
+        best = huge(1.0_wp)
+        do r = 0, reps
+            elapsed = 0
+            snaps = 0
+            do while (elapsed < merge(0.2_wp, 1.0_wp, r == 0)*min_time)
+                do k = 1, per_cycle
+                    t0 = wall_seconds()
+                    call chain_advance(chain, k*chain%flow%period/(per_cycle + 1), log, err)
+                    call chain_sync(chain)
+                    xs = chain%x
+                    vs = chain%v
+                    elapsed = elapsed + (wall_seconds() - t0)
+                    if (allocated(err)) call fail(err%message)
+                    checksum = checksum + xs(n/2) + vs(1)
+                end do
+                snaps = snaps + per_cycle
+                call chain_advance(chain, chain%flow%period, log, err)
+                if (allocated(err)) call fail(err%message)
+                call chain_new_cycle(chain)
+            end do
+            if (r > 0 .and. elapsed < best) then
+                best = elapsed
+                row%units = snaps*n
+                row%cycles = 0
+                row%collisions = chain%impacts
+            end if
+        end do
+        row%seconds = best
+        if (.not. (abs(checksum) < huge(1.0_wp))) call fail('strobe: state is not finite')
+    end subroutine case_strobe
+
+    !> What one strobe record costs inside `record_run` for the same n = 100000 chain: the
+    !> sync at the end of each cycle plus the copies into the record buffer and the
+    !> period-detection window.
+    subroutine case_strobe_record(row)
+        type(row_t), intent(inout) :: row
+        integer, parameter :: n = 100000
+        type(run_config_t) :: cfg
+        type(chain_t) :: chain
+        type(run_result_t) :: res
+        real(wp) :: seconds
+
+        row%label = 'strobe record inside record_run (same chain, one record per cycle)'
+        row%n = n
+        row%unit_name = 'oscillator record'
+        cfg = make_config(n, 1.0e-3_wp, 1.5_wp, 0.05_wp, 0.7_wp, 0.0_wp, 0.0_wp)
+        chain = new_chain(cfg)
+        call run_block(cfg, chain, 2_i8, seconds, res)
+        call time_cycles(cfg, chain, row)
+        row%units = row%cycles*n
+    end subroutine case_strobe_record
+
+    !> The chain's state on the section, for the scipy baseline of run_bench.py.
+    subroutine print_state(chain)
+        type(chain_t), intent(in) :: chain
+        integer :: i
+        character(len=32) :: buf
+        character(len=:), allocatable :: line
+
+        if (any(chain%contact /= 0)) call fail('default case: an oscillator rests on a wall '// &
+                                               'at the baseline start')
+        line = 'state'
+        do i = 1, chain%n
+            write (buf, '(es24.16)') chain%x(i)
+            line = line//achar(9)//trim(adjustl(buf))
+        end do
+        do i = 1, chain%n
+            write (buf, '(es24.16)') chain%v(i)
+            line = line//achar(9)//trim(adjustl(buf))
+        end do
+        write (output_unit, '(a)') line
+    end subroutine print_state
+
+    subroutine parse_arguments(only, tsv, quick)
+        character(len=:), allocatable, intent(out) :: only
+        logical, intent(out) :: tsv, quick
+        integer :: j, length
+        character(len=:), allocatable :: arg
+        logical :: want_case
+
+        only = ''
+        tsv = .false.
+        quick = .false.
+        want_case = .false.
+        do j = 1, command_argument_count()
+            call get_command_argument(j, length=length)
+            allocate (character(len=length) :: arg)
+            call get_command_argument(j, arg)
+            if (want_case) then
+                if (.not. any(case_names == arg)) call fail("unknown case '"//arg// &
+                                                            "' (see --list)")
+                only = arg
+                want_case = .false.
+            else
+                select case (arg)
+                case ('--case')
+                    want_case = .true.
+                case ('--tsv')
+                    tsv = .true.
+                case ('--quick')
+                    quick = .true.
+                case ('--list')
+                    do length = 1, size(case_names)
+                        write (output_unit, '(a)') trim(case_names(length))
+                    end do
+                    stop
+                case ('-h', '--help')
+                    write (output_unit, '(a)') 'usage: impactchain-bench [--case NAME] '// &
+                        '[--tsv] [--quick] [--list]', &
+                        '  Times the engine and prints a Markdown table (see bench/README.md).'
+                    stop
+                case default
+                    call fail("unknown argument '"//arg//"' (see --help)")
+                end select
+            end if
+            deallocate (arg)
+        end do
+        if (want_case) call fail('--case needs a name (see --list)')
+    end subroutine parse_arguments
+
+    pure function itoa(i) result(text)
+        integer, intent(in) :: i
+        character(len=:), allocatable :: text
+        character(len=16) :: buf
+
+        write (buf, '(i0)') i
+        text = trim(buf)
+    end function itoa
+
+    pure function real_fmt(x) result(text)
+        real(wp), intent(in) :: x
+        character(len=32) :: text
+
+        write (text, '(f0.2)') x
+        if (text(1:1) == '.') text = '0'//text
+    end function real_fmt
+
+    subroutine fail(message)
+        character(len=*), intent(in) :: message
+
+        write (error_unit, '(a)') 'impactchain-bench: error: '//message
+        error stop 1
+    end subroutine fail
+
+end program bench

@@ -1,0 +1,169 @@
+!> Support for the f2py layer (`impactchain_f2py.f90`); f2py never sees this module.
+!>
+!> It turns plain arguments into the same `run_config_t` the namelist reader builds, so that
+!> `validate_config` and `check_size` give the CLI's own messages; it provides a record sink
+!> that writes strobe records and events straight into arrays owned by the caller (numpy); and
+!> it copies error messages into a buffer of byte values. There is no physics here: every
+!> number comes from `chain_run` / `chain_sim`, exactly as for the CLI.
+module chain_bridge
+    use, intrinsic :: iso_c_binding, only: c_int
+    use chain_kinds, only: wp, i8
+    use chain_error, only: error_t, set_error
+    use chain_config, only: run_config_t, fmt_real, fmt_int
+    use chain_events, only: event_log_t
+    use chain_run, only: record_sink_t
+    implicit none
+    private
+    public :: array_sink_t, make_config, put_message, count_vectors
+    public :: status_ok, status_invalid, status_failed, status_capacity, status_internal
+    public :: message_capacity
+
+    integer(c_int), parameter :: status_ok = 0        !! success
+    integer(c_int), parameter :: status_invalid = 1   !! a bad argument (Python: ValueError)
+    integer(c_int), parameter :: status_failed = 2    !! the run itself failed (RuntimeError)
+    integer(c_int), parameter :: status_capacity = 3  !! the event buffer is too small
+    integer(c_int), parameter :: status_internal = 4  !! the caller broke the layer's protocol
+    integer, parameter :: message_capacity = 1024     !! bytes of the message buffer
+
+    !> Strobe records and events go straight into the caller's arrays (pointers valid during
+    !> one layer call only). Events beyond the capacity are counted but not stored, so memory
+    !> stays bounded by what the caller allocated; the caller retries with the full count.
+    type, extends(record_sink_t) :: array_sink_t
+        real(wp), pointer :: x(:, :) => null()      !! x(n, cycles), or size 0: not kept
+        real(wp), pointer :: v(:, :) => null()
+        integer(i8), pointer :: cycle(:) => null()  !! cycle(cycles)
+        real(wp), pointer :: time(:) => null()      !! time(capacity)
+        real(wp), pointer :: speed(:) => null()
+        integer, pointer :: site(:) => null()
+        integer, pointer :: kind(:) => null()
+        integer(i8) :: n_events = 0                 !! events seen so far (may exceed capacity)
+    contains
+        procedure :: put_strobe => array_put_strobe
+        procedure :: put_events => array_put_events
+    end type array_sink_t
+
+contains
+
+    !> The configuration a namelist with these values would give. `spacing` has one value
+    !> (uniform) or n+1 values, as in &chain; `boundary` is the lower-cased name as byte values;
+    !> `explicit` selects &initial kind = 'explicit' (x0, v0) rather than 'rest'.
+    subroutine make_config(cfg, n, spacing, damping, restitution, amplitude, omega, boundary, &
+                           explicit, x0, v0, transient, cycles, phase, stick_speed, &
+                           max_size_mb, record_events, lyapunov, vectors, qr_every, jacobian, &
+                           jacobian_cycles)
+        type(run_config_t), intent(out) :: cfg
+        integer, intent(in) :: n, vectors, qr_every, jacobian_cycles
+        real(wp), intent(in) :: spacing(:), damping, restitution, amplitude, omega
+        real(wp), intent(in) :: x0(:), v0(:), phase, stick_speed, max_size_mb
+        integer(c_int), intent(in) :: boundary(:)   !! byte values 0..255
+        logical, intent(in) :: explicit, record_events, lyapunov, jacobian
+        integer(i8), intent(in) :: transient, cycles
+        integer :: j
+
+        cfg%n = n
+        if (size(spacing) == 1) then
+            allocate (cfg%spacing(max(n + 1, 1)))
+            cfg%spacing = spacing(1)
+        else
+            cfg%spacing = spacing
+        end if
+        cfg%damping = damping
+        cfg%restitution = restitution
+        cfg%amplitude = amplitude
+        cfg%omega = omega
+        allocate (character(len=size(boundary)) :: cfg%boundary)
+        do j = 1, size(boundary)
+            cfg%boundary(j:j) = achar(iand(int(boundary(j)), 255))
+        end do
+        if (explicit) then
+            cfg%initial_kind = 'explicit'
+        else
+            cfg%initial_kind = 'rest'
+        end if
+        cfg%initial_file = ''
+        cfg%x0 = x0
+        cfg%v0 = v0
+        cfg%transient = transient
+        cfg%cycles = cycles
+        cfg%phase = phase
+        cfg%stick_speed = stick_speed
+        cfg%record_events = record_events
+        cfg%lyapunov = lyapunov
+        cfg%vectors = vectors
+        cfg%qr_every = qr_every
+        cfg%jacobian = jacobian
+        cfg%jacobian_cycles = jacobian_cycles
+        cfg%output_file = '(python)'
+        cfg%max_size_mb = max_size_mb
+        cfg%sweep = .false.
+        cfg%sweep_mode = 'continuation'
+        cfg%sweep_parameter = ''
+        cfg%sweep_parameter2 = ''
+        cfg%input_text = ''
+    end subroutine make_config
+
+    !> Number of tangent vectors a (validated) configuration carries: vectors, 0 meaning 2n.
+    pure integer function count_vectors(cfg)
+        type(run_config_t), intent(in) :: cfg
+
+        count_vectors = cfg%vectors
+        if (count_vectors == 0) count_vectors = 2*cfg%n
+    end function count_vectors
+
+    !> Copy `text` into the message buffer (truncated to its size) and set the status.
+    subroutine put_message(text, code, status, msg_len, message)
+        character(len=*), intent(in) :: text
+        integer(c_int), intent(in) :: code
+        integer(c_int), intent(out) :: status, msg_len
+        integer(c_int), intent(out) :: message(:)  !! byte values 0..255
+        integer :: j
+
+        status = code
+        msg_len = int(min(len(text), size(message)), c_int)
+        message = 0
+        do j = 1, msg_len
+            message(j) = iachar(text(j:j))
+        end do
+    end subroutine put_message
+
+    subroutine array_put_strobe(sink, n_records, first, x, v, cycle, err)
+        class(array_sink_t), intent(inout) :: sink
+        integer(i8), intent(in) :: n_records, first
+        real(wp), intent(in) :: x(:, :), v(:, :)
+        integer(i8), intent(in) :: cycle(:)
+        type(error_t), allocatable, intent(out) :: err
+        integer(i8) :: last
+
+        if (.not. associated(sink%x)) return
+        if (size(sink%x, 2) == 0) return
+        last = first + size(x, 2) - 1
+        if (size(sink%x, 2) /= n_records .or. last > n_records .or. &
+            size(sink%x, 1) /= size(x, 1)) then
+            call set_error(err, "python layer: strobe arrays of the wrong shape")
+            return
+        end if
+        sink%x(:, first:last) = x
+        sink%v(:, first:last) = v
+        sink%cycle(first:last) = cycle
+    end subroutine array_put_strobe
+
+    subroutine array_put_events(sink, log, err)
+        class(array_sink_t), intent(inout) :: sink
+        type(event_log_t), intent(in) :: log
+        type(error_t), allocatable, intent(out) :: err
+        integer(i8) :: room, take, first
+
+        if (.not. associated(sink%time)) return
+        room = max(0_i8, size(sink%time, kind=i8) - sink%n_events)
+        take = min(room, int(log%count, i8))
+        first = sink%n_events + 1
+        if (take > 0) then
+            sink%time(first:first + take - 1) = log%time(1:take)
+            sink%site(first:first + take - 1) = log%site(1:take)
+            sink%speed(first:first + take - 1) = log%speed(1:take)
+            sink%kind(first:first + take - 1) = log%kind(1:take)
+        end if
+        sink%n_events = sink%n_events + log%count
+    end subroutine array_put_events
+
+end module chain_bridge

@@ -1,0 +1,268 @@
+!> The thin layer wrapped by f2py into `post._kernels` (SHTOOLS' PythonWrapper pattern): plain
+!> external subroutines with explicit-shape c_double / c_int / c_int64_t arrays. Only these
+!> three routines cross into Python; `post/api.py` is the interface people use.
+!>
+!> Each routine builds the `run_config_t` a namelist with the same values would give, checks
+!> it with the library's `validate_config` (so errors carry the CLI's messages), and calls the
+!> same kernels as the CLI: `start_chain` and `record_run` (what `run_simulation` runs, with a
+!> sink writing into the caller's arrays instead of an HDF5 file) or `poincare_jacobian`.
+!>
+!> Protocol (every routine):
+!> - `status` = 0 ok, 1 bad argument (ValueError), 2 the run failed (RuntimeError), 3 the event
+!>   buffer was too small, 4 the caller broke this protocol; `message(1:msg_len)` holds the
+!>   library's message as byte values when status /= 0. Nothing is printed, nothing stops.
+!> - Booleans are c_int 0 / 1. No strings cross: `boundary` (the lower-cased name) and
+!>   `message` are c_int arrays of byte values 0..255 (f2py 2.x cannot declare c_int8_t).
+!> - Sizes of outputs are caller-given. With `dry_run = 1` a routine only validates (`ic_run`
+!>   and `ic_jacobian` also build the chain, which checks the initial state), so the caller
+!>   allocates outputs only for a valid configuration, then calls again with dry_run = 0.
+!> - Events, whose number is not known in advance: the caller gives a capacity `ncap`; `nev`
+!>   returns the number of events of the run; when nev > ncap the first ncap are stored,
+!>   status = 3, and the caller calls again with ncap >= nev (runs are deterministic: the
+!>   second call repeats the first exactly). Memory stays bounded by what the caller gave.
+!> - The routines keep no state between calls (nor does the library), so f2py releases the GIL
+!>   while they run (`threadsafe`): Python threads can run several chains at once.
+
+!> One run: transient, then `cycles` recorded cycles, as `fpm run` on the equivalent namelist.
+!> Strobe records are kept when nc > 0 (then nr = n, nc = cycles), events when record_events;
+!> the Lyapunov spectrum (kcap = number of exponents) and the Jacobian of the `jacobian_cycles`
+!> Poincare map at the final state with its eigenvalues (mj = 2n) when asked. nf = n always.
+subroutine ic_run(n, nsp, spacing, damping, restitution, amplitude, omega, nb, boundary, &
+                  explicit, nx0, x0, nv0, v0, transient, cycles, phase, stick_speed, &
+                  max_size_mb, record_events, lyapunov, vectors, qr_every, jacobian, &
+                  jacobian_cycles, dry_run, nr, nc, nf, ncap, kcap, mj, x, v, cycle, final_x, &
+                  final_v, periods, site_counts, counts, collisions_per_cycle, nev, ev_time, &
+                  ev_site, ev_speed, ev_kind, k, exponents, stderr_bits, per_time, ky, jac, &
+                  mult_re, mult_im, status, msg_len, message)
+    use, intrinsic :: iso_c_binding, only: c_int, c_int64_t, c_double
+    use chain_kinds, only: i8
+    use chain_error, only: error_t
+    use chain_config, only: run_config_t, validate_config
+    use chain_engine, only: chain_t
+    use chain_run, only: run_result_t, record_run, check_size
+    use chain_sim, only: start_chain
+    use chain_bridge, only: array_sink_t, make_config, put_message, &
+                            count_vectors, status_ok, status_invalid, status_failed, &
+                            status_capacity, status_internal
+    implicit none
+    !f2py threadsafe
+    integer(c_int), intent(in) :: n, nsp, nb, nx0, nv0, explicit, record_events, lyapunov
+    integer(c_int), intent(in) :: vectors, qr_every, jacobian, jacobian_cycles, dry_run
+    integer(c_int), intent(in) :: nr, nf, kcap, mj
+    integer(c_int64_t), intent(in) :: transient, cycles, nc, ncap
+    real(c_double), intent(in) :: spacing(nsp), damping, restitution, amplitude, omega
+    real(c_double), intent(in) :: x0(nx0), v0(nv0), phase, stick_speed, max_size_mb
+    integer(c_int), intent(in) :: boundary(nb)
+    real(c_double), intent(out), target :: x(nr, nc), v(nr, nc)
+    integer(c_int64_t), intent(out), target :: cycle(nc)
+    real(c_double), intent(out) :: final_x(nf), final_v(nf)
+    integer(c_int), intent(out) :: periods(nf)
+    integer(c_int64_t), intent(out) :: site_counts(nf + 1), counts(3), nev
+    real(c_double), intent(out) :: collisions_per_cycle, ky
+    real(c_double), intent(out), target :: ev_time(ncap), ev_speed(ncap)
+    integer(c_int), intent(out), target :: ev_site(ncap), ev_kind(ncap)
+    integer(c_int), intent(out) :: k
+    real(c_double), intent(out) :: exponents(kcap), stderr_bits(kcap), per_time(kcap)
+    real(c_double), intent(out) :: jac(mj, mj), mult_re(mj), mult_im(mj)
+    integer(c_int), intent(out) :: status, msg_len
+    integer(c_int), intent(out) :: message(1024)
+    type(run_config_t) :: cfg
+    type(chain_t) :: chain
+    type(array_sink_t) :: sink
+    type(run_result_t) :: res
+    type(error_t), allocatable :: err
+    logical :: sizes_ok
+
+    call put_message('', status_ok, status, msg_len, message)
+    final_x = 0
+    final_v = 0
+    periods = 0
+    site_counts = 0
+    counts = 0
+    collisions_per_cycle = 0
+    nev = 0
+    k = 0
+    ky = 0
+    exponents = 0
+    stderr_bits = 0
+    per_time = 0
+    jac = 0
+    mult_re = 0
+    mult_im = 0
+
+    call make_config(cfg, int(n), spacing, damping, restitution, amplitude, omega, boundary, &
+                     explicit /= 0, x0, v0, int(transient, i8), int(cycles, i8), phase, &
+                     stick_speed, max_size_mb, record_events /= 0, lyapunov /= 0, &
+                     int(vectors), int(qr_every), jacobian /= 0, int(jacobian_cycles))
+    call validate_config(cfg, err)
+    if (.not. allocated(err)) call check_size(cfg, err)
+    if (.not. allocated(err)) call start_chain(cfg, chain, err)
+    if (allocated(err)) then
+        call put_message(err%message, status_invalid, status, msg_len, message)
+        return
+    end if
+    if (dry_run /= 0) return
+
+    sizes_ok = nf == n .and. (nc == 0 .or. (nr == n .and. nc == cycles))
+    if (cfg%lyapunov) sizes_ok = sizes_ok .and. kcap == count_vectors(cfg)
+    if (cfg%jacobian) sizes_ok = sizes_ok .and. mj == 2*n
+    if (.not. sizes_ok) then
+        call put_message("python layer: output sizes do not match the configuration", &
+                         status_internal, status, msg_len, message)
+        return
+    end if
+    if (nc > 0) then
+        sink%x => x
+        sink%v => v
+        sink%cycle => cycle
+    end if
+    if (cfg%record_events) then
+        sink%time => ev_time
+        sink%speed => ev_speed
+        sink%site => ev_site
+        sink%kind => ev_kind
+    end if
+    call record_run(cfg, chain, sink, res, err)
+    if (allocated(err)) then
+        call put_message(err%message, status_failed, status, msg_len, message)
+        return
+    end if
+
+    final_x = chain%x
+    final_v = chain%v
+    periods = res%periods
+    site_counts = res%site_counts
+    counts = [res%impacts, res%sticks, res%releases]
+    collisions_per_cycle = res%collisions_per_cycle
+    nev = sink%n_events
+    if (res%has_lyapunov) then
+        k = size(res%lyapunov%bits_per_cycle)
+        exponents = res%lyapunov%bits_per_cycle
+        stderr_bits = res%lyapunov%stderr_bits
+        per_time = res%lyapunov%nats_per_time
+        ky = res%lyapunov%ky_dimension
+    end if
+    if (cfg%jacobian) then
+        jac = res%jacobian
+        mult_re = res%multipliers_re
+        mult_im = res%multipliers_im
+    end if
+    if (nev > ncap) call put_message("python layer: more events than the capacity ncap", &
+                                     status_capacity, status, msg_len, message)
+end subroutine ic_run
+
+!> Jacobian (2n x 2n, n = nx0) of the `jacobian_cycles`-cycle Poincare map at the state
+!> (x0, v0) on the section of drive phase `phase`; v0 may be empty (at rest). The state is
+!> taken as a fresh start (no sticking contacts, bonds scheduled from scratch).
+subroutine ic_jacobian(nsp, spacing, damping, restitution, amplitude, omega, nb, boundary, &
+                       nx0, x0, nv0, v0, phase, stick_speed, max_size_mb, jacobian_cycles, &
+                       dry_run, mj, jac, status, msg_len, message)
+    use, intrinsic :: iso_c_binding, only: c_int, c_double
+    use chain_kinds, only: wp, i8
+    use chain_error, only: error_t
+    use chain_config, only: run_config_t, validate_config
+    use chain_flow, only: make_flow
+    use chain_engine, only: chain_t, chain_init
+    use chain_run, only: poincare_jacobian, check_size
+    use chain_bridge, only: make_config, put_message, status_ok, &
+                            status_invalid, status_failed, status_internal
+    implicit none
+    !f2py threadsafe
+    integer(c_int), intent(in) :: nsp, nb, nx0, nv0, jacobian_cycles, dry_run, mj
+    real(c_double), intent(in) :: spacing(nsp), damping, restitution, amplitude, omega
+    real(c_double), intent(in) :: x0(nx0), v0(nv0), phase, stick_speed, max_size_mb
+    integer(c_int), intent(in) :: boundary(nb)
+    real(c_double), intent(out) :: jac(mj, mj)
+    integer(c_int), intent(out) :: status, msg_len
+    integer(c_int), intent(out) :: message(1024)
+    type(run_config_t) :: cfg
+    type(chain_t) :: chain
+    type(error_t), allocatable :: err
+    real(wp), allocatable :: j_out(:, :), v_start(:)
+
+    call put_message('', status_ok, status, msg_len, message)
+    call make_config(cfg, int(nx0), spacing, damping, restitution, amplitude, omega, boundary, &
+                     .true., x0, v0, 0_i8, 1_i8, phase, stick_speed, max_size_mb, .false., &
+                     .false., 0, 1, .true., int(jacobian_cycles))
+    call validate_config(cfg, err)
+    if (.not. allocated(err)) call check_size(cfg, err)
+    if (.not. allocated(err)) then
+        allocate (v_start(cfg%n))
+        v_start = 0
+        if (size(cfg%v0) == cfg%n) v_start = cfg%v0
+        call chain_init(chain, make_flow(cfg%damping, cfg%amplitude, cfg%omega), &
+                        cfg%restitution, cfg%spacing, cfg%boundary == 'fixed', &
+                        cfg%stick_speed, cfg%x0, v_start, 0_i8, cfg%phase/cfg%omega, err)
+    end if
+    if (allocated(err)) then
+        call put_message(err%message, status_invalid, status, msg_len, message)
+        return
+    end if
+    if (dry_run /= 0) return
+    if (mj /= 2*cfg%n) then
+        call put_message("python layer: output sizes do not match the configuration", &
+                         status_internal, status, msg_len, message)
+        return
+    end if
+    call poincare_jacobian(chain, cfg%jacobian_cycles, j_out, err)
+    if (allocated(err)) then
+        call put_message(err%message, status_failed, status, msg_len, message)
+        return
+    end if
+    jac = j_out
+end subroutine ic_jacobian
+
+!> The seeded random start of &initial kind = 'random' (the CLI's generator): x(i) uniform in
+!> [-x_amp, x_amp), v(i) in [-v_amp, v_amp). nf = n when the arguments are valid.
+subroutine ic_random_start(n, nsp, spacing, seed, x_amp, v_amp, dry_run, nf, x, v, status, &
+                           msg_len, message)
+    use, intrinsic :: iso_c_binding, only: c_int, c_double
+    use chain_kinds, only: wp, i8
+    use chain_error, only: error_t
+    use chain_config, only: run_config_t, validate_config
+    use chain_sim, only: initial_state
+    use chain_bridge, only: make_config, put_message, status_ok, status_invalid, &
+                            status_internal
+    implicit none
+    !f2py threadsafe
+    integer(c_int), intent(in) :: n, nsp, seed, dry_run, nf
+    real(c_double), intent(in) :: spacing(nsp), x_amp, v_amp
+    real(c_double), intent(out) :: x(nf), v(nf)
+    integer(c_int), intent(out) :: status, msg_len
+    integer(c_int), intent(out) :: message(1024)
+    type(run_config_t) :: cfg
+    type(error_t), allocatable :: err
+    real(wp), allocatable :: xs(:), vs(:), queue_time(:), no_list(:)
+    integer, allocatable :: contact(:), queue_action(:)
+    integer(i8) :: cycle
+    real(wp) :: s
+
+    call put_message('', status_ok, status, msg_len, message)
+    x = 0
+    v = 0
+    allocate (no_list(0))
+    call make_config(cfg, int(n), spacing, 0.05_wp, 0.7_wp, 0.0_wp, 1.0_wp, &
+                     [iachar('f'), iachar('i'), iachar('x'), iachar('e'), iachar('d')], &
+                     .false., no_list, &
+                     no_list, 0_i8, 1_i8, 0.0_wp, 1.0e-9_wp, 4096.0_wp, .false., .false., 0, &
+                     1, .false., 1)
+    cfg%initial_kind = 'random'
+    cfg%seed = seed
+    cfg%x_amp = x_amp
+    cfg%v_amp = v_amp
+    call validate_config(cfg, err)
+    if (.not. allocated(err)) call initial_state(cfg, xs, vs, cycle, s, contact, queue_time, &
+                                                 queue_action, err)
+    if (allocated(err)) then
+        call put_message(err%message, status_invalid, status, msg_len, message)
+        return
+    end if
+    if (dry_run /= 0) return
+    if (nf /= n) then
+        call put_message("python layer: output sizes do not match the configuration", &
+                         status_internal, status, msg_len, message)
+        return
+    end if
+    x = xs
+    v = vs
+end subroutine ic_random_start

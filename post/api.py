@@ -1,0 +1,588 @@
+"""Call the impactchain kernels on numpy arrays, without namelists or files.
+
+The functions here run the very same Fortran code as the command line
+(``fpm run --profile release -- input.nml``), through the f2py extension
+``post._kernels`` (built by ``make`` / ``.venv/bin/python f2py/build.py``). Results are
+bit-identical to the CLI's on the equivalent namelist, and every bad argument raises a
+:class:`ValueError` carrying the CLI's own message (``"&chain: damping = 1.2000000 is
+outside [0, 1)"``): the checks are the library's ``validate_config``, not a copy of them.
+
+Python and the equivalent namelist / CLI output:
+
+- ``simulate(n, amplitude, omega, ...)``: ``&chain``, ``&initial``, ``&run``; the file's
+  ``/strobe``, ``/events``, ``/final``, ``/stats``.
+- ``lyapunov(..., vectors=k, qr_every=q)``: ``&lyapunov enabled=T, vectors=k,
+  qr_every=q``; ``/lyapunov``.
+- ``floquet(..., period=p)``: ``&lyapunov enabled=F, jacobian=T, jacobian_cycles=p``;
+  ``/floquet``.
+- ``poincare_jacobian(x, v, ...)``: the same kernel at any state (the CLI evaluates it
+  only at the final state of a run).
+- ``random_start(n, seed, x_amp, v_amp)``: ``&initial kind='random'``.
+
+Argument names are the namelist keys. ``x0 = v0 = None`` is a start at rest
+(``kind='rest'``); arrays are ``kind='explicit'`` (``v0 = None`` then means v = 0).
+``spacing`` is one number (uniform) or the n+1 bond spacings, bond 0 (left wall) first.
+
+Units are the model's reduced ones (MODEL.md): time in units of 1/(natural angular
+frequency), so one drive cycle lasts ``T = 2 pi / omega``; lengths in the unit of
+``spacing``; velocities in length/time. A run starts at t = 0 at drive phase 0; strobe
+record j (j = 1..cycles) is taken at t = (transient + j) T + phase/omega.
+
+Example::
+
+    from post import api
+    sim = api.simulate(16, amplitude=1.7, omega=1.5, transient=500, cycles=200)
+    sim.x.shape                           # (200, 16)
+    lyap = api.lyapunov(16, 1.7, 1.5, transient=100, cycles=300)
+    lyap.exponents[:3], lyap.stderr[:3]   # bits per drive cycle, descending
+    api.floquet(15, 2.16, 1.5, transient=2000, period=2).multipliers  # (30,) complex
+"""
+
+from __future__ import annotations
+
+import operator
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+try:
+    from post import _kernels
+except ImportError as _exc:  # not built yet: say how to build it when a function is called
+    _kernels = None
+    _IMPORT_ERROR: ImportError | None = _exc
+else:
+    _IMPORT_ERROR = None
+
+__all__ = [
+    "Simulation",
+    "Lyapunov",
+    "Floquet",
+    "simulate",
+    "lyapunov",
+    "floquet",
+    "poincare_jacobian",
+    "random_start",
+    "extension_available",
+    "IMPACT",
+    "STICK",
+    "RELEASE",
+]
+
+IMPACT = 0
+"""``event_kind``: an ordinary impact."""
+STICK = 1
+"""``event_kind``: an impact that ends chatter; the oscillator then rests on the wall."""
+RELEASE = 2
+"""``event_kind``: a resting oscillator leaves the wall (not a collision)."""
+
+_STATUS_OK, _STATUS_INVALID, _STATUS_FAILED, _STATUS_CAPACITY = 0, 1, 2, 3
+_MAX_N = 10_000_000  # chain_config's max_n: only used to phrase errors for n beyond int32
+_INT32 = (-(2**31), 2**31 - 1)
+_INT64 = (-(2**63), 2**63 - 1)
+_FIRST_EVENT_CAPACITY = (1024, 1 << 20)  # bounds of the first guess of the event count
+_BYTES_PER_EVENT = 24  # time, speed (float64), site, kind (int32)
+
+#: Outputs of ``_kernels.ic_run``, in f2py's order (checked by post/tests/test_api.py).
+RUN_OUTPUTS = (
+    "x", "v", "cycle", "final_x", "final_v", "periods", "site_counts", "counts",
+    "collisions_per_cycle", "nev", "ev_time", "ev_site", "ev_speed", "ev_kind", "k",
+    "exponents", "stderr_bits", "per_time", "ky", "jac", "mult_re", "mult_im", "status",
+    "msg_len", "message",
+)
+
+
+def extension_available() -> bool:
+    """Whether the compiled extension ``post._kernels`` could be imported."""
+    return _kernels is not None
+
+
+# ------------------------------------------------------------------------------ results
+
+
+@dataclass(frozen=True, eq=False)
+class Simulation:
+    """Strobe records and events of one run (the CLI's ``/strobe``, ``/events``, ...).
+
+    Arrays are read-only. ``n`` oscillators, ``cycles`` records, ``m`` events.
+    """
+
+    x: NDArray[np.float64]
+    """(cycles, n) displacement of each oscillator from its equilibrium point at the
+    section [length]; row j is drive cycle ``cycle[j]``."""
+    v: NDArray[np.float64]
+    """(cycles, n) velocity at the section [length/time]."""
+    cycle: NDArray[np.int64]
+    """(cycles,) drive-cycle index of each record: transient + 1 .. transient + cycles."""
+    event_time: NDArray[np.float64]
+    """(m,) time of each event since the start of the run [time]; only events of the
+    recorded cycles (none during the transient), in time order. Empty when
+    ``events=False``."""
+    event_site: NDArray[np.int32]
+    """(m,) bond of each event, 0..n: 0 the left wall | oscillator 1, k oscillators k |
+    k+1, n oscillator n | right wall."""
+    event_speed: NDArray[np.float64]
+    """(m,) approach speed before the event, >= 0 [length/time]."""
+    event_kind: NDArray[np.int32]
+    """(m,) :data:`IMPACT`, :data:`STICK` or :data:`RELEASE`."""
+    final_x: NDArray[np.float64]
+    """(n,) displacement at the end of the run (equal to ``x[-1]``) [length]."""
+    final_v: NDArray[np.float64]
+    """(n,) velocity at the end of the run [length/time]."""
+    periods: NDArray[np.int32]
+    """(n,) period of each oscillator in drive cycles over the last <= 1024 records
+    (0: none found up to 16), as the CLI's ``/strobe/period``."""
+    site_counts: NDArray[np.int64]
+    """(n+1,) impacts on each bond 0..n during the recorded cycles."""
+    impacts: int
+    """Impacts during the recorded cycles."""
+    sticks: int
+    """Impacts that ended in a sticking contact."""
+    releases: int
+    """Sticking contacts that let go."""
+    collisions_per_cycle: float
+    """Impacts per recorded drive cycle."""
+    drive_period: float
+    """T = 2 pi / omega [time]."""
+    phase: float
+    """Drive phase of the section [rad]."""
+
+    @property
+    def time(self) -> NDArray[np.float64]:
+        """(cycles,) time of each record since the start of the run [time]."""
+        return self.cycle * self.drive_period + self.phase / (2 * np.pi) * self.drive_period
+
+
+@dataclass(frozen=True, eq=False)
+class Lyapunov:
+    """A Lyapunov spectrum (the CLI's ``/lyapunov``), read-only arrays of k exponents."""
+
+    exponents: NDArray[np.float64]
+    """(k,) exponents in bits per drive cycle, descending."""
+    stderr: NDArray[np.float64]
+    """(k,) standard error of each exponent from block averages, bits per drive cycle."""
+    exponents_per_time: NDArray[np.float64]
+    """(k,) the same exponents in nats per unit time."""
+    ky_dimension: float
+    """Kaplan-Yorke dimension of the k exponents (meaningful when k = 2n)."""
+    collisions_per_cycle: float
+    """Impacts per drive cycle over the averaged cycles (enters the sum rule)."""
+    final_x: NDArray[np.float64]
+    """(n,) displacement at the end of the run [length]."""
+    final_v: NDArray[np.float64]
+    """(n,) velocity at the end of the run [length/time]."""
+
+
+@dataclass(frozen=True, eq=False)
+class Floquet:
+    """Jacobian of the p-cycle Poincare map at the end of a run, and its eigenvalues."""
+
+    multipliers: NDArray[np.complex128]
+    """(2n,) eigenvalues of ``jacobian`` (LAPACK dgeev order, as the CLI's
+    ``/floquet/multipliers_re``, ``_im``). On a period-p orbit: its Floquet multipliers."""
+    jacobian: NDArray[np.float64]
+    """(2n, 2n) d(state after p cycles)/d(state), the state interleaved as
+    (x_1, v_1, x_2, v_2, ..., x_n, v_n) (the engine's tangent layout, as in the CLI)."""
+    x: NDArray[np.float64]
+    """(n,) displacement where the Jacobian was evaluated (the end of the run) [length]."""
+    v: NDArray[np.float64]
+    """(n,) velocity there [length/time]."""
+
+
+# ---------------------------------------------------------------------------- functions
+
+
+def simulate(
+    n: int,
+    amplitude: float,
+    omega: float,
+    damping: float = 0.05,
+    restitution: float = 0.7,
+    spacing: float | ArrayLike = 1.0,
+    boundary: str = "fixed",
+    x0: ArrayLike | None = None,
+    v0: ArrayLike | None = None,
+    transient: int = 0,
+    cycles: int = 100,
+    events: bool = True,
+    *,
+    phase: float = 0.0,
+    stick_speed: float = 1.0e-9,
+    max_size_mb: float = 4096.0,
+) -> Simulation:
+    """Run the chain: ``transient`` unrecorded drive cycles, then ``cycles`` recorded ones.
+
+    Parameters (namelist keys; ranges are checked by the library):
+        n: number of oscillators, 1..1e7.
+        amplitude: drive amplitude A >= 0. omega: drive angular frequency, 1e-3..1e3.
+        damping: b in [0, 1). restitution: K in [0, 1].
+        spacing: one value (uniform) or the n+1 bond spacings, bond 0 first; > 0 [length].
+        boundary: ``'fixed'`` (walls at both ends) or ``'free'`` (no walls).
+        x0, v0: initial displacements / velocities, arrays of n values [length,
+            length/time]; both None: at rest; v0 None with x0 given: v = 0.
+        transient: cycles run before recording, 0..1e12. cycles: records, 1..1e12.
+        events: keep the event stream (time, site, speed, kind of every event).
+        phase: drive phase of the section in [0, 2 pi). stick_speed: the rebound speed
+            below which chatter on a wall ends in sticking, (0, 1].
+        max_size_mb: refuse runs whose records need more memory (the CLI's
+            ``&output max_size_mb``, also applied to the event stream here).
+
+    Returns:
+        A :class:`Simulation`; ``x``, ``v`` have shape (cycles, n).
+
+    Raises:
+        ValueError: a bad argument, with the CLI's message. TypeError: an argument of the
+        wrong type. RuntimeError: the run itself failed (the engine's message).
+    """
+    cfg = _config(n, amplitude, omega, damping, restitution, spacing, boundary, x0, v0,
+                  transient, cycles, phase, stick_speed, max_size_mb)
+    keep_events = bool(events)
+    out = _run(cfg, strobe=True, events=keep_events)
+    nev = int(out["nev"])
+    counts = out["counts"]
+    return Simulation(
+        x=_frozen(out["x"].T),
+        v=_frozen(out["v"].T),
+        cycle=_frozen(out["cycle"]),
+        event_time=_frozen(out["ev_time"][:nev]),
+        event_site=_frozen(out["ev_site"][:nev]),
+        event_speed=_frozen(out["ev_speed"][:nev]),
+        event_kind=_frozen(out["ev_kind"][:nev]),
+        final_x=_frozen(out["final_x"]),
+        final_v=_frozen(out["final_v"]),
+        periods=_frozen(out["periods"]),
+        site_counts=_frozen(out["site_counts"]),
+        impacts=int(counts[0]),
+        sticks=int(counts[1]),
+        releases=int(counts[2]),
+        collisions_per_cycle=float(out["collisions_per_cycle"]),
+        drive_period=2 * np.pi / cfg["omega"],
+        phase=cfg["phase"],
+    )
+
+
+def lyapunov(
+    n: int,
+    amplitude: float,
+    omega: float,
+    damping: float = 0.05,
+    restitution: float = 0.7,
+    spacing: float | ArrayLike = 1.0,
+    boundary: str = "fixed",
+    x0: ArrayLike | None = None,
+    v0: ArrayLike | None = None,
+    transient: int = 0,
+    cycles: int = 100,
+    vectors: int = 0,
+    *,
+    qr_every: int = 1,
+    phase: float = 0.0,
+    stick_speed: float = 1.0e-9,
+    max_size_mb: float = 4096.0,
+) -> Lyapunov:
+    """Lyapunov spectrum averaged over ``cycles`` drive cycles after ``transient``.
+
+    An orthonormal frame of ``vectors`` tangent vectors (0: all 2n) is carried through the
+    exact flow and the saltation matrices of every impact and re-orthonormalised (LAPACK
+    QR) every ``qr_every`` cycles (1 <= qr_every <= cycles). The leading k exponents do not
+    depend on k. Other arguments as :func:`simulate`.
+
+    Returns:
+        A :class:`Lyapunov`: ``exponents`` and ``stderr`` (k,) in bits per drive cycle,
+        descending, k = vectors or 2n.
+    """
+    cfg = _config(n, amplitude, omega, damping, restitution, spacing, boundary, x0, v0,
+                  transient, cycles, phase, stick_speed, max_size_mb)
+    cfg["lyapunov"] = 1
+    cfg["vectors"] = _int32(vectors, "&lyapunov: vectors", "[0, 2n] (0 means all 2n)")
+    cfg["qr_every"] = _int32(qr_every, "&lyapunov: qr_every", "[1, cycles]")
+    out = _run(cfg, strobe=False, events=False)
+    k = int(out["k"])
+    return Lyapunov(
+        exponents=_frozen(out["exponents"][:k]),
+        stderr=_frozen(out["stderr_bits"][:k]),
+        exponents_per_time=_frozen(out["per_time"][:k]),
+        ky_dimension=float(out["ky"]),
+        collisions_per_cycle=float(out["collisions_per_cycle"]),
+        final_x=_frozen(out["final_x"]),
+        final_v=_frozen(out["final_v"]),
+    )
+
+
+def floquet(
+    n: int,
+    amplitude: float,
+    omega: float,
+    damping: float = 0.05,
+    restitution: float = 0.7,
+    spacing: float | ArrayLike = 1.0,
+    boundary: str = "fixed",
+    x0: ArrayLike | None = None,
+    v0: ArrayLike | None = None,
+    transient: int = 0,
+    cycles: int = 1,
+    period: int = 1,
+    *,
+    phase: float = 0.0,
+    stick_speed: float = 1.0e-9,
+    max_size_mb: float = 4096.0,
+) -> Floquet:
+    """Floquet multipliers: eigenvalues of the ``period``-cycle Poincare-map Jacobian at
+    the state reached after ``transient + cycles`` drive cycles (where the CLI evaluates
+    it). Run long enough to settle on a period-p orbit for them to be its multipliers.
+
+    ``period``: p in [1, 1000] (the CLI's ``jacobian_cycles``). Other arguments as
+    :func:`simulate`.
+
+    Returns:
+        A :class:`Floquet`: ``multipliers`` (2n,) complex, ``jacobian`` (2n, 2n).
+    """
+    cfg = _config(n, amplitude, omega, damping, restitution, spacing, boundary, x0, v0,
+                  transient, cycles, phase, stick_speed, max_size_mb)
+    cfg["jacobian"] = 1
+    cfg["jacobian_cycles"] = _int32(period, "&lyapunov: jacobian_cycles", "[1, 1000]")
+    out = _run(cfg, strobe=False, events=False)
+    return Floquet(
+        multipliers=_frozen(out["mult_re"] + 1j * out["mult_im"]),
+        jacobian=_frozen(out["jac"]),
+        x=_frozen(out["final_x"]),
+        v=_frozen(out["final_v"]),
+    )
+
+
+def poincare_jacobian(
+    x: ArrayLike,
+    v: ArrayLike,
+    amplitude: float,
+    omega: float,
+    damping: float = 0.05,
+    restitution: float = 0.7,
+    spacing: float | ArrayLike = 1.0,
+    boundary: str = "fixed",
+    cycles: int = 1,
+    *,
+    phase: float = 0.0,
+    stick_speed: float = 1.0e-9,
+    max_size_mb: float = 4096.0,
+) -> NDArray[np.float64]:
+    """Jacobian of the ``cycles``-cycle Poincare map at the state (x, v) on the section.
+
+    ``x``, ``v``: (n,) displacements [length] and velocities [length/time] at drive phase
+    ``phase`` (as a strobe record of :func:`simulate` with the same phase). The state is a
+    fresh start: no oscillator rests on a wall, every collision is searched from here.
+    ``cycles``: 1..1000. Other arguments as :func:`simulate`.
+
+    Returns:
+        (2n, 2n) float64 matrix J with J[i, j] = d z'_i / d z_j, the state interleaved as
+        z = (x_1, v_1, x_2, v_2, ..., x_n, v_n): the product of the exact propagators and
+        saltation matrices met along the way (MODEL.md 4-5).
+    """
+    xs = _vector(x, "&initial: x0")
+    vs = _vector(v, "&initial: v0")
+    n = xs.size
+    args = dict(
+        spacing=_spacing(spacing),
+        damping=_float(damping, "damping"),
+        restitution=_float(restitution, "restitution"),
+        amplitude=_float(amplitude, "amplitude"),
+        omega=_float(omega, "omega"),
+        boundary=_name(boundary, "boundary"),
+        x0=xs,
+        v0=vs,
+        phase=_float(phase, "phase"),
+        stick_speed=_float(stick_speed, "stick_speed"),
+        max_size_mb=_float(max_size_mb, "max_size_mb"),
+        jacobian_cycles=_int32(cycles, "&lyapunov: jacobian_cycles", "[1, 1000]"),
+    )
+    kernels = _extension()
+    jac, status, msg_len, message = kernels.ic_jacobian(**args, dry_run=1, mj=0)
+    if status == _STATUS_OK:  # valid: now with room for the result
+        jac, status, msg_len, message = kernels.ic_jacobian(**args, dry_run=0, mj=2 * n)
+    _raise_for(status, msg_len, message)
+    return _frozen(jac)
+
+
+def random_start(
+    n: int,
+    seed: int = 1,
+    x_amp: float = 0.0,
+    v_amp: float = 0.0,
+    spacing: float | ArrayLike = 1.0,
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """The CLI's seeded random start (``&initial kind='random'``): x_i uniform in
+    [-x_amp, x_amp), v_i in [-v_amp, v_amp), from the same portable generator, so that
+    ``simulate(..., x0=x, v0=v)`` equals a CLI run with that ``&initial`` group.
+
+    ``x_amp`` must be below half the smallest spacing (no overlapping start).
+
+    Returns:
+        (x, v), each (n,) float64 [length, length/time].
+    """
+    nn = _int32(n, "&chain: n", f"[1, {_MAX_N}]")
+    args = dict(
+        n=nn,
+        spacing=_spacing(spacing),
+        seed=_int32(seed, "&initial: seed", "the 32-bit integers"),
+        x_amp=_float(x_amp, "x_amp"),
+        v_amp=_float(v_amp, "v_amp"),
+    )
+    kernels = _extension()
+    x, v, status, msg_len, message = kernels.ic_random_start(**args, dry_run=1, nf=0)
+    if status == _STATUS_OK:
+        x, v, status, msg_len, message = kernels.ic_random_start(**args, dry_run=0, nf=nn)
+    _raise_for(status, msg_len, message)
+    return _frozen(x), _frozen(v)
+
+
+# ------------------------------------------------------------------------------ helpers
+
+
+def _extension() -> Any:
+    if _kernels is None:
+        raise ImportError(
+            "the impactchain extension post._kernels is not built; run `make` or "
+            f"`.venv/bin/python f2py/build.py` ({_IMPORT_ERROR})")
+    return _kernels
+
+
+def _config(n: Any, amplitude: Any, omega: Any, damping: Any, restitution: Any,
+            spacing: Any, boundary: Any, x0: Any, v0: Any, transient: Any, cycles: Any,
+            phase: Any, stick_speed: Any, max_size_mb: Any) -> dict[str, Any]:
+    """The arguments of ``ic_run`` describing one run (Python types converted only)."""
+    nn = _int32(n, "&chain: n", f"[1, {_MAX_N}]")
+    explicit = x0 is not None or v0 is not None
+    xs = np.zeros(max(nn, 0)) if x0 is None and explicit else _vector(x0, "&initial: x0")
+    return dict(
+        n=nn,
+        spacing=_spacing(spacing),
+        damping=_float(damping, "damping"),
+        restitution=_float(restitution, "restitution"),
+        amplitude=_float(amplitude, "amplitude"),
+        omega=_float(omega, "omega"),
+        boundary=_name(boundary, "boundary"),
+        explicit=int(explicit),
+        x0=xs,
+        v0=_vector(v0, "&initial: v0"),
+        transient=_int64(transient, "&run: transient", "[0, 1e12]"),
+        cycles=_int64(cycles, "&run: cycles", "[1, 1e12]"),
+        phase=_float(phase, "phase"),
+        stick_speed=_float(stick_speed, "stick_speed"),
+        max_size_mb=_float(max_size_mb, "max_size_mb"),
+        record_events=0,
+        lyapunov=0,
+        vectors=0,
+        qr_every=1,
+        jacobian=0,
+        jacobian_cycles=1,
+    )
+
+
+def _run(cfg: dict[str, Any], strobe: bool, events: bool) -> dict[str, Any]:
+    """Validate, allocate, run; retry once with the exact event count if it was short."""
+    kernels = _extension()
+    cfg = dict(cfg, record_events=int(events))
+    out = _call_run(kernels, cfg, dry_run=True)
+    _raise_for(out["status"], out["msg_len"], out["message"])
+    n = cfg["n"]
+    k = (cfg["vectors"] or 2 * n) if cfg["lyapunov"] else 0
+    sizes = dict(nr=n if strobe else 0, nc=cfg["cycles"] if strobe else 0, nf=n,
+                 kcap=k, mj=2 * n if cfg["jacobian"] else 0)
+    capacity = 0
+    if events:
+        low, high = _FIRST_EVENT_CAPACITY
+        capacity = int(min(max(low, 4 * (n + 1) * cfg["cycles"]), high))
+    out = _call_run(kernels, cfg, dry_run=False, ncap=capacity, **sizes)
+    if out["status"] == _STATUS_CAPACITY:
+        need = int(out["nev"])
+        megabytes = need * _BYTES_PER_EVENT / 1e6
+        if megabytes > cfg["max_size_mb"]:
+            raise ValueError(
+                f"events: this run has {need} events, about {megabytes:.6g} MB, more than "
+                f"max_size_mb = {cfg['max_size_mb']:.8g}; pass events=False or raise "
+                "max_size_mb")
+        out = _call_run(kernels, cfg, dry_run=False, ncap=need, **sizes)
+    _raise_for(out["status"], out["msg_len"], out["message"])
+    return out
+
+
+def _call_run(kernels: Any, cfg: dict[str, Any], dry_run: bool, nr: int = 0, nc: int = 0,
+              nf: int = 0, ncap: int = 0, kcap: int = 0, mj: int = 0) -> dict[str, Any]:
+    result = kernels.ic_run(**cfg, dry_run=int(dry_run), nr=nr, nc=nc, nf=nf, ncap=ncap,
+                            kcap=kcap, mj=mj)
+    return dict(zip(RUN_OUTPUTS, result, strict=True))
+
+
+def _raise_for(status: int, msg_len: int, message: NDArray[np.int32]) -> None:
+    if status == _STATUS_OK:
+        return
+    text = bytes(np.asarray(message[:msg_len]).astype(np.uint8)).decode("utf-8", "replace")
+    if status == _STATUS_INVALID:
+        raise ValueError(text)
+    if status == _STATUS_FAILED:
+        raise RuntimeError(text)
+    raise RuntimeError(f"impactchain extension (status {status}): {text}")
+
+
+def _frozen(a: NDArray[Any]) -> NDArray[Any]:
+    a = np.asarray(a)
+    a.setflags(write=False)
+    return a
+
+
+def _float(value: Any, name: str) -> float:
+    if isinstance(value, (bool, np.bool_)) or not isinstance(
+            value, (int, float, np.integer, np.floating)):
+        raise TypeError(f"{name} must be a real number, not {type(value).__name__}")
+    return float(value)
+
+
+def _integer(value: Any, name: str) -> int:
+    if isinstance(value, (bool, np.bool_)):
+        raise TypeError(f"{name} must be an integer, not bool")
+    try:
+        return operator.index(value)
+    except TypeError:
+        raise TypeError(f"{name} must be an integer, not {type(value).__name__}") from None
+
+
+def _int32(value: Any, key: str, allowed: str) -> int:
+    """An integer argument; one beyond 32 bits gets the CLI's message for that key."""
+    i = _integer(value, key.split(": ")[-1])
+    if not _INT32[0] <= i <= _INT32[1]:
+        raise ValueError(f"{key} = {i} is outside {allowed}")
+    return i
+
+
+def _int64(value: Any, key: str, allowed: str) -> int:
+    i = _integer(value, key.split(": ")[-1])
+    if not _INT64[0] <= i <= _INT64[1]:
+        raise ValueError(f"{key} = {i} is outside {allowed}")
+    return i
+
+
+def _vector(value: Any, key: str, length: str = "n") -> NDArray[np.float64]:
+    """A 1-D float64 array (empty for None); lengths are checked by the library."""
+    if value is None:
+        return np.zeros(0)
+    try:
+        a = np.asarray(value, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise TypeError(f"{key.split(': ')[-1]} must be an array of real numbers") from None
+    if a.ndim != 1:
+        raise ValueError(f"{key} must be a 1-D array of {length} values, got shape {a.shape}")
+    return np.ascontiguousarray(a)
+
+
+def _spacing(value: Any) -> NDArray[np.float64]:
+    """One value (uniform) or n+1 values, as the namelist's ``spacing``."""
+    if np.ndim(value) == 0:
+        return np.array([_float(value, "spacing")])
+    return _vector(value, "&chain: spacing", "n+1")
+
+
+def _name(value: Any, name: str) -> NDArray[np.int32]:
+    """A keyword value as the namelist reader sees it (trimmed, lower case), as bytes."""
+    if not isinstance(value, str):
+        raise TypeError(f"{name} must be a string, not {type(value).__name__}")
+    return np.frombuffer(value.strip().lower().encode(), dtype=np.uint8).astype(np.int32)

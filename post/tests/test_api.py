@@ -1,0 +1,524 @@
+"""post.api, the Python interface to the Fortran kernels (the f2py extension post._kernels).
+
+What these tests demonstrate:
+
+1. Python and the CLI (``fpm run --profile release`` on the equivalent namelist) give
+   bit-identical strobe records, event streams, final states, statistics, periods, Lyapunov
+   spectra and Floquet Jacobians (``test_bit_identical_to_cli``, ``test_example_...``).
+2. Every validation error of the library surfaces as a Python ValueError with exactly the
+   CLI's message (``test_errors_match_cli``); Python-only misuse raises TypeError /
+   ValueError with a clear message (``test_python_side_errors``).
+3. No leaks: 10,000 short calls do not grow the process's resident memory (``test_no_leak``).
+4. The extension builds from the tracked sources alone, in a scratch copy of the tree
+   (``test_fresh_build``); ``make test`` builds it before running pytest.
+
+Tests that need the extension are skipped when it cannot be imported, unless the
+environment variable IMPACTCHAIN_REQUIRE_EXTENSION is set (``make test`` sets it), in which
+case they fail loudly.
+"""
+
+from __future__ import annotations
+
+import importlib.util
+import math
+import os
+import re
+import shutil
+import subprocess
+import sys
+from concurrent.futures import ThreadPoolExecutor
+from pathlib import Path
+from typing import Any
+
+import h5py
+import numpy as np
+import pytest
+
+from post import api
+
+ROOT = Path(__file__).resolve().parents[2]
+FPM = ROOT / ".venv" / "bin" / "fpm"
+EXAMPLE = ROOT / "post" / "examples" / "fig1c_space_amplitude.py"
+
+pytestmark = pytest.mark.skipif(
+    not api.extension_available() and "IMPACTCHAIN_REQUIRE_EXTENSION" not in os.environ,
+    reason="the extension post._kernels is not built (run `make` or "
+           "`.venv/bin/python f2py/build.py`); set IMPACTCHAIN_REQUIRE_EXTENSION=1 to fail "
+           "instead of skipping",
+)
+
+
+# ----------------------------------------------------------------------------- the CLI
+
+
+@pytest.fixture(scope="session")
+def cli() -> Path:
+    """The simulator built with the release profile, as the extension is."""
+    out = subprocess.run([str(FPM), "run", "--profile", "release", "--runner", "echo"],
+                         cwd=ROOT, capture_output=True, text=True, check=True)
+    path = ROOT / out.stdout.strip().splitlines()[-1]
+    assert path.exists(), out.stdout + out.stderr
+    return path
+
+
+def _values(values: Any) -> str:
+    """Numbers as a namelist list; repr() round-trips every double exactly."""
+    return ", ".join(repr(float(v)) for v in np.atleast_1d(np.asarray(values, dtype=float)))
+
+
+def namelist(n: int, amplitude: float, omega: float, damping: float = 0.05,
+             restitution: float = 0.7, spacing: Any = 1.0, boundary: str = "fixed",
+             x0: Any = None, v0: Any = None, transient: int = 0, cycles: int = 100,
+             events: bool = True, phase: float = 0.0, stick_speed: float = 1.0e-9,
+             max_size_mb: float = 4096.0, lyapunov: bool = False, vectors: int = 0,
+             qr_every: int = 1, period: int | None = None, random: dict | None = None) -> str:
+    """The namelist equivalent to a call of post.api with these arguments."""
+    lines = [f"&chain n = {n}, amplitude = {_values(amplitude)}, omega = {_values(omega)}, "
+             f"damping = {_values(damping)}, restitution = {_values(restitution)}, "
+             f"spacing = {_values(spacing)}, boundary = '{boundary}' /"]
+    if random is not None:
+        lines.append(f"&initial kind = 'random', seed = {random['seed']}, "
+                     f"x_amp = {_values(random['x_amp'])}, v_amp = {_values(random['v_amp'])} /")
+    elif x0 is not None or v0 is not None:
+        x = np.zeros(n) if x0 is None else x0
+        v = "" if v0 is None else f", v0 = {_values(v0)}"
+        lines.append(f"&initial kind = 'explicit', x0 = {_values(x)}{v} /")
+    lines.append(f"&run transient = {transient}, cycles = {cycles}, phase = {_values(phase)}, "
+                 f"record_events = {'T' if events else 'F'}, "
+                 f"stick_speed = {_values(stick_speed)} /")
+    if lyapunov or period is not None:
+        lines.append(f"&lyapunov enabled = {'T' if lyapunov else 'F'}, vectors = {vectors}, "
+                     f"qr_every = {qr_every}, jacobian = {'T' if period is not None else 'F'}, "
+                     f"jacobian_cycles = {1 if period is None else period} /")
+    lines.append(f"&output file = 'run.h5', overwrite = T, "
+                 f"max_size_mb = {_values(max_size_mb)} /")
+    return "\n".join(lines) + "\n"
+
+
+def run_cli(exe: Path, text: str, workdir: Path) -> subprocess.CompletedProcess:
+    (workdir / "input.nml").write_text(text)
+    return subprocess.run([str(exe), "--quiet", "input.nml"], cwd=workdir,
+                          capture_output=True, text=True, timeout=300)
+
+
+def cli_error(exe: Path, text: str, workdir: Path) -> str:
+    """The message the CLI prints for an input it refuses."""
+    result = run_cli(exe, text, workdir)
+    assert result.returncode == 1, (result.stdout, result.stderr)
+    assert not (workdir / "run.h5").exists()
+    match = re.fullmatch(r"impactchain: error: (.*)\n", result.stderr, re.S)
+    assert match, result.stderr
+    return match.group(1)
+
+
+# ------------------------------------------------------------------ 1. bit-identical to CLI
+
+CASES: dict[str, dict[str, Any]] = {
+    # the paper's fig. 1c chain, chaotic, from the CLI's seeded random start
+    "fig1c-chaotic": dict(n=16, amplitude=1.7, omega=1.5, transient=200, cycles=200,
+                          random=dict(seed=1, x_amp=0.3, v_amp=1.0), vectors=0, period=1),
+    # free ends, one spacing per bond, another section phase, explicit x0 with v0 = 0,
+    # part of the spectrum with QR every other cycle, a 2-cycle Jacobian
+    "free-disordered": dict(n=6, amplitude=2.0, omega=1.9, damping=0.1, restitution=0.5,
+                            spacing=[1.0, 0.9, 1.1, 1.05, 0.95, 1.0, 1.2], boundary="free",
+                            x0=[0.1, -0.2, 0.05, 0.3, -0.1, 0.0], phase=1.0, transient=20,
+                            cycles=50, vectors=3, qr_every=2, period=2),
+    # chatter that ends in sticking on the walls, and releases; more events than the first
+    # guess of the event buffer, so the API's retry path runs
+    "sticking": dict(n=4, amplitude=0.6, omega=0.5, restitution=0.2, spacing=0.3,
+                     x0=[0.01, -0.02, 0.0, 0.02], v0=[0.1, 0.0, -0.1, 0.2], transient=50,
+                     cycles=50, vectors=0, period=1),
+    # a start at rest, strong drive
+    "rest-strong": dict(n=8, amplitude=3.5, omega=1.5, transient=30, cycles=40, vectors=5,
+                        period=1),
+}
+
+
+def _initial(case: dict[str, Any]) -> tuple[Any, Any]:
+    if "random" in case:
+        r = case["random"]
+        return api.random_start(case["n"], seed=r["seed"], x_amp=r["x_amp"], v_amp=r["v_amp"])
+    return case.get("x0"), case.get("v0")
+
+
+def _model_args(case: dict[str, Any]) -> dict[str, Any]:
+    keys = ("damping", "restitution", "spacing", "boundary", "transient", "cycles", "phase")
+    return {k: case[k] for k in keys if k in case}
+
+
+@pytest.mark.parametrize("name", CASES)
+def test_bit_identical_to_cli(name: str, cli: Path, tmp_path: Path) -> None:
+    case = CASES[name]
+    run_cli_args = {k: v for k, v in case.items()}
+    result = run_cli(cli, namelist(**run_cli_args, lyapunov=True), tmp_path)
+    assert result.returncode == 0, result.stderr
+
+    x0, v0 = _initial(case)
+    common = dict(n=case["n"], amplitude=case["amplitude"], omega=case["omega"], x0=x0, v0=v0,
+                  **_model_args(case))
+    sim = api.simulate(**common)
+    lyap = api.lyapunov(**common, vectors=case["vectors"], qr_every=case.get("qr_every", 1))
+    flo = api.floquet(**common, period=case["period"])
+
+    with h5py.File(tmp_path / "run.h5") as f:
+        if x0 is not None:
+            np.testing.assert_array_equal(f["initial/x"][:], x0, strict=True)
+        if v0 is not None:
+            np.testing.assert_array_equal(f["initial/v"][:], v0, strict=True)
+        np.testing.assert_array_equal(sim.x, f["strobe/x"][:], strict=True)
+        np.testing.assert_array_equal(sim.v, f["strobe/v"][:], strict=True)
+        np.testing.assert_array_equal(sim.cycle, f["strobe/cycle"][:].astype(np.int64))
+        np.testing.assert_array_equal(sim.periods, f["strobe/period"][:])
+        for field in ("time", "site", "speed", "kind"):
+            np.testing.assert_array_equal(getattr(sim, "event_" + field),
+                                          f["events/" + field][:])
+        np.testing.assert_array_equal(sim.final_x, f["final/x"][:], strict=True)
+        np.testing.assert_array_equal(sim.final_v, f["final/v"][:], strict=True)
+        np.testing.assert_array_equal(sim.site_counts, f["stats/site_counts"][:])
+        stats = {k: np.ravel(v)[0] for k, v in f["stats"].attrs.items()}
+        assert (sim.impacts, sim.sticks, sim.releases) == (
+            stats["impacts"], stats["sticks"], stats["releases"])
+        assert sim.collisions_per_cycle == stats["collisions_per_cycle"]
+
+        g = f["lyapunov"]
+        np.testing.assert_array_equal(lyap.exponents, g["exponents"][:], strict=True)
+        np.testing.assert_array_equal(lyap.stderr, g["stderr"][:], strict=True)
+        np.testing.assert_array_equal(lyap.exponents_per_time, g["exponents_per_time"][:],
+                                      strict=True)
+        ky = {k: np.ravel(v)[0] for k, v in g.attrs.items()}.get("ky_dimension")
+        if ky is not None:
+            assert lyap.ky_dimension == ky
+
+        g = f["floquet"]
+        np.testing.assert_array_equal(flo.jacobian, g["jacobian"][:], strict=True)
+        np.testing.assert_array_equal(flo.multipliers.real, g["multipliers_re"][:])
+        np.testing.assert_array_equal(flo.multipliers.imag, g["multipliers_im"][:])
+        np.testing.assert_array_equal(flo.x, f["final/x"][:])
+
+    k = case["vectors"] or 2 * case["n"]
+    assert lyap.exponents.shape == lyap.stderr.shape == (k,)
+    assert np.all(np.diff(lyap.exponents) <= 0)
+    assert sim.x.shape == sim.v.shape == (case["cycles"], case["n"])
+    if name == "sticking":  # the case is what it claims to be
+        assert sim.sticks > 0 and sim.releases > 0
+        assert sim.event_time.size > api._FIRST_EVENT_CAPACITY[0]
+
+
+def test_shapes_units_and_readonly() -> None:
+    sim = api.simulate(5, 1.8, 1.47, transient=3, cycles=7, phase=0.5)
+    assert sim.x.shape == sim.v.shape == (7, 5) and sim.x.dtype == np.float64
+    np.testing.assert_array_equal(sim.cycle, np.arange(4, 11))
+    np.testing.assert_array_equal(sim.x[-1], sim.final_x)
+    assert sim.drive_period == pytest.approx(2 * math.pi / 1.47)
+    np.testing.assert_allclose(sim.time, (sim.cycle + 0.5 / (2 * math.pi)) * sim.drive_period)
+    assert sim.site_counts.shape == (6,) and sim.site_counts.sum() == sim.impacts
+    assert np.all(np.diff(sim.event_time) >= 0) and np.all(sim.event_time >= 3 * sim.drive_period)
+    assert sim.event_site.min() >= 0 and sim.event_site.max() <= 5
+    with pytest.raises(ValueError):
+        sim.x[0, 0] = 1.0
+    quiet = api.simulate(5, 1.8, 1.47, transient=3, cycles=7, phase=0.5, events=False)
+    assert quiet.event_time.shape == (0,)
+    np.testing.assert_array_equal(quiet.x, sim.x)
+
+
+def test_event_buffer_retry_is_invisible(monkeypatch: pytest.MonkeyPatch) -> None:
+    """A first guess of 1 event (retry) and of a million (no retry) give the same run."""
+    args = dict(n=4, amplitude=1.7, omega=1.5, transient=5, cycles=30)
+    monkeypatch.setattr(api, "_FIRST_EVENT_CAPACITY", (1, 1))
+    small = api.simulate(**args)
+    monkeypatch.setattr(api, "_FIRST_EVENT_CAPACITY", (10**6, 10**6))
+    large = api.simulate(**args)
+    assert small.event_time.size > 1
+    for field in ("x", "v", "event_time", "event_site", "event_speed", "event_kind"):
+        np.testing.assert_array_equal(getattr(small, field), getattr(large, field))
+
+
+def test_no_impacts_is_the_linear_response() -> None:
+    """Far apart oscillators never touch: the mean exponent is -b T nats per cycle and the
+    records are the forced response P sin(w t) + Q cos(w t) once the start has decayed."""
+    b, w, a = 0.05, 1.5, 0.1
+    lyap = api.lyapunov(3, a, w, damping=b, spacing=100.0, cycles=20)
+    assert np.mean(lyap.exponents) * math.log(2) == pytest.approx(-b * 2 * math.pi / w,
+                                                                  rel=1e-12)
+    assert lyap.collisions_per_cycle == 0
+    sim = api.simulate(3, a, w, damping=b, spacing=100.0, transient=2000, cycles=3)
+    d2 = (1 - w**2) ** 2 + (2 * b * w) ** 2
+    np.testing.assert_allclose(sim.x, -2 * b * w * a / d2, rtol=1e-9)  # Q, at w t = 0
+    np.testing.assert_allclose(sim.v, w * a * (1 - w**2) / d2, rtol=1e-9)  # w P
+
+
+def test_poincare_jacobian_against_finite_differences() -> None:
+    """The analytic Jacobian at a state equals central differences of simulate()."""
+    n, args = 4, dict(amplitude=1.7, omega=1.5)
+    start = api.simulate(n, **args, transient=30, cycles=1)
+    z = np.column_stack([start.final_x, start.final_v]).ravel()  # (x1, v1, x2, v2, ...)
+
+    def step(z: np.ndarray) -> np.ndarray:
+        r = api.simulate(n, **args, x0=z[0::2], v0=z[1::2], cycles=2, events=False)
+        return np.column_stack([r.final_x, r.final_v]).ravel()
+
+    jac = api.poincare_jacobian(start.final_x, start.final_v, **args, cycles=2)
+    assert jac.shape == (2 * n, 2 * n)
+    eps = 1e-7
+    fd = np.column_stack([(step(z + eps * e) - step(z - eps * e)) / (2 * eps)
+                          for e in np.eye(2 * n)])
+    # error of the differences: collision times are roots found to ~1e-15, divided by eps
+    np.testing.assert_allclose(jac, fd, rtol=0, atol=1e-7)
+
+
+def test_poincare_jacobian_matches_floquet_at_the_same_state() -> None:
+    """floquet() evaluates the same kernel at the end of a run; poincare_jacobian() starts a
+    fresh chain there, whose collision times are searched anew: equal to rounding."""
+    flo = api.floquet(8, 1.7, 1.5, transient=50)
+    jac = api.poincare_jacobian(flo.x, flo.v, 1.7, 1.5)
+    np.testing.assert_allclose(jac, flo.jacobian, rtol=0, atol=1e-12)
+
+
+def test_threads_give_the_same_results() -> None:
+    """The layer keeps no state and f2py releases the GIL: threads are safe."""
+    amplitudes = np.linspace(1.5, 2.5, 8)
+
+    def job(a: float) -> api.Simulation:
+        return api.simulate(8, a, 1.5, transient=100, cycles=100)
+
+    serial = [job(a) for a in amplitudes]
+    with ThreadPoolExecutor(4) as pool:
+        parallel = list(pool.map(job, amplitudes))
+    for s, p in zip(serial, parallel):
+        np.testing.assert_array_equal(s.x, p.x)
+        np.testing.assert_array_equal(s.event_time, p.event_time)
+
+
+def test_extension_outputs_in_documented_order() -> None:
+    """api.RUN_OUTPUTS names the tuple f2py returns; a reordered layer must fail here."""
+    first_line = api._extension().ic_run.__doc__.splitlines()[0]
+    returned = first_line.split(" = ")[0].split(",")
+    assert tuple(returned) == api.RUN_OUTPUTS
+
+
+# ---------------------------------------------------------------- 2. errors as exceptions
+
+BASE = dict(n=4, amplitude=1.7, omega=1.5, cycles=5)
+# (function, arguments beyond BASE, namelist arguments beyond BASE); None: same as Python
+BAD: dict[str, tuple[str, dict[str, Any], dict[str, Any] | None]] = {
+    "damping > 1": ("simulate", dict(damping=1.2), None),
+    "damping < 0": ("simulate", dict(damping=-0.1), None),
+    "restitution": ("simulate", dict(restitution=1.3), None),
+    "amplitude": ("simulate", dict(amplitude=-1.0), None),
+    "omega = 0": ("simulate", dict(omega=0.0), None),
+    "omega NaN": ("simulate", dict(omega=float("nan")), None),
+    "resonance": ("simulate", dict(damping=0.0, omega=1.0), None),
+    "n = 0": ("simulate", dict(n=0), None),
+    "n < 0": ("simulate", dict(n=-3), None),
+    "n too large": ("simulate", dict(n=10**7 + 1), None),
+    "spacing count": ("simulate", dict(spacing=[1.0, 1.0, 1.0]), None),
+    "spacing < 0": ("simulate", dict(spacing=[1.0, 1.0, -1.0, 1.0, 1.0]), None),
+    "spacing inf": ("simulate", dict(spacing=float("inf")), None),
+    "boundary": ("simulate", dict(boundary="open"), None),
+    "x0 count": ("simulate", dict(x0=[0.0, 0.0, 0.0]), None),
+    "v0 count": ("simulate", dict(x0=[0.0] * 4, v0=[0.0] * 3), None),
+    "x0 NaN": ("simulate", dict(x0=[0.0, float("nan"), 0.0, 0.0]), None),
+    "overlap": ("simulate", dict(x0=[-1.5, 0.0, 0.0, 0.0]), None),
+    "transient": ("simulate", dict(transient=-1), None),
+    "cycles = 0": ("simulate", dict(cycles=0), None),
+    "cycles > 1e12": ("simulate", dict(cycles=10**12 + 1), None),
+    "phase": ("simulate", dict(phase=7.0), None),
+    "stick_speed": ("simulate", dict(stick_speed=0.0), None),
+    "too large": ("simulate", dict(n=1000, cycles=10**6), None),
+    "vectors": ("lyapunov", dict(vectors=9), dict(lyapunov=True, vectors=9)),
+    "qr_every": ("lyapunov", dict(qr_every=6), dict(lyapunov=True, qr_every=6)),
+    "period 0": ("floquet", dict(period=0), dict(period=0)),
+    "period 1001": ("floquet", dict(period=1001), dict(period=1001)),
+}
+
+
+# Messages that differ between Python and the CLI (none at present); strict xfail.
+KNOWN_DIFFERENCES: dict[str, str] = {}
+
+
+@pytest.mark.parametrize("name", [
+    pytest.param(name, marks=pytest.mark.xfail(strict=True, reason=KNOWN_DIFFERENCES[name]))
+    if name in KNOWN_DIFFERENCES else name for name in BAD])
+def test_errors_match_cli(name: str, cli: Path, tmp_path: Path) -> None:
+    function, args, nml_args = BAD[name]
+    nml_args = args if nml_args is None else nml_args
+    expected = cli_error(cli, namelist(**{**BASE, **nml_args}), tmp_path)
+    with pytest.raises(ValueError) as info:
+        getattr(api, function)(**{**BASE, **args})
+    assert str(info.value) == expected
+
+
+def test_random_start_errors_match_cli(cli: Path, tmp_path: Path) -> None:
+    expected = cli_error(cli, namelist(**BASE, random=dict(seed=3, x_amp=0.6, v_amp=0.1)),
+                         tmp_path)
+    with pytest.raises(ValueError) as info:
+        api.random_start(4, seed=3, x_amp=0.6, v_amp=0.1)
+    assert str(info.value) == expected
+    assert "x_amp" in expected
+
+
+def test_random_start_is_the_cli_start(cli: Path, tmp_path: Path) -> None:
+    x, v = api.random_start(7, seed=11, x_amp=0.4, v_amp=2.0, spacing=0.9)
+    run_cli(cli, namelist(7, 1.0, 1.5, spacing=0.9, cycles=1,
+                          random=dict(seed=11, x_amp=0.4, v_amp=2.0)), tmp_path)
+    with h5py.File(tmp_path / "run.h5") as f:
+        np.testing.assert_array_equal(x, f["initial/x"][:], strict=True)
+        np.testing.assert_array_equal(v, f["initial/v"][:], strict=True)
+
+
+def test_jacobian_errors() -> None:
+    with pytest.raises(ValueError, match=r"^&lyapunov: jacobian_cycles = 0 is outside"):
+        api.poincare_jacobian(np.zeros(3), np.zeros(3), 1.0, 1.5, cycles=0)
+    with pytest.raises(ValueError, match=r"^initial state: the gap of bond 0"):
+        api.poincare_jacobian([-2.0, 0.0], [0.0, 0.0], 1.0, 1.5)
+    with pytest.raises(ValueError, match=r"^&initial: v0 needs n = 2 values"):
+        api.poincare_jacobian([0.0, 0.0], [0.0], 1.0, 1.5)
+    with pytest.raises(ValueError, match=r"^&chain: n = 0 is outside"):
+        api.poincare_jacobian([], [], 1.0, 1.5)
+
+
+PYTHON_ONLY: dict[str, tuple[str, dict[str, Any], type[Exception], str]] = {
+    "n float": ("simulate", dict(n=4.0), TypeError, r"^n must be an integer, not float$"),
+    "n str": ("simulate", dict(n="4"), TypeError, r"^n must be an integer, not str$"),
+    "n bool": ("simulate", dict(n=True), TypeError, r"^n must be an integer, not bool$"),
+    "n beyond int32": ("simulate", dict(n=2**40), ValueError,
+                       r"^&chain: n = 1099511627776 is outside \[1, 10000000\]$"),
+    "cycles beyond int64": ("simulate", dict(cycles=2**70), ValueError,
+                            r"^&run: cycles = 1180591620717411303424 is outside \[1, 1e12\]$"),
+    "amplitude None": ("simulate", dict(amplitude=None), TypeError,
+                       r"^amplitude must be a real number, not NoneType$"),
+    "amplitude str": ("simulate", dict(amplitude="1.7"), TypeError,
+                      r"^amplitude must be a real number, not str$"),
+    "boundary type": ("simulate", dict(boundary=1), TypeError,
+                      r"^boundary must be a string, not int$"),
+    "x0 2-D": ("simulate", dict(x0=np.zeros((2, 2))), ValueError,
+               r"^&initial: x0 must be a 1-D array of n values, got shape \(2, 2\)$"),
+    "x0 text": ("simulate", dict(x0=["a", "b", "c", "d"]), TypeError,
+                r"^x0 must be an array of real numbers$"),
+    "spacing 2-D": ("simulate", dict(spacing=np.ones((5, 1))), ValueError,
+                    r"^&chain: spacing must be a 1-D array"),
+    "vectors float": ("lyapunov", dict(vectors=1.5), TypeError,
+                      r"^vectors must be an integer, not float$"),
+    "events over max_size_mb": ("simulate", dict(n=4, amplitude=0.6, omega=0.5,
+                                                 restitution=0.2, spacing=0.3, cycles=50,
+                                                 max_size_mb=0.01), ValueError,
+                                r"^events: this run has \d+ events, about .* MB, more than "
+                                r"max_size_mb = 0.01; pass events=False or raise max_size_mb$"),
+    "tangent memory": ("lyapunov", dict(n=20000, cycles=1), ValueError,
+                       r"^&lyapunov: the tangent vectors of this run need about .* MB of "
+                       r"memory, more than &output max_size_mb = 4096.0000; lower vectors, "
+                       r"leave jacobian off, or raise max_size_mb$"),
+}
+
+
+@pytest.mark.parametrize("name", PYTHON_ONLY)
+def test_python_side_errors(name: str) -> None:
+    function, args, error, pattern = PYTHON_ONLY[name]
+    with pytest.raises(error, match=pattern):
+        getattr(api, function)(**{**BASE, **args})
+
+
+def test_engine_failure_is_a_runtime_error(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Status 2 (the run failed) and unknown statuses raise RuntimeError, never pass."""
+    message = np.frombuffer(b"engine: stuck", dtype=np.uint8).astype(np.int32)
+    with pytest.raises(RuntimeError, match="^engine: stuck$"):
+        api._raise_for(2, message.size, message)
+    with pytest.raises(RuntimeError, match=r"status 4"):
+        api._raise_for(4, message.size, message)
+
+
+# -------------------------------------------------------------------------- 3. no leaks
+
+
+def _rss_kib() -> int:
+    for line in Path("/proc/self/status").read_text().splitlines():
+        if line.startswith("VmRSS:"):
+            return int(line.split()[1])
+    raise AssertionError("no VmRSS in /proc/self/status")
+
+
+def test_no_leak() -> None:
+    """10,000 short calls (n = 4, 5 cycles) after a warm-up of 500: RSS grows < 5 MB.
+
+    The calls rotate through every entry point, including refused inputs (their error
+    paths free what they allocated too)."""
+    zeros = np.zeros(4)
+
+    def calls(count: int) -> None:
+        for i in range(count):
+            kind = i % 6
+            if kind == 0:
+                api.simulate(4, 1.7, 1.5, cycles=5)
+            elif kind == 1:
+                api.lyapunov(4, 1.7, 1.5, cycles=5)
+            elif kind == 2:
+                api.floquet(4, 1.7, 1.5, cycles=5)
+            elif kind == 3:
+                api.poincare_jacobian(zeros, zeros, 1.7, 1.5)
+            elif kind == 4:
+                api.random_start(4, seed=i, x_amp=0.3)
+            else:
+                with pytest.raises(ValueError):
+                    api.simulate(4, 1.7, 1.5, damping=1.5, cycles=5)
+
+    calls(500)
+    before = _rss_kib()
+    calls(10_000)
+    growth = _rss_kib() - before
+    assert growth < 5 * 1024, f"resident memory grew by {growth} KiB over 10,000 calls"
+
+
+# -------------------------------------------------------- 4. the build, and the example
+
+
+def test_fresh_build(tmp_path: Path) -> None:
+    """f2py/build.py builds a working extension from the tracked sources alone."""
+    if shutil.which("gfortran") is None and "IMPACTCHAIN_REQUIRE_EXTENSION" not in os.environ:
+        pytest.skip("no gfortran")
+    for folder in ("src", "f2py"):
+        shutil.copytree(ROOT / folder, tmp_path / folder)
+    (tmp_path / "post").mkdir()
+    for name in ("__init__.py", "api.py"):
+        shutil.copy2(ROOT / "post" / name, tmp_path / "post" / name)
+    build = subprocess.run([sys.executable, "f2py/build.py", "--force", "--quiet"],
+                           cwd=tmp_path, capture_output=True, text=True, timeout=600)
+    assert build.returncode == 0, build.stdout + build.stderr
+    assert list((tmp_path / "post").glob("_kernels*.so"))
+    probe = ("from post import api; import sys; assert api.__file__.startswith(sys.argv[1]); "
+             "print(api.simulate(6, 1.7, 1.5, transient=10, cycles=20).x.tobytes().hex())")
+    out = subprocess.run([sys.executable, "-c", probe, str(tmp_path)], cwd=tmp_path,
+                         capture_output=True, text=True, timeout=120)
+    assert out.returncode == 0, out.stderr
+    here = api.simulate(6, 1.7, 1.5, transient=10, cycles=20).x.tobytes().hex()
+    assert out.stdout.strip() == here
+
+
+def _example() -> Any:
+    spec = importlib.util.spec_from_file_location("fig1c_example", EXAMPLE)
+    assert spec is not None and spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def test_example_reproduces_the_fig1c_recipe(cli: Path, tmp_path: Path) -> None:
+    """The example's data are those of `fpm run -- namelists/fig1c.nml`, bit for bit."""
+    text = (ROOT / "namelists" / "fig1c.nml").read_text()
+    text = re.sub(r"&output[^/]*/", "&output file = 'run.h5' /", text)
+    result = run_cli(cli, text, tmp_path)
+    assert result.returncode == 0, result.stderr
+    sim = _example().compute()
+    with h5py.File(tmp_path / "run.h5") as f:
+        np.testing.assert_array_equal(sim.x, f["strobe/x"][:], strict=True)
+        np.testing.assert_array_equal(sim.v, f["strobe/v"][:], strict=True)
+
+
+def test_example_writes_a_png(tmp_path: Path) -> None:
+    out = tmp_path / "fig1c.png"
+    result = subprocess.run([sys.executable, str(EXAMPLE), str(out), "--transient", "100",
+                             "--cycles", "50"], capture_output=True, text=True, timeout=120)
+    assert result.returncode == 0, result.stderr
+    assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    bad = subprocess.run([sys.executable, str(EXAMPLE), str(out), "--amplitude", "-1"],
+                         capture_output=True, text=True, timeout=120)
+    assert bad.returncode == 2 and "&chain: amplitude = -1.0000000 is outside" in bad.stderr
