@@ -558,8 +558,19 @@ contains
         type(chain_t), intent(inout) :: chain
         integer, intent(in) :: rows(:)
         real(wp), intent(in) :: s(:, :)
+        real(wp) :: old(size(rows))
+        integer :: j, a, b
 
-        chain%tangent(:, rows) = matmul(chain%tangent(:, rows), transpose(s))
+        ! one tangent vector at a time: no temporaries on the hot path
+        do j = 1, chain%n_vectors
+            old = chain%tangent(j, rows)
+            do a = 1, size(rows)
+                chain%tangent(j, rows(a)) = 0
+                do b = 1, size(rows)
+                    chain%tangent(j, rows(a)) = chain%tangent(j, rows(a)) + s(a, b)*old(b)
+                end do
+            end do
+        end do
     end subroutine apply_jump
 
     !> Does the net force press oscillator i, at rest in a stack on the `side` wall, towards

@@ -85,7 +85,7 @@ contains
         gam = flow%gam
         cc = gap%y
         ss = (gap%vy + b*gap%y)*flow%inv_gam
-        amp = hypot(cc, ss)
+        amp = sqrt(cc**2 + ss**2)
         res%status = search_none
         res%tau = huge(1.0_wp)
         if (gap%offset - amp > 0) return
@@ -159,8 +159,8 @@ contains
 
         b = flow%damping
         w = flow%omega
-        ry0 = hypot(gap%y, (gap%vy + b*gap%y)*flow%inv_gam)
-        rp = abs(gap%beta)*hypot(flow%p_sin, flow%q_cos)
+        ry0 = sqrt(gap%y**2 + ((gap%vy + b*gap%y)*flow%inv_gam)**2)
+        rp = abs(gap%beta)*sqrt(flow%p_sin**2 + flow%q_cos**2)
         tol = noise(gap%offset, ry0 + rp)
         tau = 0
         do it = 1, max_steps
