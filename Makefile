@@ -82,3 +82,55 @@ bench: build
 
 clean:
 	rm -rf build runs/*.h5 runs/*.png post/_kernels*
+
+# ---- every figure of the paper: `make figures` (runs in parallel on the machine's cores) ----
+RUNS := figures/runs
+SIM := $(FPM) run $(RELEASE) -- --quiet
+POST := $(PY) -m post
+SINGLE := fig1a fig1b fig1c fig1d fig2a fig2b fig2c fig2d fig2e fig2f fig3_red fig3_green \
+          fig4_7
+SWEEPS := fig10 fig11_b005 fig11_b010 fig11_b015 fig12_K08 fig12_K06 fig12_K04 fig13
+FIGURES := $(foreach f,fig1a fig1b fig1c fig1d fig2a fig2b fig2c fig2d fig2e fig2f,figures/$(f).png) \
+           figures/fig3.png figures/fig4.png figures/fig5.png figures/fig6.png \
+           figures/fig7.png figures/fig8.png figures/fig10.png figures/fig11.png \
+           figures/fig12_damping.png figures/fig12_restitution.png figures/fig13.png
+
+.PHONY: figures figure-files
+figures: build
+	@mkdir -p $(RUNS)
+	@start=$$(date +%s)
+	$(MAKE) --no-print-directory -j $$(nproc) figure-files
+	echo "impactchain: every figure of the paper is in figures/ ($$(( $$(date +%s) - start )) s)"
+
+figure-files: $(FIGURES)
+
+$(RUNS)/%.h5: namelists/%.nml
+	@echo "impactchain: running $<"
+	$(SIM) $<
+
+figures/fig1%.png: $(RUNS)/fig1%.h5
+	$(POST) space-amplitude $< -o $@
+figures/fig2%.png: $(RUNS)/fig2%.h5
+	$(POST) space-amplitude $< -o $@
+figures/fig3.png: $(RUNS)/fig3_red.h5 $(RUNS)/fig3_green.h5
+	$(POST) space-amplitude $^ -o $@
+figures/fig4.png: $(RUNS)/fig4_7.h5
+	$(POST) space-time-amplitude $< --panel-cycles 60 --panels 4 -o $@
+figures/fig5.png: $(RUNS)/fig4_7.h5
+	$(POST) space-time-amplitude $< --panel-cycles 60 --panels 4 --start 741 -o $@
+figures/fig6.png: $(RUNS)/fig4_7.h5
+	$(POST) shock-wave $< --panel-cycles 60 --panels 4 -o $@
+figures/fig7.png: $(RUNS)/fig4_7.h5
+	$(POST) shock-wave $< --panel-cycles 60 --panels 4 --start 741 -o $@
+figures/fig8.png: $(RUNS)/fig4_7.h5
+	$(POST) poincare $< --site 1 --cycles 50 -o $@
+figures/fig10.png: $(RUNS)/fig10.h5
+	$(POST) bifurcation $< -o $@
+figures/fig11.png: $(RUNS)/fig11_b005.h5 $(RUNS)/fig11_b010.h5 $(RUNS)/fig11_b015.h5
+	$(POST) lyapunov $^ --k 10 --with-bifurcation -o $@
+figures/fig12_damping.png: $(RUNS)/fig11_b005.h5 $(RUNS)/fig11_b010.h5 $(RUNS)/fig11_b015.h5
+	$(POST) ky-dimension $^ -o $@
+figures/fig12_restitution.png: $(RUNS)/fig12_K08.h5 $(RUNS)/fig12_K06.h5 $(RUNS)/fig12_K04.h5
+	$(POST) ky-dimension $^ -o $@
+figures/fig13.png: $(RUNS)/fig13.h5
+	$(POST) lyapunov $< --k 32 -o $@
