@@ -14,7 +14,7 @@ APT_PACKAGES := gfortran libhdf5-dev liblapack-dev libblas-dev pkg-config \
 PY_STAMP := $(VENV)/.requirements-installed
 DEFAULT_RUN := runs/default.h5
 
-.PHONY: all setup system-deps python-deps build run test fortran-test python-test \
+.PHONY: all setup system-deps python-deps build run test fortran-test python-test mpi \
         figures bench clean help
 
 all: build
@@ -64,7 +64,11 @@ run: build
 	$(PY) -m post all $(DEFAULT_RUN) -o runs/default
 	@echo "impactchain: figures written next to $(DEFAULT_RUN) (runs/default_*.png)"
 
-fortran-test: build
+# the MPI sweep driver (optional for users; built and run by make test)
+mpi: build
+	cd mpi && $(FPM) build $(RELEASE) --compiler mpifort
+
+fortran-test: build mpi
 	$(FPM) test $(RELEASE)
 	@echo "impactchain: the same tests with runtime checks"
 	$(FPM) test $(CHECKED)

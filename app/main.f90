@@ -47,9 +47,12 @@ program main
     use impactchain, only: wp, i8, error_t, run_config_t, read_config, run_simulation, &
                            run_result_t
     use interrupt_flag, only: catch_interrupts, interrupted
+    use chain_sweep, only: run_sweep, sweep_summary_t
     implicit none
     type(run_config_t) :: cfg
     type(run_result_t) :: summary
+    type(sweep_summary_t) :: sweep_summary
+    character(len=:), allocatable :: unit_label
     type(error_t), allocatable :: err
     character(len=:), allocatable :: input
     logical :: quiet
@@ -61,10 +64,19 @@ program main
     call system_clock(clock_start, clock_rate)
     clock_last = clock_start
     call catch_interrupts()
-    call run_simulation(cfg, summary, err, progress)
-    if (allocated(err)) call fail(err%message)
-    call report(summary, cfg%output_file)
-    if (.not. summary%complete) stop 3, quiet=.true.
+    if (cfg%sweep) then
+        unit_label = 'point'
+        call run_sweep(cfg, sweep_summary, err, progress)
+        if (allocated(err)) call fail(err%message)
+        call report_sweep(sweep_summary, cfg%output_file)
+        if (.not. sweep_summary%complete) stop 3, quiet=.true.
+    else
+        unit_label = 'cycle'
+        call run_simulation(cfg, summary, err, progress)
+        if (allocated(err)) call fail(err%message)
+        call report(summary, cfg%output_file)
+        if (.not. summary%complete) stop 3, quiet=.true.
+    end if
 
 contains
 
@@ -129,8 +141,9 @@ contains
         if (elapsed < 2) return
         clock_last = now
         rate = done/max(elapsed, 1.0e-9_wp)
-        write (error_unit, '(a,i0,a,i0,a,es9.2,a,f9.1,a)') 'impactchain: cycle ', done, ' / ', &
-            total, ', ', rate, ' cycles/s, ', (total - done)/max(rate, 1.0e-9_wp), ' s left'
+        write (error_unit, '(a,i0,a,i0,a,es9.2,a,f9.1,a)') 'impactchain: '//unit_label//' ', &
+            done, ' / ', total, ', ', rate, ' '//unit_label//'s/s, ', &
+            (total - done)/max(rate, 1.0e-9_wp), ' s left'
     end function progress
 
     subroutine report(summary, output_file)
@@ -148,6 +161,22 @@ contains
             'impactchain: the run was stopped early; the file holds the finished records '// &
             'and is marked complete = 0'
     end subroutine report
+
+    subroutine report_sweep(summary, output_file)
+        type(sweep_summary_t), intent(in) :: summary
+        character(len=*), intent(in) :: output_file
+
+        if (summary%complete) then
+            write (output_unit, '(a)') 'impactchain: wrote '//output_file
+            write (output_unit, '(a,i0,a,i0,a,f0.4)') '  sweep points ', summary%n_points, &
+                ' (resumed from a checkpoint: ', summary%points_resumed, &
+                '), mean collisions per cycle ', summary%mean_collisions
+        else
+            write (error_unit, '(a,i0,a,i0,a)') 'impactchain: the sweep was stopped after ', &
+                summary%points_done, ' of ', summary%n_points, ' points; run the same '// &
+                'command again to resume from '//output_file//'.ckpt'
+        end if
+    end subroutine report_sweep
 
     subroutine fail(message)
         character(len=*), intent(in) :: message

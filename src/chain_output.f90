@@ -15,7 +15,8 @@ module chain_output
     public :: output_t, output_begin, output_header, output_strobe_write, output_events_append
     public :: output_final, output_stats, output_periods, output_lyapunov, output_jacobian
     public :: output_end, output_abort, read_final_state, output_sweep_write, output_group
-    public :: schema_version, code_version, output_truncate_strobe
+    public :: schema_version, code_version, output_truncate_strobe, output_sweep_attributes
+    public :: output_sweep_write_int
 
     integer, parameter :: schema_version = 1
     character(len=*), parameter :: code_version = '0.1.0'
@@ -314,6 +315,33 @@ contains
         if (e < 0) call set_error(err, "output: cannot write /floquet")
     end subroutine output_jacobian
 
+    !> Attributes of /sweep: the swept parameters and the mode.
+    subroutine output_sweep_attributes(out, parameter, parameter2, mode, err)
+        type(output_t), intent(inout) :: out
+        character(len=*), intent(in) :: parameter, parameter2, mode
+        type(error_t), allocatable, intent(out) :: err
+        integer :: e(3)
+
+        call h5ltset_attribute_string_f(out%file, 'sweep', 'parameter', parameter, e(1))
+        call h5ltset_attribute_string_f(out%file, 'sweep', 'parameter2', parameter2//' ', e(2))
+        call h5ltset_attribute_string_f(out%file, 'sweep', 'mode', mode, e(3))
+        if (any(e < 0)) call set_error(err, "output: cannot write the /sweep attributes")
+    end subroutine output_sweep_attributes
+
+    !> One integer sweep dataset, stored as given (Fortran order).
+    subroutine output_sweep_write_int(out, name, values, dims, units, err)
+        type(output_t), intent(inout) :: out
+        character(len=*), intent(in) :: name, units
+        integer, intent(in) :: values(*)
+        integer(hsize_t), intent(in) :: dims(:)
+        type(error_t), allocatable, intent(out) :: err
+        integer :: e
+
+        call h5ltmake_dataset_int_f(out%file, name, size(dims), dims, values, e)
+        if (e >= 0) call h5ltset_attribute_string_f(out%file, name, 'units', units, e)
+        if (e < 0) call set_error(err, "output: cannot write /"//name)
+    end subroutine output_sweep_write_int
+
     !> One sweep dataset: a real array of any rank up to 3, stored as given (Fortran order).
     subroutine output_sweep_write(out, name, values, dims, units, err)
         type(output_t), intent(inout) :: out
@@ -396,12 +424,15 @@ contains
 
     !> The final state of an earlier run, to continue from it.
     subroutine read_final_state(path, n, x, v, cycle, phase, contact, queue_time, &
-                                queue_action, time_in_cycle, err)
+                                queue_action, time_in_cycle, model, spacing, boundary, err)
         character(len=*), intent(in) :: path
         integer, intent(in) :: n
         real(wp), allocatable, intent(out) :: x(:), v(:), queue_time(:)
         integer(i8), intent(out) :: cycle
         real(wp), intent(out) :: phase, time_in_cycle
+        real(wp), intent(out) :: model(4) !! damping, restitution, amplitude, omega of the file
+        real(wp), allocatable, intent(out) :: spacing(:)
+        character(len=8), intent(out) :: boundary
         integer, allocatable, intent(out) :: contact(:), queue_action(:)
         type(error_t), allocatable, intent(out) :: err
         integer(hid_t) :: f, d
@@ -458,6 +489,16 @@ contains
         phase = ph(1)
         if (e >= 0) call h5ltread_dataset_double_f(f, 'final/time_in_cycle', ph, dims, e)
         time_in_cycle = ph(1)
+        if (e >= 0) call h5ltget_attribute_double_f(f, 'params', 'damping', model(1:1), e)
+        if (e >= 0) call h5ltget_attribute_double_f(f, 'params', 'restitution', model(2:2), e)
+        if (e >= 0) call h5ltget_attribute_double_f(f, 'params', 'amplitude', model(3:3), e)
+        if (e >= 0) call h5ltget_attribute_double_f(f, 'params', 'omega', model(4:4), e)
+        boundary = ''
+        if (e >= 0) call h5ltget_attribute_string_f(f, 'params', 'boundary', boundary, e)
+        allocate (spacing(n + 1))
+        dims = [int(n + 1, hsize_t)]
+        if (e >= 0) call h5ltread_dataset_double_f(f, 'params/spacing', spacing, dims, e)
+        dims = [1_hsize_t]
         if (e >= 0) then
             call h5dopen_f(f, 'final/cycle', d, e)
             cycle_buf = 0

@@ -39,7 +39,9 @@ contains
         type(error_t), allocatable, intent(out) :: err
         integer(i8) :: state
         integer :: i
-        real(wp) :: phase
+        real(wp) :: phase, model(4)
+        real(wp), allocatable :: spacing(:)
+        character(len=8) :: boundary
 
         cycle = 0
         s = 0
@@ -59,7 +61,13 @@ contains
             if (size(cfg%v0) == cfg%n) v = cfg%v0
         case ('file')
             call read_final_state(cfg%initial_file, cfg%n, x, v, cycle, phase, contact, &
-                                  queue_time, queue_action, s, err)
+                                  queue_time, queue_action, s, model, spacing, boundary, err)
+            if (allocated(err)) return
+            ! the stored event schedule belongs to the file's model: with other parameters
+            ! (a continuation step of a sweep) every bond is searched again
+            if (any(model /= [cfg%damping, cfg%restitution, cfg%amplitude, cfg%omega]) .or. &
+                any(spacing /= cfg%spacing) .or. boundary(1:len(cfg%boundary)) /= cfg%boundary) &
+                deallocate (queue_time, queue_action)
         end select
     end subroutine initial_state
 

@@ -1,0 +1,542 @@
+!> Parameter sweeps: bifurcation diagrams and Lyapunov scans along one parameter, or a 2-D
+!> grid of two (MODEL.md section 7, figures 10-13).
+!>
+!> Points are grouped in branches. Along `parameter` a branch is a continuation: each point
+!> starts from the final state of the one before (the paper's procedure; the drive phase and
+!> the cycle count run on), exactly as a run with `&initial kind = 'file'` on the previous
+!> point's output would. Each value of `parameter2` is its own branch; in mode 'independent'
+!> every point is its own branch and starts from the run's initial condition. Branches are
+!> independent, so they run in parallel (OpenMP threads here, MPI ranks in mpi/) and every
+!> point's numbers are the same whatever the number of threads or ranks.
+module chain_sweep
+    use chain_kinds, only: wp, i8
+    use chain_error, only: error_t, set_error, fmt_real, fmt_int
+    use chain_flow, only: make_flow
+    use chain_engine, only: chain_t, chain_init
+    use chain_config, only: run_config_t, validate_config
+    use chain_run, only: memory_sink_t, run_result_t, record_run, check_size
+    use chain_sim, only: start_chain
+    use chain_output, only: output_t, output_begin, output_header, output_group, &
+                            output_sweep_write, output_sweep_attributes, output_end, output_abort, &
+                            output_sweep_write_int
+    use chain_config, only: config_summary
+    use hdf5, only: hsize_t
+    implicit none
+    private
+    public :: sweep_plan_t, sweep_result_t, plan_sweep, sweep_point_config, run_branch
+    public :: run_sweep_branches, sweep_result_init, branch_start_state_t, point_hook
+    public :: run_sweep, write_sweep_file, sweep_summary_t
+
+    character(len=8), parameter :: checkpoint_magic = 'ICSWEEP1'
+    !> Seconds between checkpoints of a running sweep.
+    integer, parameter :: checkpoint_every = 10
+
+    type :: sweep_summary_t
+        integer :: n_points = 0
+        integer :: points_done = 0
+        integer :: points_resumed = 0      !! points taken from a checkpoint
+        logical :: complete = .false.
+        real(wp) :: mean_collisions = 0
+    end type sweep_summary_t
+
+    type :: sweep_plan_t
+        integer :: n_axis1 = 1          !! points along `parameter`
+        integer :: n_axis2 = 1          !! values of `parameter2` (1 for a 1-D sweep)
+        integer :: n_points = 1
+        integer :: n_branches = 1
+        integer :: points_per_branch = 1
+        integer :: n_axes = 1
+        integer :: k = 0                !! Lyapunov exponents per point (0: none)
+    end type sweep_plan_t
+
+    !> Everything stored per point (Fortran order; h5py shows the point index first).
+    type :: sweep_result_t
+        real(wp), allocatable :: values(:, :)        !! values(n_axes, n_points)
+        real(wp), allocatable :: x(:, :, :)          !! x(n, cycles, n_points)
+        real(wp), allocatable :: collisions(:)       !! collisions per cycle (n_points)
+        integer, allocatable :: period(:, :)         !! period(n, n_points)
+        real(wp), allocatable :: exponents(:, :)     !! exponents(k, n_points), bits/cycle
+        real(wp), allocatable :: stderr(:, :)        !! stderr(k, n_points)
+        real(wp), allocatable :: ky(:)               !! ky(n_points)
+        logical, allocatable :: done(:)              !! done(n_points)
+    end type sweep_result_t
+
+    !> Where a continuation branch resumes: the final state of its last finished point.
+    type :: branch_start_state_t
+        logical :: resume = .false.
+        real(wp), allocatable :: x(:), v(:)
+        integer, allocatable :: contact(:)
+        integer(i8) :: cycle = 0
+        real(wp) :: s = 0
+    end type branch_start_state_t
+
+    abstract interface
+        !> Progress of a sweep in points; .false. stops it (the checkpoint keeps the points).
+        function progress_i(done, total) result(keep_going)
+            import :: i8
+            integer(i8), intent(in) :: done, total
+            logical :: keep_going
+        end function progress_i
+        !> Called after every finished point with the whole sweep; .false. stops the sweep.
+        function point_hook(res, starts) result(keep_going)
+            import :: sweep_result_t, branch_start_state_t
+            type(sweep_result_t), intent(in) :: res
+            type(branch_start_state_t), intent(in) :: starts(:)
+            logical :: keep_going
+        end function point_hook
+    end interface
+
+contains
+
+    !> Sizes of the sweep described by cfg (validated: &sweep present).
+    pure function plan_sweep(cfg) result(plan)
+        type(run_config_t), intent(in) :: cfg
+        type(sweep_plan_t) :: plan
+
+        plan%n_axis1 = axis_points(cfg%sweep_start, cfg%sweep_stop, cfg%sweep_step)
+        plan%n_axes = 1
+        if (len(cfg%sweep_parameter2) > 0) then
+            plan%n_axis2 = axis_points(cfg%sweep_start2, cfg%sweep_stop2, cfg%sweep_step2)
+            plan%n_axes = 2
+        end if
+        plan%n_points = plan%n_axis1*plan%n_axis2
+        if (cfg%sweep_mode == 'independent') then
+            plan%n_branches = plan%n_points
+            plan%points_per_branch = 1
+        else
+            plan%n_branches = plan%n_axis2
+            plan%points_per_branch = plan%n_axis1
+        end if
+        plan%k = 0
+        if (cfg%lyapunov) plan%k = merge(2*cfg%n, cfg%vectors, cfg%vectors == 0)
+    end function plan_sweep
+
+    !> Number of points from start to stop in steps of step (rounding-safe).
+    pure integer function axis_points(start, stop, step)
+        real(wp), intent(in) :: start, stop, step
+
+        axis_points = nint((stop - start)/step) + 1
+        if (start + (axis_points - 1)*step > max(start, stop) + 1.0e-9_wp*abs(step) .or. &
+            start + (axis_points - 1)*step < min(start, stop) - 1.0e-9_wp*abs(step)) &
+            axis_points = axis_points - 1
+    end function axis_points
+
+    pure subroutine sweep_result_init(res, cfg, plan)
+        type(sweep_result_t), intent(out) :: res
+        type(run_config_t), intent(in) :: cfg
+        type(sweep_plan_t), intent(in) :: plan
+        integer :: p
+
+        allocate (res%values(plan%n_axes, plan%n_points))
+        do p = 1, plan%n_points
+            res%values(:, p) = point_values(cfg, plan, p)
+        end do
+        allocate (res%x(cfg%n, int(cfg%cycles), plan%n_points))
+        allocate (res%collisions(plan%n_points), res%period(cfg%n, plan%n_points))
+        allocate (res%exponents(plan%k, plan%n_points), res%stderr(plan%k, plan%n_points))
+        allocate (res%ky(plan%n_points), res%done(plan%n_points))
+        res%x = 0
+        res%collisions = 0
+        res%period = 0
+        res%exponents = 0
+        res%stderr = 0
+        res%ky = 0
+        res%done = .false.
+    end subroutine sweep_result_init
+
+    !> Parameter values of point p: index i along `parameter`, j along `parameter2`, computed
+    !> from the indices (never by accumulating steps).
+    pure function point_values(cfg, plan, p) result(values)
+        type(run_config_t), intent(in) :: cfg
+        type(sweep_plan_t), intent(in) :: plan
+        integer, intent(in) :: p
+        real(wp) :: values(plan%n_axes)
+        integer :: i, j
+
+        i = modulo(p - 1, plan%n_axis1) + 1
+        j = (p - 1)/plan%n_axis1 + 1
+        values(1) = cfg%sweep_start + (i - 1)*cfg%sweep_step
+        if (plan%n_axes == 2) values(2) = cfg%sweep_start2 + (j - 1)*cfg%sweep_step2
+    end function point_values
+
+    !> The configuration of one point, validated (a value outside its range is an error
+    !> naming the parameter and the point).
+    subroutine sweep_point_config(cfg, plan, p, point, err)
+        type(run_config_t), intent(in) :: cfg
+        type(sweep_plan_t), intent(in) :: plan
+        integer, intent(in) :: p
+        type(run_config_t), intent(out) :: point
+        type(error_t), allocatable, intent(out) :: err
+        real(wp) :: values(plan%n_axes)
+
+        point = cfg
+        point%sweep = .false.
+        values = point_values(cfg, plan, p)
+        call set_parameter(point, cfg%sweep_parameter, values(1))
+        if (plan%n_axes == 2) call set_parameter(point, cfg%sweep_parameter2, values(2))
+        call validate_config(point, err)
+        if (allocated(err)) err%message = "&sweep: point "//fmt_int(p)//" ("// &
+                                          cfg%sweep_parameter//" = "//fmt_real(values(1))// &
+                                          "): "//err%message
+    end subroutine sweep_point_config
+
+    pure subroutine set_parameter(cfg, name, value)
+        type(run_config_t), intent(inout) :: cfg
+        character(len=*), intent(in) :: name
+        real(wp), intent(in) :: value
+
+        select case (name)
+        case ('amplitude')
+            cfg%amplitude = value
+        case ('omega')
+            cfg%omega = value
+        case ('damping')
+            cfg%damping = value
+        case ('restitution')
+            cfg%restitution = value
+        case ('spacing')
+            cfg%spacing = value
+        end select
+    end subroutine set_parameter
+
+    !> Run the points of branch b in order into `res`, skipping those already done (a resumed
+    !> sweep); starts(b) holds where a continuation resumes. Results, the done flag and the
+    !> resume state are written in one critical section, where `hook` then sees a consistent
+    !> snapshot of the whole sweep (for progress and checkpoints); it may ask to stop.
+    subroutine run_branch(cfg, plan, b, res, starts, stop_now, err, hook)
+        type(run_config_t), intent(in) :: cfg
+        type(sweep_plan_t), intent(in) :: plan
+        integer, intent(in) :: b
+        type(sweep_result_t), intent(inout) :: res
+        type(branch_start_state_t), intent(inout) :: starts(:)
+        logical, intent(inout) :: stop_now
+        type(error_t), allocatable, intent(out) :: err
+        procedure(point_hook), optional :: hook
+        type(run_config_t) :: point
+        type(chain_t) :: chain
+        type(memory_sink_t) :: sink
+        type(run_result_t) :: out
+        integer :: q, p
+
+        do q = 1, plan%points_per_branch
+            p = (b - 1)*plan%points_per_branch + q
+            if (res%done(p)) cycle
+            if (stop_now) return
+            call sweep_point_config(cfg, plan, p, point, err)
+            if (allocated(err)) return
+            if (starts(b)%resume) then
+                call chain_init(chain, make_flow(point%damping, point%amplitude, point%omega), &
+                                point%restitution, point%spacing, point%boundary == 'fixed', &
+                                point%stick_speed, starts(b)%x, starts(b)%v, starts(b)%cycle, &
+                                starts(b)%s, err, starts(b)%contact)
+            else
+                call start_chain(point, chain, err)
+            end if
+            if (allocated(err)) return
+            call record_run(point, chain, sink, out, err)
+            if (allocated(err)) return
+            !$omp critical (sweep_results)
+            res%x(:, :, p) = sink%x
+            res%collisions(p) = out%collisions_per_cycle
+            res%period(:, p) = out%periods
+            if (out%has_lyapunov) then
+                res%exponents(:, p) = out%lyapunov%bits_per_cycle
+                res%stderr(:, p) = out%lyapunov%stderr_bits
+                res%ky(p) = out%lyapunov%ky_dimension
+            end if
+            res%done(p) = .true.
+            if (cfg%sweep_mode == 'continuation') then
+                starts(b)%resume = .true.
+                starts(b)%x = chain%x
+                starts(b)%v = chain%v
+                starts(b)%contact = chain%contact
+                starts(b)%cycle = chain%cycle
+                starts(b)%s = chain%s
+            end if
+            if (present(hook)) then
+                if (.not. hook(res, starts)) stop_now = .true.
+            end if
+            !$omp end critical (sweep_results)
+            deallocate (sink%x, sink%v, sink%cycle)
+        end do
+    end subroutine run_branch
+
+    !> Run the branches selected by `mine` (all when absent) with OpenMP threads; the first
+    !> error met, if any, is returned after all threads stop.
+    subroutine run_sweep_branches(cfg, plan, res, starts, err, mine, hook)
+        type(run_config_t), intent(in) :: cfg
+        type(sweep_plan_t), intent(in) :: plan
+        type(sweep_result_t), intent(inout) :: res
+        type(branch_start_state_t), intent(inout) :: starts(:)
+        type(error_t), allocatable, intent(out) :: err
+        logical, intent(in), optional :: mine(:)
+        procedure(point_hook), optional :: hook
+        type(error_t), allocatable :: branch_err
+        character(len=:), allocatable :: first_message
+        logical :: stop_now
+        integer :: b
+
+        call check_size(cfg, err)
+        if (allocated(err)) return
+        stop_now = .false.
+        !$omp parallel do schedule(dynamic) private(branch_err) shared(stop_now, res, starts)
+        do b = 1, plan%n_branches
+            if (present(mine)) then
+                if (.not. mine(b)) cycle
+            end if
+            call run_branch(cfg, plan, b, res, starts, stop_now, branch_err, hook)
+            if (allocated(branch_err)) then
+                !$omp critical (sweep_results)
+                if (.not. allocated(first_message)) first_message = branch_err%message
+                stop_now = .true.
+                !$omp end critical (sweep_results)
+            end if
+        end do
+        !$omp end parallel do
+        if (allocated(first_message)) call set_error(err, first_message)
+    end subroutine run_sweep_branches
+
+    !> The whole sweep described by cfg: resumes from `file.ckpt` when one exists for the same
+    !> input, checkpoints every few seconds, and writes the HDF5 file when every point is done.
+    !> `progress(done, total)` may ask to stop: the checkpoint then keeps the finished points.
+    subroutine run_sweep(cfg, summary, err, progress)
+        type(run_config_t), intent(in) :: cfg
+        type(sweep_summary_t), intent(out) :: summary
+        type(error_t), allocatable, intent(out) :: err
+        procedure(progress_i), optional :: progress
+        type(sweep_plan_t) :: plan
+        type(sweep_result_t) :: res
+        type(branch_start_state_t), allocatable :: starts(:)
+        type(output_t) :: out
+        type(error_t), allocatable :: err2
+        character(len=:), allocatable :: checkpoint
+        integer(i8) :: clock_last, clock_rate, now
+        integer :: p
+
+        plan = plan_sweep(cfg)
+        do p = 1, plan%n_points
+            call sweep_point_config_check(cfg, plan, p, err)
+            if (allocated(err)) return
+        end do
+        call check_size(cfg, err)
+        if (allocated(err)) return
+        call output_begin(out, cfg%output_file, cfg%overwrite, err)
+        if (allocated(err)) return
+        checkpoint = cfg%output_file//'.ckpt'
+        call sweep_result_init(res, cfg, plan)
+        allocate (starts(plan%n_branches))
+        call load_checkpoint(checkpoint, cfg, plan, res, starts, err)
+        if (allocated(err)) then
+            call output_abort(out)
+            return
+        end if
+        summary%n_points = plan%n_points
+        summary%points_resumed = count(res%done)
+        call system_clock(clock_last, clock_rate)
+        call run_sweep_branches(cfg, plan, res, starts, err, hook=after_point)
+        summary%points_done = count(res%done)
+        summary%complete = all(res%done)
+        if (.not. summary%complete .or. allocated(err)) then
+            call save_checkpoint(checkpoint, cfg, plan, res, starts, err2)
+            call output_abort(out)
+            if (allocated(err2) .and. .not. allocated(err)) call move_alloc(err2, err)
+            return
+        end if
+        summary%mean_collisions = sum(res%collisions)/plan%n_points
+        call write_sweep_file(out, cfg, plan, res, err)
+        if (allocated(err)) then
+            call output_abort(out)
+            return
+        end if
+        call output_end(out, .true., err)
+        if (.not. allocated(err)) call delete_file(checkpoint)
+
+    contains
+
+        logical function after_point(res, starts) result(keep_going)
+            type(sweep_result_t), intent(in) :: res
+            type(branch_start_state_t), intent(in) :: starts(:)
+            type(error_t), allocatable :: ckpt_err
+
+            keep_going = .true.
+            if (present(progress)) keep_going = progress(int(count(res%done), i8), &
+                                                         int(plan%n_points, i8))
+            call system_clock(now)
+            if (now - clock_last >= checkpoint_every*clock_rate) then
+                call save_checkpoint(checkpoint, cfg, plan, res, starts, ckpt_err)
+                clock_last = now
+            end if
+        end function after_point
+
+    end subroutine run_sweep
+
+    !> Validate every point before any work (an out-of-range point is an error up front).
+    subroutine sweep_point_config_check(cfg, plan, p, err)
+        type(run_config_t), intent(in) :: cfg
+        type(sweep_plan_t), intent(in) :: plan
+        integer, intent(in) :: p
+        type(error_t), allocatable, intent(out) :: err
+        type(run_config_t) :: point
+
+        call sweep_point_config(cfg, plan, p, point, err)
+    end subroutine sweep_point_config_check
+
+    !> Header of a normal run (for the sweep's starting configuration) and the /sweep group.
+    subroutine write_sweep_file(out, cfg, plan, res, err)
+        type(output_t), intent(inout) :: out
+        type(run_config_t), intent(in) :: cfg
+        type(sweep_plan_t), intent(in) :: plan
+        type(sweep_result_t), intent(in) :: res
+        type(error_t), allocatable, intent(out) :: err
+        type(chain_t) :: chain
+        integer(hsize_t) :: np, n, cycles, k
+
+        call start_chain(cfg, chain, err)
+        if (allocated(err)) return
+        call output_header(out, cfg%input_text, config_summary(cfg), cfg%n, cfg%spacing, &
+                           cfg%damping, cfg%restitution, cfg%amplitude, cfg%omega, &
+                           cfg%boundary, chain%flow%period, cfg%phase, cfg%transient, &
+                           cfg%cycles, chain%x, chain%v, err)
+        if (allocated(err)) return
+        call output_group(out, 'sweep', err)
+        if (allocated(err)) return
+        call output_sweep_attributes(out, cfg%sweep_parameter, cfg%sweep_parameter2, &
+                                     cfg%sweep_mode, err)
+        if (allocated(err)) return
+        np = plan%n_points
+        n = cfg%n
+        cycles = cfg%cycles
+        k = plan%k
+        if (plan%n_axes == 1) then
+            call output_sweep_write(out, 'sweep/values', res%values, [np], 'parameter', err)
+        else
+            call output_sweep_write(out, 'sweep/values', res%values, [2_hsize_t, np], &
+                                    'parameter', err)
+        end if
+        if (.not. allocated(err)) call output_sweep_write(out, 'sweep/x', res%x, &
+                                                          [n, cycles, np], 'length', err)
+        if (.not. allocated(err)) call output_sweep_write(out, 'sweep/collisions_per_cycle', &
+                                                          res%collisions, [np], &
+                                                          'impacts per drive cycle', err)
+        if (.not. allocated(err)) call output_sweep_write_int(out, 'sweep/period', res%period, &
+                                                              [n, np], &
+                                                              'drive cycles (0 = aperiodic)', err)
+        if (allocated(err) .or. k == 0) return
+        call output_sweep_write(out, 'sweep/exponents', res%exponents, [k, np], &
+                                'bits per drive cycle', err)
+        if (.not. allocated(err)) call output_sweep_write(out, 'sweep/stderr', res%stderr, &
+                                                          [k, np], 'bits per drive cycle', err)
+        if (.not. allocated(err)) call output_sweep_write(out, 'sweep/ky_dimension', res%ky, &
+                                                          [np], '1', err)
+    end subroutine write_sweep_file
+
+    !> Finished points and where each branch resumes, written atomically (tmp + rename).
+    subroutine save_checkpoint(path, cfg, plan, res, starts, err)
+        character(len=*), intent(in) :: path
+        type(run_config_t), intent(in) :: cfg
+        type(sweep_plan_t), intent(in) :: plan
+        type(sweep_result_t), intent(in) :: res
+        type(branch_start_state_t), intent(in) :: starts(:)
+        type(error_t), allocatable, intent(out) :: err
+        integer :: u, ios, b
+
+        open (newunit=u, file=path//'.tmp', access='stream', form='unformatted', &
+              status='replace', action='write', iostat=ios)
+        if (ios /= 0) then
+            call set_error(err, "&sweep: cannot write the checkpoint '"//path//"'")
+            return
+        end if
+        write (u) checkpoint_magic, len(cfg%input_text), cfg%input_text, plan%n_points, &
+            cfg%n, cfg%cycles, plan%k, plan%n_branches
+        write (u) merge(1, 0, res%done), res%x, res%collisions, res%period, res%exponents, &
+            res%stderr, res%ky
+        do b = 1, plan%n_branches
+            write (u) merge(1, 0, starts(b)%resume)
+            if (starts(b)%resume) write (u) starts(b)%x, starts(b)%v, starts(b)%contact, &
+                starts(b)%cycle, starts(b)%s
+        end do
+        close (u)
+        call rename_file(path//'.tmp', path, err)
+    end subroutine save_checkpoint
+
+    !> Resume from a checkpoint of the same input, if there is one.
+    subroutine load_checkpoint(path, cfg, plan, res, starts, err)
+        character(len=*), intent(in) :: path
+        type(run_config_t), intent(in) :: cfg
+        type(sweep_plan_t), intent(in) :: plan
+        type(sweep_result_t), intent(inout) :: res
+        type(branch_start_state_t), intent(inout) :: starts(:)
+        type(error_t), allocatable, intent(out) :: err
+        character(len=8) :: magic
+        character(len=:), allocatable :: text
+        integer :: u, ios, length, n_points, n, k, n_branches, b, flag
+        integer, allocatable :: done(:)
+        integer(i8) :: cycles
+        logical :: exists
+
+        inquire (file=path, exist=exists)
+        if (.not. exists) return
+        open (newunit=u, file=path, access='stream', form='unformatted', status='old', &
+              action='read', iostat=ios)
+        if (ios /= 0) return
+        read (u, iostat=ios) magic, length
+        if (ios /= 0 .or. magic /= checkpoint_magic .or. length /= len(cfg%input_text)) then
+            close (u)
+            call set_error(err, "&sweep: '"//path//"' is a checkpoint of another input; "// &
+                           "remove it to start afresh")
+            return
+        end if
+        allocate (character(len=length) :: text)
+        read (u, iostat=ios) text, n_points, n, cycles, k, n_branches
+        if (ios /= 0 .or. text /= cfg%input_text .or. n_points /= plan%n_points .or. &
+            n /= cfg%n .or. cycles /= cfg%cycles .or. k /= plan%k .or. &
+            n_branches /= plan%n_branches) then
+            close (u)
+            call set_error(err, "&sweep: '"//path//"' is a checkpoint of another input; "// &
+                           "remove it to start afresh")
+            return
+        end if
+        allocate (done(n_points))
+        read (u, iostat=ios) done, res%x, res%collisions, res%period, res%exponents, &
+            res%stderr, res%ky
+        res%done = done == 1
+        do b = 1, n_branches
+            if (ios /= 0) exit
+            read (u, iostat=ios) flag
+            starts(b)%resume = flag == 1
+            if (starts(b)%resume .and. ios == 0) then
+                allocate (starts(b)%x(n), starts(b)%v(n), starts(b)%contact(n))
+                read (u, iostat=ios) starts(b)%x, starts(b)%v, starts(b)%contact, &
+                    starts(b)%cycle, starts(b)%s
+            end if
+        end do
+        close (u)
+        if (ios /= 0) call set_error(err, "&sweep: the checkpoint '"//path//"' is damaged; "// &
+                                     "remove it to start afresh")
+    end subroutine load_checkpoint
+
+    subroutine rename_file(from, to, err)
+        use, intrinsic :: iso_c_binding, only: c_char, c_int, c_null_char
+        character(len=*), intent(in) :: from, to
+        type(error_t), allocatable, intent(out) :: err
+        interface
+            function c_rename(old, new) bind(C, name='rename') result(status)
+                import :: c_char, c_int
+                character(kind=c_char), intent(in) :: old(*), new(*)
+                integer(c_int) :: status
+            end function c_rename
+        end interface
+
+        if (c_rename(from//c_null_char, to//c_null_char) /= 0) &
+            call set_error(err, "&sweep: cannot rename '"//from//"' to '"//to//"'")
+    end subroutine rename_file
+
+    subroutine delete_file(path)
+        character(len=*), intent(in) :: path
+        integer :: u, ios
+
+        open (newunit=u, file=path, status='old', iostat=ios)
+        if (ios == 0) close (u, status='delete')
+    end subroutine delete_file
+
+end module chain_sweep

@@ -1,0 +1,137 @@
+"""Parameter sweeps: identical results with 1 or 2 OpenMP threads and under MPI, a
+continuation sweep equal to the same steps run one by one from files, and an interrupted
+sweep that resumes to the same file as an uninterrupted one."""
+from __future__ import annotations
+
+import os
+import shutil
+import signal
+import subprocess
+import time
+from pathlib import Path
+
+import h5py
+import numpy as np
+import pytest
+
+from simulator import FPM, ROOT, impactchain_exe, run_namelist  # noqa: F401 (fixture)
+
+GRID = """
+&chain n = 6, amplitude = 2.0, omega = 1.5 /
+&initial kind = 'random', seed = 3, x_amp = 0.3, v_amp = 0.5 /
+&run transient = 50, cycles = 20, record_events = .false. /
+&lyapunov vectors = 4 /
+&sweep parameter = 'amplitude', start = 1.5, stop = 2.5, step = 0.1, mode = '{mode}',
+       parameter2 = 'omega', start2 = 1.3, stop2 = 1.7, step2 = 0.1 /
+&output file = '{out}' /
+"""
+
+
+def run_with_threads(exe, tmp_path, text, threads, name):
+    (tmp_path / name).write_text(text)
+    env = dict(os.environ, OMP_NUM_THREADS=str(threads))
+    result = subprocess.run([str(exe), "--quiet", name], cwd=tmp_path, env=env,
+                            capture_output=True, text=True, timeout=300)
+    assert result.returncode == 0, result.stderr
+    return result
+
+
+def assert_same_sweep(a: Path, b: Path) -> None:
+    with h5py.File(a) as fa, h5py.File(b) as fb:
+        assert sorted(fa["sweep"]) == sorted(fb["sweep"])
+        for key in fa["sweep"]:
+            np.testing.assert_array_equal(fa["sweep"][key][:], fb["sweep"][key][:], err_msg=key)
+        for key in ("parameter", "parameter2", "mode"):
+            assert fa["sweep"].attrs[key] == fb["sweep"].attrs[key]
+
+
+@pytest.fixture(scope="session")
+def mpi_exe() -> Path | None:
+    """The MPI build of the sweep driver (mpi/), or None when mpifort is not installed."""
+    if shutil.which("mpifort") is None:
+        return None
+    out = subprocess.run([str(FPM), "run", "--profile", "release", "--compiler", "mpifort",
+                          "--runner", "echo"], cwd=ROOT / "mpi", capture_output=True,
+                         text=True, check=True)
+    return ROOT / "mpi" / out.stdout.strip().splitlines()[-1]
+
+
+@pytest.mark.parametrize("mode", ["continuation", "independent"])
+def test_threads_and_ranks_give_identical_sweeps(impactchain_exe, mpi_exe, tmp_path, mode):
+    run_with_threads(impactchain_exe, tmp_path, GRID.format(mode=mode, out="one.h5"), 1,
+                     "one.nml")
+    run_with_threads(impactchain_exe, tmp_path, GRID.format(mode=mode, out="two.h5"), 2,
+                     "two.nml")
+    with h5py.File(tmp_path / "one.h5") as f:
+        assert f["sweep/values"].shape == (55, 2)
+        assert f["sweep/x"].shape == (55, 20, 6)
+        assert f["sweep/exponents"].shape == (55, 4)
+        assert int(np.ravel(f.attrs["complete"])[0]) == 1
+    assert_same_sweep(tmp_path / "one.h5", tmp_path / "two.h5")
+    if mpi_exe is None:
+        pytest.skip("mpifort is not installed: the MPI comparison needs openmpi")
+    (tmp_path / "mpi.nml").write_text(GRID.format(mode=mode, out="mpi.h5"))
+    result = subprocess.run(["mpirun", "--allow-run-as-root", "--oversubscribe", "-np", "2",
+                             str(mpi_exe), "mpi.nml"], cwd=tmp_path, capture_output=True,
+                            text=True, timeout=300, env=dict(os.environ, OMP_NUM_THREADS="1"))
+    assert result.returncode == 0, result.stdout + result.stderr
+    assert_same_sweep(tmp_path / "one.h5", tmp_path / "mpi.h5")
+
+
+def test_continuation_equals_runs_from_files(impactchain_exe, tmp_path):
+    chain = "&chain n = 8, amplitude = {a}, omega = 1.9, restitution = 0.5 /\n"
+    run = "&run transient = 30, cycles = 10, record_events = .false. /\n"
+    values = [3.0, 2.9, 2.8, 2.7]
+    run_namelist(impactchain_exe, chain.format(a=3.0) + "&initial kind = 'rest' /\n" + run +
+                 "&sweep parameter = 'amplitude', start = 3.0, stop = 2.7, step = -0.1 /\n"
+                 "&output file = 'sweep.h5' /", tmp_path, "sweep.nml")
+    previous = None
+    for j, a in enumerate(values):
+        start = ("&initial kind = 'rest' /\n" if previous is None else
+                 f"&initial kind = 'file', file = '{previous}' /\n")
+        run_namelist(impactchain_exe, chain.format(a=a) + start + run +
+                     f"&output file = 'step{j}.h5' /", tmp_path, f"step{j}.nml")
+        previous = f"step{j}.h5"
+    with h5py.File(tmp_path / "sweep.h5") as f:
+        np.testing.assert_allclose(f["sweep/values"][:], values, rtol=0, atol=1e-12)
+        for j in range(len(values)):
+            with h5py.File(tmp_path / f"step{j}.h5") as g:
+                np.testing.assert_array_equal(f["sweep/x"][j], g["strobe/x"][:])
+                np.testing.assert_array_equal(f["sweep/period"][j], g["strobe/period"][:])
+
+
+LONG = """
+&chain n = 8, amplitude = 6.0, omega = 1.9, damping = 0.05, restitution = 0.5 /
+&initial kind = 'rest' /
+&run transient = 250, cycles = 50, record_events = .false. /
+&sweep parameter = 'amplitude', start = 6.0, stop = 1.0, step = -0.002 /
+&output file = '{out}' /
+"""
+
+
+def test_interrupted_sweep_resumes_to_the_same_file(impactchain_exe, tmp_path):
+    run_namelist(impactchain_exe, LONG.format(out="whole.h5"), tmp_path, "whole.nml")
+    (tmp_path / "part.nml").write_text(LONG.format(out="part.h5"))
+    proc = subprocess.Popen([str(impactchain_exe), "--quiet", "part.nml"], cwd=tmp_path,
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    time.sleep(1.0)
+    proc.send_signal(signal.SIGINT)
+    _, err = proc.communicate(timeout=120)
+    assert proc.returncode == 3, err
+    assert (tmp_path / "part.h5.ckpt").exists()
+    assert not (tmp_path / "part.h5").exists()
+    result = run_namelist(impactchain_exe, LONG.format(out="part.h5"), tmp_path, "part.nml")
+    resumed = int(result.stdout.split("resumed from a checkpoint: ")[1].split(")")[0])
+    assert 0 < resumed < 2501
+    assert not (tmp_path / "part.h5.ckpt").exists()
+    assert_same_sweep(tmp_path / "whole.h5", tmp_path / "part.h5")
+
+
+def test_sweep_point_out_of_range_is_refused(impactchain_exe, tmp_path):
+    text = ("&chain n = 4, amplitude = 1.0, omega = 1.5 /\n"
+            "&sweep parameter = 'restitution', start = 0.8, stop = 1.2, step = 0.1 /\n"
+            "&output file = 'bad.h5' /\n")
+    result = run_namelist(impactchain_exe, text, tmp_path, check=False)
+    assert result.returncode == 1
+    assert "restitution" in result.stderr and "point" in result.stderr
+    assert not list(tmp_path.glob("bad.h5*"))
