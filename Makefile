@@ -91,6 +91,7 @@ clean:
 RUNS := figures/runs
 SIM := $(FPM) run $(RELEASE) -- --quiet
 POST := $(PY) -m post
+GALLERY := --dpi 70
 SINGLE := fig1a fig1b fig1c fig1d fig2a fig2b fig2c fig2d fig2e fig2f fig3_red fig3_green \
           fig4_7
 SWEEPS := fig10 fig11_b005 fig11_b010 fig11_b015 fig12_K08 fig12_K06 fig12_K04 fig13
@@ -100,6 +101,7 @@ FIGURES := $(foreach f,fig1a fig1b fig1c fig1d fig2a fig2b fig2c fig2d fig2e fig
            figures/fig12_damping.png figures/fig12_restitution.png figures/fig13.png
 
 .PHONY: figures figure-files
+.SECONDARY:
 figures: build
 	@mkdir -p $(RUNS)
 	@start=$$(date +%s)
@@ -113,28 +115,28 @@ $(RUNS)/%.h5: namelists/%.nml
 	$(SIM) $<
 
 figures/fig1%.png: $(RUNS)/fig1%.h5
-	$(POST) space-amplitude $< -o $@
+	$(POST) space-amplitude $< -o $@ $(GALLERY)
 figures/fig2%.png: $(RUNS)/fig2%.h5
-	$(POST) space-amplitude $< -o $@
+	$(POST) space-amplitude $< -o $@ $(GALLERY)
 figures/fig3.png: $(RUNS)/fig3_red.h5 $(RUNS)/fig3_green.h5
-	$(POST) space-amplitude $^ -o $@
+	$(POST) space-amplitude $^ -o $@ $(GALLERY)
 figures/fig4.png: $(RUNS)/fig4_7.h5
-	$(POST) space-time-amplitude $< --panel-cycles 60 --panels 4 -o $@
+	$(POST) space-time-amplitude $< --panel-cycles 60 --panels 4 -o $@ $(GALLERY)
 figures/fig5.png: $(RUNS)/fig4_7.h5
-	$(POST) space-time-amplitude $< --panel-cycles 60 --panels 4 --start 741 -o $@
+	$(POST) space-time-amplitude $< --panel-cycles 60 --panels 4 --start 741 -o $@ $(GALLERY)
 figures/fig6.png: $(RUNS)/fig4_7.h5
-	$(POST) shock-wave $< --panel-cycles 60 --panels 4 -o $@
+	$(POST) shock-wave $< --panel-cycles 60 --panels 4 -o $@ $(GALLERY)
 figures/fig7.png: $(RUNS)/fig4_7.h5
-	$(POST) shock-wave $< --panel-cycles 60 --panels 4 --start 741 -o $@
+	$(POST) shock-wave $< --panel-cycles 60 --panels 4 --start 741 -o $@ $(GALLERY)
 figures/fig8.png: $(RUNS)/fig4_7.h5
-	$(POST) poincare $< --site 1 --cycles 50 -o $@
+	$(POST) poincare $< --site 1 --cycles 50 -o $@ $(GALLERY)
 figures/fig10.png: $(RUNS)/fig10.h5
-	$(POST) bifurcation $< -o $@
+	$(POST) bifurcation $< -o $@ $(GALLERY)
 figures/fig11.png: $(RUNS)/fig11_b005.h5 $(RUNS)/fig11_b010.h5 $(RUNS)/fig11_b015.h5
-	$(POST) lyapunov $^ --k 10 --with-bifurcation -o $@
+	$(POST) lyapunov $^ --k 10 --with-bifurcation -o $@ $(GALLERY)
 figures/fig12_damping.png: $(RUNS)/fig11_b005.h5 $(RUNS)/fig11_b010.h5 $(RUNS)/fig11_b015.h5
-	$(POST) ky-dimension $^ -o $@
+	$(POST) ky-dimension $^ -o $@ $(GALLERY)
 figures/fig12_restitution.png: $(RUNS)/fig12_K08.h5 $(RUNS)/fig12_K06.h5 $(RUNS)/fig12_K04.h5
-	$(POST) ky-dimension $^ -o $@
+	$(POST) ky-dimension $^ -o $@ $(GALLERY)
 figures/fig13.png: $(RUNS)/fig13.h5
-	$(POST) lyapunov $< --k 32 -o $@
+	$(POST) lyapunov $< --k 32 -o $@ $(GALLERY)

@@ -196,6 +196,7 @@ def build_parser() -> argparse.ArgumentParser:
         p.add_argument("files", nargs="+" if command.multiple else 1, metavar="FILE.h5")
         p.add_argument("-o", "--output", required=True, metavar="OUT",
                        help="output file, .png, .pdf or .svg")
+        p.add_argument("--dpi", type=int, default=150, help="resolution (default: 150)")
         command.options(p)
     p = sub.add_parser("all", help="every figure one file supports, written as "
                                    "PREFIX_<figure>.png",
@@ -205,6 +206,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("files", nargs=1, metavar="FILE.h5")
     p.add_argument("-o", "--output", required=True, metavar="PREFIX",
                    help="output prefix, e.g. figs/run")
+    p.add_argument("--dpi", type=int, default=150, help="resolution (default: 150)")
     _all_options(p)
     return parser
 
@@ -231,7 +233,7 @@ def _make_one(command: Command, args: argparse.Namespace) -> None:
     runs = [_read(path, command.require, command.optional, command.name)
             for path in args.files]
     figure = command.build(runs, args)
-    _save(figure, output)
+    _save(figure, output, args.dpi)
 
 
 def _make_all(args: argparse.Namespace) -> None:
@@ -243,7 +245,7 @@ def _make_all(args: argparse.Namespace) -> None:
         raise CliError(f"{path}: the file holds no data for any figure")
     for name, figure in made:
         out = Path(f"{prefix}_{name.replace('-', '_')}{suffix}")
-        _save(figure, out)
+        _save(figure, out, args.dpi)
         print(out)
 
 
@@ -301,13 +303,13 @@ def _output_prefix(text: str) -> tuple[str, str]:
     return text, ".png"
 
 
-def _save(figure: Figure, out: Path) -> None:
+def _save(figure: Figure, out: Path, dpi: int = 150) -> None:
     """Write the figure atomically: to a hidden temporary file, then rename."""
     fmt = out.suffix.lower().lstrip(".")
     temporary = out.with_name(f".{out.name}.partial")
     try:
         out.parent.mkdir(parents=True, exist_ok=True)
-        figure.savefig(temporary, format=fmt, dpi=150)
+        figure.savefig(temporary, format=fmt, dpi=dpi)
         os.replace(temporary, out)
     except OSError as exc:
         raise CliError(f"cannot write {out}: {exc.strerror or exc}") from exc
