@@ -22,7 +22,7 @@ contains
     subroutine run_lyapunov_tests(t)
         type(tally_t), intent(inout) :: t
 
-        call sum_rule(t, 4, 1.35_wp, 1.35_wp)
+        call sum_rule(t, 4, 4.15_wp, 0.9_wp)
         call sum_rule(t, 16, 1.7_wp, 1.5_wp)
         call no_impacts(t)
         call finite_differences(t, 2, .true.)
