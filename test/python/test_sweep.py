@@ -50,7 +50,9 @@ def mpi_exe() -> Path | None:
     """The MPI build of the sweep driver (mpi/), or None when mpifort is not installed."""
     if shutil.which("mpifort") is None:
         return None
-    out = subprocess.run([str(FPM), "run", "--profile", "release", "--compiler", "mpifort",
+    flags = os.environ.get("IMPACTCHAIN_FPM_FLAGS")   # the same build as impactchain_exe
+    profile = ["--flag", flags] if flags else ["--profile", "release"]
+    out = subprocess.run([str(FPM), "run", *profile, "--compiler", "mpifort",
                           "--runner", "echo"], cwd=ROOT / "mpi", capture_output=True,
                          text=True, check=True)
     return ROOT / "mpi" / out.stdout.strip().splitlines()[-1]
