@@ -16,7 +16,7 @@ module chain_output
     public :: output_final, output_stats, output_periods, output_lyapunov, output_jacobian
     public :: output_end, output_abort, read_final_state, output_sweep_write, output_group
     public :: schema_version, code_version, output_truncate_strobe, output_sweep_attributes
-    public :: output_sweep_write_int
+    public :: output_sweep_write_int, rename_file
 
     integer, parameter :: schema_version = 1
     character(len=*), parameter :: code_version = '0.1.0'
@@ -404,11 +404,17 @@ contains
             call set_error(err, "output: cannot finish '"//out%part_path//"'")
             return
         end if
-        if (c_rename(out%part_path//c_null_char, out%path//c_null_char) /= 0) then
-            call set_error(err, "output: cannot rename '"//out%part_path//"' to '"// &
-                           out%path//"'")
-        end if
+        call rename_file(out%part_path, out%path, err)
     end subroutine output_end
+
+    !> Move a finished file to its final name (atomic on one file system).
+    subroutine rename_file(from, to, err)
+        character(len=*), intent(in) :: from, to
+        type(error_t), allocatable, intent(out) :: err
+
+        if (c_rename(from//c_null_char, to//c_null_char) /= 0) &
+            call set_error(err, "output: cannot rename '"//from//"' to '"//to//"'")
+    end subroutine rename_file
 
     !> Close and delete the partial file after an error.
     subroutine output_abort(out)
@@ -463,9 +469,9 @@ contains
         if (.not. allocated(err)) then
             call h5ltget_attribute_int_f(f, '/', 'complete', complete, e)
             call h5ltget_attribute_int_f(f, 'params', 'n', n_file, e)
-            if (n_file(1) /= n) call set_error(err, "&initial: file = '"//path//"' has n = "// &
-                                                fmt_int(n_file(1))//" oscillators, the input n = "// &
-                                                fmt_int(n))
+            if (n_file(1) /= n) call set_error(err, "&initial: file = '"//path// &
+                                                "' has n = "//fmt_int(n_file(1))// &
+                                                " oscillators, the input n = "//fmt_int(n))
         end if
         if (.not. allocated(err)) then
             call h5lexists_f(f, 'final', exists, e)

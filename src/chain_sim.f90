@@ -17,7 +17,7 @@ module chain_sim
                             read_final_state, output_truncate_strobe
     implicit none
     private
-    public :: run_simulation, initial_state, start_chain
+    public :: run_simulation, initial_state, start_chain, write_run_header
 
     !> Sends records to the HDF5 file as they come.
     type, extends(record_sink_t) :: file_sink_t
@@ -95,6 +95,30 @@ contains
         end if
     end subroutine start_chain
 
+    !> Root attributes, /params and /initial of the run described by cfg (for a sweep file: of
+    !> its starting configuration).
+    subroutine write_run_header(out, cfg, err)
+        type(output_t), intent(inout) :: out
+        type(run_config_t), intent(in) :: cfg
+        type(error_t), allocatable, intent(out) :: err
+        type(chain_t) :: chain
+
+        call start_chain(cfg, chain, err)
+        if (.not. allocated(err)) call header_for(out, cfg, chain, err)
+    end subroutine write_run_header
+
+    subroutine header_for(out, cfg, chain, err)
+        type(output_t), intent(inout) :: out
+        type(run_config_t), intent(in) :: cfg
+        type(chain_t), intent(in) :: chain
+        type(error_t), allocatable, intent(out) :: err
+
+        call output_header(out, cfg%input_text, config_summary(cfg), cfg%n, cfg%spacing, &
+                           cfg%damping, cfg%restitution, cfg%amplitude, cfg%omega, &
+                           cfg%boundary, chain%flow%period, cfg%phase, cfg%transient, &
+                           cfg%cycles, chain%x, chain%v, err)
+    end subroutine header_for
+
     !> The whole run described by `cfg`, written to cfg%output_file.
     subroutine run_simulation(cfg, res, err, progress)
         type(run_config_t), intent(in) :: cfg
@@ -111,10 +135,7 @@ contains
         if (allocated(err)) return
         call output_begin(sink%out, cfg%output_file, cfg%overwrite, err)
         if (allocated(err)) return
-        call output_header(sink%out, cfg%input_text, config_summary(cfg), cfg%n, cfg%spacing, &
-                           cfg%damping, cfg%restitution, cfg%amplitude, cfg%omega, &
-                           cfg%boundary, chain%flow%period, cfg%phase, cfg%transient, &
-                           cfg%cycles, chain%x, chain%v, err)
+        call header_for(sink%out, cfg, chain, err)
         if (.not. allocated(err)) call record_run(cfg, chain, sink, res, err, progress)
         if (.not. allocated(err)) call write_results(sink%out, chain, res, cfg%jacobian_cycles, err)
         if (.not. allocated(err) .and. .not. res%complete) &

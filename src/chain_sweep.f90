@@ -15,11 +15,10 @@ module chain_sweep
     use chain_engine, only: chain_t, chain_init
     use chain_config, only: run_config_t, validate_config
     use chain_run, only: memory_sink_t, run_result_t, record_run, check_size
-    use chain_sim, only: start_chain
-    use chain_output, only: output_t, output_begin, output_header, output_group, &
+    use chain_sim, only: start_chain, write_run_header
+    use chain_output, only: output_t, output_begin, output_group, &
                             output_sweep_write, output_sweep_attributes, output_end, output_abort, &
-                            output_sweep_write_int
-    use chain_config, only: config_summary
+                            output_sweep_write_int, rename_file
     use hdf5, only: hsize_t
     implicit none
     private
@@ -388,15 +387,9 @@ contains
         type(sweep_plan_t), intent(in) :: plan
         type(sweep_result_t), intent(in) :: res
         type(error_t), allocatable, intent(out) :: err
-        type(chain_t) :: chain
         integer(hsize_t) :: np, n, cycles, k
 
-        call start_chain(cfg, chain, err)
-        if (allocated(err)) return
-        call output_header(out, cfg%input_text, config_summary(cfg), cfg%n, cfg%spacing, &
-                           cfg%damping, cfg%restitution, cfg%amplitude, cfg%omega, &
-                           cfg%boundary, chain%flow%period, cfg%phase, cfg%transient, &
-                           cfg%cycles, chain%x, chain%v, err)
+        call write_run_header(out, cfg, err)
         if (allocated(err)) return
         call output_group(out, 'sweep', err)
         if (allocated(err)) return
@@ -514,22 +507,6 @@ contains
         if (ios /= 0) call set_error(err, "&sweep: the checkpoint '"//path//"' is damaged; "// &
                                      "remove it to start afresh")
     end subroutine load_checkpoint
-
-    subroutine rename_file(from, to, err)
-        use, intrinsic :: iso_c_binding, only: c_char, c_int, c_null_char
-        character(len=*), intent(in) :: from, to
-        type(error_t), allocatable, intent(out) :: err
-        interface
-            function c_rename(old, new) bind(C, name='rename') result(status)
-                import :: c_char, c_int
-                character(kind=c_char), intent(in) :: old(*), new(*)
-                integer(c_int) :: status
-            end function c_rename
-        end interface
-
-        if (c_rename(from//c_null_char, to//c_null_char) /= 0) &
-            call set_error(err, "&sweep: cannot rename '"//from//"' to '"//to//"'")
-    end subroutine rename_file
 
     subroutine delete_file(path)
         character(len=*), intent(in) :: path

@@ -209,7 +209,8 @@ contains
                     if (found < scan_length) bad = bad + 1
                     cycle
                 end if
-                ! closed form: xp = rp sin(w s + psi) first reaches -c at w s + psi = pi + asin(c/rp)
+                ! closed form: xp = rp sin(w s + psi) first reaches -c where
+                ! w s + psi = pi + asin(c/rp)
                 truth = modulo(pi + asin(gap%offset/rp) - atan2(flow%q_cos, flow%p_sin) &
                                - flow%omega*0.1_wp*j, two_pi)/flow%omega
                 if (abs(found - truth) > 1.0e-8_wp) bad = bad + 1
