@@ -22,6 +22,7 @@ module chain_gaps
     integer, parameter :: search_horizon = 2 !! no zero before tau = horizon; search again there
     real(wp), parameter :: time_tolerance = 1.0e-13_wp !! accuracy of a located zero
     integer, parameter :: max_steps = 200000
+    integer, parameter :: lazy_steps = 2      !! steps of a forced search before it defers
 
     type :: gap_t
         real(wp) :: offset = 0 !! c: constant part of the gap (a sum of spacings)
@@ -198,6 +199,13 @@ contains
                 return
             end if
             tau = tau + h
+            ! far from contact, stop here and let the queue come back: most predictions are
+            ! overwritten by a neighbour's impact before they are due
+            if (it >= lazy_steps .and. g > 0.25_wp*gap%offset) then
+                res%status = search_horizon
+                res%tau = tau
+                return
+            end if
         end do
         res%status = search_root
         res%tau = tau
