@@ -15,6 +15,7 @@ module impactchain
     use chain_run, only: record_sink_t, memory_sink_t, run_result_t, record_run, &
                          progress_callback, poincare_jacobian, advance_to_point, section_target
     use chain_sim, only: run_simulation, start_chain, initial_state
+    use chain_sweep, only: run_sweep, sweep_summary_t, plan_sweep, sweep_plan_t
     implicit none
     private
     public :: wp, i8, pi, two_pi, error_t, set_error
@@ -28,5 +29,6 @@ module impactchain
     public :: record_sink_t, memory_sink_t, run_result_t, record_run, progress_callback
     public :: poincare_jacobian, advance_to_point, section_target
     public :: run_simulation, start_chain, initial_state
+    public :: run_sweep, sweep_summary_t, plan_sweep, sweep_plan_t
 
 end module impactchain
