@@ -446,7 +446,8 @@ contains
         sgn = merge(-1.0_wp, 1.0_wp, side == contact_left)
         v_minus = chain%v(i)
         u = sgn*v_minus
-        if (u < chain%stick_speed .and. pressed(chain, i, side)) then
+        if (u < max(chain%stick_speed, resolved_speed(chain, i, side)) .and. &
+            pressed(chain, i, side)) then
             chain%contact(i) = side
             chain%x(i) = rest_position(chain, i, side)
             chain%v(i) = 0
@@ -593,6 +594,23 @@ contains
         tol = 64*epsilon(1.0_wp)*(depth + chain%flow%amplitude)
         pressed = push < -tol .or. (abs(push) <= tol .and. rate <= 0)
     end function pressed
+
+    !> The smallest approach speed at which a bounce off the `side` wall is resolved: a bounce
+    !> of speed u rises u**2 / (2 |acc|) above the wall, which must exceed the rounding level of
+    !> the gap (set by the size of its terms, large near resonance). Slower arrivals while
+    !> pressed are chatter at the rounding floor and end in rest.
+    pure function resolved_speed(chain, i, side) result(u_min)
+        type(chain_t), intent(in) :: chain
+        integer, intent(in) :: i, side
+        real(wp) :: u_min, depth, push, scale
+
+        depth = abs(rest_position(chain, i, side))
+        push = abs(depth - sign(1.0_wp, real(side, wp))*chain%flow%amplitude* &
+                   chain%drive_sin)
+        scale = depth + abs(chain%x(i) - chain%drive_x) + &
+                sqrt(chain%flow%p_sin**2 + chain%flow%q_cos**2)
+        u_min = 16*sqrt(2*push*64*epsilon(1.0_wp)*scale)
+    end function resolved_speed
 
     !> Next time the force on resting oscillator i turns away from its wall (closed form).
     pure function release_time(chain, i) result(s_release)
