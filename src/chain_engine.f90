@@ -486,7 +486,7 @@ contains
         type(event_log_t), intent(inout) :: log
         type(error_t), allocatable, intent(out) :: err
         integer :: l, r, info
-        real(wp) :: u, f_minus(4), f_plus(4), s(4, 4)
+        real(wp) :: u, k, f_minus(4), f_plus(4), s(4, 4)
 
         l = bond
         r = bond + 1
@@ -497,10 +497,11 @@ contains
             f_minus = [chain%v(l), field(chain, l), chain%v(r), field(chain, r)]
             chain%contact(l) = contact_free
             chain%contact(r) = contact_free
-            call pair_impact(chain%restitution, chain%v(l), chain%v(r))
+            k = chain%restitution
+            call pair_impact(k, chain%v(l), chain%v(r))
             f_plus = [chain%v(l), field(chain, l), chain%v(r), field(chain, r)]
             if (chain%n_vectors > 0) then
-                call saltation_matrix(pair_reset_jacobian(chain%restitution), f_minus, f_plus, &
+                call saltation_matrix(pair_reset_jacobian(k), f_minus, f_plus, &
                                       [-1.0_wp, 0.0_wp, 1.0_wp, 0.0_wp], s, info)
                 call apply_jump(chain, [2*l - 1, 2*l, 2*r - 1, 2*r], s)
             end if
@@ -689,7 +690,8 @@ contains
         type(error_t), allocatable, intent(out) :: err
         character(len=32) :: buf
 
-        if (time <= chain%last_event) then
+        ! impacts closer than the rounding of times within a cycle are simultaneous
+        if (time <= chain%last_event + 16*epsilon(1.0_wp)*chain%flow%period) then
             chain%same_instant = chain%same_instant + 1
             if (chain%same_instant > max_same_instant) then
                 write (buf, '(es14.6)') chain_elapsed(chain, time)
