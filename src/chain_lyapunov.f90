@@ -6,6 +6,7 @@
 !> per-step growth rates give the standard error of each exponent.
 module chain_lyapunov
     use chain_kinds, only: wp
+    use, intrinsic :: ieee_arithmetic, only: ieee_value, ieee_negative_inf, ieee_is_finite
     use chain_lapack, only: qr_orthonormalise, general_eigenvalues
     implicit none
     private
@@ -63,7 +64,13 @@ contains
         call qr_orthonormalise(a, r_diag, info)
         if (info /= 0) return
         frame_t = transpose(a)
-        growth = log(abs(r_diag))
+        ! a rest on a wall zeroes tangent rows: that growth is -infinity, set without a
+        ! floating-point exception (log(0) traps under -ffpe-trap=zero)
+        where (r_diag /= 0)
+            growth = log(abs(r_diag))
+        elsewhere
+            growth = ieee_value(1.0_wp, ieee_negative_inf)
+        end where
         acc%steps = acc%steps + 1
         acc%total = acc%total + growth
         n_blocks = size(acc%block_len)
@@ -93,10 +100,14 @@ contains
                 mean = mean + acc%block_sum(:, b)/acc%block_len(b)
             end do
             mean = mean/nb
+            ! no error bar for an exponent of -infinity (a run with rests on the walls)
+            where (.not. ieee_is_finite(mean)) mean = 0
             do b = 1, nb
-                err = err + (acc%block_sum(:, b)/acc%block_len(b) - mean)**2
+                where (ieee_is_finite(acc%block_sum(:, b))) &
+                    err = err + (acc%block_sum(:, b)/acc%block_len(b) - mean)**2
             end do
             err = sqrt(err/(nb - 1)/nb)
+            where (.not. ieee_is_finite(acc%total)) err = 0
         end if
         order = descending_order(nats)
         res%bits_per_cycle = nats(order)*to_bits
