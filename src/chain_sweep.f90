@@ -229,7 +229,10 @@ contains
                                 point%stick_speed, starts(b)%x, starts(b)%v, starts(b)%cycle, &
                                 starts(b)%s, err, starts(b)%contact)
             else
+                ! a start from a file reads HDF5, which is not thread-safe
+                !$omp critical (sweep_hdf5)
                 call start_chain(point, chain, err)
+                !$omp end critical (sweep_hdf5)
             end if
             if (allocated(err)) return
             call record_run(point, chain, sink, out, err)
