@@ -379,9 +379,12 @@ def ky_dimension(runs: Sequence[Run]) -> Figure:
     fig = Figure(figsize=(7.0, 4.5), layout="constrained")
     ax = fig.add_subplot()
     colours = _overlay_colours(len(runs))
+    differing = _differing_parameters(runs)
     for run, colour in zip(runs, colours):
         sweep = _sweep(run)
         dimension = _sweep_ky(run, sweep)
+        label = ", ".join(f"${_SYMBOLS[name][1]}$ = {getattr(run.params, name):g}"
+                          for name in differing) or run.name
         if sweep.is_2d:
             if len(runs) > 1:
                 raise FigureError("ky-dimension overlays only 1-D sweeps")
@@ -391,7 +394,7 @@ def ky_dimension(runs: Sequence[Run]) -> Figure:
             ax.set_xlabel(_parameter_label(sweep.parameter))
             ax.set_ylabel(_parameter_label(sweep.parameter2))
         else:
-            ax.plot(sweep.values, dimension, color=colour, linewidth=0.9, label=run.name,
+            ax.plot(sweep.values, dimension, color=colour, linewidth=0.9, label=label,
                     gid="ky", **_sweep_style(sweep.values, marker="."))
             ax.set_xlabel(_parameter_label(sweep.parameter))
             ax.set_ylabel("Kaplan-Yorke dimension $D_{KY}$")
@@ -399,8 +402,15 @@ def ky_dimension(runs: Sequence[Run]) -> Figure:
         ax.legend(fontsize="small")
     first = runs[0].sweep
     skip = (first.parameter, first.parameter2) if first is not None else ()
-    ax.set_title(_title(runs[0], skip=skip), fontsize="medium")
+    ax.set_title(_title(runs[0], skip=(*skip, *differing)), fontsize="medium")
     return fig
+
+
+def _differing_parameters(runs: Sequence[Run]) -> list[str]:
+    """Model parameters whose values differ between overlaid runs (for their labels)."""
+    names = ("amplitude", "omega", "damping", "restitution")
+    return [name for name in names
+            if len({getattr(run.params, name) for run in runs}) > 1]
 
 
 def _sweep_ky(run: Run, sweep: Sweep) -> np.ndarray:

@@ -321,3 +321,12 @@ def test_shock_wave_says_when_no_event_falls_in_the_panels(make_run: MakeRun) ->
     assert "no collision in the shown cycles: the events span t/T = 90.1 to 90.2" in title
     normal = figures.shock_wave(read_run(make_run("ok.h5", records=4)))
     assert "no collision" not in normal.get_suptitle()
+
+
+def test_ky_dimension_overlay_labels_the_differing_parameter(make_run: MakeRun) -> None:
+    runs = [read_run(make_run(f"s{j}.h5", sweep=True, omega=w)) for j, w in
+            enumerate((1.5, 1.9))]
+    (ax,) = figures.ky_dimension(runs).axes
+    labels = [text.get_text() for text in ax.get_legend().get_texts()]
+    assert labels == ["$\\omega$ = 1.5", "$\\omega$ = 1.9"]
+    assert "omega" not in ax.get_title() and "\\omega" not in ax.get_title()
