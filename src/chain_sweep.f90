@@ -8,6 +8,18 @@
 !> every point is its own branch and starts from the run's initial condition. Branches are
 !> independent, so they run in parallel (OpenMP threads here, MPI ranks in mpi/) and every
 !> point's numbers are the same whatever the number of threads or ranks.
+!>
+!> Continuation precisely: the next point starts from the previous point's final state (x, v,
+!> the resting contacts, the cycle index and the time within the cycle, i.e. its last strobe
+!> record), with the event schedule searched again under the new parameters; `chain_sim`
+!> does the same for a start from a file whose /params differ. With `&run phase` /= 0 in an
+!> 'omega' sweep, the time within the cycle is kept, so the drive phase of the start scales
+!> with omega; records are then taken at the new section time phase / omega as usual.
+!>
+!> A sweep keeps, per point, only what /sweep stores (no events, no Jacobian). The HDF5 file
+!> is written when every point is done (root `complete` = 1); until then the finished points
+!> live in the checkpoint `file.h5.ckpt` (written every `checkpoint_every` seconds and when
+!> stopped), from which the same input resumes.
 module chain_sweep
     use chain_kinds, only: wp, i8
     use chain_error, only: error_t, set_error, fmt_real, fmt_int
@@ -25,9 +37,10 @@ module chain_sweep
     public :: sweep_plan_t, sweep_result_t, plan_sweep, sweep_point_config, run_branch
     public :: run_sweep_branches, sweep_result_init, branch_start_state_t, point_hook
     public :: run_sweep, write_sweep_file, sweep_summary_t
+    public :: save_checkpoint, load_checkpoint, remove_file, checkpoint_every
 
     character(len=8), parameter :: checkpoint_magic = 'ICSWEEP1'
-    !> Seconds between checkpoints of a running sweep.
+    !> Seconds between checkpoints of a running sweep (and between MPI gathers in mpi/).
     integer, parameter :: checkpoint_every = 10
 
     type :: sweep_summary_t
@@ -159,7 +172,8 @@ contains
     end function point_values
 
     !> The configuration of one point, validated (a value outside its range is an error
-    !> naming the parameter and the point).
+    !> naming the parameter and the point). A sweep stores neither events nor the Poincare-map
+    !> Jacobian, so neither is collected (neither changes the motion).
     subroutine sweep_point_config(cfg, plan, p, point, err)
         type(run_config_t), intent(in) :: cfg
         type(sweep_plan_t), intent(in) :: plan
@@ -170,6 +184,8 @@ contains
 
         point = cfg
         point%sweep = .false.
+        point%record_events = .false.
+        point%jacobian = .false.
         values = point_values(cfg, plan, p)
         call set_parameter(point, cfg%sweep_parameter, values(1))
         if (plan%n_axes == 2) call set_parameter(point, cfg%sweep_parameter2, values(2))
@@ -216,11 +232,14 @@ contains
         type(memory_sink_t) :: sink
         type(run_result_t) :: out
         integer :: q, p
+        logical :: stopping
 
         do q = 1, plan%points_per_branch
             p = (b - 1)*plan%points_per_branch + q
             if (res%done(p)) cycle
-            if (stop_now) return
+            !$omp atomic read
+            stopping = stop_now
+            if (stopping) return
             call sweep_point_config(cfg, plan, p, point, err)
             if (allocated(err)) return
             if (starts(b)%resume) then
@@ -256,7 +275,10 @@ contains
                 starts(b)%s = chain%s
             end if
             if (present(hook)) then
-                if (.not. hook(res, starts)) stop_now = .true.
+                if (.not. hook(res, starts)) then
+                    !$omp atomic write
+                    stop_now = .true.
+                end if
             end if
             !$omp end critical (sweep_results)
             deallocate (sink%x, sink%v, sink%cycle)
@@ -290,6 +312,7 @@ contains
             if (allocated(branch_err)) then
                 !$omp critical (sweep_results)
                 if (.not. allocated(first_message)) first_message = branch_err%message
+                !$omp atomic write
                 stop_now = .true.
                 !$omp end critical (sweep_results)
             end if
@@ -351,7 +374,7 @@ contains
             return
         end if
         call output_end(out, .true., err)
-        if (.not. allocated(err)) call delete_file(checkpoint)
+        if (.not. allocated(err)) call remove_file(checkpoint)
 
     contains
 
@@ -511,12 +534,13 @@ contains
                                      "remove it to start afresh")
     end subroutine load_checkpoint
 
-    subroutine delete_file(path)
+    !> Delete a file if it exists (the checkpoint of a finished sweep).
+    subroutine remove_file(path)
         character(len=*), intent(in) :: path
         integer :: u, ios
 
         open (newunit=u, file=path, status='old', iostat=ios)
         if (ios == 0) close (u, status='delete')
-    end subroutine delete_file
+    end subroutine remove_file
 
 end module chain_sweep

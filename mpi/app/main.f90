@@ -1,38 +1,60 @@
 !> impactchain-mpi: the sweep of a namelist with &sweep, its branches distributed over MPI
-!> ranks (branch b on rank mod(b - 1, size)); rank 0 gathers the points and writes the one
-!> HDF5 file. Every point is computed exactly as in the threaded driver, so the file is the
-!> same as a serial run's. Usage: mpirun -np 4 impactchain-mpi input.nml
+!> ranks (branch b on rank mod(b - 1, ranks); inside a rank, OpenMP threads as in the serial
+!> driver). Every point is computed exactly as in the threaded driver, so the file is the same
+!> as a serial run's, whatever the number of ranks and threads.
+!>
+!> The ranks work in rounds of `checkpoint_every` seconds (IMPACTCHAIN_CHECKPOINT_SECONDS
+!> overrides it): after each round the finished points and, for continuation branches, the
+!> state each branch resumes from are gathered on rank 0, which writes `file.h5.ckpt`, the
+!> same checkpoint as the threaded driver's. SIGINT / SIGTERM end the round early, write the
+!> checkpoint and exit with status 3; running the same command again (with any number of ranks,
+!> or the threaded driver) resumes without redoing finished points. When every point is done,
+!> rank 0 writes the one HDF5 file and deletes the checkpoint.
+!>
+!> Usage: mpirun -np 4 impactchain-mpi [--quiet] input.nml
 program impactchain_mpi
-    use, intrinsic :: iso_fortran_env, only: error_unit, output_unit
-    use mpi_f08, only: MPI_Init, MPI_Finalize, MPI_Comm_rank, MPI_Comm_size, MPI_Reduce, &
-                       MPI_Bcast, MPI_Allreduce, MPI_COMM_WORLD, MPI_SUM, MPI_MAX, &
-                       MPI_DOUBLE_PRECISION, MPI_INTEGER, MPI_IN_PLACE
-    use chain_kinds, only: wp
+    use, intrinsic :: iso_fortran_env, only: error_unit, output_unit, int64
+    use mpi_f08, only: MPI_Init_thread, MPI_Finalize, MPI_Comm_rank, MPI_Comm_size, MPI_Bcast, &
+                       MPI_Allreduce, MPI_Gatherv, MPI_COMM_WORLD, MPI_MAX, &
+                       MPI_DOUBLE_PRECISION, MPI_INTEGER, MPI_INTEGER8, MPI_IN_PLACE, &
+                       MPI_THREAD_FUNNELED
+    use chain_kinds, only: wp, i8
     use chain_error, only: error_t
     use chain_config, only: run_config_t, read_config
     use chain_sweep, only: sweep_plan_t, sweep_result_t, branch_start_state_t, plan_sweep, &
-                           sweep_result_init, run_sweep_branches, write_sweep_file
+                           sweep_result_init, sweep_point_config, run_sweep_branches, &
+                           write_sweep_file, &
+                           save_checkpoint, load_checkpoint, remove_file, checkpoint_every
     use chain_output, only: output_t, output_begin, output_end, output_abort
+    use interrupt_flag, only: catch_interrupts, interrupted
     implicit none
-    type(run_config_t) :: cfg
+    type(run_config_t) :: cfg, point
     type(sweep_plan_t) :: plan
     type(sweep_result_t) :: res
     type(branch_start_state_t), allocatable :: starts(:)
     type(output_t) :: out
     type(error_t), allocatable :: err
-    integer :: rank, ranks, b, failed, length
-    character(len=:), allocatable :: input
+    integer :: rank, ranks, provided, b, p, failed, left, stopping, resumed
+    logical :: quiet
+    logical, allocatable :: mine(:)
+    character(len=:), allocatable :: input, checkpoint
+    real(wp) :: round_seconds
+    integer(int64) :: clock_start, clock_round, clock_rate
 
-    call MPI_Init()
+    call MPI_Init_thread(MPI_THREAD_FUNNELED, provided)
     call MPI_Comm_rank(MPI_COMM_WORLD, rank)
     call MPI_Comm_size(MPI_COMM_WORLD, ranks)
-    if (command_argument_count() /= 1) call stop_all('usage: impactchain-mpi input.nml')
-    call get_command_argument(1, length=length)
-    allocate (character(len=length) :: input)
-    call get_command_argument(1, input)
+    call parse_arguments(input, quiet)
     call read_config(input, cfg, err)
     if (allocated(err)) call stop_all(err%message)
     if (.not. cfg%sweep) call stop_all(input//': impactchain-mpi runs sweeps; add a &sweep group')
+    round_seconds = round_length()
+    plan = plan_sweep(cfg)
+    ! every point is checked before any work (every rank alike)
+    do p = 1, plan%n_points
+        call sweep_point_config(cfg, plan, p, point, err)
+        if (allocated(err)) call stop_all(err%message)
+    end do
     ! rank 0 refuses an existing or unwritable output before anyone works
     failed = 0
     if (rank == 0) then
@@ -41,64 +63,272 @@ program impactchain_mpi
     end if
     call MPI_Bcast(failed, 1, MPI_INTEGER, 0, MPI_COMM_WORLD)
     if (failed /= 0) call stop_all(err_text(err))
-    plan = plan_sweep(cfg)
     call sweep_result_init(res, cfg, plan)
     allocate (starts(plan%n_branches))
-    call run_sweep_branches(cfg, plan, res, starts, err, &
-                            mine=[(modulo(b - 1, ranks) == rank, b=1, plan%n_branches)])
-    failed = merge(1, 0, allocated(err))
-    call MPI_Allreduce(MPI_IN_PLACE, failed, 1, MPI_INTEGER, MPI_MAX, MPI_COMM_WORLD)
-    if (failed /= 0) then
-        if (rank == 0) call output_abort(out)
-        call stop_all(err_text(err))
-    end if
-    ! every point was computed on exactly one rank, zeros elsewhere: a sum gathers them
-    call gather(res%x, size(res%x))
-    call gather(res%collisions, size(res%collisions))
-    call gather(res%exponents, size(res%exponents))
-    call gather(res%stderr, size(res%stderr))
-    call gather(res%ky, size(res%ky))
-    call gather_int(res%period, size(res%period))
+    ! every rank reads the checkpoint (if any), so every rank can own any branch
+    checkpoint = cfg%output_file//'.ckpt'
+    call load_checkpoint(checkpoint, cfg, plan, res, starts, err)
+    call agree_or_stop(err)
+    resumed = count(res%done)
+    mine = [(modulo(b - 1, ranks) == rank, b=1, plan%n_branches)]
+    if (rank == 0 .and. plan%n_branches < ranks .and. .not. quiet) &
+        write (error_unit, '(a,i0,a,i0,a)') 'impactchain-mpi: note: ', plan%n_branches, &
+        ' branches for ', ranks, ' ranks, so some ranks stay idle (a continuation along '// &
+        'one parameter is one branch: add parameter2 or use mode = ''independent'')'
+    call catch_interrupts()
+    call system_clock(clock_start, clock_rate)
+    do
+        call system_clock(clock_round)
+        call run_sweep_branches(cfg, plan, res, starts, err, mine=mine, hook=round_hook)
+        call agree_or_stop(err)
+        call collect_on_root()
+        left = count(.not. res%done)
+        call MPI_Bcast(left, 1, MPI_INTEGER, 0, MPI_COMM_WORLD)
+        if (left == 0) exit
+        stopping = merge(1, 0, interrupted())
+        call MPI_Allreduce(MPI_IN_PLACE, stopping, 1, MPI_INTEGER, MPI_MAX, MPI_COMM_WORLD)
+        if (rank == 0) then
+            call save_checkpoint(checkpoint, cfg, plan, res, starts, err)
+            if (allocated(err)) write (error_unit, '(a)') 'impactchain-mpi: warning: '// &
+                err%message
+            call report_progress()
+        end if
+        if (stopping /= 0) then
+            if (rank == 0) then
+                call output_abort(out)
+                write (error_unit, '(a,i0,a,i0,a)') 'impactchain-mpi: the sweep was stopped '// &
+                    'after ', plan%n_points - left, ' of ', plan%n_points, ' points; run the '// &
+                    'same command again to resume from '//checkpoint
+            end if
+            call MPI_Finalize()
+            stop 3, quiet=.true.
+        end if
+    end do
     if (rank == 0) then
-        write (output_unit, '(a,i0,a,i0,a)') 'impactchain-mpi: ', plan%n_points, &
-            ' points on ', ranks, ' ranks'
         call write_sweep_file(out, cfg, plan, res, err)
         if (.not. allocated(err)) call output_end(out, .true., err)
         if (allocated(err)) then
             call output_abort(out)
             write (error_unit, '(a)') 'impactchain-mpi: error: '//err%message
         else
+            call remove_file(checkpoint)
             write (output_unit, '(a)') 'impactchain-mpi: wrote '//cfg%output_file
+            write (output_unit, '(a,i0,a,i0,a,i0,a)') '  sweep points ', plan%n_points, &
+                ' on ', ranks, ' ranks (resumed from a checkpoint: ', resumed, ')'
         end if
     end if
+    failed = merge(1, 0, allocated(err))
+    call MPI_Bcast(failed, 1, MPI_INTEGER, 0, MPI_COMM_WORLD)
     call MPI_Finalize()
-    if (allocated(err)) stop 1, quiet=.true.
+    if (failed /= 0) stop 1, quiet=.true.
 
 contains
 
-    subroutine gather(values, count)
-        real(wp), intent(inout) :: values(*)
-        integer, intent(in) :: count
+    !> Called by the sweep after each finished point: ends the round after round_seconds, or
+    !> at once on a signal.
+    logical function round_hook(res, starts) result(keep_going)
+        type(sweep_result_t), intent(in) :: res
+        type(branch_start_state_t), intent(in) :: starts(:)
+        integer(int64) :: now
 
+        call system_clock(now)
+        keep_going = .not. interrupted() .and. &
+                     real(now - clock_round, wp) < round_seconds*clock_rate
+    end function round_hook
+
+    !> Rank 0 receives every rank's branches: their points (results and done flags) and the
+    !> states they resume from. Values travel as they are (no arithmetic), so bit for bit.
+    subroutine collect_on_root()
+        real(wp), allocatable :: rsend(:), rrecv(:)
+        integer(i8), allocatable :: isend(:), irecv(:)
+        integer :: nr, ni, r, c, owned(0:ranks - 1), rcounts(0:ranks - 1), icounts(0:ranks - 1)
+        integer :: rdispl(0:ranks - 1), idispl(0:ranks - 1), ro, io, b
+
+        call record_sizes(nr, ni)
+        owned = 0
+        do b = 1, plan%n_branches
+            owned(modulo(b - 1, ranks)) = owned(modulo(b - 1, ranks)) + 1
+        end do
+        rcounts = owned*nr
+        icounts = owned*ni
+        rdispl(0) = 0
+        idispl(0) = 0
+        do r = 1, ranks - 1
+            rdispl(r) = rdispl(r - 1) + rcounts(r - 1)
+            idispl(r) = idispl(r - 1) + icounts(r - 1)
+        end do
+        allocate (rsend(rcounts(rank)), isend(icounts(rank)))
+        c = 0
+        do b = 1, plan%n_branches
+            if (.not. mine(b)) cycle
+            call pack_branch(b, rsend(c*nr + 1:(c + 1)*nr), isend(c*ni + 1:(c + 1)*ni))
+            c = c + 1
+        end do
         if (rank == 0) then
-            call MPI_Reduce(MPI_IN_PLACE, values, count, MPI_DOUBLE_PRECISION, MPI_SUM, 0, &
-                            MPI_COMM_WORLD)
+            allocate (rrecv(sum(rcounts)), irecv(sum(icounts)))
         else
-            call MPI_Reduce(values, values, count, MPI_DOUBLE_PRECISION, MPI_SUM, 0, &
-                            MPI_COMM_WORLD)
+            allocate (rrecv(1), irecv(1))
         end if
-    end subroutine gather
+        call MPI_Gatherv(rsend, rcounts(rank), MPI_DOUBLE_PRECISION, rrecv, rcounts, rdispl, &
+                         MPI_DOUBLE_PRECISION, 0, MPI_COMM_WORLD)
+        call MPI_Gatherv(isend, icounts(rank), MPI_INTEGER8, irecv, icounts, idispl, &
+                         MPI_INTEGER8, 0, MPI_COMM_WORLD)
+        if (rank /= 0) return
+        ! rank r's branches arrive in increasing order from displacement r
+        do r = 0, ranks - 1
+            ro = rdispl(r)
+            io = idispl(r)
+            do b = r + 1, plan%n_branches, ranks
+                call unpack_branch(b, rrecv(ro + 1:ro + nr), irecv(io + 1:io + ni))
+                ro = ro + nr
+                io = io + ni
+            end do
+        end do
+    end subroutine collect_on_root
 
-    subroutine gather_int(values, count)
-        integer, intent(inout) :: values(*)
-        integer, intent(in) :: count
+    !> Reals and integers per branch: per point collisions, x, exponents, stderr, ky and
+    !> done, period; then the resume state x, v, s and resume, contact, cycle.
+    subroutine record_sizes(nr, ni)
+        integer, intent(out) :: nr, ni
 
-        if (rank == 0) then
-            call MPI_Reduce(MPI_IN_PLACE, values, count, MPI_INTEGER, MPI_SUM, 0, MPI_COMM_WORLD)
-        else
-            call MPI_Reduce(values, values, count, MPI_INTEGER, MPI_SUM, 0, MPI_COMM_WORLD)
+        nr = plan%points_per_branch*(2 + cfg%n*int(cfg%cycles) + 2*plan%k) + 2*cfg%n + 1
+        ni = plan%points_per_branch*(1 + cfg%n) + cfg%n + 2
+    end subroutine record_sizes
+
+    subroutine pack_branch(b, rbuf, ibuf)
+        integer, intent(in) :: b
+        real(wp), intent(out) :: rbuf(:)
+        integer(i8), intent(out) :: ibuf(:)
+        integer :: q, p, j, i, n, m, k
+
+        n = cfg%n
+        m = n*int(cfg%cycles)
+        k = plan%k
+        j = 0
+        i = 0
+        do q = 1, plan%points_per_branch
+            p = (b - 1)*plan%points_per_branch + q
+            rbuf(j + 1) = res%collisions(p)
+            rbuf(j + 2:j + 1 + m) = reshape(res%x(:, :, p), [m])
+            rbuf(j + 2 + m:j + 1 + m + k) = res%exponents(:, p)
+            rbuf(j + 2 + m + k:j + 1 + m + 2*k) = res%stderr(:, p)
+            rbuf(j + 2 + m + 2*k) = res%ky(p)
+            j = j + 2 + m + 2*k
+            ibuf(i + 1) = merge(1, 0, res%done(p))
+            ibuf(i + 2:i + 1 + n) = res%period(:, p)
+            i = i + 1 + n
+        end do
+        rbuf(j + 1:) = 0
+        ibuf(i + 1:) = 0
+        ibuf(i + 1) = merge(1, 0, starts(b)%resume)
+        if (starts(b)%resume) then
+            rbuf(j + 1:j + n) = starts(b)%x
+            rbuf(j + n + 1:j + 2*n) = starts(b)%v
+            rbuf(j + 2*n + 1) = starts(b)%s
+            ibuf(i + 2:i + 1 + n) = starts(b)%contact
+            ibuf(i + 2 + n) = starts(b)%cycle
         end if
-    end subroutine gather_int
+    end subroutine pack_branch
+
+    subroutine unpack_branch(b, rbuf, ibuf)
+        integer, intent(in) :: b
+        real(wp), intent(in) :: rbuf(:)
+        integer(i8), intent(in) :: ibuf(:)
+        integer :: q, p, j, i, n, m, k
+
+        n = cfg%n
+        m = n*int(cfg%cycles)
+        k = plan%k
+        j = 0
+        i = 0
+        do q = 1, plan%points_per_branch
+            p = (b - 1)*plan%points_per_branch + q
+            res%collisions(p) = rbuf(j + 1)
+            res%x(:, :, p) = reshape(rbuf(j + 2:j + 1 + m), [n, int(cfg%cycles)])
+            res%exponents(:, p) = rbuf(j + 2 + m:j + 1 + m + k)
+            res%stderr(:, p) = rbuf(j + 2 + m + k:j + 1 + m + 2*k)
+            res%ky(p) = rbuf(j + 2 + m + 2*k)
+            j = j + 2 + m + 2*k
+            res%done(p) = ibuf(i + 1) == 1
+            res%period(:, p) = int(ibuf(i + 2:i + 1 + n))
+            i = i + 1 + n
+        end do
+        starts(b)%resume = ibuf(i + 1) == 1
+        if (starts(b)%resume) then
+            starts(b)%x = rbuf(j + 1:j + n)
+            starts(b)%v = rbuf(j + n + 1:j + 2*n)
+            starts(b)%s = rbuf(j + 2*n + 1)
+            starts(b)%contact = int(ibuf(i + 2:i + 1 + n))
+            starts(b)%cycle = ibuf(i + 2 + n)
+        end if
+    end subroutine unpack_branch
+
+    !> Points done / total, rate and time left (rank 0, stderr; at most once a round).
+    subroutine report_progress()
+        integer(int64) :: now
+        real(wp) :: elapsed, rate
+        integer :: done
+
+        if (quiet) return
+        call system_clock(now)
+        elapsed = real(now - clock_start, wp)/clock_rate
+        done = plan%n_points - left
+        rate = (done - resumed)/max(elapsed, 1.0e-9_wp)
+        write (error_unit, '(a,i0,a,i0,a,es9.2,a,f9.1,a)') 'impactchain-mpi: point ', done, &
+            ' / ', plan%n_points, ', ', rate, ' points/s, ', left/max(rate, 1.0e-9_wp), ' s left'
+    end subroutine report_progress
+
+    !> Seconds per round: checkpoint_every, or IMPACTCHAIN_CHECKPOINT_SECONDS when set.
+    real(wp) function round_length() result(seconds)
+        character(len=64) :: text
+        integer :: length, status, ios
+
+        seconds = checkpoint_every
+        call get_environment_variable('IMPACTCHAIN_CHECKPOINT_SECONDS', text, length, status)
+        if (status /= 0 .or. length == 0) return
+        read (text, *, iostat=ios) seconds
+        if (ios /= 0 .or. .not. (seconds > 0 .and. seconds <= 1.0e6_wp)) &
+            call stop_all('IMPACTCHAIN_CHECKPOINT_SECONDS = '//trim(text)// &
+                          ' must be a number of seconds in (0, 1e6]')
+    end function round_length
+
+    !> All ranks learn whether any failed; a failing rank prints its own message.
+    subroutine agree_or_stop(e)
+        type(error_t), allocatable, intent(in) :: e
+
+        failed = merge(1, 0, allocated(e))
+        if (allocated(e)) write (error_unit, '(a,i0,a)') 'impactchain-mpi: error (rank ', rank, &
+            '): '//e%message
+        call MPI_Allreduce(MPI_IN_PLACE, failed, 1, MPI_INTEGER, MPI_MAX, MPI_COMM_WORLD)
+        if (failed == 0) return
+        if (rank == 0) call output_abort(out)
+        call MPI_Finalize()
+        stop 1, quiet=.true.
+    end subroutine agree_or_stop
+
+    subroutine parse_arguments(input, quiet)
+        character(len=:), allocatable, intent(out) :: input
+        logical, intent(out) :: quiet
+        integer :: j, length
+        character(len=:), allocatable :: arg
+
+        quiet = .false.
+        input = ''
+        do j = 1, command_argument_count()
+            call get_command_argument(j, length=length)
+            allocate (character(len=length) :: arg)
+            call get_command_argument(j, arg)
+            if (arg == '-q' .or. arg == '--quiet') then
+                quiet = .true.
+            else if (arg(1:min(1, len(arg))) == '-' .or. len(input) > 0) then
+                call stop_all('usage: impactchain-mpi [--quiet] input.nml')
+            else
+                input = arg
+            end if
+            deallocate (arg)
+        end do
+        if (len(input) == 0) call stop_all('usage: impactchain-mpi [--quiet] input.nml')
+    end subroutine parse_arguments
 
     function err_text(e) result(text)
         type(error_t), allocatable, intent(in) :: e
@@ -108,6 +338,7 @@ contains
         if (allocated(e)) text = e%message
     end function err_text
 
+    !> Every rank calls this with the same message (errors every rank meets alike).
     subroutine stop_all(message)
         character(len=*), intent(in) :: message
 

@@ -137,3 +137,52 @@ def test_sweep_point_out_of_range_is_refused(impactchain_exe, tmp_path):
     assert result.returncode == 1
     assert "restitution" in result.stderr and "point" in result.stderr
     assert not list(tmp_path.glob("bad.h5*"))
+
+
+GRID2 = """
+&chain n = 8, amplitude = 6.0, omega = 1.9, damping = 0.05, restitution = 0.5 /
+&initial kind = 'rest' /
+&run transient = 250, cycles = 50 /
+&sweep parameter = 'amplitude', start = 6.0, stop = 1.0, step = -0.005,
+       parameter2 = 'restitution', start2 = 0.5, stop2 = 0.6, step2 = 0.1 /
+&output file = '{out}' /
+"""
+
+
+def test_mpi_sweep_stopped_by_sigterm_resumes(impactchain_exe, mpi_exe, tmp_path):
+    """A Slurm-like stop (SIGTERM to mpirun) leaves the checkpoint; the same command resumes it
+    (also with another number of ranks), and so does the threaded driver: the same checkpoint
+    format. Both resumed files equal an uninterrupted run's."""
+    if mpi_exe is None:
+        pytest.skip("mpifort is not installed: the MPI test needs openmpi")
+    run_with_threads(impactchain_exe, tmp_path, GRID2.format(out="whole.h5"), 2, "whole.nml")
+    (tmp_path / "part.nml").write_text(GRID2.format(out="part.h5"))
+    env = dict(os.environ, OMP_NUM_THREADS="1", IMPACTCHAIN_CHECKPOINT_SECONDS="0.2")
+    mpirun = ["mpirun", "--allow-run-as-root", "--oversubscribe"]
+    proc = subprocess.Popen([*mpirun, "-np", "2", str(mpi_exe), "part.nml"], cwd=tmp_path,
+                            env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    ckpt = tmp_path / "part.h5.ckpt"
+    deadline = time.monotonic() + 60
+    while not ckpt.exists() and time.monotonic() < deadline and proc.poll() is None:
+        time.sleep(0.05)
+    proc.send_signal(signal.SIGTERM)
+    out, err = proc.communicate(timeout=120)
+    assert proc.returncode != 0, out + err
+    assert "stopped after" in err, out + err
+    assert ckpt.exists() and not (tmp_path / "part.h5").exists()
+    threaded = tmp_path / "threaded"
+    threaded.mkdir()
+    shutil.copy(ckpt, threaded / "part.h5.ckpt")
+    # the MPI resume, in many short rounds on 3 ranks
+    result = subprocess.run([*mpirun, "-np", "3", str(mpi_exe), "part.nml"], cwd=tmp_path,
+                            env=env, capture_output=True, text=True, timeout=300)
+    assert result.returncode == 0, result.stdout + result.stderr
+    resumed = int(result.stdout.split("resumed from a checkpoint: ")[1].split(")")[0])
+    assert 0 < resumed < 2002
+    assert not ckpt.exists()
+    assert_same_sweep(tmp_path / "whole.h5", tmp_path / "part.h5")
+    # the threaded driver resumes the same checkpoint (same input text, in another directory)
+    result = run_namelist(impactchain_exe, GRID2.format(out="part.h5"), threaded, "part.nml")
+    assert f"resumed from a checkpoint: {resumed}" in result.stdout
+    assert not (threaded / "part.h5.ckpt").exists()
+    assert_same_sweep(tmp_path / "whole.h5", threaded / "part.h5")

@@ -1,0 +1,336 @@
+!> fpm test test_sweep: parameter sweeps (chain_sweep) through the library, without the CLI.
+!> The number of points and their values, the configuration of one point, identical results
+!> with 1 and 2 OpenMP threads, a continuation equal to the same steps run one by one from
+!> files (`&initial kind = 'file'`), and a sweep stopped, checkpointed and resumed equal to an
+!> uninterrupted one. The CLI, MPI and signal tests are in test/python/test_sweep.py.
+!> Prints "N passed, M failed"; exits non-zero on a failure.
+program test_sweep
+    use, intrinsic :: iso_fortran_env, only: output_unit
+    !$ use omp_lib, only: omp_set_num_threads
+    use chain_kinds, only: wp, i8
+    use chain_error, only: error_t
+    use chain_config, only: run_config_t, read_config
+    use chain_sim, only: run_simulation
+    use chain_run, only: run_result_t
+    use chain_output, only: read_final_state
+    use chain_sweep, only: sweep_plan_t, sweep_result_t, branch_start_state_t, plan_sweep, &
+                           sweep_result_init, sweep_point_config, run_sweep_branches, &
+                           save_checkpoint, load_checkpoint, remove_file
+    use testing, only: tally_t, check, check_close
+    implicit none
+    type(tally_t) :: t
+    character(len=:), allocatable :: tmp
+
+    tmp = temp_prefix()
+    call test_axes(t)
+    call test_point_config(t)
+    call test_threads(t)
+    call test_continuation_equals_files(t)
+    call test_checkpoint_resume(t)
+    write (output_unit, '(i0,a,i0,a)') t%passed, ' passed, ', t%failed, ' failed'
+    if (t%failed > 0) error stop 1
+
+contains
+
+    !> Points per axis from the index (never accumulated), rounding-safe at both ends.
+    subroutine test_axes(t)
+        type(tally_t), intent(inout) :: t
+        type(run_config_t) :: cfg
+        type(sweep_plan_t) :: plan
+        type(sweep_result_t) :: res
+
+        ! the paper's figure 10: A from 6 down to 1 in steps of 0.001
+        call config_from(cfg, "&sweep parameter = 'amplitude', start = 6.0, stop = 1.0, "// &
+                         "step = -0.001 /", 'axes')
+        plan = plan_sweep(cfg)
+        call check(t, plan%n_points == 5001 .and. plan%n_branches == 1 .and. &
+                   plan%points_per_branch == 5001, 'figure 10 axis: 5001 points, one branch')
+        call sweep_result_init(res, cfg, plan)
+        call check_close(t, res%values(1, 5001), 1.0_wp, 'figure 10 axis: last value', &
+                         abs_tol=4*epsilon(1.0_wp))
+        call check(t, res%values(1, 2501) == 6.0_wp + 2500*(-0.001_wp), &
+                   'values come from the index: start + (i - 1) step')
+        ! a step that does not divide the range stops before `stop`
+        call config_from(cfg, "&sweep parameter = 'omega', start = 1.0, stop = 2.0, "// &
+                         "step = 0.3 /", 'axes')
+        plan = plan_sweep(cfg)
+        call check(t, plan%n_points == 4, '1 .. 2 step 0.3: 4 points (1.0 .. 1.9)')
+        call config_from(cfg, "&sweep parameter = 'omega', start = 0.1, stop = 0.7, "// &
+                         "step = 0.1 /", 'axes')
+        plan = plan_sweep(cfg)
+        call check(t, plan%n_points == 7, '0.1 .. 0.7 step 0.1: 7 points')
+        ! a grid: index i along parameter runs fastest; one branch per value of parameter2
+        call config_from(cfg, "&sweep parameter = 'amplitude', start = 1.0, stop = 2.0, "// &
+                         "step = 0.5, parameter2 = 'damping', start2 = 0.1, stop2 = 0.05, "// &
+                         "step2 = -0.05 /", 'axes')
+        plan = plan_sweep(cfg)
+        call sweep_result_init(res, cfg, plan)
+        call check(t, plan%n_points == 6 .and. plan%n_branches == 2 .and. plan%n_axes == 2, &
+                   '2-D continuation grid: 6 points in 2 branches')
+        call check(t, all(res%values(:, 4) == [1.0_wp, 0.05_wp]) .and. &
+                   all(res%values(:, 3) == [2.0_wp, 0.1_wp]), '2-D grid: point order')
+        call config_from(cfg, "&sweep parameter = 'amplitude', start = 1.0, stop = 2.0, "// &
+                         "step = 0.5, mode = 'independent', parameter2 = 'damping', "// &
+                         "start2 = 0.1, stop2 = 0.05, step2 = -0.05 /", 'axes')
+        plan = plan_sweep(cfg)
+        call check(t, plan%n_branches == 6, 'independent grid: a branch per point')
+    end subroutine test_axes
+
+    !> One point: the parameter set (every bond for 'spacing'), checked like any input.
+    subroutine test_point_config(t)
+        type(tally_t), intent(inout) :: t
+        type(run_config_t) :: cfg, point
+        type(sweep_plan_t) :: plan
+        type(error_t), allocatable :: err
+
+        call config_from(cfg, "&sweep parameter = 'spacing', start = 1.0, stop = 1.2, "// &
+                         "step = 0.1 /", 'point')
+        plan = plan_sweep(cfg)
+        call sweep_point_config(cfg, plan, 3, point, err)
+        call check(t, .not. allocated(err), 'spacing point 3 is valid')
+        if (allocated(err)) return
+        call check(t, size(point%spacing) == cfg%n + 1 .and. &
+                   all(point%spacing == 1.0_wp + 2*0.1_wp), "'spacing' sets every bond")
+        call check(t, .not. point%sweep .and. .not. point%record_events, &
+                   'a point is a plain run that keeps no events')
+        call config_from(cfg, "&sweep parameter = 'restitution', start = 0.9, stop = 1.1, "// &
+                         "step = 0.1 /", 'point')
+        plan = plan_sweep(cfg)
+        call sweep_point_config(cfg, plan, 3, point, err)
+        call check(t, allocated(err), 'restitution 1.1 is refused')
+        if (allocated(err)) call check(t, index(err%message, 'point 3') > 0 .and. &
+                                       index(err%message, 'restitution') > 0 .and. &
+                                       index(err%message, '1.1') > 0, &
+                                       'the error names the point, parameter and value: '// &
+                                       err%message)
+    end subroutine test_point_config
+
+    !> The same grid with 1 and 2 threads, continuation and independent: equal bit for bit.
+    subroutine test_threads(t)
+        type(tally_t), intent(inout) :: t
+        character(len=*), parameter :: modes(2) = [character(len=12) :: 'continuation', &
+                                                   'independent']
+        type(run_config_t) :: cfg
+        type(sweep_result_t) :: one, two
+        integer :: m
+
+        do m = 1, 2
+            call config_from(cfg, "&lyapunov vectors = 4 /"//new_line('a')// &
+                             "&sweep parameter = 'amplitude', start = 1.8, stop = 2.4, "// &
+                             "step = 0.2, mode = '"//trim(modes(m))//"', parameter2 = "// &
+                             "'omega', start2 = 1.4, stop2 = 1.6, step2 = 0.1 /", 'threads')
+            !$ call omp_set_num_threads(1)
+            call whole_sweep(cfg, one)
+            !$ call omp_set_num_threads(2)
+            call whole_sweep(cfg, two)
+            call check(t, all(one%done) .and. all(two%done), trim(modes(m))//': all done')
+            call check(t, same(one, two), trim(modes(m))//': 1 and 2 threads agree bit for bit')
+            call check(t, any(one%collisions > 0) .and. any(one%exponents(1, :) /= 0), &
+                       trim(modes(m))//': the sweep has impacts and exponents')
+        end do
+    end subroutine test_threads
+
+    !> A continuation sweep ends where the same steps, run one by one with
+    !> `&initial kind = 'file'` on the previous step's output, end: same x, v, cycle, time.
+    subroutine test_continuation_equals_files(t)
+        type(tally_t), intent(inout) :: t
+        character(len=*), parameter :: chain = "&chain n = 5, omega = 1.9, restitution = 0.5, "
+        character(len=*), parameter :: run = "&run transient = 20, cycles = 10, "// &
+                                             "record_events = .false. /"
+        type(run_config_t) :: cfg, step
+        type(sweep_plan_t) :: plan
+        type(sweep_result_t) :: res
+        type(branch_start_state_t), allocatable :: starts(:)
+        type(run_result_t) :: summary
+        type(error_t), allocatable :: err
+        real(wp), allocatable :: x(:), v(:), qt(:), spacing(:)
+        integer, allocatable :: contact(:), qa(:)
+        integer(i8) :: cycle
+        real(wp) :: phase, s, model(4)
+        character(len=8) :: boundary
+        character(len=:), allocatable :: previous, path
+        integer :: j
+
+        call config_text(cfg, chain//"amplitude = 3.0 /"//new_line('a')//run//new_line('a')// &
+                         "&sweep parameter = 'amplitude', start = 3.0, stop = 2.8, "// &
+                         "step = -0.1 /", 'cont')
+        plan = plan_sweep(cfg)
+        call sweep_result_init(res, cfg, plan)
+        allocate (starts(plan%n_branches))
+        call run_sweep_branches(cfg, plan, res, starts, err)
+        call check(t, .not. allocated(err) .and. all(res%done), 'continuation sweep runs')
+        if (allocated(err)) return
+        previous = ''
+        ! each step's amplitude is the sweep's own value, printed with every digit
+        do j = 1, plan%n_points
+            call config_text(step, chain//"amplitude = "//real_text(res%values(1, j))//" /"// &
+                             new_line('a')//run, 'step')
+            if (j > 1) then
+                step%initial_kind = 'file'
+                step%initial_file = previous
+            end if
+            path = tmp//'step'//char(iachar('0') + j)//'.h5'
+            step%output_file = path
+            step%overwrite = .true.
+            call run_simulation(step, summary, err)
+            call check(t, .not. allocated(err), 'step run from a file')
+            if (allocated(err)) return
+            if (j > 1) call remove_file(previous)
+            previous = path
+        end do
+        call read_final_state(previous, cfg%n, x, v, cycle, phase, contact, qt, qa, s, model, &
+                              spacing, boundary, err)
+        call remove_file(previous)
+        call check(t, .not. allocated(err), 'final state of the last step')
+        if (allocated(err)) return
+        call check(t, all(x == starts(1)%x) .and. all(v == starts(1)%v) .and. &
+                   cycle == starts(1)%cycle .and. s == starts(1)%s .and. &
+                   all(contact == starts(1)%contact), &
+                   'continuation = steps from files, bit for bit')
+        call check(t, all(x == res%x(:, 10, 3)), 'the last record of the sweep is the final x')
+        call check(t, cycle == 3*(20 + 10), 'the drive cycle count runs on over the steps')
+    end subroutine test_continuation_equals_files
+
+    !> Stopped after a few points, saved, loaded into a fresh result and finished: the same
+    !> as an uninterrupted sweep. A checkpoint of another input is refused.
+    subroutine test_checkpoint_resume(t)
+        type(tally_t), intent(inout) :: t
+        type(run_config_t) :: cfg, other
+        type(sweep_plan_t) :: plan
+        type(sweep_result_t) :: whole, part, loaded
+        type(branch_start_state_t), allocatable :: starts(:), loaded_starts(:)
+        type(error_t), allocatable :: err
+        character(len=:), allocatable :: path
+        integer :: b
+
+        call config_from(cfg, "&lyapunov vectors = 3 /"//new_line('a')// &
+                         "&sweep parameter = 'amplitude', start = 2.4, stop = 1.6, "// &
+                         "step = -0.1, parameter2 = 'restitution', start2 = 0.5, "// &
+                         "stop2 = 0.7, step2 = 0.1 /", 'ckpt')
+        call whole_sweep(cfg, whole)
+        plan = plan_sweep(cfg)
+        call sweep_result_init(part, cfg, plan)
+        allocate (starts(plan%n_branches))
+        !$ call omp_set_num_threads(2)
+        call run_sweep_branches(cfg, plan, part, starts, err, hook=stop_after_five)
+        call check(t, .not. allocated(err) .and. count(part%done) >= 5 .and. &
+                   .not. all(part%done), 'the sweep stops early when asked')
+        path = tmp//'sweep.ckpt'
+        call save_checkpoint(path, cfg, plan, part, starts, err)
+        call check(t, .not. allocated(err), 'checkpoint written')
+        call sweep_result_init(loaded, cfg, plan)
+        allocate (loaded_starts(plan%n_branches))
+        call load_checkpoint(path, cfg, plan, loaded, loaded_starts, err)
+        call check(t, .not. allocated(err), 'checkpoint read')
+        if (allocated(err)) return
+        call check(t, same(part, loaded) .and. all(part%done .eqv. loaded%done), &
+                   'checkpoint round trip keeps the finished points bit for bit')
+        do b = 1, plan%n_branches
+            call check(t, loaded_starts(b)%resume .eqv. starts(b)%resume, &
+                       'checkpoint round trip keeps which branches resume')
+            if (starts(b)%resume .and. loaded_starts(b)%resume) &
+                call check(t, all(loaded_starts(b)%x == starts(b)%x) .and. &
+                           all(loaded_starts(b)%v == starts(b)%v) .and. &
+                           all(loaded_starts(b)%contact == starts(b)%contact) .and. &
+                           loaded_starts(b)%cycle == starts(b)%cycle .and. &
+                           loaded_starts(b)%s == starts(b)%s, &
+                           'checkpoint round trip keeps the resume state bit for bit')
+        end do
+        call run_sweep_branches(cfg, plan, loaded, loaded_starts, err)
+        call check(t, .not. allocated(err) .and. all(loaded%done), 'the resumed sweep finishes')
+        call check(t, same(whole, loaded), 'stopped + resumed = uninterrupted, bit for bit')
+        other = cfg
+        other%input_text = cfg%input_text//' '
+        deallocate (loaded_starts)
+        allocate (loaded_starts(plan%n_branches))
+        call load_checkpoint(path, other, plan, loaded, loaded_starts, err)
+        call check(t, allocated(err), 'a checkpoint of another input is refused')
+        call remove_file(path)
+    end subroutine test_checkpoint_resume
+
+    logical function stop_after_five(res, starts) result(keep_going)
+        type(sweep_result_t), intent(in) :: res
+        type(branch_start_state_t), intent(in) :: starts(:)
+
+        keep_going = count(res%done) < 5 .or. size(starts) < 0
+    end function stop_after_five
+
+    subroutine whole_sweep(cfg, res)
+        type(run_config_t), intent(in) :: cfg
+        type(sweep_result_t), intent(out) :: res
+        type(sweep_plan_t) :: plan
+        type(branch_start_state_t), allocatable :: starts(:)
+        type(error_t), allocatable :: err
+
+        plan = plan_sweep(cfg)
+        call sweep_result_init(res, cfg, plan)
+        allocate (starts(plan%n_branches))
+        call run_sweep_branches(cfg, plan, res, starts, err)
+        call check(t, .not. allocated(err), 'sweep runs')
+    end subroutine whole_sweep
+
+    logical function same(a, b)
+        type(sweep_result_t), intent(in) :: a, b
+
+        same = all(a%x == b%x) .and. all(a%collisions == b%collisions) .and. &
+               all(a%period == b%period) .and. all(a%exponents == b%exponents) .and. &
+               all(a%stderr == b%stderr) .and. all(a%ky == b%ky) .and. &
+               all(a%values == b%values)
+    end function same
+
+    !> A small chaotic-enough chain with the given &sweep (and other groups) appended.
+    subroutine config_from(cfg, groups, name)
+        type(run_config_t), intent(out) :: cfg
+        character(len=*), intent(in) :: groups, name
+
+        call config_text(cfg, "&chain n = 4, amplitude = 2.0, omega = 1.5, "// &
+                         "restitution = 0.7 /"//new_line('a')// &
+                         "&initial kind = 'random', seed = 5, x_amp = 0.3, v_amp = 0.5 /"// &
+                         new_line('a')//"&run transient = 30, cycles = 12 /"//new_line('a')// &
+                         groups, name)
+    end subroutine config_from
+
+    !> The configuration of a namelist text (written to a temporary file and read back).
+    subroutine config_text(cfg, text, name)
+        type(run_config_t), intent(out) :: cfg
+        character(len=*), intent(in) :: text, name
+        type(error_t), allocatable :: err
+        integer :: u
+
+        open (newunit=u, file=tmp//name//'.nml', status='replace', action='write')
+        write (u, '(a)') text
+        write (u, '(a)') "&output file = '"//tmp//name//".h5' /"
+        close (u)
+        call read_config(tmp//name//'.nml', cfg, err)
+        call remove_file(tmp//name//'.nml')
+        if (allocated(err)) then
+            write (output_unit, '(a)') 'test_sweep: bad test input: '//err%message
+            error stop 1
+        end if
+    end subroutine config_text
+
+    function real_text(x) result(text)
+        real(wp), intent(in) :: x
+        character(len=:), allocatable :: text
+        character(len=32) :: buf
+
+        write (buf, '(es24.17)') x
+        text = trim(adjustl(buf))
+    end function real_text
+
+    !> A prefix for temporary files, unique per run: $TMPDIR (or /tmp)/impactchain-test-<clock>-
+    function temp_prefix() result(prefix)
+        character(len=:), allocatable :: prefix
+        character(len=512) :: dir
+        character(len=24) :: stamp
+        integer :: length, status
+        integer(i8) :: clock
+
+        call get_environment_variable('TMPDIR', dir, length, status)
+        if (status /= 0 .or. length == 0) dir = '/tmp'
+        call system_clock(clock)
+        write (stamp, '(i0)') clock
+        prefix = trim(dir)//'/impactchain-test-sweep-'//trim(stamp)//'-'
+    end function temp_prefix
+
+end program test_sweep
