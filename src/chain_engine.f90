@@ -1,10 +1,16 @@
 !> The event-driven chain (MODEL.md sections 1-4): exact flow between impacts, impacts in time
 !> order, sticking contacts on the walls, and an optional tangent frame carried alongside.
 !>
-!> Design for speed: every oscillator keeps its state at its own last-update time (lazy
-!> update); every bond keeps its next event in an indexed heap; an impact touches only the
-!> two oscillators involved and reschedules only the neighbouring bonds. Times are times within
-!> the current drive cycle; `chain_new_cycle` moves the frame on by one period.
+!> Design for speed: every moving oscillator keeps the free part of its motion, (x - xp,
+!> v - vp), referred back to one common time, the epoch. Its state at any later time s is then
+!> one 2x2 product with the propagator M(s - epoch), which is computed once per event time and
+!> shared by every oscillator (and every tangent row): an impact costs no sine or exponential
+!> per oscillator, and nothing is touched but the two oscillators involved. After an impact the
+!> new free part is referred back to the epoch with M^-1. `chain_sync` moves the epoch to the
+!> current time and fills x, v; it also keeps e^(b (s - epoch)) bounded in long cycles. Every
+!> bond keeps its next event in an indexed heap; an impact reschedules only the neighbouring
+!> bonds. Times are times within the current drive cycle; `chain_new_cycle` moves the frame on
+!> by one period.
 !>
 !> Chatter and sticking: an oscillator that arrives at a wall with approach speed below
 !> `stick_speed` while the net force presses it there ends the (otherwise infinite) chatter
@@ -22,7 +28,7 @@
 module chain_engine
     use chain_kinds, only: wp, i8, two_pi
     use chain_error, only: error_t, set_error, fmt_int
-    use chain_flow, only: flow_t, forced_response, propagator
+    use chain_flow, only: flow_t, propagator
     use chain_gaps, only: gap_t, gap_search_t, next_gap_zero, search_root, search_horizon
     use chain_impact, only: pair_impact, wall_impact, pair_reset_jacobian, &
                             wall_reset_jacobian, saltation_matrix
@@ -50,6 +56,9 @@ module chain_engine
     !> inelastic collapse); far more means the engine is stuck, which is reported.
     integer, parameter :: collapse_after = 1000
     integer, parameter :: max_same_instant = 100000
+    !> The epoch moves to the current time once b (s - epoch) exceeds this, so that the
+    !> free parts referred back to it (growing like e^(b (s - epoch))) stay far from overflow.
+    real(wp), parameter :: rebase_after = 64
 
     type :: chain_t
         integer :: n = 0
@@ -62,16 +71,28 @@ module chain_engine
         real(wp) :: s = 0                   !! current time within the drive cycle
         integer(i8) :: start_cycle = 0      !! cycle of the run's initial state
         real(wp) :: start_s = 0             !! time within the cycle of the run's initial state
-        real(wp), allocatable :: x(:), v(:) !! x(n), v(n): state of each oscillator at t(i)
-        real(wp), allocatable :: t(:)       !! t(n): last-update time of each oscillator
-        real(wp), allocatable :: xp_t(:), vp_t(:) !! forced response at t(i), reused by bring
-        real(wp) :: drive_s = -huge(1.0_wp) !! time of the cached forced response below
+        real(wp), allocatable :: x(:), v(:) !! x(n), v(n): state at time s after chain_sync
+        real(wp), allocatable :: y(:), vy(:) !! y(n), vy(n): free part of each moving
+                                             !! oscillator, referred back to the epoch
+        real(wp) :: epoch = 0               !! time within the cycle that y, vy refer to
+        !> Free parts set at the current instant, kept as they were set: several impacts at one
+        !> instant (a cascade, K = 0) must see exactly the velocities the last one left, not
+        !> their round trip through the epoch.
+        real(wp), allocatable :: y_now(:), vy_now(:)
+        integer(i8), allocatable :: stamp(:) !! instant at which y_now, vy_now were set
+        integer(i8) :: instant = 0           !! counts the distinct instants of the frame
+        logical :: synced = .false.         !! x, v hold the state at time s = epoch
+        real(wp) :: frame_s = -huge(1.0_wp) !! time of the cached propagators below
+        real(wp) :: m(2, 2) = 0, m_inv(2, 2) = 0 !! M(frame_s - epoch) and its inverse
+        real(wp) :: drive_s = -huge(1.0_wp) !! time of the cached drive below
         real(wp) :: drive_x = 0, drive_v = 0, drive_sin = 0 !! xp, vp, sin(w s) at drive_s
         integer, allocatable :: contact(:)  !! contact(n): contact_free / left / right
         type(queue_t) :: queue              !! next event time of each bond
         integer, allocatable :: action(:)   !! action(0:n): what that event is
         integer :: n_vectors = 0            !! tangent vectors carried (0: none)
-        real(wp), allocatable :: tangent(:, :) !! tangent(n_vectors, 2n): frame, transposed
+        real(wp), allocatable :: tangent(:, :) !! tangent(n_vectors, 2n): frame, transposed;
+                                               !! moving rows referred back to the epoch
+        integer :: tangent_scale_bits = 0   !! the frame is the true one times 2**(-bits)
         integer(i8) :: impacts = 0, sticks = 0, releases = 0
         integer(i8), allocatable :: site_counts(:) !! site_counts(0:n): impacts per bond
         real(wp) :: last_event = -huge(1.0_wp)
@@ -110,13 +131,19 @@ contains
         chain%s = s
         chain%start_cycle = cycle
         chain%start_s = s
-        allocate (chain%t(n), chain%contact(n), chain%action(0:n), chain%site_counts(0:n))
-        chain%t = s
-        call drive_now(chain)
-        chain%xp_t = [(chain%drive_x, j=1, n)]
-        chain%vp_t = [(chain%drive_v, j=1, n)]
+        allocate (chain%contact(n), chain%action(0:n), chain%site_counts(0:n))
+        allocate (chain%y_now(n), chain%vy_now(n), chain%stamp(n))
+        chain%stamp = -1
         chain%contact = contact_free
         if (present(contact)) chain%contact = contact
+        ! the same rounding as chain_sync, so that a run continued from its saved state
+        ! follows the uninterrupted one bit for bit
+        chain%epoch = s
+        call frame_now(chain)
+        call drive_now(chain)
+        chain%y = chain%x - chain%drive_x
+        chain%vy = chain%v - chain%drive_v
+        chain%synced = .true.
         chain%site_counts = 0
         gaps = chain_gaps_now(chain)
         do j = 0, n
@@ -143,16 +170,18 @@ contains
         end if
     end subroutine chain_init
 
-    !> Start carrying a tangent frame (columns of `frame`, shape (2n, k)).
+    !> Start carrying a tangent frame (columns of `frame`, shape (2n, k)) from now.
     pure subroutine chain_set_tangent(chain, frame)
         type(chain_t), intent(inout) :: chain
         real(wp), intent(in) :: frame(:, :)
 
+        chain%n_vectors = 0
+        call chain_sync(chain)
         chain%n_vectors = size(frame, 2)
         chain%tangent = transpose(frame)
     end subroutine chain_set_tangent
 
-    !> Gaps of all bonds at the current time (bringing every oscillator up to date).
+    !> Gaps of all bonds at the current time (moves the epoch here).
     function chain_gaps_now(chain) result(gaps)
         type(chain_t), intent(inout) :: chain
         real(wp) :: gaps(0:chain%n)
@@ -212,69 +241,168 @@ contains
         chain%s = s_target
     end subroutine chain_advance
 
-    !> Bring every oscillator (and its tangent rows) to the current time.
+    !> Move the epoch to the current time and fill x, v (and the tangent rows) with the state
+    !> now. The free parts are re-derived from x, v exactly as chain_init does, and a second
+    !> sync at the same time changes nothing, so a run continued from a saved state follows
+    !> the uninterrupted one bit for bit.
     pure subroutine chain_sync(chain)
         type(chain_t), intent(inout) :: chain
         integer :: i
 
+        if (chain%synced .and. chain%epoch == chain%s) return
+        call frame_now(chain)
+        call drive_now(chain)
         do i = 1, chain%n
-            call bring(chain, i)
+            call state_now(chain, i, chain%x(i), chain%v(i))
         end do
+        call move_tangent_epoch(chain)
+        chain%y = chain%x - chain%drive_x
+        chain%vy = chain%v - chain%drive_v
+        call set_epoch_here(chain)
+        chain%synced = .true.
+        ! from here on the free parts are the ones just derived from x, v
+        chain%instant = chain%instant + 1
     end subroutine chain_sync
 
-    !> At the end of a drive cycle (s = T): sync, and restart the in-cycle clock at 0.
+    !> At the end of a drive cycle (s = T): sync, and restart the in-cycle clock at 0, with the
+    !> free parts taken from x, v and the drive at s = 0, as a start from this state would.
     pure subroutine chain_new_cycle(chain)
         type(chain_t), intent(inout) :: chain
 
         call chain_sync(chain)
-        chain%t = 0
         chain%s = 0
+        chain%epoch = 0
+        chain%frame_s = -huge(1.0_wp)
+        chain%drive_s = -huge(1.0_wp)
+        call frame_now(chain)
         call drive_now(chain)
-        chain%xp_t = chain%drive_x
-        chain%vp_t = chain%drive_v
+        chain%y = chain%x - chain%drive_x
+        chain%vy = chain%v - chain%drive_v
         call queue_shift(chain%queue, chain%flow%period, never)
         chain%cycle = chain%cycle + 1
         chain%last_event = chain%last_event - chain%flow%period
     end subroutine chain_new_cycle
 
-    !> Move oscillator i (and its tangent rows) from its own time to the current time.
-    pure subroutine bring(chain, i)
+    !> The propagator from the epoch to the current time (and its inverse), once per event time.
+    pure subroutine frame_now(chain)
         type(chain_t), intent(inout) :: chain
-        integer, intent(in) :: i
-        real(wp) :: m(2, 2), y, vy, tau, c1
-        integer :: j
+        real(wp) :: tau, det
+        integer :: i
 
-        tau = chain%s - chain%t(i)
-        if (tau == 0) return
-        call drive_now(chain)
-        if (chain%contact(i) == contact_free) then
-            m = propagator(chain%flow, tau)
-            y = chain%x(i) - chain%xp_t(i)
-            vy = chain%v(i) - chain%vp_t(i)
-            chain%x(i) = m(1, 1)*y + m(1, 2)*vy + chain%drive_x
-            chain%v(i) = m(2, 1)*y + m(2, 2)*vy + chain%drive_v
-            do j = 1, chain%n_vectors
-                c1 = chain%tangent(j, 2*i - 1)
-                chain%tangent(j, 2*i - 1) = m(1, 1)*c1 + m(1, 2)*chain%tangent(j, 2*i)
-                chain%tangent(j, 2*i) = m(2, 1)*c1 + m(2, 2)*chain%tangent(j, 2*i)
+        if (chain%frame_s == chain%s) return
+        chain%frame_s = chain%s
+        chain%instant = chain%instant + 1
+        tau = chain%s - chain%epoch
+        chain%m = propagator(chain%flow, tau)
+        ! det M = exp(-2 b tau)
+        det = chain%m(1, 1)*chain%m(2, 2) - chain%m(1, 2)*chain%m(2, 1)
+        chain%m_inv(1, 1) = chain%m(2, 2)/det
+        chain%m_inv(2, 1) = -chain%m(2, 1)/det
+        chain%m_inv(1, 2) = -chain%m(1, 2)/det
+        chain%m_inv(2, 2) = chain%m(1, 1)/det
+        if (chain%flow%damping*tau > rebase_after) then
+            do i = 1, chain%n
+                if (chain%contact(i) /= contact_free) cycle
+                call free_part_now(chain, i, chain%y(i), chain%vy(i))
             end do
+            call move_tangent_epoch(chain)
+            call set_epoch_here(chain)
+            chain%synced = .false.
         end if
-        chain%t(i) = chain%s
-        chain%xp_t(i) = chain%drive_x
-        chain%vp_t(i) = chain%drive_v
-    end subroutine bring
+    end subroutine frame_now
 
-    !> The forced response at the current time, computed once per event time.
+    !> The epoch is now: M = identity (after the free parts were moved here).
+    pure subroutine set_epoch_here(chain)
+        type(chain_t), intent(inout) :: chain
+
+        chain%epoch = chain%s
+        chain%m(:, 1) = [1.0_wp, 0.0_wp]
+        chain%m(:, 2) = [0.0_wp, 1.0_wp]
+        chain%m_inv = chain%m
+    end subroutine set_epoch_here
+
+    !> The forced response at the current time, once per event time; only impacts on walls or
+    !> resting oscillators and the tangent frame need it (a pair impact does not).
     pure subroutine drive_now(chain)
         type(chain_t), intent(inout) :: chain
+        real(wp) :: sn, cs
 
         if (chain%drive_s == chain%s) return
         chain%drive_s = chain%s
-        call forced_response(chain%flow, chain%s, chain%drive_x, chain%drive_v)
-        chain%drive_sin = sin(chain%flow%omega*chain%s)
+        sn = sin(chain%flow%omega*chain%s)
+        cs = cos(chain%flow%omega*chain%s)
+        chain%drive_sin = sn
+        chain%drive_x = chain%flow%p_sin*sn + chain%flow%q_cos*cs
+        chain%drive_v = chain%flow%omega*(chain%flow%p_sin*cs - chain%flow%q_cos*sn)
     end subroutine drive_now
 
-    !> Acceleration of a free oscillator in state (x, v) now (after `drive_now`).
+    !> Tangent rows of moving oscillators from the epoch to now (after frame_now).
+    pure subroutine move_tangent_epoch(chain)
+        type(chain_t), intent(inout) :: chain
+        integer :: i
+
+        if (chain%n_vectors == 0) return
+        do i = 1, chain%n
+            if (chain%contact(i) == contact_free) call apply_jump(chain, [2*i - 1, 2*i], chain%m)
+        end do
+    end subroutine move_tangent_epoch
+
+    !> Free part (x - xp, v - vp) of moving oscillator i now (after frame_now).
+    pure subroutine free_part_now(chain, i, y, vy)
+        type(chain_t), intent(in) :: chain
+        integer, intent(in) :: i
+        real(wp), intent(out) :: y, vy
+
+        if (chain%stamp(i) == chain%instant) then
+            y = chain%y_now(i)
+            vy = chain%vy_now(i)
+        else
+            y = chain%m(1, 1)*chain%y(i) + chain%m(1, 2)*chain%vy(i)
+            vy = chain%m(2, 1)*chain%y(i) + chain%m(2, 2)*chain%vy(i)
+        end if
+    end subroutine free_part_now
+
+    !> State of oscillator i now (after frame_now and drive_now): moving, or resting in a stack on a wall.
+    pure subroutine state_now(chain, i, x, v)
+        type(chain_t), intent(in) :: chain
+        integer, intent(in) :: i
+        real(wp), intent(out) :: x, v
+
+        if (chain%contact(i) == contact_free) then
+            call free_part_now(chain, i, x, v)
+            x = x + chain%drive_x
+            v = v + chain%drive_v
+        else
+            x = rest_position(chain, i, chain%contact(i))
+            v = 0
+        end if
+    end subroutine state_now
+
+    !> Oscillator i moves on from state (x, v) now (after frame_now and drive_now).
+    pure subroutine set_moving_state(chain, i, x, v)
+        type(chain_t), intent(inout) :: chain
+        integer, intent(in) :: i
+        real(wp), intent(in) :: x, v
+
+        call set_free_part(chain, i, x - chain%drive_x, v - chain%drive_v)
+    end subroutine set_moving_state
+
+    !> Oscillator i moves on with free part (y, vy) now: referred back to the epoch.
+    pure subroutine set_free_part(chain, i, y, vy)
+        type(chain_t), intent(inout) :: chain
+        integer, intent(in) :: i
+        real(wp), intent(in) :: y, vy
+
+        chain%y(i) = chain%m_inv(1, 1)*y + chain%m_inv(1, 2)*vy
+        chain%vy(i) = chain%m_inv(2, 1)*y + chain%m_inv(2, 2)*vy
+        chain%y_now(i) = y
+        chain%vy_now(i) = vy
+        chain%stamp(i) = chain%instant
+        chain%contact(i) = contact_free
+        chain%synced = .false.
+    end subroutine set_free_part
+
+    !> Acceleration of a free oscillator in state (x, v) now (after `frame_now`).
     pure function acceleration_now(chain, x, v) result(acc)
         type(chain_t), intent(in) :: chain
         real(wp), intent(in) :: x, v
@@ -334,7 +462,7 @@ contains
         logical, intent(out) :: closes
         integer, intent(out) :: resting
         integer :: l, r
-        real(wp) :: xp, vp, fixed_l, fixed_r
+        real(wp) :: y, vy, yl, vyl, fixed_l, fixed_r
         logical :: moving_l, moving_r
 
         l = bond
@@ -359,16 +487,18 @@ contains
         end if
         call side_position(chain, l, moving_l, fixed_l)
         call side_position(chain, r, moving_r, fixed_r)
-        call drive_now(chain)
-        xp = chain%drive_x
-        vp = chain%drive_v
+        call frame_now(chain)
         if (moving_l .and. moving_r) then
-            gap = gap_t(chain%spacing(bond), chain%x(r) - chain%x(l), &
-                        chain%v(r) - chain%v(l), 0.0_wp)
+            ! the drive cancels in a pair gap: the difference of the free parts
+            call free_part_now(chain, r, y, vy)
+            call free_part_now(chain, l, yl, vyl)
+            gap = gap_t(chain%spacing(bond), y - yl, vy - vyl, 0.0_wp)
         else if (moving_r) then
-            gap = gap_t(chain%spacing(bond) - fixed_l, chain%x(r) - xp, chain%v(r) - vp, 1.0_wp)
+            call free_part_now(chain, r, y, vy)
+            gap = gap_t(chain%spacing(bond) - fixed_l, y, vy, 1.0_wp)
         else if (moving_l) then
-            gap = gap_t(chain%spacing(bond) + fixed_r, xp - chain%x(l), vp - chain%v(l), -1.0_wp)
+            call free_part_now(chain, l, y, vy)
+            gap = gap_t(chain%spacing(bond) + fixed_r, -y, -vy, -1.0_wp)
         else
             closes = .false.
         end if
@@ -376,8 +506,8 @@ contains
 
     !> Is side i of a bond a moving oscillator, or a fixed position (wall at x = 0 in the
     !> bond's frame, or a resting oscillator at its rest position)?
-    subroutine side_position(chain, i, moving, fixed)
-        type(chain_t), intent(inout) :: chain
+    pure subroutine side_position(chain, i, moving, fixed)
+        type(chain_t), intent(in) :: chain
         integer, intent(in) :: i
         logical, intent(out) :: moving
         real(wp), intent(out) :: fixed
@@ -385,7 +515,6 @@ contains
         moving = .false.
         fixed = 0
         if (i < 1 .or. i > chain%n) return
-        call bring(chain, i)
         if (chain%contact(i) == contact_free) then
             moving = .true.
         else
@@ -440,17 +569,18 @@ contains
         integer, intent(in) :: bond, i, side
         type(event_log_t), intent(inout) :: log
         type(error_t), allocatable, intent(out) :: err
-        real(wp) :: sgn, v_minus, u, acc_minus, acc_plus, s(2, 2)
+        real(wp) :: sgn, x, v_minus, v_plus, u, acc_minus, acc_plus, s(2, 2)
         integer :: info
 
+        call frame_now(chain)
+        call drive_now(chain)
+        call state_now(chain, i, x, v_minus)
         sgn = merge(-1.0_wp, 1.0_wp, side == contact_left)
-        v_minus = chain%v(i)
         u = sgn*v_minus
-        if (u < max(chain%stick_speed, resolved_speed(chain, i, side)) .and. &
+        if (u < max(chain%stick_speed, resolved_speed(chain, x, i, side)) .and. &
             pressed(chain, i, side)) then
             chain%contact(i) = side
-            chain%x(i) = rest_position(chain, i, side)
-            chain%v(i) = 0
+            chain%synced = .false.
             chain%sticks = chain%sticks + 1
             if (chain%n_vectors > 0) chain%tangent(:, 2*i - 1:2*i) = 0
             if (u > 0) then
@@ -460,18 +590,20 @@ contains
             call event_log_append(log, chain_elapsed(chain, chain%s), bond, max(u, 0.0_wp), &
                                   event_stick)
         else if (u > 0 .and. (bond == 0 .or. bond == chain%n)) then
-            acc_minus = acceleration_now(chain, chain%x(i), v_minus)
-            call wall_impact(chain%restitution, chain%v(i))
-            acc_plus = acceleration_now(chain, chain%x(i), chain%v(i))
+            acc_minus = acceleration_now(chain, x, v_minus)
+            v_plus = v_minus
+            call wall_impact(chain%restitution, v_plus)
+            acc_plus = acceleration_now(chain, x, v_plus)
+            call set_moving_state(chain, i, x, v_plus)
             if (chain%n_vectors > 0) then
                 call saltation_matrix(wall_reset_jacobian(chain%restitution), &
-                                      [v_minus, acc_minus], [chain%v(i), acc_plus], &
+                                      [v_minus, acc_minus], [v_plus, acc_plus], &
                                       [-sgn, 0.0_wp], s, info)
-                call apply_jump(chain, [2*i - 1, 2*i], s)
+                ! the jump acts on the rows now; they are kept referred back to the epoch
+                call apply_jump(chain, [2*i - 1, 2*i], matmul(chain%m_inv, matmul(s, chain%m)))
+                call keep_tangent_finite(chain, [2*i - 1, 2*i])
             end if
-            chain%impacts = chain%impacts + 1
-            chain%site_counts(bond) = chain%site_counts(bond) + 1
-            call event_log_append(log, chain_elapsed(chain, chain%s), bond, u, event_impact)
+            call count_impact(chain, bond, u, log)
         else if (u > 0) then
             call pair_event(chain, bond, log, err)
             return
@@ -486,31 +618,72 @@ contains
         type(event_log_t), intent(inout) :: log
         type(error_t), allocatable, intent(out) :: err
         integer :: l, r, info
-        real(wp) :: u, k, f_minus(4), f_plus(4), s(4, 4)
+        real(wp) :: u, k, yl, wl, yr, wr, xp, vp, f_minus(4), f_plus(4), s(4, 4), to_now(4, 4)
 
         l = bond
         r = bond + 1
-        call bring(chain, l)
-        call bring(chain, r)
-        u = chain%v(l) - chain%v(r)
+        call frame_now(chain)
+        ! the impact law is Galilean invariant: it acts on the free parts (x - xp, v - vp)
+        ! alone, so two moving oscillators collide without the drive being evaluated
+        if (chain%contact(l) == contact_free .and. chain%contact(r) == contact_free) then
+            call free_part_now(chain, l, yl, wl)
+            call free_part_now(chain, r, yr, wr)
+        else
+            call drive_now(chain)
+            call state_now(chain, l, yl, wl)
+            call state_now(chain, r, yr, wr)
+            yl = yl - chain%drive_x
+            wl = wl - chain%drive_v
+            yr = yr - chain%drive_x
+            wr = wr - chain%drive_v
+        end if
+        u = wl - wr
         if (u > 0) then
-            f_minus = [chain%v(l), field(chain, l), chain%v(r), field(chain, r)]
-            chain%contact(l) = contact_free
-            chain%contact(r) = contact_free
             k = chain%restitution
-            call pair_impact(k, chain%v(l), chain%v(r))
-            f_plus = [chain%v(l), field(chain, l), chain%v(r), field(chain, r)]
             if (chain%n_vectors > 0) then
+                call drive_now(chain)
+                xp = chain%drive_x
+                vp = chain%drive_v
+                ! S needs velocities only through differences (offset-free): the free
+                ! parts keep grad h . f- = -u exactly
+                f_minus = [wl, field(chain, l, yl + xp, wl + vp), &
+                           wr, field(chain, r, yr + xp, wr + vp)]
+            end if
+            call pair_impact(k, wl, wr)
+            ! both move on (a resting one is knocked off its stack)
+            call set_free_part(chain, l, yl, wl)
+            call set_free_part(chain, r, yr, wr)
+            if (chain%n_vectors > 0) then
+                f_plus = [wl, field(chain, l, yl + xp, wl + vp), &
+                          wr, field(chain, r, yr + xp, wr + vp)]
                 call saltation_matrix(pair_reset_jacobian(k), f_minus, f_plus, &
                                       [-1.0_wp, 0.0_wp, 1.0_wp, 0.0_wp], s, info)
-                call apply_jump(chain, [2*l - 1, 2*l, 2*r - 1, 2*r], s)
+                ! rows now = M rows at the epoch (a resting oscillator's rows are zero)
+                to_now = 0
+                to_now(1:2, 1:2) = chain%m
+                to_now(3:4, 3:4) = chain%m
+                s = matmul(s, to_now)
+                to_now(1:2, 1:2) = chain%m_inv
+                to_now(3:4, 3:4) = chain%m_inv
+                call apply_jump(chain, [2*l - 1, 2*l, 2*r - 1, 2*r], matmul(to_now, s))
+                call keep_tangent_finite(chain, [2*l - 1, 2*l, 2*r - 1, 2*r])
             end if
-            chain%impacts = chain%impacts + 1
-            chain%site_counts(bond) = chain%site_counts(bond) + 1
-            call event_log_append(log, chain_elapsed(chain, chain%s), bond, u, event_impact)
+            call count_impact(chain, bond, u, log)
         end if
         call schedule_around(chain, l, r, err)
     end subroutine pair_event
+
+    !> Count and log an impact of approach speed u on a bond.
+    subroutine count_impact(chain, bond, u, log)
+        type(chain_t), intent(inout) :: chain
+        integer, intent(in) :: bond
+        real(wp), intent(in) :: u
+        type(event_log_t), intent(inout) :: log
+
+        chain%impacts = chain%impacts + 1
+        chain%site_counts(bond) = chain%site_counts(bond) + 1
+        call event_log_append(log, chain_elapsed(chain, chain%s), bond, u, event_impact)
+    end subroutine count_impact
 
     !> A resting oscillator leaves its stack.
     subroutine release_event(chain, bond, log, err)
@@ -525,8 +698,9 @@ contains
         if (bond < chain%n) then
             if (chain%contact(bond + 1) == contact_left) i = bond + 1
         end if
-        call bring(chain, i)
-        chain%contact(i) = contact_free
+        call frame_now(chain)
+        call drive_now(chain)
+        call set_moving_state(chain, i, rest_position(chain, i, chain%contact(i)), 0.0_wp)
         chain%releases = chain%releases + 1
         call event_log_append(log, chain_elapsed(chain, chain%s), bond, 0.0_wp, event_release)
         call schedule_around(chain, i, i, err)
@@ -545,14 +719,15 @@ contains
         end do
     end subroutine schedule_around
 
-    !> Acceleration of oscillator i now (zero while it rests on a wall).
-    pure function field(chain, i) result(acc)
+    !> Acceleration of oscillator i in state (x, v) now (zero while it rests on a wall).
+    pure function field(chain, i, x, v) result(acc)
         type(chain_t), intent(in) :: chain
         integer, intent(in) :: i
+        real(wp), intent(in) :: x, v
         real(wp) :: acc
 
         acc = 0
-        if (chain%contact(i) == contact_free) acc = acceleration_now(chain, chain%x(i), chain%v(i))
+        if (chain%contact(i) == contact_free) acc = acceleration_now(chain, x, v)
     end function field
 
     !> Replace the tangent rows `rows` by S times them.
@@ -574,6 +749,20 @@ contains
             end do
         end do
     end subroutine apply_jump
+
+    !> Impacts at nearly zero approach speed (the last steps of an inelastic collapse) have
+    !> saltation matrices of size 1/u, and a cascade of them can overflow the frame within one
+    !> QR interval. The whole frame is then scaled by a power of two (exact), and the factor is
+    !> kept in tangent_scale_bits for the next QR step to add back.
+    pure subroutine keep_tangent_finite(chain, rows)
+        type(chain_t), intent(inout) :: chain
+        integer, intent(in) :: rows(:)
+        integer, parameter :: bits = 512
+
+        if (maxval(abs(chain%tangent(:, rows))) < 2.0_wp**200) return
+        chain%tangent = scale(chain%tangent, -bits)
+        chain%tangent_scale_bits = chain%tangent_scale_bits + bits
+    end subroutine keep_tangent_finite
 
     !> Does the net force press oscillator i, at rest in a stack on the `side` wall, towards
     !> that wall (now, or from now on)? At rest x = -S (left), so its acceleration is
@@ -600,15 +789,16 @@ contains
     !> of speed u rises u**2 / (2 |acc|) above the wall, which must exceed the rounding level of
     !> the gap (set by the size of its terms, large near resonance). Slower arrivals while
     !> pressed are chatter at the rounding floor and end in rest.
-    pure function resolved_speed(chain, i, side) result(u_min)
+    pure function resolved_speed(chain, x, i, side) result(u_min)
         type(chain_t), intent(in) :: chain
+        real(wp), intent(in) :: x !! position of oscillator i now
         integer, intent(in) :: i, side
         real(wp) :: u_min, depth, push, scale
 
         depth = abs(rest_position(chain, i, side))
         push = abs(depth - sign(1.0_wp, real(side, wp))*chain%flow%amplitude* &
                    chain%drive_sin)
-        scale = depth + abs(chain%x(i) - chain%drive_x) + &
+        scale = depth + abs(x - chain%drive_x) + &
                 sqrt(chain%flow%p_sin**2 + chain%flow%q_cos**2)
         u_min = 16*sqrt(2*push*64*epsilon(1.0_wp)*scale)
     end function resolved_speed
@@ -664,6 +854,10 @@ contains
                         (last == chain%n .and. chain%walls .or. last < chain%n)
         if ((against_left .and. mean < 0) .or. (against_right .and. mean > 0)) mean = 0
         chain%v(first:last) = mean
+        do i = first, last
+            if (chain%contact(i) == contact_free) &
+                call set_moving_state(chain, i, chain%x(i), chain%v(i))
+        end do
         if (chain%n_vectors > 0) then
             allocate (rows(chain%n_vectors))
             rows = 0
@@ -674,9 +868,7 @@ contains
                 chain%tangent(:, 2*i) = rows/m
             end do
         end if
-        chain%impacts = chain%impacts + 1
-        chain%site_counts(bond) = chain%site_counts(bond) + 1
-        call event_log_append(log, chain_elapsed(chain, chain%s), bond, 0.0_wp, event_impact)
+        call count_impact(chain, bond, 0.0_wp, log)
         do j = first - 1, last
             call schedule(chain, j, err)
             if (allocated(err)) return

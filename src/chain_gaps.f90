@@ -72,13 +72,16 @@ contains
         end if
     end function next_gap_zero
 
-    !> Zero of c + y(tau) with y a free damped oscillation: closed-form bracket, then Newton.
+    !> Zero of c + y(tau) with y a free damped oscillation: closed-form bracket, then Halley.
+    !> y = amp exp(-b tau) cos(theta), theta = gam tau - phi. The iteration carries exp(-b tau),
+    !> cos(theta) and sin(theta) along and updates them by the step (angle addition), so a
+    !> search costs one atan2, one acos and an exponential or two, whatever the steps.
     pure function free_gap_zero(flow, gap) result(res)
         type(flow_t), intent(in) :: flow
         type(gap_t), intent(in) :: gap
         type(gap_search_t) :: res
-        real(wp) :: b, gam, cc, ss, amp, phi, alpha, tau_min, tau_max, lo, hi, tau
-        real(wp) :: g, g1, g2, denom, step, e, cs, sn
+        real(wp) :: b, gam, cc, ss, amp, phi, alpha, tau_min, lo, hi, tau
+        real(wp) :: g, g1, g2, denom, step, e, q, decay, cos_th, sin_th
         integer :: it
         logical :: halley
 
@@ -96,30 +99,37 @@ contains
             res%tau = 0
             return
         end if
-        ! y = amp exp(-b tau) cos(gam tau - phi); minima where gam tau - phi = pi - alpha (2 pi)
-        ! with value -amp gam exp(-b tau); each minimum is shallower than the one before
+        ! minima of y where theta = pi - alpha (mod 2 pi), with value -amp gam exp(-b tau);
+        ! each minimum is shallower than the one before
         phi = atan2(ss, cc)
         alpha = flow%alpha
         tau_min = modulo(pi - alpha + phi, two_pi) / gam
         ! in contact and not closing: the minimum we sit at is not a new impact
         if (g <= noise(gap%offset, amp) .and. tau_min < 0.5_wp*pi/gam) &
             tau_min = tau_min + two_pi/gam
-        e = exp(-b*tau_min)
+        e = 1
+        if (b /= 0) e = exp(-b*tau_min)
         if (gap%offset - amp*gam*e > 0) return
         lo = max(0.0_wp, tau_min - pi/gam)
         hi = tau_min
-        ! first guess: the zero of the same branch with the decay frozen at tau_min; it lies at
-        ! or after the true zero, whose |cos| is smaller
-        tau = tau_min - (pi - alpha - acos(max(-1.0_wp, -gap%offset/(amp*e))))/gam
-        tau = min(hi, max(lo, tau))
+        ! first guess: the zero of the same (decreasing) branch with the decay frozen at
+        ! tau_min, theta = acos(q); it lies at or after the true zero, whose |cos| is smaller
+        q = max(-1.0_wp, -gap%offset/(amp*e))
+        step = (pi - alpha - acos(q))/gam
+        tau = tau_min - step
+        cos_th = q
+        sin_th = sqrt(max(0.0_wp, 1 - q**2))
+        decay = e
+        if (b /= 0) decay = e*exp(b*step)
+        if (tau < lo .or. tau > hi) then
+            tau = min(hi, max(lo, tau))
+            call phase_at(tau, decay, cos_th, sin_th)
+        end if
         res%status = search_root
         res%tau = lo
         do it = 1, 100
-            e = exp(-b*tau)
-            cs = cos(gam*tau)
-            sn = sin(gam*tau)
-            g = gap%offset + e*(cc*cs + ss*sn)
-            g1 = e*((gam*ss - b*cc)*cs - (gam*cc + b*ss)*sn)
+            g = gap%offset + amp*decay*cos_th
+            g1 = -amp*decay*(b*cos_th + gam*sin_th)
             g2 = -2*b*g1 - (g - gap%offset)
             if (g > 0) then
                 lo = tau
@@ -134,9 +144,21 @@ contains
             denom = 2*g1**2 - g*g2
             step = huge(1.0_wp)
             if (denom /= 0) step = -2*g*g1/denom
+            ! on the zero to within rounding (a step that would not even change tau)
+            if (abs(step) <= 0.25_wp*time_tolerance) then
+                res%tau = min(hi, max(lo, tau))
+                return
+            end if
             halley = tau + step > lo .and. tau + step < hi
-            if (.not. halley) step = 0.5_wp*(lo + hi) - tau
-            tau = tau + step
+            if (halley) then
+                call rotate_phase(flow, step, decay, cos_th, sin_th)
+                tau = tau + step
+            else
+                ! bisection: a fresh evaluation, no accumulated rotations
+                step = 0.5_wp*(lo + hi) - tau
+                tau = tau + step
+                call phase_at(tau, decay, cos_th, sin_th)
+            end if
             ! cubic convergence on a transversal zero: after a Halley step this small the error
             ! is below 1e-15; near grazing (small slope) iterate to the tolerance instead
             if (abs(step) <= 0.25_wp*time_tolerance .or. &
@@ -146,7 +168,65 @@ contains
             end if
         end do
         res%tau = lo
+
+    contains
+
+        !> exp(-b t), cos(theta), sin(theta) at time t, from scratch.
+        pure subroutine phase_at(t, decay, cos_th, sin_th)
+            real(wp), intent(in) :: t
+            real(wp), intent(out) :: decay, cos_th, sin_th
+            real(wp) :: cg, sg
+
+            decay = exp(-b*t)
+            cg = cos(gam*t)
+            sg = sin(gam*t)
+            ! theta = gam t - phi, cos(phi) = cc / amp, sin(phi) = ss / amp
+            cos_th = (cg*cc + sg*ss)/amp
+            sin_th = (sg*cc - cg*ss)/amp
+        end subroutine phase_at
+
     end function free_gap_zero
+
+    !> Move exp(-b t), cos(theta), sin(theta) on by a time step h: short steps (the Halley
+    !> corrections) by Taylor polynomials accurate to rounding, long ones by the library.
+    pure subroutine rotate_phase(flow, h, decay, cos_th, sin_th)
+        type(flow_t), intent(in) :: flow
+        real(wp), intent(in) :: h
+        real(wp), intent(inout) :: decay, cos_th, sin_th
+        real(wp) :: x, u, x2, cd, sd, ed, c0
+        ! Taylor coefficients of sin, cos and exp
+        real(wp), parameter :: s3 = -1/6.0_wp, s5 = 1/120.0_wp, s7 = -1/5040.0_wp, &
+                               s9 = 1/362880.0_wp
+        real(wp), parameter :: c2 = -1/2.0_wp, c4 = 1/24.0_wp, c6 = -1/720.0_wp, &
+                               c8 = 1/40320.0_wp, c10 = -1/3628800.0_wp
+        real(wp), parameter :: e2 = 1/2.0_wp, e3 = 1/6.0_wp, e4 = 1/24.0_wp, e5 = 1/120.0_wp, &
+                               e6 = 1/720.0_wp, e7 = 1/5040.0_wp, e8 = 1/40320.0_wp, &
+                               e9 = 1/362880.0_wp
+
+        x = flow%gam*h
+        u = -flow%damping*h
+        x2 = x*x
+        if (abs(x) <= 1.0e-3_wp .and. abs(u) <= 1.0e-3_wp) then
+            ! remainders below x**7 / 7! and u**7 / 7!: under 1e-21 relative
+            sd = x*(1 + x2*(s3 + x2*s5))
+            cd = 1 + x2*(c2 + x2*(c4 + x2*c6))
+            ed = 1 + u*(1 + u*(e2 + u*(e3 + u*(e4 + u*(e5 + u*e6)))))
+        else if (abs(x) <= 0.05_wp .and. abs(u) <= 0.05_wp) then
+            ! remainders below x**11 / 11! and u**10 / 10!: under 1e-19 relative
+            sd = x*(1 + x2*(s3 + x2*(s5 + x2*(s7 + x2*s9))))
+            cd = 1 + x2*(c2 + x2*(c4 + x2*(c6 + x2*(c8 + x2*c10))))
+            ed = 1 + u*(1 + u*(e2 + u*(e3 + u*(e4 + u*(e5 + u*(e6 + u*(e7 + u*(e8 + &
+                 u*e9))))))))
+        else
+            sd = sin(x)
+            cd = cos(x)
+            ed = exp(u)
+        end if
+        c0 = cos_th
+        cos_th = c0*cd - sin_th*sd
+        sin_th = sin_th*cd + c0*sd
+        decay = decay*ed
+    end subroutine rotate_phase
 
     !> Zero of c + y(tau) + beta xp(s0 + tau) by Taylor-bounded conservative advancement.
     pure function forced_gap_zero(flow, gap, s0, horizon) result(res)

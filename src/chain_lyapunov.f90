@@ -51,11 +51,13 @@ contains
         acc%block_len = 0
     end subroutine lyapunov_start
 
-    !> Re-orthonormalise the frame (stored transposed, frame_t(k, m)) and accumulate.
-    subroutine lyapunov_step(acc, frame_t, info)
+    !> Re-orthonormalise the frame (stored transposed, frame_t(k, m)) and accumulate. The frame
+    !> may be the true one times 2**(-scale_bits) (the engine scales it to stay finite).
+    subroutine lyapunov_step(acc, frame_t, info, scale_bits)
         type(lyapunov_acc_t), intent(inout) :: acc
         real(wp), intent(inout) :: frame_t(:, :)
         integer, intent(out) :: info
+        integer, intent(in), optional :: scale_bits
         real(wp), allocatable :: a(:, :)
         real(wp) :: r_diag(acc%k), growth(acc%k)
         integer :: b, n_blocks
@@ -71,6 +73,9 @@ contains
         elsewhere
             growth = ieee_value(1.0_wp, ieee_negative_inf)
         end where
+        if (present(scale_bits)) then
+            where (r_diag /= 0) growth = growth + scale_bits*log(2.0_wp)
+        end if
         acc%steps = acc%steps + 1
         acc%total = acc%total + growth
         n_blocks = size(acc%block_len)

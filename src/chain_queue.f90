@@ -42,14 +42,22 @@ contains
         time = q%time(bond)
     end subroutine queue_top
 
-    !> Set the event time of `bond` and restore the heap order.
+    !> Set the event time of `bond` and restore the heap order: an earlier time can only move
+    !> the bond up, a later one only down.
     pure subroutine queue_set(q, bond, time)
         type(queue_t), intent(inout) :: q
         integer, intent(in) :: bond
         real(wp), intent(in) :: time
+        real(wp) :: old
+
+        old = q%time(bond)
+        if (time == old) return
         q%time(bond) = time
-        call sift_up(q, q%slot(bond))
-        call sift_down(q, q%slot(bond))
+        if (time < old) then
+            call sift_up(q, bond)
+        else
+            call sift_down(q, bond)
+        end if
     end subroutine queue_set
 
     !> Subtract `dt` from every time (order is unchanged): the start of a new drive cycle.
@@ -59,53 +67,55 @@ contains
         where (q%time < never) q%time = q%time - dt
     end subroutine queue_shift
 
+    !> Does bond a come before bond b (time, then bond index)?
     pure logical function earlier(q, a, b)
         type(queue_t), intent(in) :: q
         integer, intent(in) :: a, b
         earlier = q%time(a) < q%time(b) .or. (q%time(a) == q%time(b) .and. a < b)
     end function earlier
 
-    pure subroutine swap(q, i, j)
+    !> Move `bond` up past every later parent (the parents shift down into the hole).
+    pure subroutine sift_up(q, bond)
         type(queue_t), intent(inout) :: q
-        integer, intent(in) :: i, j
-        integer :: t
+        integer, intent(in) :: bond
+        integer :: j, parent
 
-        t = q%heap(i)
-        q%heap(i) = q%heap(j)
-        q%heap(j) = t
-        q%slot(q%heap(i)) = i
-        q%slot(q%heap(j)) = j
-    end subroutine swap
-
-    pure subroutine sift_up(q, start)
-        type(queue_t), intent(inout) :: q
-        integer, intent(in) :: start
-        integer :: j
-
-        j = start
+        j = q%slot(bond)
         do while (j > 1)
-            if (.not. earlier(q, q%heap(j), q%heap(j/2))) exit
-            call swap(q, j, j/2)
+            parent = q%heap(j/2)
+            if (.not. earlier(q, bond, parent)) exit
+            q%heap(j) = parent
+            q%slot(parent) = j
             j = j/2
         end do
+        q%heap(j) = bond
+        q%slot(bond) = j
     end subroutine sift_up
 
-    pure subroutine sift_down(q, start)
+    !> Move `bond` down past every earlier child (the children shift up into the hole).
+    pure subroutine sift_down(q, bond)
         type(queue_t), intent(inout) :: q
-        integer, intent(in) :: start
-        integer :: j, c
+        integer, intent(in) :: bond
+        integer :: j, c, child
 
-        j = start
+        j = q%slot(bond)
         do
             c = 2*j
             if (c > q%size) exit
+            child = q%heap(c)
             if (c + 1 <= q%size) then
-                if (earlier(q, q%heap(c + 1), q%heap(c))) c = c + 1
+                if (earlier(q, q%heap(c + 1), child)) then
+                    c = c + 1
+                    child = q%heap(c)
+                end if
             end if
-            if (.not. earlier(q, q%heap(c), q%heap(j))) exit
-            call swap(q, j, c)
+            if (.not. earlier(q, child, bond)) exit
+            q%heap(j) = child
+            q%slot(child) = j
             j = c
         end do
+        q%heap(j) = bond
+        q%slot(bond) = j
     end subroutine sift_down
 
 end module chain_queue

@@ -144,6 +144,15 @@ contains
         call advance_to_point(copy, copy%cycle + cycles, copy%s, log, err)
         if (allocated(err)) return
         jacobian = transpose(copy%tangent)
+        ! undo the engine's power-of-two scaling, saturating at huge (such a map is singular)
+        if (copy%tangent_scale_bits > 0) then
+            where (jacobian /= 0 .and. exponent(jacobian) + copy%tangent_scale_bits < &
+                   maxexponent(1.0_wp))
+                jacobian = scale(jacobian, copy%tangent_scale_bits)
+            elsewhere (jacobian /= 0)
+                jacobian = sign(huge(1.0_wp), jacobian)
+            end where
+        end if
     end subroutine poincare_jacobian
 
     !> Transient, then `cfg%cycles` recorded cycles sent to `sink`; the chain ends in the final
@@ -201,7 +210,8 @@ contains
             xwin(:, w) = chain%x
             vwin(:, w) = chain%v
             if (cfg%lyapunov .and. modulo(j, int(cfg%qr_every, i8)) == 0) then
-                call lyapunov_step(acc, chain%tangent, info)
+                call lyapunov_step(acc, chain%tangent, info, chain%tangent_scale_bits)
+                chain%tangent_scale_bits = 0
                 if (info /= 0) then
                     call set_error(err, "lyapunov: QR factorisation failed (LAPACK info "// &
                                    fmt_real(real(info, wp))//")")

@@ -81,6 +81,7 @@ contains
             end if
             l = max(bond, 1)
             r = min(bond + 1, chain%n)
+            call chain_sync(chain)
             call pre_state(chain, l, tq, xl, vl)
             call pre_state(chain, r, tq, xr, vr)
             call event_log_clear(log)
@@ -111,7 +112,7 @@ contains
         call check(t, bad_gap == 0, 'no gap below -1e-12 after any impact')
     end subroutine every_impact
 
-    !> State of oscillator i at time tq, propagated from its own last update independently.
+    !> State of oscillator i at time tq, propagated independently from the synced chain.
     subroutine pre_state(chain, i, tq, x, v)
         type(chain_t), intent(in) :: chain
         integer, intent(in) :: i
@@ -121,7 +122,7 @@ contains
         x = chain%x(i)
         v = chain%v(i)
         if (chain%contact(i) == contact_free) &
-            call advance_state(chain%flow, chain%t(i), tq - chain%t(i), x, v)
+            call advance_state(chain%flow, chain%s, tq - chain%s, x, v)
     end subroutine pre_state
 
     !> Small drive, no impacts: every strobe record equals the closed-form linear response
