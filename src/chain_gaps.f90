@@ -23,6 +23,8 @@ module chain_gaps
     real(wp), parameter :: time_tolerance = 1.0e-13_wp !! accuracy of a located zero
     integer, parameter :: max_steps = 200000
     integer, parameter :: lazy_steps = 2      !! steps of a forced search before it defers
+    real(wp), parameter :: short_angle = 0.05_wp !! steps this short turn phases by Taylor
+    integer, parameter :: max_turns = 16      !! Taylor turns in a row before a fresh start
 
     type :: gap_t
         real(wp) :: offset = 0 !! c: constant part of the gap (a sum of spacings)
@@ -103,19 +105,19 @@ contains
         ! each minimum is shallower than the one before
         phi = atan2(ss, cc)
         alpha = flow%alpha
-        tau_min = modulo(pi - alpha + phi, two_pi) / gam
+        tau_min = modulo(pi - alpha + phi, two_pi)*flow%inv_gam
         ! in contact and not closing: the minimum we sit at is not a new impact
-        if (g <= noise(gap%offset, amp) .and. tau_min < 0.5_wp*pi/gam) &
-            tau_min = tau_min + two_pi/gam
+        if (g <= noise(gap%offset, amp) .and. tau_min < 0.5_wp*pi*flow%inv_gam) &
+            tau_min = tau_min + two_pi*flow%inv_gam
         e = 1
         if (b /= 0) e = exp(-b*tau_min)
         if (gap%offset - amp*gam*e > 0) return
-        lo = max(0.0_wp, tau_min - pi/gam)
+        lo = max(0.0_wp, tau_min - pi*flow%inv_gam)
         hi = tau_min
         ! first guess: the zero of the same (decreasing) branch with the decay frozen at
         ! tau_min, theta = acos(q); it lies at or after the true zero, whose |cos| is smaller
         q = max(-1.0_wp, -gap%offset/(amp*e))
-        step = (pi - alpha - acos(q))/gam
+        step = (pi - alpha - acos(q))*flow%inv_gam
         tau = tau_min - step
         cos_th = q
         sin_th = sqrt(max(0.0_wp, 1 - q**2))
@@ -193,40 +195,68 @@ contains
         type(flow_t), intent(in) :: flow
         real(wp), intent(in) :: h
         real(wp), intent(inout) :: decay, cos_th, sin_th
-        real(wp) :: x, u, x2, cd, sd, ed, c0
-        ! Taylor coefficients of sin, cos and exp
+        real(wp) :: x, u, cd, sd
+
+        x = flow%gam*h
+        u = -flow%damping*h
+        if (max(abs(x), abs(u)) <= short_angle) then
+            call short_cis(x, cd, sd)
+            decay = decay*short_exp(u)
+        else
+            cd = cos(x)
+            sd = sin(x)
+            decay = decay*exp(u)
+        end if
+        call turn(cd, sd, cos_th, sin_th)
+    end subroutine rotate_phase
+
+    !> (cos, sin) of an angle turned on by the angle with cosine cd and sine sd.
+    pure subroutine turn(cd, sd, cos_a, sin_a)
+        real(wp), intent(in) :: cd, sd
+        real(wp), intent(inout) :: cos_a, sin_a
+        real(wp) :: c0
+
+        c0 = cos_a
+        cos_a = c0*cd - sin_a*sd
+        sin_a = sin_a*cd + c0*sd
+    end subroutine turn
+
+    !> cos x and sin x for |x| <= short_angle by Taylor polynomials; the remainders are below
+    !> x**8 / 8! (|x| <= 1e-3) or x**12 / 12!: under 1e-19 relative.
+    pure subroutine short_cis(x, cd, sd)
+        real(wp), intent(in) :: x
+        real(wp), intent(out) :: cd, sd
         real(wp), parameter :: s3 = -1/6.0_wp, s5 = 1/120.0_wp, s7 = -1/5040.0_wp, &
                                s9 = 1/362880.0_wp
         real(wp), parameter :: c2 = -1/2.0_wp, c4 = 1/24.0_wp, c6 = -1/720.0_wp, &
                                c8 = 1/40320.0_wp, c10 = -1/3628800.0_wp
+        real(wp) :: x2
+
+        x2 = x*x
+        if (abs(x) <= 1.0e-3_wp) then
+            sd = x*(1 + x2*(s3 + x2*s5))
+            cd = 1 + x2*(c2 + x2*(c4 + x2*c6))
+        else
+            sd = x*(1 + x2*(s3 + x2*(s5 + x2*(s7 + x2*s9))))
+            cd = 1 + x2*(c2 + x2*(c4 + x2*(c6 + x2*(c8 + x2*c10))))
+        end if
+    end subroutine short_cis
+
+    !> exp(u) for |u| <= short_angle by its Taylor polynomial (remainder under 1e-19 relative).
+    pure function short_exp(u) result(ed)
+        real(wp), intent(in) :: u
+        real(wp) :: ed
         real(wp), parameter :: e2 = 1/2.0_wp, e3 = 1/6.0_wp, e4 = 1/24.0_wp, e5 = 1/120.0_wp, &
                                e6 = 1/720.0_wp, e7 = 1/5040.0_wp, e8 = 1/40320.0_wp, &
                                e9 = 1/362880.0_wp
 
-        x = flow%gam*h
-        u = -flow%damping*h
-        x2 = x*x
-        if (abs(x) <= 1.0e-3_wp .and. abs(u) <= 1.0e-3_wp) then
-            ! remainders below x**7 / 7! and u**7 / 7!: under 1e-21 relative
-            sd = x*(1 + x2*(s3 + x2*s5))
-            cd = 1 + x2*(c2 + x2*(c4 + x2*c6))
+        if (abs(u) <= 1.0e-3_wp) then
             ed = 1 + u*(1 + u*(e2 + u*(e3 + u*(e4 + u*(e5 + u*e6)))))
-        else if (abs(x) <= 0.05_wp .and. abs(u) <= 0.05_wp) then
-            ! remainders below x**11 / 11! and u**10 / 10!: under 1e-19 relative
-            sd = x*(1 + x2*(s3 + x2*(s5 + x2*(s7 + x2*s9))))
-            cd = 1 + x2*(c2 + x2*(c4 + x2*(c6 + x2*(c8 + x2*c10))))
+        else
             ed = 1 + u*(1 + u*(e2 + u*(e3 + u*(e4 + u*(e5 + u*(e6 + u*(e7 + u*(e8 + &
                  u*e9))))))))
-        else
-            sd = sin(x)
-            cd = cos(x)
-            ed = exp(u)
         end if
-        c0 = cos_th
-        cos_th = c0*cd - sin_th*sd
-        sin_th = sin_th*cd + c0*sd
-        decay = decay*ed
-    end subroutine rotate_phase
+    end function short_exp
 
     !> Zero of c + y(tau) + beta xp(s0 + tau) by Taylor-bounded conservative advancement.
     pure function forced_gap_zero(flow, gap, s0, horizon) result(res)
@@ -235,8 +265,8 @@ contains
         real(wp), intent(in) :: s0, horizon
         type(gap_search_t) :: res
         real(wp) :: b, w, ry0, rp, tau, e, ry, g, g1, g2, g3, m2, m4, h, tol
-        real(wp) :: mm(2, 2), y, vy, ay, jy, xp, vp
-        integer :: it
+        real(wp) :: cg, sg, cw, sw, cd, sd, sn, y, vy, ay, jy, xp, vp
+        integer :: it, turns
 
         b = flow%damping
         w = flow%omega
@@ -244,20 +274,47 @@ contains
         rp = abs(gap%beta)*sqrt(flow%p_sin**2 + flow%q_cos**2)
         tol = noise(gap%offset, ry0 + rp)
         tau = 0
+        h = 0
+        turns = 0
         do it = 1, max_steps
-            e = exp(-b*tau)
+            ! exp(-b tau), cos and sin of gam tau and of w (s0 + tau): short steps turn the
+            ! previous ones (Taylor), others (and every max_turns-th) start afresh
+            if (tau == 0) then
+                e = 1
+                cg = 1
+                sg = 0
+                cw = cos(w*s0)
+                sw = sin(w*s0)
+            else if (max(flow%gam*h, b*h, w*h) <= short_angle .and. turns < max_turns) then
+                turns = turns + 1
+                e = e*short_exp(-b*h)
+                call short_cis(flow%gam*h, cd, sd)
+                call turn(cd, sd, cg, sg)
+                call short_cis(w*h, cd, sd)
+                call turn(cd, sd, cw, sw)
+            else
+                turns = 0
+                e = 1
+                if (b /= 0) e = exp(-b*tau)
+                cg = cos(flow%gam*tau)
+                sg = sin(flow%gam*tau)
+                cw = cos(w*(s0 + tau))
+                sw = sin(w*(s0 + tau))
+            end if
+            ! the propagator of eq. 17 and the forced response
+            sn = sg*flow%inv_gam
+            y = e*((cg + b*sn)*gap%y + sn*gap%vy)
+            vy = e*(-sn*gap%y + (cg - b*sn)*gap%vy)
+            xp = flow%p_sin*sw + flow%q_cos*cw
+            vp = w*(flow%p_sin*cw - flow%q_cos*sw)
             ry = ry0*e
             if (gap%offset - ry - rp > 0) then
                 res%status = search_none
                 res%tau = huge(1.0_wp)
                 return
             end if
-            mm = propagator(flow, tau)
-            y = mm(1, 1)*gap%y + mm(1, 2)*gap%vy
-            vy = mm(2, 1)*gap%y + mm(2, 2)*gap%vy
             ay = -2*b*vy - y
             jy = -2*b*ay - vy
-            call forced_response(flow, s0 + tau, xp, vp)
             g = gap%offset + y + gap%beta*xp
             g1 = vy + gap%beta*vp
             g2 = ay - gap%beta*w**2*xp
