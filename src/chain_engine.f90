@@ -28,7 +28,7 @@
 module chain_engine
     use chain_kinds, only: wp, i8, two_pi
     use chain_error, only: error_t, set_error, fmt_int
-    use chain_flow, only: flow_t, propagator
+    use chain_flow, only: flow_t
     use chain_gaps, only: gap_t, gap_search_t, next_gap_zero, search_root, search_horizon
     use chain_impact, only: pair_impact, wall_impact, pair_reset_jacobian, &
                             wall_reset_jacobian, saltation_matrix
@@ -59,6 +59,8 @@ module chain_engine
     !> The epoch moves to the current time once b (s - epoch) exceeds this, so that the
     !> free parts referred back to it (growing like e^(b (s - epoch))) stay far from overflow.
     real(wp), parameter :: rebase_after = 64
+    !> A separating pair is looked at again later only if it cannot close before this time.
+    real(wp), parameter :: defer_after = 0.25_wp
 
     type :: chain_t
         integer :: n = 0
@@ -286,20 +288,27 @@ contains
     !> The propagator from the epoch to the current time (and its inverse), once per event time.
     pure subroutine frame_now(chain)
         type(chain_t), intent(inout) :: chain
-        real(wp) :: tau, det
+        real(wp) :: tau, b, e, cs, sn, inv_det
         integer :: i
 
         if (chain%frame_s == chain%s) return
         chain%frame_s = chain%s
         chain%instant = chain%instant + 1
         tau = chain%s - chain%epoch
-        chain%m = propagator(chain%flow, tau)
-        ! det M = exp(-2 b tau)
-        det = chain%m(1, 1)*chain%m(2, 2) - chain%m(1, 2)*chain%m(2, 1)
-        chain%m_inv(1, 1) = chain%m(2, 2)/det
-        chain%m_inv(2, 1) = -chain%m(2, 1)/det
-        chain%m_inv(1, 2) = -chain%m(1, 2)/det
-        chain%m_inv(2, 2) = chain%m(1, 1)/det
+        ! the propagator of eq. 17 (as chain_flow's) and its inverse, det M = exp(-2 b tau)
+        b = chain%flow%damping
+        e = exp(-b*tau)
+        cs = cos(chain%flow%gam*tau)
+        sn = sin(chain%flow%gam*tau)*chain%flow%inv_gam
+        chain%m(1, 1) = e*(cs + b*sn)
+        chain%m(1, 2) = e*sn
+        chain%m(2, 1) = -e*sn
+        chain%m(2, 2) = e*(cs - b*sn)
+        inv_det = 1/(e*e)
+        chain%m_inv(1, 1) = chain%m(2, 2)*inv_det
+        chain%m_inv(2, 1) = -chain%m(2, 1)*inv_det
+        chain%m_inv(1, 2) = -chain%m(1, 2)*inv_det
+        chain%m_inv(2, 2) = chain%m(1, 1)*inv_det
         if (chain%flow%damping*tau > rebase_after) then
             do i = 1, chain%n
                 if (chain%contact(i) /= contact_free) cycle
@@ -669,9 +678,39 @@ contains
                 call keep_tangent_finite(chain, [2*l - 1, 2*l, 2*r - 1, 2*r])
             end if
             call count_impact(chain, bond, u, log)
+            ! the pair just separated: its next impact is far, and usually pre-empted
+            call schedule(chain, l - 1, err)
+            if (.not. allocated(err)) call schedule_separating(chain, bond, err)
+            if (.not. allocated(err)) call schedule(chain, r, err)
+            return
         end if
         call schedule_around(chain, l, r, err)
     end subroutine pair_event
+
+    !> Schedule a pair bond that is opening: rather than searching its next impact now, look
+    !> again when it could first close at the earliest (|g''| <= amp for a free gap), as long
+    !> as that is not soon; a neighbour's impact usually reschedules it before then.
+    subroutine schedule_separating(chain, bond, err)
+        type(chain_t), intent(inout) :: chain
+        integer, intent(in) :: bond
+        type(error_t), allocatable, intent(out) :: err
+        type(gap_t) :: gap
+        logical :: closes
+        integer :: resting
+        real(wp) :: amp, earliest
+
+        call gap_now(chain, bond, gap, closes, resting)
+        if (closes .and. resting == 0 .and. gap%beta == 0 .and. gap%vy > 0) then
+            amp = sqrt(gap%y**2 + ((gap%vy + chain%flow%damping*gap%y)*chain%flow%inv_gam)**2)
+            earliest = 2*gap%vy/amp
+            if (earliest > defer_after) then
+                chain%action(bond) = action_recheck
+                call queue_set(chain%queue, bond, chain%s + earliest)
+                return
+            end if
+        end if
+        call schedule(chain, bond, err)
+    end subroutine schedule_separating
 
     !> Count and log an impact of approach speed u on a bond.
     subroutine count_impact(chain, bond, u, log)

@@ -149,8 +149,22 @@ GRID2 = """
 """
 
 
+def _children(pid: int) -> list[int]:
+    """Processes whose parent is pid (Linux /proc)."""
+    found = []
+    for entry in Path("/proc").iterdir():
+        if entry.name.isdigit():
+            try:
+                stat = (entry / "stat").read_text()
+            except OSError:
+                continue
+            if int(stat.rsplit(")", 1)[1].split()[1]) == pid:
+                found.append(int(entry.name))
+    return found
+
+
 def test_mpi_sweep_stopped_by_sigterm_resumes(impactchain_exe, mpi_exe, tmp_path):
-    """A Slurm-like stop (SIGTERM to mpirun) leaves the checkpoint; the same command resumes it
+    """A Slurm-like stop (SIGTERM to every rank) leaves the checkpoint; the same command resumes it
     (also with another number of ranks), and so does the threaded driver: the same checkpoint
     format. Both resumed files equal an uninterrupted run's."""
     if mpi_exe is None:
@@ -165,7 +179,11 @@ def test_mpi_sweep_stopped_by_sigterm_resumes(impactchain_exe, mpi_exe, tmp_path
     deadline = time.monotonic() + 60
     while not ckpt.exists() and time.monotonic() < deadline and proc.poll() is None:
         time.sleep(0.05)
-    proc.send_signal(signal.SIGTERM)
+    # like scancel, signal every task (mpirun itself forwards SIGTERM only after a delay)
+    ranks = _children(proc.pid)
+    assert ranks, "no MPI ranks found under mpirun"
+    for pid in ranks:
+        os.kill(pid, signal.SIGTERM)
     out, err = proc.communicate(timeout=120)
     assert proc.returncode != 0, out + err
     assert "stopped after" in err, out + err
