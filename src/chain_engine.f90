@@ -95,6 +95,12 @@ module chain_engine
         real(wp), allocatable :: tangent(:, :) !! tangent(n_vectors, 2n): frame, transposed;
                                                !! moving rows referred back to the epoch
         integer :: tangent_scale_bits = 0   !! the frame is the true one times 2**(-bits)
+        !> Tangent rows hit at the current instant are kept in the coordinates of now (not of
+        !> the epoch) until the instant ends: the saltation matrices of a collapse cascade are
+        !> huge (1/u) and cancel in their product only if applied without round trips.
+        integer(i8), allocatable :: row_stamp(:) !! instant at which rows were moved to now
+        integer, allocatable :: touched(:)  !! the oscillators whose rows are now "now"
+        integer :: n_touched = 0
         integer(i8) :: impacts = 0, sticks = 0, releases = 0
         integer(i8), allocatable :: site_counts(:) !! site_counts(0:n): impacts per bond
         real(wp) :: last_event = -huge(1.0_wp)
@@ -136,6 +142,8 @@ contains
         allocate (chain%contact(n), chain%action(0:n), chain%site_counts(0:n))
         allocate (chain%y_now(n), chain%vy_now(n), chain%stamp(n))
         chain%stamp = -1
+        allocate (chain%row_stamp(n), chain%touched(n))
+        chain%row_stamp = -1
         chain%contact = contact_free
         if (present(contact)) chain%contact = contact
         ! the same rounding as chain_sync, so that a run continued from its saved state
@@ -180,6 +188,8 @@ contains
         chain%n_vectors = 0
         call chain_sync(chain)
         chain%n_vectors = size(frame, 2)
+        chain%n_touched = 0
+        chain%row_stamp = -1
         chain%tangent = transpose(frame)
     end subroutine chain_set_tangent
 
@@ -292,6 +302,7 @@ contains
         integer :: i
 
         if (chain%frame_s == chain%s) return
+        call rows_back_to_epoch(chain)
         chain%frame_s = chain%s
         chain%instant = chain%instant + 1
         tau = chain%s - chain%epoch
@@ -345,16 +356,46 @@ contains
         chain%drive_v = chain%flow%omega*(chain%flow%p_sin*cs - chain%flow%q_cos*sn)
     end subroutine drive_now
 
-    !> Tangent rows of moving oscillators from the epoch to now (after frame_now).
+    !> Tangent rows of moving oscillators from the epoch to now (after frame_now); rows already
+    !> moved to now at this instant stay. Afterwards every row is in the coordinates of now.
     pure subroutine move_tangent_epoch(chain)
         type(chain_t), intent(inout) :: chain
         integer :: i
 
-        if (chain%n_vectors == 0) return
-        do i = 1, chain%n
-            if (chain%contact(i) == contact_free) call apply_jump(chain, [2*i - 1, 2*i], chain%m)
-        end do
+        if (chain%n_vectors > 0) then
+            do i = 1, chain%n
+                if (chain%row_stamp(i) == chain%instant) cycle
+                if (chain%contact(i) == contact_free) &
+                    call apply_jump(chain, [2*i - 1, 2*i], chain%m)
+            end do
+        end if
+        chain%n_touched = 0
     end subroutine move_tangent_epoch
+
+    !> The tangent rows of oscillator i in the coordinates of now, for an impact (after
+    !> frame_now); they go back to the epoch when the instant ends.
+    pure subroutine rows_to_now(chain, i)
+        type(chain_t), intent(inout) :: chain
+        integer, intent(in) :: i
+
+        if (chain%row_stamp(i) == chain%instant) return
+        call apply_jump(chain, [2*i - 1, 2*i], chain%m)
+        chain%row_stamp(i) = chain%instant
+        chain%n_touched = chain%n_touched + 1
+        chain%touched(chain%n_touched) = i
+    end subroutine rows_to_now
+
+    !> At the end of an instant: rows moved to now go back to the epoch (M^-1 of that instant).
+    pure subroutine rows_back_to_epoch(chain)
+        type(chain_t), intent(inout) :: chain
+        integer :: j, i
+
+        do j = 1, chain%n_touched
+            i = chain%touched(j)
+            call apply_jump(chain, [2*i - 1, 2*i], chain%m_inv)
+        end do
+        chain%n_touched = 0
+    end subroutine rows_back_to_epoch
 
     !> Free part (x - xp, v - vp) of moving oscillator i now (after frame_now).
     pure subroutine free_part_now(chain, i, y, vy)
@@ -608,8 +649,8 @@ contains
                 call saltation_matrix(wall_reset_jacobian(chain%restitution), &
                                       [v_minus, acc_minus], [v_plus, acc_plus], &
                                       [-sgn, 0.0_wp], s, info)
-                ! the jump acts on the rows now; they are kept referred back to the epoch
-                call apply_jump(chain, [2*i - 1, 2*i], matmul(chain%m_inv, matmul(s, chain%m)))
+                call rows_to_now(chain, i)
+                call apply_jump(chain, [2*i - 1, 2*i], s)
                 call keep_tangent_finite(chain, [2*i - 1, 2*i])
             end if
             call count_impact(chain, bond, u, log)
@@ -627,7 +668,7 @@ contains
         type(event_log_t), intent(inout) :: log
         type(error_t), allocatable, intent(out) :: err
         integer :: l, r, info
-        real(wp) :: u, k, yl, wl, yr, wr, xp, vp, f_minus(4), f_plus(4), s(4, 4), to_now(4, 4)
+        real(wp) :: u, k, yl, wl, yr, wr, xp, vp, f_minus(4), f_plus(4), s(4, 4)
 
         l = bond
         r = bond + 1
@@ -667,14 +708,10 @@ contains
                           wr, field(chain, r, yr + xp, wr + vp)]
                 call saltation_matrix(pair_reset_jacobian(k), f_minus, f_plus, &
                                       [-1.0_wp, 0.0_wp, 1.0_wp, 0.0_wp], s, info)
-                ! rows now = M rows at the epoch (a resting oscillator's rows are zero)
-                to_now = 0
-                to_now(1:2, 1:2) = chain%m
-                to_now(3:4, 3:4) = chain%m
-                s = matmul(s, to_now)
-                to_now(1:2, 1:2) = chain%m_inv
-                to_now(3:4, 3:4) = chain%m_inv
-                call apply_jump(chain, [2*l - 1, 2*l, 2*r - 1, 2*r], matmul(to_now, s))
+                ! (a resting oscillator's rows are zero in any coordinates)
+                call rows_to_now(chain, l)
+                call rows_to_now(chain, r)
+                call apply_jump(chain, [2*l - 1, 2*l, 2*r - 1, 2*r], s)
                 call keep_tangent_finite(chain, [2*l - 1, 2*l, 2*r - 1, 2*r])
             end if
             call count_impact(chain, bond, u, log)
@@ -875,7 +912,10 @@ contains
         real(wp), allocatable :: rows(:)
 
         gaps = chain_gaps_now(chain)
-        tol = 1.0e-12_wp
+        ! touching, to within the rounding of positions built from free part and drive (large
+        ! near resonance)
+        tol = 1.0e-12_wp + 256*epsilon(1.0_wp)*(maxval(chain%spacing) + maxval(abs(chain%x)) + &
+                                                 hypot(chain%flow%p_sin, chain%flow%q_cos))
         first = max(1, bond)
         last = min(chain%n, bond + 1)
         do while (first > 1)
