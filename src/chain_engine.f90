@@ -835,7 +835,7 @@ contains
         integer, intent(in) :: rows(:)
         integer, parameter :: bits = 512
 
-        if (maxval(abs(chain%tangent(:, rows))) < 2.0_wp**200) return
+        if (maxval(abs(chain%tangent(:, rows))) < 2.0_wp**900) return
         chain%tangent = scale(chain%tangent, -bits)
         chain%tangent_scale_bits = chain%tangent_scale_bits + bits
     end subroutine keep_tangent_finite
