@@ -153,6 +153,13 @@ contains
             end if
             halley = tau + step > lo .and. tau + step < hi
             if (halley) then
+                ! cubic convergence on a transversal zero: after a Halley step this small the
+                ! error is below 1e-15 (no need to evaluate there); near grazing (small slope)
+                ! iterate to the tolerance instead
+                if (abs(step) <= 1.0e-5_wp .and. abs(g1) >= 1.0e-3_wp*amp) then
+                    res%tau = min(hi, max(lo, tau + step))
+                    return
+                end if
                 call rotate_phase(flow, step, decay, cos_th, sin_th)
                 tau = tau + step
             else
@@ -160,13 +167,10 @@ contains
                 step = 0.5_wp*(lo + hi) - tau
                 tau = tau + step
                 call phase_at(tau, decay, cos_th, sin_th)
-            end if
-            ! cubic convergence on a transversal zero: after a Halley step this small the error
-            ! is below 1e-15; near grazing (small slope) iterate to the tolerance instead
-            if (abs(step) <= 0.25_wp*time_tolerance .or. &
-                (halley .and. abs(step) <= 1.0e-5_wp .and. abs(g1) >= 1.0e-3_wp*amp)) then
-                res%tau = min(hi, max(lo, tau))
-                return
+                if (abs(step) <= 0.25_wp*time_tolerance) then
+                    res%tau = min(hi, max(lo, tau))
+                    return
+                end if
             end if
         end do
         res%tau = lo
@@ -230,31 +234,36 @@ contains
                                s9 = 1/362880.0_wp
         real(wp), parameter :: c2 = -1/2.0_wp, c4 = 1/24.0_wp, c6 = -1/720.0_wp, &
                                c8 = 1/40320.0_wp, c10 = -1/3628800.0_wp
-        real(wp) :: x2
+        real(wp) :: x2, x4
 
         x2 = x*x
+        ! Estrin's scheme: pairs of terms evaluated side by side, a short dependency chain
         if (abs(x) <= 1.0e-3_wp) then
-            sd = x*(1 + x2*(s3 + x2*s5))
-            cd = 1 + x2*(c2 + x2*(c4 + x2*c6))
+            sd = x + (x*x2)*(s3 + x2*s5)
+            cd = (1 + c2*x2) + (x2*x2)*(c4 + c6*x2)
         else
-            sd = x*(1 + x2*(s3 + x2*(s5 + x2*(s7 + x2*s9))))
-            cd = 1 + x2*(c2 + x2*(c4 + x2*(c6 + x2*(c8 + x2*c10))))
+            x4 = x2*x2
+            sd = x + (x*x2)*((s3 + x2*s5) + x4*(s7 + x2*s9))
+            cd = (1 + c2*x2) + x4*((c4 + c6*x2) + x4*(c8 + c10*x2))
         end if
     end subroutine short_cis
 
     !> exp(u) for |u| <= short_angle by its Taylor polynomial (remainder under 1e-19 relative).
     pure function short_exp(u) result(ed)
         real(wp), intent(in) :: u
-        real(wp) :: ed
+        real(wp) :: ed, u2, u4
         real(wp), parameter :: e2 = 1/2.0_wp, e3 = 1/6.0_wp, e4 = 1/24.0_wp, e5 = 1/120.0_wp, &
                                e6 = 1/720.0_wp, e7 = 1/5040.0_wp, e8 = 1/40320.0_wp, &
                                e9 = 1/362880.0_wp
 
+        u2 = u*u
+        ! Estrin's scheme, as in short_cis
         if (abs(u) <= 1.0e-3_wp) then
-            ed = 1 + u*(1 + u*(e2 + u*(e3 + u*(e4 + u*(e5 + u*e6)))))
+            ed = (1 + u) + u2*((e2 + e3*u) + u2*((e4 + e5*u) + e6*u2))
         else
-            ed = 1 + u*(1 + u*(e2 + u*(e3 + u*(e4 + u*(e5 + u*(e6 + u*(e7 + u*(e8 + &
-                 u*e9))))))))
+            u4 = u2*u2
+            ed = ((1 + u) + u2*(e2 + e3*u)) + u4*(((e4 + e5*u) + u2*(e6 + e7*u)) + &
+                                               u4*(e8 + e9*u))
         end if
     end function short_exp
 
