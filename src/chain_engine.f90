@@ -366,7 +366,7 @@ contains
             do i = 1, chain%n
                 if (chain%row_stamp(i) == chain%instant) cycle
                 if (chain%contact(i) == contact_free) &
-                    call apply_jump(chain, [2*i - 1, 2*i], chain%m)
+                    call apply_jump(chain, 2*i - 1, chain%m)
             end do
         end if
         chain%n_touched = 0
@@ -379,7 +379,7 @@ contains
         integer, intent(in) :: i
 
         if (chain%row_stamp(i) == chain%instant) return
-        call apply_jump(chain, [2*i - 1, 2*i], chain%m)
+        call apply_jump(chain, 2*i - 1, chain%m)
         chain%row_stamp(i) = chain%instant
         chain%n_touched = chain%n_touched + 1
         chain%touched(chain%n_touched) = i
@@ -392,7 +392,7 @@ contains
 
         do j = 1, chain%n_touched
             i = chain%touched(j)
-            call apply_jump(chain, [2*i - 1, 2*i], chain%m_inv)
+            call apply_jump(chain, 2*i - 1, chain%m_inv)
         end do
         chain%n_touched = 0
     end subroutine rows_back_to_epoch
@@ -650,8 +650,8 @@ contains
                                       [v_minus, acc_minus], [v_plus, acc_plus], &
                                       [-sgn, 0.0_wp], s, info)
                 call rows_to_now(chain, i)
-                call apply_jump(chain, [2*i - 1, 2*i], s)
-                call keep_tangent_finite(chain, [2*i - 1, 2*i])
+                call apply_jump(chain, 2*i - 1, s)
+                call keep_tangent_finite(chain, 2*i - 1, 2*i)
             end if
             call count_impact(chain, bond, u, log)
         else if (u > 0) then
@@ -711,8 +711,8 @@ contains
                 ! (a resting oscillator's rows are zero in any coordinates)
                 call rows_to_now(chain, l)
                 call rows_to_now(chain, r)
-                call apply_jump(chain, [2*l - 1, 2*l, 2*r - 1, 2*r], s)
-                call keep_tangent_finite(chain, [2*l - 1, 2*l, 2*r - 1, 2*r])
+                call apply_jump(chain, 2*l - 1, s)
+                call keep_tangent_finite(chain, 2*l - 1, 2*r)
             end if
             call count_impact(chain, bond, u, log)
             ! the pair just separated: its next impact is far, and usually pre-empted
@@ -806,36 +806,63 @@ contains
         if (chain%contact(i) == contact_free) acc = acceleration_now(chain, x, v)
     end function field
 
-    !> Replace the tangent rows `rows` by S times them.
-    pure subroutine apply_jump(chain, rows, s)
+    !> Replace the tangent rows first, first + 1, ... (one oscillator, s 2x2, or a neighbour
+    !> pair, s 4x4) by S times them. The frame is stored transposed, so these rows are
+    !> adjacent columns of chain%tangent and the loops run over contiguous memory.
+    pure subroutine apply_jump(chain, first, s)
         type(chain_t), intent(inout) :: chain
-        integer, intent(in) :: rows(:)
+        integer, intent(in) :: first
         real(wp), intent(in) :: s(:, :)
-        real(wp) :: old(size(rows))
-        integer :: j, a, b
 
-        ! one tangent vector at a time: no temporaries on the hot path
-        do j = 1, chain%n_vectors
-            old = chain%tangent(j, rows)
-            do a = 1, size(rows)
-                chain%tangent(j, rows(a)) = 0
-                do b = 1, size(rows)
-                    chain%tangent(j, rows(a)) = chain%tangent(j, rows(a)) + s(a, b)*old(b)
-                end do
-            end do
-        end do
+        if (size(s, 1) == 2) then
+            call jump_two_rows(chain%tangent(:, first:first + 1), s)
+        else
+            call jump_four_rows(chain%tangent(:, first:first + 3), s)
+        end if
     end subroutine apply_jump
+
+    pure subroutine jump_two_rows(t, s)
+        real(wp), contiguous, intent(inout) :: t(:, :)
+        real(wp), intent(in) :: s(2, 2)
+        real(wp) :: a, b
+        integer :: j
+
+        do j = 1, size(t, 1)
+            a = t(j, 1)
+            b = t(j, 2)
+            t(j, 1) = s(1, 1)*a + s(1, 2)*b
+            t(j, 2) = s(2, 1)*a + s(2, 2)*b
+        end do
+    end subroutine jump_two_rows
+
+    pure subroutine jump_four_rows(t, s)
+        real(wp), contiguous, intent(inout) :: t(:, :)
+        real(wp), intent(in) :: s(4, 4)
+        real(wp) :: a, b, c, d
+        integer :: j
+
+        do j = 1, size(t, 1)
+            a = t(j, 1)
+            b = t(j, 2)
+            c = t(j, 3)
+            d = t(j, 4)
+            t(j, 1) = s(1, 1)*a + s(1, 2)*b + s(1, 3)*c + s(1, 4)*d
+            t(j, 2) = s(2, 1)*a + s(2, 2)*b + s(2, 3)*c + s(2, 4)*d
+            t(j, 3) = s(3, 1)*a + s(3, 2)*b + s(3, 3)*c + s(3, 4)*d
+            t(j, 4) = s(4, 1)*a + s(4, 2)*b + s(4, 3)*c + s(4, 4)*d
+        end do
+    end subroutine jump_four_rows
 
     !> Impacts at nearly zero approach speed (the last steps of an inelastic collapse) have
     !> saltation matrices of size 1/u, and a cascade of them can overflow the frame within one
     !> QR interval. The whole frame is then scaled by a power of two (exact), and the factor is
     !> kept in tangent_scale_bits for the next QR step to add back.
-    pure subroutine keep_tangent_finite(chain, rows)
+    pure subroutine keep_tangent_finite(chain, first, last)
         type(chain_t), intent(inout) :: chain
-        integer, intent(in) :: rows(:)
+        integer, intent(in) :: first, last  !! the rows just changed
         integer, parameter :: bits = 512
 
-        if (maxval(abs(chain%tangent(:, rows))) < 2.0_wp**900) return
+        if (all(abs(chain%tangent(:, first:last)) < 2.0_wp**900)) return
         chain%tangent = scale(chain%tangent, -bits)
         chain%tangent_scale_bits = chain%tangent_scale_bits + bits
     end subroutine keep_tangent_finite

@@ -4,6 +4,7 @@
 !> periodic case of the paper separated by their error bars.
 module test_lyapunov
     use chain_kinds, only: wp, i8
+    use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
     use chain_error, only: error_t
     use chain_engine, only: chain_t, chain_init, chain_set_tangent
     use chain_events, only: event_log_t, event_log_init
@@ -11,6 +12,7 @@ module test_lyapunov
     use chain_run, only: record_run, memory_sink_t, run_result_t, advance_to_point, &
                          poincare_jacobian
     use chain_lyapunov, only: ky_dimension, floquet_multipliers
+    use chain_lapack, only: qr_orthonormalise
     use test_engine, only: make_chain
     use testing, only: tally_t, check, check_close
     implicit none
@@ -34,6 +36,7 @@ contains
         call floquet_period_one(t)
         call chaotic_and_periodic(t)
         call kaplan_yorke(t)
+        call qr_factors(t)
     end subroutine run_lyapunov_tests
 
     !> A configuration for record_run: transient, recorded cycles, Lyapunov vectors (0 = all).
@@ -288,5 +291,59 @@ contains
                          1.0e-15_wp)
         call check_close(t, ky_dimension([0.3_wp, -0.1_wp]), 2.0_wp, 'D_KY full', 1.0e-15_wp)
     end subroutine kaplan_yorke
+
+    !> qr_orthonormalise on frames of every kind it meets: Q orthonormal, Q^T A upper
+    !> triangular with the returned diagonal, whether Q comes from the triangular solve (a
+    !> narrow diagonal) or from dorgqr (a graded frame; rows zeroed by a rest).
+    subroutine qr_factors(t)
+        type(tally_t), intent(inout) :: t
+
+        call check_qr(t, 32, 32, 0.25_wp, 0, 'square frame, narrow R diagonal')
+        call check_qr(t, 32, 32, 2.0_wp, 0, 'square frame, R diagonal spanning 1e19')
+        call check_qr(t, 32, 32, 0.6_wp, 0, 'square frame, R diagonal spanning 1e6')
+        call check_qr(t, 32, 32, 0.25_wp, 2, 'square frame with two zero rows')
+        call check_qr(t, 2048, 10, 0.5_wp, 0, 'tall frame')
+    end subroutine qr_factors
+
+    !> Columns of a pseudo-random m x k matrix scaled by 2**(-grading*j) (j = column), with
+    !> the first `zero_rows` rows zeroed.
+    subroutine check_qr(t, m, k, grading, zero_rows, label)
+        type(tally_t), intent(inout) :: t
+        integer, intent(in) :: m, k, zero_rows
+        real(wp), intent(in) :: grading
+        character(len=*), intent(in) :: label
+        real(wp) :: a(m, k), q(m, k), r_diag(k), qta(k, k), h, eye(k, k), lower
+        integer :: i, j, info
+
+        do j = 1, k
+            do i = 1, m
+                h = sin(7.31_wp*i + 3.17_wp*j*j)*9973.1_wp
+                a(i, j) = (h - floor(h) - 0.5_wp)*2.0_wp**(-grading*j)
+            end do
+        end do
+        a(1:zero_rows, :) = 0
+        q = a
+        call qr_orthonormalise(q, r_diag, info)
+        eye = 0
+        do j = 1, k
+            eye(j, j) = 1
+        end do
+        qta = matmul(transpose(q), a)
+        lower = 0
+        do j = 1, k - 1
+            lower = max(lower, maxval(abs(qta(j + 1:k, j)))/norm2(a(:, j)))
+        end do
+        call check(t, info == 0 .and. all(ieee_is_finite(q)), 'QR, '//label//': finite')
+        call check_close(t, maxval(abs(matmul(transpose(q), q) - eye)), 0.0_wp, &
+                         'QR, '//label//': Q orthonormal', 1.0e-9_wp)
+        call check_close(t, lower, 0.0_wp, 'QR, '//label//': Q^T A upper triangular', &
+                         1.0e-9_wp)
+        call check_close(t, maxval(abs([(qta(j, j) - r_diag(j), j=1, k)]/ &
+                                       [(norm2(a(:, j)), j=1, k)])), 0.0_wp, &
+                         'QR, '//label//': R diagonal returned', 1.0e-12_wp)
+        if (grading <= 0.25_wp .and. zero_rows == 0) &
+            call check_close(t, maxval(abs(matmul(transpose(q), q) - eye)), 0.0_wp, &
+                             'QR, '//label//': Q orthonormal to rounding', 1.0e-13_wp)
+    end subroutine check_qr
 
 end module test_lyapunov
