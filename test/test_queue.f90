@@ -1,0 +1,56 @@
+!> The event queue against a brute-force minimum: after every update of a random bond, with
+!> ties in time, the top is the earliest (time, bond) pair, for queue sizes around the
+!> branching of the heap.
+module test_queue
+    use chain_kinds, only: wp
+    use chain_queue, only: queue_t, queue_init, queue_set, queue_top, queue_shift
+    use testing, only: tally_t, check
+    implicit none
+    private
+    public :: run_queue_tests
+
+contains
+
+    subroutine run_queue_tests(t)
+        type(tally_t), intent(inout) :: t
+        integer :: n_bonds
+
+        do n_bonds = 1, 23
+            call random_updates(t, n_bonds, 400)
+        end do
+        call random_updates(t, 1000, 20000)
+    end subroutine run_queue_tests
+
+    subroutine random_updates(t, n_bonds, updates)
+        type(tally_t), intent(inout) :: t
+        integer, intent(in) :: n_bonds, updates
+        real(wp), parameter :: never = huge(1.0_wp)
+        type(queue_t) :: q
+        real(wp) :: times(0:n_bonds - 1), top_time, h
+        integer :: u, bond, top_bond, want, wrong
+        character(len=12) :: label
+
+        call queue_init(q, n_bonds, never)
+        times = never
+        wrong = 0
+        do u = 1, updates
+            h = sin(12.9898_wp*u + 4.1_wp*n_bonds)*43758.5453_wp
+            h = h - floor(h)
+            bond = min(n_bonds - 1, int(h*n_bonds))
+            ! coarse times make ties common; now and then a bond leaves the schedule
+            times(bond) = merge(never, real(int(100*abs(sin(7.3_wp*u))), wp), mod(u, 17) == 0)
+            call queue_set(q, bond, times(bond))
+            if (mod(u, 101) == 0) then
+                call queue_shift(q, 3.0_wp, never)
+                where (times < never) times = times - 3
+            end if
+            call queue_top(q, top_bond, top_time)
+            want = minloc(times, dim=1) - 1   ! the first (lowest bond) of the earliest
+            if (top_bond /= want .or. top_time /= times(want)) wrong = wrong + 1
+        end do
+        write (label, '(i0)') n_bonds
+        call check(t, wrong == 0, 'queue of '//trim(label)//' bonds: top is the earliest '// &
+                   '(time, bond) after every update')
+    end subroutine random_updates
+
+end module test_queue
