@@ -53,7 +53,7 @@ contains
     !> of R spans less than `solve_span`: its columns are orthonormal to about
     !> eps cond(R), as with the modified Gram-Schmidt of the classic Lyapunov algorithm, at a
     !> fifth of the cost of dorgqr (which dominated a 32-exponent run). The growth rates do
-    !> not depend on that choice: the R factors telescope, frame_T = Phi Q_0 (R_T..R_1)^-1,
+    !> not depend on that choice: the R factors telescope, Q_T = Phi Q_0 (R_T..R_1)^-1,
     !> whatever the orthogonality of the frames in between. A frame with a wider span
     !> (rows zeroed by a rest on a wall, a collapse cascade) gets Q from dorgqr.
     subroutine qr_orthonormalise(a, r_diag, info)
