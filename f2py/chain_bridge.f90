@@ -129,8 +129,8 @@ contains
     subroutine array_put_strobe(sink, n_records, first, x, v, cycle, err)
         class(array_sink_t), intent(inout) :: sink
         integer(i8), intent(in) :: n_records, first
-        real(wp), intent(in) :: x(:, :), v(:, :)
-        integer(i8), intent(in) :: cycle(:)
+        real(wp), intent(in), contiguous :: x(:, :), v(:, :)
+        integer(i8), intent(in), contiguous :: cycle(:)
         type(error_t), allocatable, intent(out) :: err
         integer(i8) :: last
 

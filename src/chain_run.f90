@@ -38,8 +38,8 @@ module chain_run
             import :: record_sink_t, wp, i8, error_t
             class(record_sink_t), intent(inout) :: sink
             integer(i8), intent(in) :: n_records, first
-            real(wp), intent(in) :: x(:, :), v(:, :)
-            integer(i8), intent(in) :: cycle(:)
+            real(wp), intent(in), contiguous :: x(:, :), v(:, :) !! records are whole columns
+            integer(i8), intent(in), contiguous :: cycle(:)
             type(error_t), allocatable, intent(out) :: err
         end subroutine put_strobe_i
         subroutine put_events_i(sink, log, err)
@@ -293,8 +293,8 @@ contains
     subroutine memory_put_strobe(sink, n_records, first, x, v, cycle, err)
         class(memory_sink_t), intent(inout) :: sink
         integer(i8), intent(in) :: n_records, first
-        real(wp), intent(in) :: x(:, :), v(:, :)
-        integer(i8), intent(in) :: cycle(:)
+        real(wp), intent(in), contiguous :: x(:, :), v(:, :)
+        integer(i8), intent(in), contiguous :: cycle(:)
         type(error_t), allocatable, intent(out) :: err
         integer(i8) :: last
 
