@@ -9,10 +9,10 @@ FPM := $(abspath $(VENV))/bin/fpm
 RELEASE := --profile release
 # gfortran's runtime checks: bounds, and traps on invalid operations, division by zero, overflow
 CHECKED := --flag "-g -O1 -fcheck=all -ffpe-trap=invalid,zero,overflow -fbacktrace"
-# libopenblas0-serial: an optimised single-threaded BLAS/LAPACK that Debian's alternatives
-# put behind libblas.so.3 and liblapack.so.3 (the Lyapunov QR is 30 % faster with it); the
-# serial build leaves the threads to impactchain's sweeps
-APT_PACKAGES := gfortran libhdf5-dev liblapack-dev libblas-dev libopenblas0-serial \
+# The reference BLAS/LAPACK: thread-safe (sweep threads factorise their frames at the same
+# time) and the same bits whatever the number of threads. Debian's single-threaded OpenBLAS
+# (libopenblas0-serial) is not thread-safe: never with threaded sweeps (README, Performance).
+APT_PACKAGES := gfortran libhdf5-dev liblapack-dev libblas-dev \
                 pkg-config libopenmpi-dev openmpi-bin
 PY_STAMP := $(VENV)/.requirements-installed
 DEFAULT_RUN := runs/default.h5

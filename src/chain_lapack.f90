@@ -1,11 +1,19 @@
-!> The few LAPACK routines impactchain needs, with explicit interfaces and workspace queries:
+!> The few LAPACK routines impactchain needs, with explicit interfaces:
 !> QR factorisation (Lyapunov re-orthonormalisation) and the nonsymmetric eigenproblem
-!> (Floquet multipliers). BLAS dtrsm forms Q from R when that is safe (see below).
+!> (Floquet multipliers).
 module chain_lapack
     use chain_kinds, only: wp
     implicit none
     private
-    public :: qr_orthonormalise, general_eigenvalues
+    public :: qr_orthonormalise, qr_workspace_t, general_eigenvalues
+
+    !> Arrays qr_orthonormalise needs, kept by its caller between calls of the same shape
+    !> (a Lyapunov run re-orthonormalises its frame every cycle).
+    type :: qr_workspace_t
+        real(wp), allocatable :: r(:, :)   !! the factorisation (R and the reflectors)
+        real(wp), allocatable :: tau(:)
+        real(wp), allocatable :: work(:)
+    end type qr_workspace_t
 
     interface
         subroutine dgeqrf(m, n, a, lda, tau, work, lwork, info)
@@ -25,14 +33,6 @@ module chain_lapack
             real(wp), intent(out) :: work(*)
             integer, intent(out) :: info
         end subroutine dorgqr
-        subroutine dtrsm(side, uplo, transa, diag, m, n, alpha, a, lda, b, ldb)
-            import :: wp
-            implicit none
-            character(len=1), intent(in) :: side, uplo, transa, diag
-            integer, intent(in) :: m, n, lda, ldb
-            real(wp), intent(in) :: alpha, a(lda, *)
-            real(wp), intent(inout) :: b(ldb, *)
-        end subroutine dtrsm
         subroutine dgeev(jobvl, jobvr, n, a, lda, wr, wi, vl, ldvl, vr, ldvr, work, lwork, info)
             import :: wp
             implicit none
@@ -49,43 +49,85 @@ contains
     !> Replace the columns of a (m x k, m >= k) by an orthonormal basis of their span (Q of
     !> a = QR) and return the diagonal of R. info /= 0 is LAPACK's.
     !>
-    !> R is Householder's (dgeqrf). Q is then a R^-1, one triangular solve, when the diagonal
-    !> of R spans less than `solve_span`: its columns are orthonormal to about
-    !> eps cond(R), as with the modified Gram-Schmidt of the classic Lyapunov algorithm, at a
-    !> fifth of the cost of dorgqr (which dominated a 32-exponent run). The growth rates do
-    !> not depend on that choice: the R factors telescope, Q_T = Phi Q_0 (R_T..R_1)^-1,
-    !> whatever the orthogonality of the frames in between. A frame with a wider span
-    !> (rows zeroed by a rest on a wall, a collapse cascade) gets Q from dorgqr.
-    subroutine qr_orthonormalise(a, r_diag, info)
+    !> R is Householder's (dgeqrf). Q is then a R^-1, one triangular solve at a fifth of the
+    !> cost of dorgqr (which dominated a 32-exponent run), when that is accurate: its columns
+    !> are orthonormal to about eps cond(a), so the solve is taken only when a bound on the
+    !> largest column of a (sqrt(k) times the largest entry of R: reflections keep lengths)
+    !> over the smallest |R_jj| (about a lower bound of cond(a)) is below `solve_span`, and
+    !> kept only when every column of the result has unit length to `unit_tolerance`.
+    !> Otherwise (rows zeroed by a rest on a wall, a collapse cascade, a nearly dependent
+    !> frame) Q comes from dorgqr. The growth rates do not depend on that choice: the R
+    !> factors telescope, Q_T = Phi Q_0 (R_T..R_1)^-1, whatever the orthogonality of the
+    !> frames in between.
+    subroutine qr_orthonormalise(a, r_diag, ws, info)
         real(wp), intent(inout) :: a(:, :)
         real(wp), intent(out) :: r_diag(:)
+        type(qr_workspace_t), intent(inout) :: ws
         integer, intent(out) :: info
-        real(wp), parameter :: solve_span = 1.0e8_wp
-        real(wp), allocatable :: tau(:), work(:), r(:, :)
-        real(wp) :: query(1)
-        integer :: m, k, j, lwork
+        real(wp), parameter :: solve_span = 1.0e8_wp, unit_tolerance = 1.0e-10_wp
+        integer, parameter :: block_width = 64
+        real(wp) :: widest
+        integer :: m, k, j
 
         m = size(a, 1)
         k = size(a, 2)
-        allocate (tau(k))
-        call dgeqrf(m, k, a, m, tau, query, -1, info)
-        lwork = max(1, int(query(1)))
-        call dorgqr(m, k, k, a, m, tau, query, -1, info)
-        lwork = max(lwork, int(query(1)))
-        allocate (work(lwork))
-        r = a
-        call dgeqrf(m, k, r, m, tau, work, lwork, info)
-        if (info /= 0) return
-        do j = 1, k
-            r_diag(j) = r(j, j)
-        end do
-        if (minval(abs(r_diag)) > maxval(abs(r_diag))/solve_span) then
-            call dtrsm('R', 'U', 'N', 'N', m, k, 1.0_wp, r, m, a, m)
-        else
-            a = r
-            call dorgqr(m, k, k, a, m, tau, work, lwork, info)
+        if (allocated(ws%r)) then
+            if (any(shape(ws%r) /= shape(a))) deallocate (ws%r, ws%tau, ws%work)
         end if
+        ! room for LAPACK's blocked algorithms at any usual block size, without a workspace
+        ! query (which costs as much as the factorisation of a small frame); a smaller
+        ! lwork would only make them block less
+        if (.not. allocated(ws%r)) allocate (ws%r(m, k), ws%tau(k), ws%work(block_width*k))
+        associate (r => ws%r, tau => ws%tau, work => ws%work)
+            r = a
+            call dgeqrf(m, k, r, m, tau, work, size(work), info)
+            if (info /= 0) return
+            widest = 0
+            do j = 1, k
+                r_diag(j) = r(j, j)
+                widest = max(widest, maxval(abs(r(1:j, j))))
+            end do
+            widest = sqrt(real(k, wp))*widest
+            if (minval(abs(r_diag)) > widest/solve_span) then
+                call solve_right_upper(r, a)
+                if (unit_columns(a, unit_tolerance)) return
+            end if
+            a = r
+            call dorgqr(m, k, k, a, m, tau, work, size(work), info)
+        end associate
     end subroutine qr_orthonormalise
+
+    !> Has every column of a unit length to `tolerance`?
+    pure logical function unit_columns(a, tolerance)
+        real(wp), intent(in) :: a(:, :), tolerance
+        integer :: j
+
+        unit_columns = .false.
+        do j = 1, size(a, 2)
+            if (.not. abs(sum(a(:, j)**2) - 1) < 2*tolerance) return
+        end do
+        unit_columns = .true.
+    end function unit_columns
+
+    !> a <- a R^-1 for the upper triangle R of r(1:k, 1:k), k = size(a, 2), column by
+    !> column: column j of the result is (a_j - sum_{i<j} result_i R_ij)/R_jj, four earlier
+    !> columns at a time so that column j is loaded and stored a quarter as often.
+    pure subroutine solve_right_upper(r, a)
+        real(wp), intent(in) :: r(:, :)
+        real(wp), intent(inout) :: a(:, :)
+        integer :: i, j
+
+        do j = 1, size(a, 2)
+            do i = 1, j - 4, 4
+                a(:, j) = a(:, j) - r(i, j)*a(:, i) - r(i + 1, j)*a(:, i + 1) &
+                          - r(i + 2, j)*a(:, i + 2) - r(i + 3, j)*a(:, i + 3)
+            end do
+            do i = 4*((j - 1)/4) + 1, j - 1
+                a(:, j) = a(:, j) - r(i, j)*a(:, i)
+            end do
+            a(:, j) = a(:, j)/r(j, j)
+        end do
+    end subroutine solve_right_upper
 
     !> Eigenvalues wr + i wi of a general square matrix (a is overwritten).
     subroutine general_eigenvalues(a, wr, wi, info)

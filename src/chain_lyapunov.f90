@@ -7,7 +7,7 @@
 module chain_lyapunov
     use chain_kinds, only: wp
     use, intrinsic :: ieee_arithmetic, only: ieee_value, ieee_negative_inf, ieee_is_finite
-    use chain_lapack, only: qr_orthonormalise, general_eigenvalues
+    use chain_lapack, only: qr_orthonormalise, qr_workspace_t, general_eigenvalues
     implicit none
     private
     public :: lyapunov_acc_t, lyapunov_start, lyapunov_step, lyapunov_result_t
@@ -23,6 +23,9 @@ module chain_lyapunov
         real(wp), allocatable :: block_sum(:, :) !! block_sum(k, n_blocks)
         integer, allocatable :: block_len(:)     !! steps in each block
         real(wp), allocatable :: running(:, :)   !! running(k, planned): total / steps so far
+        real(wp), allocatable :: frame(:, :)     !! the frame untransposed, for the QR
+        real(wp), allocatable :: r_diag(:), growth(:) !! one QR step's
+        type(qr_workspace_t) :: qr
     end type lyapunov_acc_t
 
     type :: lyapunov_result_t
@@ -45,7 +48,7 @@ contains
         acc%planned = planned_steps
         n_blocks = max(1, min(max_blocks, planned_steps))
         allocate (acc%total(k), acc%block_sum(k, n_blocks), acc%block_len(n_blocks))
-        allocate (acc%running(k, planned_steps))
+        allocate (acc%running(k, planned_steps), acc%r_diag(k), acc%growth(k))
         acc%total = 0
         acc%block_sum = 0
         acc%block_len = 0
@@ -58,31 +61,31 @@ contains
         real(wp), intent(inout) :: frame_t(:, :)
         integer, intent(out) :: info
         integer, intent(in), optional :: scale_bits
-        real(wp), allocatable :: a(:, :)
-        real(wp) :: r_diag(acc%k), growth(acc%k)
-        integer :: b, n_blocks
+        integer :: b, n_blocks, j
 
-        a = transpose(frame_t)
-        call qr_orthonormalise(a, r_diag, info)
-        if (info /= 0) return
-        frame_t = transpose(a)
-        ! a rest on a wall zeroes tangent rows: that growth is -infinity, set without a
-        ! floating-point exception (log(0) traps under -ffpe-trap=zero)
-        where (r_diag /= 0)
-            growth = log(abs(r_diag))
-        elsewhere
-            growth = ieee_value(1.0_wp, ieee_negative_inf)
-        end where
-        if (present(scale_bits)) then
-            where (r_diag /= 0) growth = growth + scale_bits*log(2.0_wp)
-        end if
-        acc%steps = acc%steps + 1
-        acc%total = acc%total + growth
-        n_blocks = size(acc%block_len)
-        b = min(n_blocks, 1 + (acc%steps - 1)*n_blocks/max(1, acc%planned))
-        acc%block_sum(:, b) = acc%block_sum(:, b) + growth
-        acc%block_len(b) = acc%block_len(b) + 1
-        if (acc%steps <= acc%planned) acc%running(:, acc%steps) = acc%total/acc%steps
+        associate (r_diag => acc%r_diag, growth => acc%growth)
+            acc%frame = transpose(frame_t)
+            call qr_orthonormalise(acc%frame, r_diag, acc%qr, info)
+            if (info /= 0) return
+            frame_t = transpose(acc%frame)
+            ! a rest on a wall zeroes tangent rows: that growth is -infinity, set without a
+            ! floating-point exception (log(0) traps under -ffpe-trap=zero)
+            do j = 1, acc%k
+                if (r_diag(j) /= 0) then
+                    growth(j) = log(abs(r_diag(j)))
+                    if (present(scale_bits)) growth(j) = growth(j) + scale_bits*log(2.0_wp)
+                else
+                    growth(j) = ieee_value(1.0_wp, ieee_negative_inf)
+                end if
+            end do
+            acc%steps = acc%steps + 1
+            acc%total = acc%total + growth
+            n_blocks = size(acc%block_len)
+            b = min(n_blocks, 1 + (acc%steps - 1)*n_blocks/max(1, acc%planned))
+            acc%block_sum(:, b) = acc%block_sum(:, b) + growth
+            acc%block_len(b) = acc%block_len(b) + 1
+            if (acc%steps <= acc%planned) acc%running(:, acc%steps) = acc%total/acc%steps
+        end associate
     end subroutine lyapunov_step
 
     !> Exponents in the paper's units (bits per drive cycle) and per unit time, sorted
@@ -137,6 +140,7 @@ contains
         real(wp), allocatable, intent(out) :: frame(:, :)
         integer, intent(out) :: info
         real(wp) :: r_diag(k), h
+        type(qr_workspace_t) :: ws
         integer :: i, j
 
         allocate (frame(m, k))
@@ -146,7 +150,7 @@ contains
                 frame(i, j) = h - floor(h) - 0.5_wp
             end do
         end do
-        call qr_orthonormalise(frame, r_diag, info)
+        call qr_orthonormalise(frame, r_diag, ws, info)
     end subroutine initial_frame
 
     !> Kaplan-Yorke dimension of a spectrum sorted descending: j + S(j)/|l(j+1)| with j the
