@@ -385,6 +385,56 @@ contains
         chain%touched(chain%n_touched) = i
     end subroutine rows_to_now
 
+    !> The jump S of an impact now (after frame_now) on the rows of oscillator i (s 2x2) or
+    !> of i and i + 1 (s 4x4). The first impact of an instant takes M^-1 S M on rows still in
+    !> the coordinates of the epoch: one pass over them instead of three (to now, S, back when
+    !> the instant ends). Any later impact of the same instant (a triple contact, a collapse
+    !> cascade with huge S) moves its rows to now and applies S there, without round trips.
+    pure subroutine jump_rows(chain, i, s)
+        type(chain_t), intent(inout) :: chain
+        integer, intent(in) :: i
+        real(wp), intent(in) :: s(:, :)
+        real(wp) :: in_epoch(4, 4), largest  ! (fixed size: automatic arrays are allocated)
+        integer :: last, j, p, ns
+
+        ns = size(s, 1)
+        last = i + ns/2 - 1
+        if (chain%same_instant == 0 .and. all(chain%row_stamp(i:last) /= chain%instant)) then
+            if (ns == 2) then
+                call apply_jump(chain, 2*i - 1, conjugated(s, chain%m, chain%m_inv), largest)
+            else
+                do p = 1, ns, 2
+                    do j = 1, ns, 2
+                        in_epoch(j:j + 1, p:p + 1) = conjugated(s(j:j + 1, p:p + 1), chain%m, &
+                                                                chain%m_inv)
+                    end do
+                end do
+                call apply_jump(chain, 2*i - 1, in_epoch, largest)
+            end if
+        else
+            do j = i, last
+                call rows_to_now(chain, j)
+            end do
+            call apply_jump(chain, 2*i - 1, s, largest)
+        end if
+        call keep_tangent_finite(chain, largest)
+    end subroutine jump_rows
+
+    !> M^-1 B M for 2x2 blocks (written out: a section of s passed to fixed-shape dummies
+    !> would be copied into an allocated temporary).
+    pure function conjugated(b, m, m_inv) result(c)
+        real(wp), intent(in) :: b(:, :), m(2, 2), m_inv(2, 2)
+        real(wp) :: c(2, 2), bm(2, 2)
+        integer :: j
+
+        do j = 1, 2
+            bm(:, j) = b(:, 1)*m(1, j) + b(:, 2)*m(2, j)
+        end do
+        do j = 1, 2
+            c(:, j) = m_inv(:, 1)*bm(1, j) + m_inv(:, 2)*bm(2, j)
+        end do
+    end function conjugated
+
     !> At the end of an instant: rows moved to now go back to the epoch (M^-1 of that instant).
     pure subroutine rows_back_to_epoch(chain)
         type(chain_t), intent(inout) :: chain
@@ -649,9 +699,7 @@ contains
                 call saltation_matrix(wall_reset_jacobian(chain%restitution), &
                                       [v_minus, acc_minus], [v_plus, acc_plus], &
                                       [-sgn, 0.0_wp], s, info)
-                call rows_to_now(chain, i)
-                call apply_jump(chain, 2*i - 1, s)
-                call keep_tangent_finite(chain, 2*i - 1, 2*i)
+                call jump_rows(chain, i, s)
             end if
             call count_impact(chain, bond, u, log)
         else if (u > 0) then
@@ -709,10 +757,7 @@ contains
                 call saltation_matrix(pair_reset_jacobian(k), f_minus, f_plus, &
                                       [-1.0_wp, 0.0_wp, 1.0_wp, 0.0_wp], s, info)
                 ! (a resting oscillator's rows are zero in any coordinates)
-                call rows_to_now(chain, l)
-                call rows_to_now(chain, r)
-                call apply_jump(chain, 2*l - 1, s)
-                call keep_tangent_finite(chain, 2*l - 1, 2*r)
+                call jump_rows(chain, l, s)
             end if
             call count_impact(chain, bond, u, log)
             ! the pair just separated: its next impact is far, and usually pre-empted
@@ -807,40 +852,49 @@ contains
     end function field
 
     !> Replace the tangent rows first, first + 1, ... (one oscillator, s 2x2, or a neighbour
-    !> pair, s 4x4) by S times them. The frame is stored transposed, so these rows are
-    !> adjacent columns of chain%tangent and the loops run over contiguous memory.
-    pure subroutine apply_jump(chain, first, s)
+    !> pair, s 4x4) by S times them; `largest` is the largest magnitude written. The frame
+    !> is stored transposed, so these rows are adjacent columns of chain%tangent and the
+    !> loops run over contiguous memory.
+    pure subroutine apply_jump(chain, first, s, largest)
         type(chain_t), intent(inout) :: chain
         integer, intent(in) :: first
         real(wp), intent(in) :: s(:, :)
+        real(wp), intent(out), optional :: largest
+        real(wp) :: biggest
 
         if (size(s, 1) == 2) then
-            call jump_two_rows(chain%tangent(:, first:first + 1), s)
+            call jump_two_rows(chain%tangent(:, first:first + 1), s, biggest)
         else
-            call jump_four_rows(chain%tangent(:, first:first + 3), s)
+            call jump_four_rows(chain%tangent(:, first:first + 3), s, biggest)
         end if
+        if (present(largest)) largest = biggest
     end subroutine apply_jump
 
-    pure subroutine jump_two_rows(t, s)
+    pure subroutine jump_two_rows(t, s, largest)
         real(wp), contiguous, intent(inout) :: t(:, :)
         real(wp), intent(in) :: s(2, 2)
+        real(wp), intent(out) :: largest
         real(wp) :: a, b
         integer :: j
 
+        largest = 0
         do j = 1, size(t, 1)
             a = t(j, 1)
             b = t(j, 2)
             t(j, 1) = s(1, 1)*a + s(1, 2)*b
             t(j, 2) = s(2, 1)*a + s(2, 2)*b
+            largest = max(largest, abs(t(j, 1)), abs(t(j, 2)))
         end do
     end subroutine jump_two_rows
 
-    pure subroutine jump_four_rows(t, s)
+    pure subroutine jump_four_rows(t, s, largest)
         real(wp), contiguous, intent(inout) :: t(:, :)
         real(wp), intent(in) :: s(4, 4)
+        real(wp), intent(out) :: largest
         real(wp) :: a, b, c, d
         integer :: j
 
+        largest = 0
         do j = 1, size(t, 1)
             a = t(j, 1)
             b = t(j, 2)
@@ -850,6 +904,7 @@ contains
             t(j, 2) = s(2, 1)*a + s(2, 2)*b + s(2, 3)*c + s(2, 4)*d
             t(j, 3) = s(3, 1)*a + s(3, 2)*b + s(3, 3)*c + s(3, 4)*d
             t(j, 4) = s(4, 1)*a + s(4, 2)*b + s(4, 3)*c + s(4, 4)*d
+            largest = max(largest, abs(t(j, 1)), abs(t(j, 2)), abs(t(j, 3)), abs(t(j, 4)))
         end do
     end subroutine jump_four_rows
 
@@ -857,12 +912,12 @@ contains
     !> saltation matrices of size 1/u, and a cascade of them can overflow the frame within one
     !> QR interval. The whole frame is then scaled by a power of two (exact), and the factor is
     !> kept in tangent_scale_bits for the next QR step to add back.
-    pure subroutine keep_tangent_finite(chain, first, last)
+    pure subroutine keep_tangent_finite(chain, largest)
         type(chain_t), intent(inout) :: chain
-        integer, intent(in) :: first, last  !! the rows just changed
+        real(wp), intent(in) :: largest  !! of the rows just changed
         integer, parameter :: bits = 512
 
-        if (all(abs(chain%tangent(:, first:last)) < 2.0_wp**900)) return
+        if (largest < 2.0_wp**900) return
         chain%tangent = scale(chain%tangent, -bits)
         chain%tangent_scale_bits = chain%tangent_scale_bits + bits
     end subroutine keep_tangent_finite

@@ -65,8 +65,8 @@ contains
         real(wp), intent(in) :: dr(:, :), f_minus(:), f_plus(:), grad_h(:)
         real(wp), intent(out) :: s(size(dr, 1), size(dr, 2))
         integer, intent(out) :: info
-        real(wp) :: rate, w(size(f_minus))
-        integer :: j
+        real(wp) :: rate, w(4)  ! (fixed size: an automatic array would be allocated)
+        integer :: j, m
 
         rate = dot_product(grad_h, f_minus)
         info = 0
@@ -75,9 +75,15 @@ contains
             s = dr
             return
         end if
-        w = (f_plus - matmul(dr, f_minus))/rate
+        ! f+ - DR f-, column by column (matmul of assumed-shape arrays would allocate)
+        m = size(f_minus)
+        w(1:m) = f_plus
+        do j = 1, m
+            w(1:m) = w(1:m) - dr(:, j)*f_minus(j)
+        end do
+        w(1:m) = w(1:m)/rate
         do j = 1, size(grad_h)
-            s(:, j) = dr(:, j) + w*grad_h(j)
+            s(:, j) = dr(:, j) + w(1:m)*grad_h(j)
         end do
     end subroutine saltation_matrix
 
