@@ -64,7 +64,7 @@ contains
         real(wp), intent(out) :: r_diag(:)
         type(qr_workspace_t), intent(inout) :: ws
         integer, intent(out) :: info
-        real(wp), parameter :: solve_span = 1.0e8_wp, unit_tolerance = 1.0e-10_wp
+        real(wp), parameter :: solve_span = 1.0e6_wp, unit_tolerance = 1.0e-10_wp
         integer, parameter :: block_width = 64
         real(wp) :: widest
         integer :: m, k, j

@@ -312,6 +312,11 @@ contains
         a = graded(32, 32, 0.0_wp, 0)
         a(:, 32) = a(:, 32) + 1.0e12_wp*a(:, 1)
         call check_qr(t, a, 'column swamped by a multiple of another', .false.)
+        ! two nearly parallel columns: unit lengths hide q1.q2 of 3e-8 (span 1e8) and of 1e-6
+        ! (span 1e10), which only the span test refuses
+        call check_qr(t, nearly_parallel(1.59e-8_wp, 5), 'nearly parallel pair, span 1e8', .true.)
+        call check_qr(t, nearly_parallel(1.21e-10_wp, 2), 'nearly parallel pair, span 1e10', &
+                      .true.)
         call check_qr(t, reflected_kahan(32, 0.8_wp), 'U Kahan(0.8), cond 1e12', .false.)
         call check_qr(t, reflected_kahan(32, 1.0_wp), 'U Kahan(1.0), cond 4e8', .false.)
     end subroutine qr_factors
@@ -364,6 +369,17 @@ contains
         end do
         a(1:zero_rows, :) = 0
     end function graded
+
+    !> Columns g1 and g1 + eps g_other of graded(32, 5, 0, 0).
+    pure function nearly_parallel(eps, other) result(a)
+        real(wp), intent(in) :: eps
+        integer, intent(in) :: other
+        real(wp) :: a(32, 2), g(32, 5)
+
+        g = graded(32, 5, 0.0_wp, 0)
+        a(:, 1) = g(:, 1)
+        a(:, 2) = g(:, 1) + eps*g(:, other)
+    end function nearly_parallel
 
     !> A Householder reflection U times Kahan's k x k matrix diag(s**(j-1)) (I - c N), N the
     !> strictly upper ones, s = sin(theta), c = cos(theta): a diagonal that spans only
