@@ -388,18 +388,22 @@ contains
     !> The jump S of an impact now (after frame_now) on the rows of oscillator i (s 2x2) or
     !> of i and i + 1 (s 4x4). The first impact of an instant takes M^-1 S M on rows still in
     !> the coordinates of the epoch: one pass over them instead of three (to now, S, back when
-    !> the instant ends). Any later impact of the same instant (a triple contact, a collapse
-    !> cascade with huge S) moves its rows to now and applies S there, without round trips.
+    !> the instant ends), if S is moderate: forming M^-1 S M spreads rounding of size eps |S|
+    !> into every entry, while S applied in the coordinates of now keeps it in the direction
+    !> S amplifies (a slow impact before a rest has |S| ~ 1/u). Those, and any later impact
+    !> of the same instant (a triple contact, a collapse cascade), move their rows to now.
     pure subroutine jump_rows(chain, i, s)
         type(chain_t), intent(inout) :: chain
         integer, intent(in) :: i
         real(wp), intent(in) :: s(:, :)
+        real(wp), parameter :: moderate_jump = 16
         real(wp) :: in_epoch(4, 4), largest  ! (fixed size: automatic arrays are allocated)
         integer :: last, j, p, ns
 
         ns = size(s, 1)
         last = i + ns/2 - 1
-        if (chain%same_instant == 0 .and. all(chain%row_stamp(i:last) /= chain%instant)) then
+        if (chain%same_instant == 0 .and. maxval(abs(s)) <= moderate_jump .and. &
+            all(chain%row_stamp(i:last) /= chain%instant)) then
             if (ns == 2) then
                 call apply_jump(chain, 2*i - 1, conjugated(s, chain%m, chain%m_inv), largest)
             else
@@ -911,13 +915,15 @@ contains
     !> Impacts at nearly zero approach speed (the last steps of an inelastic collapse) have
     !> saltation matrices of size 1/u, and a cascade of them can overflow the frame within one
     !> QR interval. The whole frame is then scaled by a power of two (exact), and the factor is
-    !> kept in tangent_scale_bits for the next QR step to add back.
+    !> kept in tangent_scale_bits for the next QR step to add back. The threshold leaves room
+    !> for rows checked in the coordinates of now to be moved back to the epoch (|M^-1| up to
+    !> about 2**93 before the epoch is moved) and then hit once more.
     pure subroutine keep_tangent_finite(chain, largest)
         type(chain_t), intent(inout) :: chain
         real(wp), intent(in) :: largest  !! of the rows just changed
         integer, parameter :: bits = 512
 
-        if (largest < 2.0_wp**900) return
+        if (largest < 2.0_wp**800) return
         chain%tangent = scale(chain%tangent, -bits)
         chain%tangent_scale_bits = chain%tangent_scale_bits + bits
     end subroutine keep_tangent_finite
