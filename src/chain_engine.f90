@@ -976,10 +976,13 @@ contains
 
         side = chain%contact(i)
         ratio = min(1.0_wp, abs(rest_position(chain, i, side))/chain%flow%amplitude)
+        ! left: the force a + A sin(wt) turns positive as sin rises through -ratio; right (the
+        ! mirror image, drive shifted by half a period): A sin(wt) - a turns negative as sin
+        ! falls through +ratio
         if (side == contact_left) then
             target_phase = -asin(ratio)
         else
-            target_phase = asin(ratio) + 0.5_wp*two_pi
+            target_phase = 0.5_wp*two_pi - asin(ratio)
         end if
         s_release = chain%s + modulo(target_phase - chain%flow%omega*chain%s, two_pi) &
                     /chain%flow%omega
