@@ -50,6 +50,10 @@ module chain_config
         logical :: lyapunov = .false.
         integer :: vectors = 0
         integer :: qr_every = 1
+        !> cycles at the end of the transient over which the tangent frame is carried and
+        !> re-orthonormalised, but not averaged, so that it has turned towards the leading
+        !> directions when averaging starts (at most &run transient)
+        integer :: align = 100
         logical :: jacobian = .false.
         integer :: jacobian_cycles = 1
         ! &output
@@ -434,13 +438,14 @@ contains
         type(run_config_t), intent(inout) :: cfg
         type(error_t), allocatable, intent(out) :: err
         logical :: enabled, jacobian
-        integer :: vectors, qr_every, jacobian_cycles, ios
+        integer :: vectors, qr_every, align, jacobian_cycles, ios
         character(len=512) :: msg
-        namelist /lyapunov/ enabled, vectors, qr_every, jacobian, jacobian_cycles
+        namelist /lyapunov/ enabled, vectors, qr_every, align, jacobian, jacobian_cycles
 
         enabled = .true.
         vectors = cfg%vectors
         qr_every = cfg%qr_every
+        align = cfg%align
         jacobian = cfg%jacobian
         jacobian_cycles = cfg%jacobian_cycles
         rewind (u)
@@ -452,6 +457,7 @@ contains
         cfg%lyapunov = enabled
         cfg%vectors = vectors
         cfg%qr_every = qr_every
+        cfg%align = align
         cfg%jacobian = jacobian
         cfg%jacobian_cycles = jacobian_cycles
     end subroutine read_lyapunov
@@ -644,6 +650,11 @@ contains
                            " is outside [1, cycles = "//fmt_int8(cfg%cycles)//"]")
             return
         end if
+        if (cfg%align < 0 .or. cfg%align > 100000) then
+            call set_error(err, "&lyapunov: align = "//fmt_int(cfg%align)// &
+                           " is outside [0, 100000] (cycles, taken from the end of the transient)")
+            return
+        end if
         if (cfg%jacobian_cycles < 1 .or. cfg%jacobian_cycles > 1000) then
             call set_error(err, "&lyapunov: jacobian_cycles = "//fmt_int(cfg%jacobian_cycles) &
                            //" is outside [1, 1000]")
@@ -723,6 +734,7 @@ contains
                fmt_int(cfg%max_period)//", period_tol = "//fmt_real(cfg%period_tol)//" /"//nl// &
                "&lyapunov enabled = "//merge('T', 'F', cfg%lyapunov)//", vectors = "// &
                fmt_int(cfg%vectors)//", qr_every = "//fmt_int(cfg%qr_every)// &
+               ", align = "//fmt_int(cfg%align)// &
                ", jacobian = "//merge('T', 'F', cfg%jacobian)//", jacobian_cycles = "// &
                fmt_int(cfg%jacobian_cycles)//" /"//nl// &
                "&output file = '"//cfg%output_file//"', overwrite = "// &

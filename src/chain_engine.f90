@@ -29,12 +29,14 @@ module chain_engine
     use chain_kinds, only: wp, i8, two_pi
     use chain_error, only: error_t, set_error, fmt_int
     use chain_flow, only: flow_t
-    use chain_gaps, only: gap_t, gap_search_t, next_gap_zero, search_root, search_horizon
+    use chain_gaps, only: gap_t, gap_search_t, next_gap_zero, search_root, search_horizon, &
+                          resolvable_speed
     use chain_impact, only: pair_impact, wall_impact, pair_reset_jacobian, &
                             wall_reset_jacobian, saltation_matrix
     use chain_queue, only: queue_t, queue_init, queue_set, queue_top, queue_shift
+    use chain_lapack, only: qr_orthonormalise, qr_workspace_t
     use chain_events, only: event_log_t, event_log_append, event_impact, event_stick, &
-                            event_release
+                            event_release, event_touch
     implicit none
     private
     public :: chain_t, chain_init, chain_advance, chain_sync, chain_new_cycle
@@ -61,6 +63,8 @@ module chain_engine
     real(wp), parameter :: rebase_after = 64
     !> A separating pair is looked at again later only if it cannot close before this time.
     real(wp), parameter :: defer_after = 0.25_wp
+    !> A saltation matrix with an entry above this re-orthonormalises a Lyapunov frame at once.
+    real(wp), parameter :: large_jump = 64
 
     type :: chain_t
         integer :: n = 0
@@ -95,13 +99,25 @@ module chain_engine
         real(wp), allocatable :: tangent(:, :) !! tangent(n_vectors, 2n): frame, transposed;
                                                !! moving rows referred back to the epoch
         integer :: tangent_scale_bits = 0   !! the frame is the true one times 2**(-bits)
+        !> For Lyapunov spectra: re-orthonormalise the frame right after a large jump (a slow
+        !> impact, |S| ~ 1/u) instead of carrying its spread of scales to the next QR step,
+        !> where later jumps and the factorisation would lose the directions it squeezed. The
+        !> logarithms of the diagonal of R are kept in tangent_log(k), per column, for that
+        !> step. (Not for a Poincare-map Jacobian, which must be the plain product.)
+        logical :: orthonormalise_jumps = .false.
+        real(wp), allocatable :: tangent_log(:)
+        real(wp), allocatable :: frame_work(:, :), r_diag(:)
+        type(qr_workspace_t) :: qr
         !> Tangent rows hit at the current instant are kept in the coordinates of now (not of
         !> the epoch) until the instant ends: the saltation matrices of a collapse cascade are
         !> huge (1/u) and cancel in their product only if applied without round trips.
         integer(i8), allocatable :: row_stamp(:) !! instant at which rows were moved to now
         integer, allocatable :: touched(:)  !! the oscillators whose rows are now "now"
         integer :: n_touched = 0
-        integer(i8) :: impacts = 0, sticks = 0, releases = 0
+        integer(i8) :: impacts = 0, sticks = 0, releases = 0, touches = 0
+        !> Events whose tangent map is singular (a rest zeroes rows, a collapse averages them,
+        !> K = 0 kills relative velocities): the QR step then looks for collapsed directions.
+        integer(i8) :: rank_losses = 0
         integer(i8), allocatable :: site_counts(:) !! site_counts(0:n): impacts per bond
         real(wp) :: last_event = -huge(1.0_wp)
         integer :: same_instant = 0
@@ -180,17 +196,31 @@ contains
         end if
     end subroutine chain_init
 
-    !> Start carrying a tangent frame (columns of `frame`, shape (2n, k)) from now.
-    pure subroutine chain_set_tangent(chain, frame)
+    !> Start carrying a tangent frame (columns of `frame`, shape (2n, k)) from now; with
+    !> `orthonormalise_jumps`, re-orthonormalised after every large jump (Lyapunov spectra).
+    pure subroutine chain_set_tangent(chain, frame, orthonormalise_jumps)
         type(chain_t), intent(inout) :: chain
         real(wp), intent(in) :: frame(:, :)
+        logical, intent(in), optional :: orthonormalise_jumps
+        integer :: i
 
+        chain%orthonormalise_jumps = .false.
+        if (present(orthonormalise_jumps)) chain%orthonormalise_jumps = orthonormalise_jumps
+        chain%tangent_log = [(0.0_wp, i=1, size(frame, 2))]
         chain%n_vectors = 0
         call chain_sync(chain)
         chain%n_vectors = size(frame, 2)
+        chain%rank_losses = 0
         chain%n_touched = 0
         chain%row_stamp = -1
         chain%tangent = transpose(frame)
+        ! a resting oscillator's state does not depend on where it came from
+        do i = 1, chain%n
+            if (chain%contact(i) /= contact_free) then
+                chain%tangent(:, 2*i - 1:2*i) = 0
+                chain%rank_losses = chain%rank_losses + 1
+            end if
+        end do
     end subroutine chain_set_tangent
 
     !> Gaps of all bonds at the current time (moves the epoch here).
@@ -392,7 +422,7 @@ contains
     !> into every entry, while S applied in the coordinates of now keeps it in the direction
     !> S amplifies (a slow impact before a rest has |S| ~ 1/u). Those, and any later impact
     !> of the same instant (a triple contact, a collapse cascade), move their rows to now.
-    pure subroutine jump_rows(chain, i, s)
+    subroutine jump_rows(chain, i, s)
         type(chain_t), intent(inout) :: chain
         integer, intent(in) :: i
         real(wp), intent(in) :: s(:, :)
@@ -422,7 +452,33 @@ contains
             call apply_jump(chain, 2*i - 1, s, largest)
         end if
         call keep_tangent_finite(chain, largest)
+        ! (not while a direction removed by a rest waits for the QR step to find it: a
+        ! factorisation here would turn it into a unit vector)
+        if (chain%orthonormalise_jumps .and. chain%rank_losses == 0 .and. &
+            maxval(abs(s)) > large_jump) call orthonormalise_tangent(chain)
     end subroutine jump_rows
+
+    !> Re-orthonormalise the frame now, keeping ln |R(j,j)| in tangent_log. Any upper
+    !> triangular change of the columns commutes with the rows' own coordinates (epoch or
+    !> now), so the frame need not be synced first.
+    subroutine orthonormalise_tangent(chain)
+        type(chain_t), intent(inout) :: chain
+        integer :: info, j
+
+        chain%frame_work = transpose(chain%tangent)
+        if (.not. allocated(chain%r_diag)) allocate (chain%r_diag(chain%n_vectors))
+        if (size(chain%r_diag) /= chain%n_vectors) then
+            deallocate (chain%r_diag)
+            allocate (chain%r_diag(chain%n_vectors))
+        end if
+        call qr_orthonormalise(chain%frame_work, chain%r_diag, chain%qr, info)
+        ! a zero diagonal (a direction lost exactly) is left to the QR step to report
+        if (info /= 0 .or. any(chain%r_diag == 0)) return
+        chain%tangent = transpose(chain%frame_work)
+        do j = 1, chain%n_vectors
+            chain%tangent_log(j) = chain%tangent_log(j) + log(abs(chain%r_diag(j)))
+        end do
+    end subroutine orthonormalise_tangent
 
     !> M^-1 B M for 2x2 blocks (written out: a section of s passed to fixed-shape dummies
     !> would be copied into an allocated temporary).
@@ -666,35 +722,49 @@ contains
     end subroutine impact_event
 
     !> Oscillator i reaches the fixed side of a bond (a wall, or the top of a resting stack) on
-    !> the `side` wall: a slow arrival while the drive presses it there ends chatter in rest;
-    !> otherwise it bounces off a wall, or hits the resting oscillator (which then moves).
+    !> the `side` wall. An arrival too slow to resolve (below the resolvable speed of the gap)
+    !> ends in rest if the net force presses it there, and is a touch otherwise; so does an
+    !> arrival below `stick_speed` while pressed (chatter ends). Otherwise it bounces off a
+    !> wall, or hits the resting oscillator (which then moves).
     subroutine contact_event(chain, bond, i, side, log, err)
         type(chain_t), intent(inout) :: chain
         integer, intent(in) :: bond, i, side
         type(event_log_t), intent(inout) :: log
         type(error_t), allocatable, intent(out) :: err
-        real(wp) :: sgn, x, v_minus, v_plus, u, acc_minus, acc_plus, s(2, 2)
-        integer :: info
+        real(wp) :: sgn, x, v_minus, v_plus, u, acc_minus, acc_plus, s(2, 2), curvature, u_min
+        type(gap_t) :: gap
+        logical :: closes, pushed
+        integer :: info, resting
 
         call frame_now(chain)
         call drive_now(chain)
         call state_now(chain, i, x, v_minus)
         sgn = merge(-1.0_wp, 1.0_wp, side == contact_left)
         u = sgn*v_minus
-        if (u < max(chain%stick_speed, resolved_speed(chain, x, i, side)) .and. &
-            pressed(chain, i, side)) then
+        acc_minus = acceleration_now(chain, x, v_minus)
+        ! the gap is a(bond) +- x(i) + const: its curvature is the acceleration, signed
+        curvature = -sgn*acc_minus
+        call gap_now(chain, bond, gap, closes, resting)
+        u_min = resolvable_speed(chain%flow, gap, curvature)
+        pushed = pressed(chain, i, side)
+        if (pushed .and. u < max(chain%stick_speed, u_min)) then
             chain%contact(i) = side
             chain%synced = .false.
             chain%sticks = chain%sticks + 1
-            if (chain%n_vectors > 0) chain%tangent(:, 2*i - 1:2*i) = 0
+            if (chain%n_vectors > 0) then
+                chain%tangent(:, 2*i - 1:2*i) = 0
+                chain%rank_losses = chain%rank_losses + 1
+            end if
             if (u > 0) then
                 chain%impacts = chain%impacts + 1
                 chain%site_counts(bond) = chain%site_counts(bond) + 1
             end if
             call event_log_append(log, chain_elapsed(chain, chain%s), bond, max(u, 0.0_wp), &
                                   event_stick)
+        else if (u > 0 .and. u < u_min) then
+            call touch_event(chain, bond, u, curvature, log)
+            return
         else if (u > 0 .and. (bond == 0 .or. bond == chain%n)) then
-            acc_minus = acceleration_now(chain, x, v_minus)
             v_plus = v_minus
             call wall_impact(chain%restitution, v_plus)
             acc_plus = acceleration_now(chain, x, v_plus)
@@ -703,6 +773,7 @@ contains
                 call saltation_matrix(wall_reset_jacobian(chain%restitution), &
                                       [v_minus, acc_minus], [v_plus, acc_plus], &
                                       [-sgn, 0.0_wp], s, info)
+                if (chain%restitution == 0) chain%rank_losses = chain%rank_losses + 1
                 call jump_rows(chain, i, s)
             end if
             call count_impact(chain, bond, u, log)
@@ -713,6 +784,31 @@ contains
         call schedule_around(chain, i, i, err)
     end subroutine contact_event
 
+    !> A contact closing slower than the resolvable speed u_min of its gap (and not pressed
+    !> into it): whether it is an impact at all is decided by rounding, so it is a touch, with
+    !> no impulse and no jump of the tangent (the derivative of the map on its no-impact side).
+    !> The gap dips below zero by at most u**2 / (2 g'') < its rounding level and opens again;
+    !> the bond is looked at again once it is clearly open (4 u_min / g'' later: the gap is then
+    !> above 8 times its rounding level and opening at 3 u_min or more).
+    subroutine touch_event(chain, bond, u, curvature, log)
+        type(chain_t), intent(inout) :: chain
+        integer, intent(in) :: bond
+        real(wp), intent(in) :: u, curvature
+        type(event_log_t), intent(inout) :: log
+        type(gap_t) :: gap
+        logical :: closes
+        integer :: resting
+        real(wp) :: wait
+
+        call gap_now(chain, bond, gap, closes, resting)
+        wait = 4*resolvable_speed(chain%flow, gap, curvature)/max(abs(curvature), tiny(1.0_wp))
+        wait = max(wait, 64*epsilon(1.0_wp)*chain%flow%period)
+        chain%action(bond) = action_recheck
+        call queue_set(chain%queue, bond, chain%s + min(wait, 0.25_wp*chain%flow%period))
+        chain%touches = chain%touches + 1
+        call event_log_append(log, chain_elapsed(chain, chain%s), bond, u, event_touch)
+    end subroutine touch_event
+
     !> Impact of oscillators `bond` and `bond`+1 (either may be resting; it then moves).
     subroutine pair_event(chain, bond, log, err)
         type(chain_t), intent(inout) :: chain
@@ -720,7 +816,7 @@ contains
         type(event_log_t), intent(inout) :: log
         type(error_t), allocatable, intent(out) :: err
         integer :: l, r, info
-        real(wp) :: u, k, yl, wl, yr, wr, xp, vp, f_minus(4), f_plus(4), s(4, 4)
+        real(wp) :: u, k, yl, wl, yr, wr, xp, vp, f_minus(4), f_plus(4), s(4, 4), curvature
 
         l = bond
         r = bond + 1
@@ -740,6 +836,15 @@ contains
             wr = wr - chain%drive_v
         end if
         u = wl - wr
+        if (u > 0 .and. chain%contact(l) == contact_free .and. chain%contact(r) == contact_free) then
+            ! the pair gap a + (yr - yl) is a free damped oscillation: g'' = -(yr - yl) - 2 b g'
+            curvature = -(yr - yl) - 2*chain%flow%damping*(wr - wl)
+            if (u < resolvable_speed(chain%flow, gap_t(chain%spacing(bond), yr - yl, wr - wl, &
+                                                       0.0_wp), curvature)) then
+                call touch_event(chain, bond, u, curvature, log)
+                return
+            end if
+        end if
         if (u > 0) then
             k = chain%restitution
             if (chain%n_vectors > 0) then
@@ -760,6 +865,7 @@ contains
                           wr, field(chain, r, yr + xp, wr + vp)]
                 call saltation_matrix(pair_reset_jacobian(k), f_minus, f_plus, &
                                       [-1.0_wp, 0.0_wp, 1.0_wp, 0.0_wp], s, info)
+                if (k == 0) chain%rank_losses = chain%rank_losses + 1
                 ! (a resting oscillator's rows are zero in any coordinates)
                 call jump_rows(chain, l, s)
             end if
@@ -949,24 +1055,6 @@ contains
         pressed = push < -tol .or. (abs(push) <= tol .and. rate <= 0)
     end function pressed
 
-    !> The smallest approach speed at which a bounce off the `side` wall is resolved: a bounce
-    !> of speed u rises u**2 / (2 |acc|) above the wall, which must exceed the rounding level of
-    !> the gap (set by the size of its terms, large near resonance). Slower arrivals while
-    !> pressed are chatter at the rounding floor and end in rest.
-    pure function resolved_speed(chain, x, i, side) result(u_min)
-        type(chain_t), intent(in) :: chain
-        real(wp), intent(in) :: x !! position of oscillator i now
-        integer, intent(in) :: i, side
-        real(wp) :: u_min, depth, push, scale
-
-        depth = abs(rest_position(chain, i, side))
-        push = abs(depth - sign(1.0_wp, real(side, wp))*chain%flow%amplitude* &
-                   chain%drive_sin)
-        scale = depth + abs(x - chain%drive_x) + &
-                sqrt(chain%flow%p_sin**2 + chain%flow%q_cos**2)
-        u_min = 16*sqrt(2*push*64*epsilon(1.0_wp)*scale)
-    end function resolved_speed
-
     !> Next time the force on resting oscillator i turns away from its wall (closed form).
     pure function release_time(chain, i) result(s_release)
         type(chain_t), intent(in) :: chain
@@ -991,7 +1079,9 @@ contains
     !> Inelastic collapse: a cluster of touching oscillators meets infinitely many impacts in
     !> no time (a crowded chain with small K). Its limit is applied at once: the cluster moves
     !> with its mean velocity, or comes to rest if it is pressed into a wall or a resting stack.
-    !> The tangent rows of the cluster are averaged like the velocities (no saltation term).
+    !> The cluster holds moving oscillators only: a resting one is a fixed side, like a wall
+    !> (its velocity and its zero tangent rows stay out of the averages). The tangent rows of
+    !> the cluster are averaged like the velocities (no saltation term).
     subroutine collapse_cluster(chain, bond, log, err)
         type(chain_t), intent(inout) :: chain
         integer, intent(in) :: bond
@@ -999,7 +1089,7 @@ contains
         type(error_t), allocatable, intent(out) :: err
         integer :: first, last, i, j, m
         real(wp) :: mean, tol, gaps(0:chain%n)
-        logical :: against_left, against_right
+        logical :: against_left, against_right, stopped
         real(wp), allocatable :: rows(:)
 
         gaps = chain_gaps_now(chain)
@@ -1009,6 +1099,13 @@ contains
                                                  hypot(chain%flow%p_sin, chain%flow%q_cos))
         first = max(1, bond)
         last = min(chain%n, bond + 1)
+        if (chain%contact(first) /= contact_free) first = first + 1
+        if (chain%contact(last) /= contact_free) last = last - 1
+        if (first > last) then
+            ! both sides fixed: nothing moves here
+            call schedule(chain, bond, err)
+            return
+        end if
         do while (first > 1)
             if (gaps(first - 1) > tol .or. chain%contact(first - 1) /= contact_free) exit
             first = first - 1
@@ -1022,18 +1119,22 @@ contains
         against_left = gaps(first - 1) <= tol .and. (first == 1 .and. chain%walls .or. first > 1)
         against_right = gaps(last) <= tol .and. &
                         (last == chain%n .and. chain%walls .or. last < chain%n)
-        if ((against_left .and. mean < 0) .or. (against_right .and. mean > 0)) mean = 0
+        stopped = (against_left .and. mean < 0) .or. (against_right .and. mean > 0)
+        if (stopped) mean = 0
         chain%v(first:last) = mean
         do i = first, last
             if (chain%contact(i) == contact_free) &
                 call set_moving_state(chain, i, chain%x(i), chain%v(i))
         end do
         if (chain%n_vectors > 0) then
+            if (m > 1 .or. stopped) chain%rank_losses = chain%rank_losses + 1
             allocate (rows(chain%n_vectors))
             rows = 0
             do i = first, last
                 rows = rows + chain%tangent(:, 2*i)
             end do
+            ! a cluster stopped by a wall has v = 0 whatever the perturbation
+            if (stopped) rows = 0
             do i = first, last
                 chain%tangent(:, 2*i) = rows/m
             end do

@@ -5,11 +5,13 @@ module chain_events
     implicit none
     private
     public :: event_log_t, event_log_init, event_log_append, event_log_clear
-    public :: event_impact, event_stick, event_release
+    public :: event_impact, event_stick, event_release, event_touch
 
     integer, parameter :: event_impact = 0  !! an impact
     integer, parameter :: event_stick = 1   !! an impact that ends chatter: the contact sticks
     integer, parameter :: event_release = 2 !! a sticking contact lets go
+    !> a contact closing slower than the resolvable speed: no impulse, no jump of the tangent
+    integer, parameter :: event_touch = 3
 
     type :: event_log_t
         logical :: enabled = .false.
@@ -17,7 +19,7 @@ module chain_events
         real(wp), allocatable :: time(:)  !! from the start of the run
         real(wp), allocatable :: speed(:) !! approach speed >= 0
         integer, allocatable :: site(:)   !! bond 0..n
-        integer, allocatable :: kind(:)   !! event_impact, event_stick or event_release
+        integer, allocatable :: kind(:)   !! event_impact, event_stick, event_release, event_touch
     end type event_log_t
 
 contains

@@ -14,7 +14,7 @@ module chain_gaps
     use chain_flow, only: flow_t, forced_response, propagator
     implicit none
     private
-    public :: gap_t, gap_search_t, next_gap_zero, gap_value
+    public :: gap_t, gap_search_t, next_gap_zero, gap_value, resolvable_speed
     public :: search_none, search_root, search_horizon, time_tolerance
 
     integer, parameter :: search_none = 0    !! the gap never closes
@@ -385,6 +385,31 @@ contains
         if (g2c == 0 .and. g3 <= 0) return
         h = (g3/6 + sqrt((g3/6)**2 + m*g2c/12))*12/m
     end function quartic_step
+
+    !> The slowest approach a gap search can resolve. A gap that closes at speed u with
+    !> curvature g'' (its second derivative at contact) turns round u**2 / (2 |g''|) beyond
+    !> zero: an impact slower than sqrt(2 |g''| noise) is one whose very existence is decided by
+    !> the rounding of the gap, and whose saltation matrix (terms of size 1/u) describes
+    !> perturbations smaller than that rounding. The engine's touch and stick rules use it.
+    pure function resolvable_speed(flow, gap, curvature) result(u_min)
+        type(flow_t), intent(in) :: flow
+        type(gap_t), intent(in) :: gap
+        real(wp), intent(in) :: curvature !! g'' at contact
+        real(wp) :: u_min
+
+        u_min = sqrt(2*abs(curvature)*noise(gap%offset, gap_amplitude(flow, gap)))
+    end function resolvable_speed
+
+    !> Size of the moving terms of a gap: its free oscillation and its share of the drive (the
+    !> amplitude that sets the rounding level of the gap in every search).
+    pure function gap_amplitude(flow, gap) result(amp)
+        type(flow_t), intent(in) :: flow
+        type(gap_t), intent(in) :: gap
+        real(wp) :: amp
+
+        amp = sqrt(gap%y**2 + ((gap%vy + flow%damping*gap%y)*flow%inv_gam)**2) + &
+              abs(gap%beta)*sqrt(flow%p_sin**2 + flow%q_cos**2)
+    end function gap_amplitude
 
     !> Rounding level of a gap built from terms of size `offset` and `amplitude`.
     pure function noise(offset, amplitude) result(tol)

@@ -14,9 +14,16 @@ module chain_lyapunov
     public :: lyapunov_result, ky_dimension, floquet_multipliers, initial_frame
 
     integer, parameter :: max_blocks = 20
+    !> A frame column whose QR diagonal is below this fraction of its own length, after an
+    !> event with a singular tangent map, lies in the span of the columns before it: a
+    !> direction the event removed (its true growth is zero), not a contraction. A genuine one
+    !> would need to shrink by 1e-11 relative to the others within one QR interval.
+    real(wp), parameter :: collapse_tolerance = 1.0e-11_wp
 
     type :: lyapunov_acc_t
         integer :: k = 0              !! number of exponents
+        integer :: collapsed = 0      !! directions removed by rests or collapses (-infinity)
+        integer, allocatable :: active(:) !! exponent index of each remaining frame column
         integer :: steps = 0          !! QR steps done
         integer :: planned = 0        !! QR steps planned (sets the blocks)
         real(wp), allocatable :: total(:)        !! total(k): sum of ln|R(j,j)|
@@ -42,50 +49,83 @@ contains
     pure subroutine lyapunov_start(acc, k, planned_steps)
         type(lyapunov_acc_t), intent(out) :: acc
         integer, intent(in) :: k, planned_steps
-        integer :: n_blocks
+        integer :: n_blocks, j
 
         acc%k = k
         acc%planned = planned_steps
         n_blocks = max(1, min(max_blocks, planned_steps))
         allocate (acc%total(k), acc%block_sum(k, n_blocks), acc%block_len(n_blocks))
         allocate (acc%running(k, planned_steps), acc%r_diag(k), acc%growth(k))
+        acc%active = [(j, j=1, k)]
         acc%total = 0
         acc%block_sum = 0
         acc%block_len = 0
     end subroutine lyapunov_start
 
-    !> Re-orthonormalise the frame (stored transposed, frame_t(k, m)) and accumulate. The frame
-    !> may be the true one times 2**(-scale_bits) (the engine scales it to stay finite).
-    subroutine lyapunov_step(acc, frame_t, info, scale_bits)
+    !> Re-orthonormalise the frame (stored transposed, frame_t(k, m)) and accumulate. Column j
+    !> may be the true one times 2**(-scale_bits) exp(-log_scale(j)).
+    !> After an event with a singular tangent map (`singular`: a rest began, a cluster
+    !> collapsed, or K = 0) a column that now lies in the span of the columns before it is a
+    !> direction that event removed: its exponent is -infinity, and the column leaves the
+    !> frame (frame_t loses that row), so that the other exponents never take the logarithm of
+    !> a diagonal that is only rounding.
+    subroutine lyapunov_step(acc, frame_t, info, scale_bits, log_scale, singular)
         type(lyapunov_acc_t), intent(inout) :: acc
-        real(wp), intent(inout) :: frame_t(:, :)
+        real(wp), allocatable, intent(inout) :: frame_t(:, :)
         integer, intent(out) :: info
-        integer, intent(in), optional :: scale_bits
-        integer :: b, n_blocks, j
+        integer, intent(in), optional :: scale_bits !! the frame was scaled by 2**(-scale_bits)
+        !> ln of the factor each column was scaled down by besides (the engine's
+        !> re-orthonormalisations after large jumps)
+        real(wp), intent(in), optional :: log_scale(:)
+        logical, intent(in), optional :: singular
+        real(wp), allocatable :: before(:, :), scale(:)
+        real(wp) :: minus_infinity
+        logical, allocatable :: gone(:)
+        integer :: b, n_blocks, j, kept
 
-        associate (r_diag => acc%r_diag, growth => acc%growth)
-            acc%frame = transpose(frame_t)
-            call qr_orthonormalise(acc%frame, r_diag, acc%qr, info)
+        minus_infinity = ieee_value(1.0_wp, ieee_negative_inf)
+        if (present(log_scale)) scale = log_scale
+        acc%frame = transpose(frame_t)
+        if (present(singular)) then
+            if (singular) before = acc%frame
+        end if
+        do
+            kept = size(acc%frame, 2)
+            if (kept == 0) exit
+            call qr_orthonormalise(acc%frame, acc%r_diag(:kept), acc%qr, info)
             if (info /= 0) return
-            frame_t = transpose(acc%frame)
-            ! a rest on a wall zeroes tangent rows: that growth is -infinity, set without a
-            ! floating-point exception (log(0) traps under -ffpe-trap=zero)
-            do j = 1, acc%k
-                if (r_diag(j) /= 0) then
-                    growth(j) = log(abs(r_diag(j)))
-                    if (present(scale_bits)) growth(j) = growth(j) + scale_bits*log(2.0_wp)
-                else
-                    growth(j) = ieee_value(1.0_wp, ieee_negative_inf)
-                end if
-            end do
-            acc%steps = acc%steps + 1
-            acc%total = acc%total + growth
-            n_blocks = size(acc%block_len)
-            b = min(n_blocks, 1 + (acc%steps - 1)*n_blocks/max(1, acc%planned))
-            acc%block_sum(:, b) = acc%block_sum(:, b) + growth
-            acc%block_len(b) = acc%block_len(b) + 1
-            if (acc%steps <= acc%planned) acc%running(:, acc%steps) = acc%total/acc%steps
-        end associate
+            if (.not. allocated(before)) exit
+            gone = [(abs(acc%r_diag(j)) <= collapse_tolerance*norm2(before(:, j)), j=1, kept)]
+            if (.not. any(gone)) exit
+            ! drop the removed directions and factorise the others afresh
+            acc%total(pack(acc%active, gone)) = minus_infinity
+            if (allocated(scale)) scale = pack(scale, .not. gone)
+            acc%collapsed = acc%collapsed + count(gone)
+            acc%active = pack(acc%active, .not. gone)
+            before = before(:, pack([(j, j=1, kept)], .not. gone))
+            acc%frame = before
+            if (size(acc%active) == 0) exit
+        end do
+        frame_t = transpose(acc%frame)
+        ! a rest that zeroes every row leaves exact zeros: that growth is -infinity too, set
+        ! without a floating-point exception (log(0) traps under -ffpe-trap=zero)
+        acc%growth = minus_infinity
+        do j = 1, size(acc%active)
+            if (acc%r_diag(j) /= 0) then
+                acc%growth(acc%active(j)) = log(abs(acc%r_diag(j)))
+                if (present(scale_bits)) acc%growth(acc%active(j)) = &
+                    acc%growth(acc%active(j)) + scale_bits*log(2.0_wp)
+                if (allocated(scale)) acc%growth(acc%active(j)) = &
+                    acc%growth(acc%active(j)) + scale(j)
+            end if
+        end do
+        acc%steps = acc%steps + 1
+        acc%total = acc%total + acc%growth
+        n_blocks = size(acc%block_len)
+        b = min(n_blocks, 1 + (acc%steps - 1)*n_blocks/max(1, acc%planned))
+        acc%block_sum(:, b) = acc%block_sum(:, b) + acc%growth
+        acc%block_len(b) = acc%block_len(b) + 1
+        if (acc%steps <= acc%planned) acc%running(:, acc%steps) = acc%total/acc%steps
     end subroutine lyapunov_step
 
     !> Exponents in the paper's units (bits per drive cycle) and per unit time, sorted

@@ -11,7 +11,8 @@ module chain_run
     use chain_kinds, only: wp, i8
     use chain_error, only: error_t, set_error
     use chain_engine, only: chain_t, chain_advance, chain_sync, chain_new_cycle, &
-                            chain_set_tangent
+                            chain_set_tangent, contact_free
+    use chain_lapack, only: qr_orthonormalise, qr_workspace_t
     use chain_events, only: event_log_t, event_log_init, event_log_clear, event_log_append
     use chain_lyapunov, only: lyapunov_acc_t, lyapunov_start, lyapunov_step, &
                               lyapunov_result_t, lyapunov_result, floquet_multipliers, &
@@ -105,20 +106,43 @@ contains
     !> Run the chain to (cycle, s) and bring every oscillator there.
     subroutine advance_to_point(chain, cycle, s, log, err)
         type(chain_t), intent(inout) :: chain
-        integer(i8), intent(in) :: cycle
-        real(wp), intent(in) :: s
+        ! by value: a caller may pass the chain's own clock (chain%s), which moves meanwhile
+        integer(i8), value :: cycle
+        real(wp), value :: s
         type(event_log_t), intent(inout) :: log
         type(error_t), allocatable, intent(out) :: err
 
-        do while (chain%cycle < cycle)
-            call chain_advance(chain, chain%flow%period, log, err)
-            if (allocated(err)) return
-            call chain_new_cycle(chain)
-        end do
+        call advance_cycles(chain, cycle, log, err)
+        if (allocated(err)) return
         call chain_advance(chain, s, log, err)
         if (allocated(err)) return
         call chain_sync(chain)
     end subroutine advance_to_point
+
+    !> Run the chain through the ends of drive cycles up to the start of `cycle`.
+    subroutine advance_cycles(chain, cycle, log, err, tangent_qr_every)
+        type(chain_t), intent(inout) :: chain
+        integer(i8), intent(in) :: cycle
+        type(event_log_t), intent(inout) :: log
+        type(error_t), allocatable, intent(out) :: err
+        !> re-orthonormalise the tangent frame, unaveraged, at every this many cycle ends
+        integer, intent(in), optional :: tangent_qr_every
+        integer(i8) :: done
+
+        done = 0
+        do while (chain%cycle < cycle)
+            call chain_advance(chain, chain%flow%period, log, err)
+            if (allocated(err)) return
+            call chain_new_cycle(chain)
+            done = done + 1
+            if (present(tangent_qr_every)) then
+                if (modulo(done, int(tangent_qr_every, i8)) == 0) then
+                    call orthonormalise_unaveraged(chain, err)
+                    if (allocated(err)) return
+                end if
+            end if
+        end do
+    end subroutine advance_cycles
 
     !> Jacobian (2n x 2n) of the p-cycle Poincare map at the chain's current (synced) state;
     !> the chain itself is not moved.
@@ -171,28 +195,38 @@ contains
         integer(i8) :: j, target_cycle, first
         real(wp) :: target_s
         integer :: m, k, info, i, nwin, w
+        integer(i8) :: align_start
         logical :: stop_now
 
         call event_log_init(log, .false., 0)
         call section_target(chain, cfg%transient, cfg%phase, 0_i8, target_cycle, target_s)
-        call advance_to_point(chain, target_cycle, target_s, log, err)
-        if (allocated(err)) return
+        ! the frame starts `align` whole cycles before the end of the transient, at the end
+        ! of a cycle (where the state is synced anyway: the run's own numbers do not depend
+        ! on whether exponents are computed), or at the end of the transient
+        align_start = target_cycle - min(cfg%transient, int(cfg%align, i8))
+        if (cfg%lyapunov .and. align_start > chain%cycle) then
+            call advance_cycles(chain, align_start, log, err)
+            if (allocated(err)) return
+            call start_tangent(chain, cfg, err)
+            if (allocated(err)) return
+            call advance_cycles(chain, target_cycle, log, err, cfg%qr_every)
+            if (.not. allocated(err)) call advance_to_point(chain, target_cycle, target_s, &
+                                                            log, err)
+            if (.not. allocated(err)) call orthonormalise_unaveraged(chain, err)
+            if (allocated(err)) return
+        else
+            call advance_to_point(chain, target_cycle, target_s, log, err)
+            if (allocated(err)) return
+            if (cfg%lyapunov) call start_tangent(chain, cfg, err)
+            if (allocated(err)) return
+        end if
+        if (cfg%lyapunov) call lyapunov_start(acc, chain%n_vectors, int(cfg%cycles/cfg%qr_every))
         call event_log_init(log, cfg%record_events, 1024)
         chain%impacts = 0
         chain%sticks = 0
         chain%releases = 0
+        chain%touches = 0
         chain%site_counts = 0
-        if (cfg%lyapunov) then
-            k = cfg%vectors
-            if (k == 0) k = 2*cfg%n
-            call initial_frame(2*cfg%n, k, frame, info)
-            if (info /= 0) then
-                call set_error(err, "lyapunov: cannot build the initial tangent frame")
-                return
-            end if
-            call chain_set_tangent(chain, frame)
-            call lyapunov_start(acc, k, int(cfg%cycles/cfg%qr_every))
-        end if
         m = int(max(1_i8, min(cfg%cycles, int(2**20/cfg%n, i8))))
         allocate (xbuf(cfg%n, m), vbuf(cfg%n, m), cbuf(m))
         nwin = int(min(cfg%cycles, int(period_window(cfg%max_period), i8)))
@@ -210,8 +244,12 @@ contains
             xwin(:, w) = chain%x
             vwin(:, w) = chain%v
             if (cfg%lyapunov .and. modulo(j, int(cfg%qr_every, i8)) == 0) then
-                call lyapunov_step(acc, chain%tangent, info, chain%tangent_scale_bits)
+                call lyapunov_step(acc, chain%tangent, info, chain%tangent_scale_bits, &
+                                   chain%tangent_log, chain%rank_losses > 0)
                 chain%tangent_scale_bits = 0
+                chain%rank_losses = 0
+                chain%n_vectors = size(chain%tangent, 1)
+                chain%tangent_log = [(0.0_wp, i=1, chain%n_vectors)]
                 if (info /= 0) then
                     call set_error(err, "lyapunov: QR factorisation failed (LAPACK info "// &
                                    fmt_real(real(info, wp))//")")
@@ -259,6 +297,53 @@ contains
                                           "failed")
         end if
     end subroutine record_run
+
+    !> Re-orthonormalise the tangent frame without averaging (while it aligns): a frame that
+    !> starts in generic directions meets the shears of slow impacts (|S| ~ 1/u) across all
+    !> its columns, and the smallest diagonals of R lose digits; once it has turned towards
+    !> the leading directions they meet mostly the first. Rows of resting oscillators stay
+    !> zero. A change of columns needs no sync: the state is not touched.
+    subroutine orthonormalise_unaveraged(chain, err)
+        type(chain_t), intent(inout) :: chain
+        type(error_t), allocatable, intent(out) :: err
+        type(qr_workspace_t) :: ws
+        real(wp), allocatable :: frame(:, :)
+        real(wp) :: r_diag(chain%n_vectors)
+        integer :: info, i
+
+        frame = transpose(chain%tangent)
+        call qr_orthonormalise(frame, r_diag, ws, info)
+        if (info /= 0) then
+            call set_error(err, "lyapunov: QR factorisation failed while aligning the "// &
+                           "frame (LAPACK info "//fmt_real(real(info, wp))//")")
+            return
+        end if
+        chain%tangent = transpose(frame)
+        do i = 1, chain%n
+            if (chain%contact(i) /= contact_free) chain%tangent(:, 2*i - 1:2*i) = 0
+        end do
+        chain%tangent_scale_bits = 0
+        chain%rank_losses = 0
+        chain%tangent_log = 0
+    end subroutine orthonormalise_unaveraged
+
+    !> Carry a tangent frame from now: k = &lyapunov vectors generic orthonormal vectors.
+    subroutine start_tangent(chain, cfg, err)
+        type(chain_t), intent(inout) :: chain
+        type(run_config_t), intent(in) :: cfg
+        type(error_t), allocatable, intent(out) :: err
+        real(wp), allocatable :: frame(:, :)
+        integer :: k, info
+
+        k = cfg%vectors
+        if (k == 0) k = 2*cfg%n
+        call initial_frame(2*cfg%n, k, frame, info)
+        if (info /= 0) then
+            call set_error(err, "lyapunov: cannot build the initial tangent frame")
+            return
+        end if
+        call chain_set_tangent(chain, frame, orthonormalise_jumps=.true.)
+    end subroutine start_tangent
 
     !> Refuse, before anything is written, records larger than &output max_size_mb.
     subroutine check_size(cfg, err)

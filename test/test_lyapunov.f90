@@ -32,6 +32,8 @@ contains
         call finite_differences(t, 16, .true.)
         call finite_differences(t, 4, .false.)
         call finite_differences(t, 16, .false.)
+        ! a section inside the drive cycle (the map crosses the end of a cycle)
+        call finite_differences(t, 4, .true., 2.0_wp)
         call leading_vectors(t)
         call floquet_period_one(t)
         call chaotic_and_periodic(t)
@@ -110,22 +112,29 @@ contains
                    'no impacts: every exponent within 1e-4 of -b T after 2000 cycles')
     end subroutine no_impacts
 
-    !> The analytic Poincare-map Jacobian equals central differences of the one-cycle map.
-    subroutine finite_differences(t, n, walls)
+    !> The analytic Poincare-map Jacobian equals central differences of the one-cycle map,
+    !> from a section at time `section` in the cycle (default 0).
+    subroutine finite_differences(t, n, walls, section)
         type(tally_t), intent(inout) :: t
         integer, intent(in) :: n
         logical, intent(in) :: walls
+        real(wp), intent(in), optional :: section
         type(chain_t) :: chain, plus, minus
         type(error_t), allocatable :: err
         type(event_log_t) :: events
         real(wp), allocatable :: jac(:, :), fd(:, :)
-        real(wp) :: h, worst, scale
+        real(wp) :: h, worst, scale, s
         integer :: j, m, attempts
         integer(i8) :: start
         logical :: same, found
         character(len=40) :: label
 
         write (label, '(a,i0,a)') 'n = ', n, merge(' fixed', ' free ', walls)
+        s = 0
+        if (present(section)) then
+            s = section
+            label = trim(label)//' mid-cycle section'
+        end if
         ! free ends: collisions die out, so start hard and look at the first cycles
         call make_chain(chain, n, 1.7_wp, 1.5_wp, 0.05_wp, 0.7_wp, walls, 0.3_wp, &
                         merge(1.2_wp, 3.0_wp, walls), err)
@@ -135,7 +144,7 @@ contains
         start = merge(2, 0, walls)
         found = .false.
         do attempts = 1, 40
-            call advance_to_point(chain, start + attempts, 0.0_wp, events, err)
+            call advance_to_point(chain, start + attempts, s, events, err)
             call poincare_jacobian(chain, 1, jac, err)
             allocate (fd(m, m))
             same = .true.
@@ -219,15 +228,23 @@ contains
         type(chain_t) :: chain, copy
         type(error_t), allocatable :: err
         type(run_result_t) :: full, lead
+        real(wp) :: worst
+        integer :: j
 
         call make_chain(chain, 16, 1.7_wp, 1.5_wp, 0.05_wp, 0.7_wp, .true., 0.3_wp, 0.5_wp, err)
         copy = chain
         call spectrum(chain, spectrum_config(16, 100_i8, 300_i8, 0), full, err)
         call spectrum(copy, spectrum_config(16, 100_i8, 300_i8, 6), lead, err)
         call check(t, size(lead%lyapunov%bits_per_cycle) == 6, 'six leading exponents')
-        call check_close(t, maxval(abs(lead%lyapunov%bits_per_cycle - &
-                                       full%lyapunov%bits_per_cycle(1:6))), 0.0_wp, &
-                         'k leading exponents equal the first k of the full spectrum', 1.0e-10_wp)
+        ! column j of a k-frame is column j of the full frame (QR keeps nested spans), but
+        ! both lists are sorted: nearly equal exponents can trade places over a short run
+        worst = 0
+        do j = 1, 6
+            worst = max(worst, minval(abs(full%lyapunov%bits_per_cycle - &
+                                          lead%lyapunov%bits_per_cycle(j))))
+        end do
+        call check_close(t, worst, 0.0_wp, &
+                         'k leading exponents are k of the full spectrum', 1.0e-10_wp)
     end subroutine leading_vectors
 
     !> Fig. 10's chain (n = 8, K = 0.5, w = 1.9, b = 0.05) at A = 3 from rest: a period-1 state
