@@ -68,6 +68,7 @@ __all__ = [
     "IMPACT",
     "STICK",
     "RELEASE",
+    "TOUCH",
 ]
 
 IMPACT = 0
@@ -76,6 +77,9 @@ STICK = 1
 """``event_kind``: an impact that ends chatter; the oscillator then rests on the wall."""
 RELEASE = 2
 """``event_kind``: a resting oscillator leaves the wall (not a collision)."""
+TOUCH = 3
+"""``event_kind``: a contact closing slower than its gap can resolve: no impulse and no jump
+of the tangent (not a collision)."""
 
 _STATUS_OK, _STATUS_INVALID, _STATUS_FAILED, _STATUS_CAPACITY = 0, 1, 2, 3
 _MAX_N = 10_000_000  # chain_config's max_n: only used to phrase errors for n beyond int32
@@ -125,7 +129,7 @@ class Simulation:
     event_speed: NDArray[np.float64]
     """(m,) approach speed before the event, >= 0 [length/time]."""
     event_kind: NDArray[np.int32]
-    """(m,) :data:`IMPACT`, :data:`STICK` or :data:`RELEASE`."""
+    """(m,) :data:`IMPACT`, :data:`STICK`, :data:`RELEASE` or :data:`TOUCH`."""
     final_x: NDArray[np.float64]
     """(n,) displacement at the end of the run (equal to ``x[-1]``) [length]."""
     final_v: NDArray[np.float64]

@@ -40,6 +40,7 @@ __all__ = [
     "IMPACT",
     "STICK",
     "RELEASE",
+    "TOUCH",
     "SchemaError",
     "Params",
     "State",
@@ -62,6 +63,9 @@ STICK = 1
 """``/events/kind``: an impact that starts a sticking contact."""
 RELEASE = 2
 """``/events/kind``: release from a sticking contact (not a collision)."""
+TOUCH = 3
+"""``/events/kind``: a contact closing slower than its gap can resolve: no impulse (not a
+collision)."""
 
 OPTIONAL_GROUPS = ("initial", "final", "strobe", "events", "stats", "lyapunov", "sweep")
 
@@ -163,12 +167,12 @@ class Events:
     time: np.ndarray  # (n_events,)
     site: np.ndarray  # (n_events,) 0..n
     speed: np.ndarray  # (n_events,) approach speed >= 0
-    kind: np.ndarray  # (n_events,) IMPACT, STICK or RELEASE
+    kind: np.ndarray  # (n_events,) IMPACT, STICK, RELEASE or TOUCH
 
     @property
     def collisions(self) -> np.ndarray:
         """Mask of events that are collisions (impacts, including sticking ones)."""
-        return self.kind != RELEASE
+        return (self.kind == IMPACT) | (self.kind == STICK)
 
 
 @dataclass(frozen=True, eq=False)
@@ -424,8 +428,8 @@ def _read_events(g: h5py.Group, path: str, n: int) -> Events:
             f"(found {site.min()}..{site.max()})"
         )
     kind = _dataset(g, path, "kind", (m,), int)
-    if m and not np.isin(kind, (IMPACT, STICK, RELEASE)).all():
-        raise SchemaError(f"{path}: /events/kind holds values other than 0, 1, 2")
+    if m and not np.isin(kind, (IMPACT, STICK, RELEASE, TOUCH)).all():
+        raise SchemaError(f"{path}: /events/kind holds values other than 0, 1, 2, 3")
     return Events(time=time, site=site, speed=_dataset(g, path, "speed", (m,), float), kind=kind)
 
 

@@ -37,6 +37,7 @@ from numpy.typing import ArrayLike
 __all__ = ["Wave", "build_shock_waves"]
 
 RELEASE_KIND = 2
+TOUCH_KIND = 3
 
 Side = Literal["left", "right"]
 
@@ -89,7 +90,7 @@ def build_shock_waves(
     """Group collision events into left and right shock waves (rules in the module doc).
 
     ``time`` and ``site`` are the event times and sites (0..n); ``kind``, if given, drops
-    releases (kind 2). Returns the waves in order of creation (start time).
+    releases (kind 2) and touches (kind 3), which are not collisions. Returns the waves in order of creation (start time).
     """
     times, sites = _collisions(time, site, n, kind)
     if drive_period <= 0 or max_wait < 0:
@@ -134,7 +135,7 @@ def _collisions(
         kinds = np.asarray(kind).reshape(-1)
         if kinds.shape != times.shape:
             raise ValueError("kind and time differ in length")
-        keep = kinds != RELEASE_KIND
+        keep = (kinds != RELEASE_KIND) & (kinds != TOUCH_KIND)
         times, sites = times[keep], sites[keep]
     order = np.argsort(times, kind="stable")
     return times[order], sites[order]

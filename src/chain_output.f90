@@ -184,7 +184,7 @@ contains
             if (.not. allocated(err)) &
                 call create_extendible(out, 'events/kind', H5T_NATIVE_INTEGER, &
                                        '0 impact, 1 impact starting a sticking contact, '// &
-                                       '2 release', err)
+                                       '2 release, 3 touch (no impulse)', err)
             if (allocated(err)) return
             out%events_created = .true.
         end if

@@ -108,6 +108,12 @@ def test_releases_are_ignored_when_kind_is_given() -> None:
     assert [_as_pairs(w) for w in waves] == [[(0.0, 0)]]
 
 
+def test_touches_are_ignored_when_kind_is_given() -> None:
+    # a touch (kind 3) has no impulse: it neither extends nor starts a wave
+    waves = build_shock_waves([0.0, 0.1, 0.2], [0, 1, 2], 4, T, kind=[0, 3, 0])
+    assert [_as_pairs(w) for w in waves] == [[(0.0, 0)]]
+
+
 def test_single_oscillator_between_walls() -> None:
     waves = _build([(0.0, 0), (0.5, 1), (1.0, 0)], n=1)
     assert [(w.side, _as_pairs(w)) for w in waves] == [
