@@ -4,16 +4,25 @@
 !> The frame itself is carried by the engine (exact propagators between impacts, saltation
 !> matrices at impacts); this module only turns frames into numbers. Block averages of the
 !> per-step growth rates give the standard error of each exponent.
+!>
+!> The running estimates (the exponents after each QR step, for convergence plots) are kept
+!> in a buffer of at most `running_capacity` rows, whatever the length of the run: every
+!> `stride`-th step, the stride a power of two that doubles (dropping every other kept row)
+!> when the buffer is full. The result adds the last step, so its last row is the final
+!> estimate.
 module chain_lyapunov
-    use chain_kinds, only: wp
+    use chain_kinds, only: wp, i8
     use, intrinsic :: ieee_arithmetic, only: ieee_value, ieee_negative_inf, ieee_is_finite
     use chain_lapack, only: qr_orthonormalise, qr_workspace_t, general_eigenvalues
     implicit none
     private
     public :: lyapunov_acc_t, lyapunov_start, lyapunov_step, lyapunov_result_t
     public :: lyapunov_result, ky_dimension, floquet_multipliers, initial_frame
+    public :: running_capacity, running_rows
 
     integer, parameter :: max_blocks = 20
+    !> Most running estimates kept (even: a full buffer halves), 4096 x k x 8 bytes.
+    integer, parameter :: running_capacity = 4096
 
     type :: lyapunov_acc_t
         integer :: k = 0              !! number of exponents
@@ -22,7 +31,10 @@ module chain_lyapunov
         real(wp), allocatable :: total(:)        !! total(k): sum of ln|R(j,j)|
         real(wp), allocatable :: block_sum(:, :) !! block_sum(k, n_blocks)
         integer, allocatable :: block_len(:)     !! steps in each block
-        real(wp), allocatable :: running(:, :)   !! running(k, planned): total / steps so far
+        integer :: stride = 1         !! steps between kept running estimates (a power of 2)
+        integer :: rows = 0           !! running estimates kept: steps stride, 2 stride, ...
+        real(wp), allocatable :: running(:, :)   !! running(k, <= running_capacity): total /
+                                                 !! steps at steps stride, 2 stride, ...
         real(wp), allocatable :: frame(:, :)     !! the frame untransposed, for the QR
         real(wp), allocatable :: r_diag(:), growth(:) !! one QR step's
         type(qr_workspace_t) :: qr
@@ -32,7 +44,8 @@ module chain_lyapunov
         real(wp), allocatable :: bits_per_cycle(:)  !! descending
         real(wp), allocatable :: nats_per_time(:)
         real(wp), allocatable :: stderr_bits(:)     !! standard error from block means
-        real(wp), allocatable :: running_bits(:, :) !! running(k, steps), bits per cycle
+        real(wp), allocatable :: running_bits(:, :) !! running(k, rows), bits per cycle
+        integer, allocatable :: running_steps(:)    !! the QR step of each row
         real(wp) :: ky_dimension = 0
         real(wp) :: positive_sum = 0                !! bits per cycle
     end type lyapunov_result_t
@@ -48,7 +61,8 @@ contains
         acc%planned = planned_steps
         n_blocks = max(1, min(max_blocks, planned_steps))
         allocate (acc%total(k), acc%block_sum(k, n_blocks), acc%block_len(n_blocks))
-        allocate (acc%running(k, planned_steps), acc%r_diag(k), acc%growth(k))
+        allocate (acc%running(k, max(0, min(planned_steps, running_capacity))))
+        allocate (acc%r_diag(k), acc%growth(k))
         acc%total = 0
         acc%block_sum = 0
         acc%block_len = 0
@@ -84,9 +98,41 @@ contains
             b = min(n_blocks, 1 + (acc%steps - 1)*n_blocks/max(1, acc%planned))
             acc%block_sum(:, b) = acc%block_sum(:, b) + growth
             acc%block_len(b) = acc%block_len(b) + 1
-            if (acc%steps <= acc%planned) acc%running(:, acc%steps) = acc%total/acc%steps
+            if (modulo(acc%steps, acc%stride) == 0) call keep_running(acc)
         end associate
     end subroutine lyapunov_step
+
+    !> Keep the running estimate of this step (a multiple of the stride); when the buffer is
+    !> full, keep every other row and double the stride first.
+    pure subroutine keep_running(acc)
+        type(lyapunov_acc_t), intent(inout) :: acc
+        integer :: half
+
+        if (size(acc%running, 2) == 0) return
+        if (acc%rows == size(acc%running, 2)) then
+            half = acc%rows/2
+            acc%running(:, 1:half) = acc%running(:, 2:2*half:2)
+            acc%rows = half
+            acc%stride = 2*acc%stride
+            if (modulo(acc%steps, acc%stride) /= 0) return
+        end if
+        acc%rows = acc%rows + 1
+        acc%running(:, acc%rows) = acc%total/acc%steps
+    end subroutine keep_running
+
+    !> Rows of running estimates in the result of a run of `steps` QR steps: the multiples of
+    !> the final stride (the least power of two d with steps / d <= running_capacity), and the
+    !> last step when it is not one of them.
+    pure integer function running_rows(steps)
+        integer(i8), intent(in) :: steps
+        integer(i8) :: d
+
+        d = 1
+        do while (steps/d > running_capacity)
+            d = 2*d
+        end do
+        running_rows = int(steps/d) + merge(0, 1, modulo(steps, d) == 0)
+    end function running_rows
 
     !> Exponents in the paper's units (bits per drive cycle) and per unit time, sorted
     !> descending, with standard errors and the running estimates.
@@ -121,11 +167,18 @@ contains
         res%bits_per_cycle = nats(order)*to_bits
         res%nats_per_time = nats(order)/(cycles_per_step*period)
         res%stderr_bits = err(order)*to_bits
-        used = min(acc%steps, acc%planned)
-        allocate (res%running_bits(acc%k, used))
-        do j = 1, used
+        ! the kept rows, and the last step (the final estimate) if it is not one of them
+        used = acc%rows
+        if (acc%steps > acc%rows*acc%stride) used = used + 1
+        allocate (res%running_bits(acc%k, used), res%running_steps(used))
+        do j = 1, acc%rows
             res%running_bits(:, j) = acc%running(order, j)*to_bits
+            res%running_steps(j) = j*acc%stride
         end do
+        if (used > acc%rows) then
+            res%running_bits(:, used) = nats(order)*to_bits
+            res%running_steps(used) = acc%steps
+        end if
         res%ky_dimension = ky_dimension(res%bits_per_cycle)
         res%positive_sum = sum(res%bits_per_cycle, mask=res%bits_per_cycle > 0)
     end function lyapunov_result

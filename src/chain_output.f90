@@ -289,10 +289,13 @@ contains
         call write_int_1d(out, 'strobe/period', period, 'drive cycles (0 = aperiodic)', err)
     end subroutine output_periods
 
-    subroutine output_lyapunov(out, bits, per_time, stderr_bits, running_bits, ky, positive_sum, &
-                               collisions_per_cycle, err)
+    !> /lyapunov; `running_bits(k, rows)` are the running estimates at drive cycles
+    !> `running_cycle(rows)` (a bounded selection of the QR steps: chain_lyapunov).
+    subroutine output_lyapunov(out, bits, per_time, stderr_bits, running_bits, running_cycle, &
+                               ky, positive_sum, collisions_per_cycle, err)
         type(output_t), intent(inout) :: out
         real(wp), intent(in) :: bits(:), per_time(:), stderr_bits(:), running_bits(:, :)
+        integer(i8), intent(in), target, contiguous :: running_cycle(:)
         real(wp), intent(in) :: ky, positive_sum, collisions_per_cycle
         type(error_t), allocatable, intent(out) :: err
 
@@ -306,6 +309,11 @@ contains
                                                      'bits per drive cycle', err)
         if (.not. allocated(err)) call write_real_2d(out, 'lyapunov/running', running_bits, &
                                                      'bits per drive cycle', err)
+        if (.not. allocated(err)) &
+            call write_dataset(out, 'lyapunov/running_cycle', H5T_STD_I64LE, &
+                               h5kind_to_type(i8, H5_INTEGER_KIND), &
+                               [int(size(running_cycle), hsize_t)], c_loc(running_cycle), &
+                               'drive cycles', err)
         if (allocated(err)) return
         call attr_real(out, 'lyapunov', 'ky_dimension', ky, err)
         call attr_real(out, 'lyapunov', 'positive_sum', positive_sum, err)

@@ -15,7 +15,7 @@ module chain_run
     use chain_events, only: event_log_t, event_log_init, event_log_clear, event_log_append
     use chain_lyapunov, only: lyapunov_acc_t, lyapunov_start, lyapunov_step, &
                               lyapunov_result_t, lyapunov_result, floquet_multipliers, &
-                              initial_frame
+                              initial_frame, running_rows
     use chain_period, only: detect_period
     use chain_config, only: run_config_t, fmt_real
     implicit none
@@ -76,6 +76,7 @@ module chain_run
         integer, allocatable :: periods(:)         !! periods(n): 0 = aperiodic
         logical :: has_lyapunov = .false.
         type(lyapunov_result_t) :: lyapunov
+        integer(i8), allocatable :: running_cycle(:) !! drive cycle of each running estimate
         real(wp), allocatable :: jacobian(:, :)    !! jacobian(2n, 2n) of the Poincare map
         real(wp), allocatable :: multipliers_re(:), multipliers_im(:)
     end type run_result_t
@@ -249,6 +250,12 @@ contains
         if (cfg%lyapunov .and. acc%steps > 0) then
             res%has_lyapunov = .true.
             res%lyapunov = lyapunov_result(acc, cfg%qr_every, chain%flow%period)
+            allocate (res%running_cycle(size(res%lyapunov%running_steps)))
+            do i = 1, size(res%running_cycle)
+                call section_target(chain, cfg%transient, cfg%phase, &
+                                    int(res%lyapunov%running_steps(i), i8)*cfg%qr_every, &
+                                    res%running_cycle(i), target_s)
+            end do
         end if
         if (cfg%jacobian) then
             call poincare_jacobian(chain, cfg%jacobian_cycles, res%jacobian, err)
@@ -269,8 +276,9 @@ contains
 
         k = 0
         if (cfg%lyapunov) k = merge(2*cfg%n, cfg%vectors, cfg%vectors == 0)
-        mb = (16.0_wp*cfg%n + 8)*real(cfg%cycles, wp)/1.0e6_wp &
-             + 8.0_wp*k*real(cfg%cycles/cfg%qr_every, wp)/1.0e6_wp
+        ! strobe x, v, cycle; running estimates (k values and a cycle per kept row)
+        mb = (16.0_wp*cfg%n + 8)*real(cfg%cycles, wp)/1.0e6_wp
+        if (cfg%lyapunov) mb = mb + (8.0_wp*k + 8)*running_rows(cfg%cycles/cfg%qr_every)/1.0e6_wp
         if (mb > cfg%max_size_mb) then
             call set_error(err, "&output: the strobe records of this run need about "// &
                            fmt_real(mb)//" MB (n x cycles x 16 bytes, plus Lyapunov "// &

@@ -166,8 +166,8 @@ contains
         if (res%has_lyapunov) then
             associate (l => res%lyapunov)
                 call output_lyapunov(out, l%bits_per_cycle, l%nats_per_time, l%stderr_bits, &
-                                     l%running_bits, l%ky_dimension, l%positive_sum, &
-                                     res%collisions_per_cycle, err)
+                                     l%running_bits, res%running_cycle, l%ky_dimension, &
+                                     l%positive_sum, res%collisions_per_cycle, err)
             end associate
             if (allocated(err)) return
         end if
