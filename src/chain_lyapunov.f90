@@ -18,11 +18,13 @@ module chain_lyapunov
     private
     public :: lyapunov_acc_t, lyapunov_start, lyapunov_step, lyapunov_result_t
     public :: lyapunov_result, ky_dimension, floquet_multipliers, initial_frame
-    public :: running_capacity, running_rows
+    public :: running_capacity, running_rows, lyapunov_pack, lyapunov_unpack
 
     integer, parameter :: max_blocks = 20
     !> Most running estimates kept (even: a full buffer halves), 4096 x k x 8 bytes.
     integer, parameter :: running_capacity = 4096
+    !> Layout of lyapunov_pack's arrays; change it when the accumulator changes.
+    integer(i8), parameter :: pack_layout = 1
 
     type :: lyapunov_acc_t
         integer :: k = 0              !! number of exponents
@@ -67,6 +69,51 @@ contains
         acc%block_sum = 0
         acc%block_len = 0
     end subroutine lyapunov_start
+
+    !> The accumulator as two plain arrays (to save a stopped run and continue it bit for bit),
+    !> and `lyapunov_unpack` back: these two are the one place that lists its components, so a
+    !> new component is added here and nowhere else. The workspaces are not saved.
+    pure subroutine lyapunov_pack(acc, ints, reals)
+        type(lyapunov_acc_t), intent(in) :: acc
+        integer(i8), allocatable, intent(out) :: ints(:)
+        real(wp), allocatable, intent(out) :: reals(:)
+
+        ints = [pack_layout, int(acc%k, i8), int(acc%steps, i8), int(acc%planned, i8), &
+                int(acc%stride, i8), int(acc%rows, i8), int(acc%block_len, i8)]
+        reals = [acc%total, reshape(acc%block_sum, [size(acc%block_sum)]), &
+                 reshape(acc%running(:, :acc%rows), [acc%k*acc%rows])]
+    end subroutine lyapunov_pack
+
+    !> The accumulator from lyapunov_pack's arrays; info = 1 if they are not such arrays (of
+    !> this layout, consistent sizes), 0 otherwise.
+    pure subroutine lyapunov_unpack(ints, reals, acc, info)
+        integer(i8), intent(in) :: ints(:)
+        real(wp), intent(in) :: reals(:)
+        type(lyapunov_acc_t), intent(out) :: acc
+        integer, intent(out) :: info
+        integer :: k, nb, rows, p
+
+        info = 1
+        if (size(ints) < 6) return
+        if (ints(1) /= pack_layout .or. ints(2) < 1 .or. any(ints(3:4) < 0) .or. &
+            ints(5) < 1 .or. ints(6) < 0 .or. any(ints(2:6) > huge(1))) return
+        k = int(ints(2))
+        call lyapunov_start(acc, k, int(ints(4)))
+        nb = size(acc%block_len)
+        rows = int(ints(6))
+        if (size(ints) /= 6 + nb .or. rows > size(acc%running, 2)) return
+        if (size(reals) /= k*(1 + nb + rows)) return
+        acc%steps = int(ints(3))
+        acc%stride = int(ints(5))
+        acc%rows = rows
+        acc%block_len = int(ints(7:))
+        acc%total = reals(1:k)
+        p = k
+        acc%block_sum = reshape(reals(p + 1:p + k*nb), [k, nb])
+        p = p + k*nb
+        acc%running(:, :rows) = reshape(reals(p + 1:p + k*rows), [k, rows])
+        info = 0
+    end subroutine lyapunov_unpack
 
     !> Re-orthonormalise the frame (stored transposed, frame_t(k, m)) and accumulate. The frame
     !> may be the true one times 2**(-scale_bits) (the engine scales it to stay finite).

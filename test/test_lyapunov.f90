@@ -13,7 +13,8 @@ module test_lyapunov
                          poincare_jacobian, check_size
     use chain_lyapunov, only: ky_dimension, floquet_multipliers, lyapunov_acc_t, &
                               lyapunov_start, lyapunov_step, lyapunov_result_t, &
-                              lyapunov_result, running_capacity, running_rows
+                              lyapunov_result, running_capacity, running_rows, &
+                              lyapunov_pack, lyapunov_unpack
     use chain_lapack, only: qr_orthonormalise, qr_workspace_t
     use test_engine, only: make_chain
     use testing, only: tally_t, check, check_close
@@ -46,7 +47,56 @@ contains
         call running_estimates_decimated(t, 5000, 1000000)
         call running_estimates_decimated(t, 300, 300)
         call size_check_matches_storage(t)
+        call pack_round_trip(t)
     end subroutine run_lyapunov_tests
+
+    !> An accumulator packed to plain arrays and unpacked goes on exactly as the original
+    !> (a run stopped and continued); arrays of another layout are refused.
+    subroutine pack_round_trip(t)
+        type(tally_t), intent(inout) :: t
+        type(lyapunov_acc_t) :: acc, copy
+        type(lyapunov_result_t) :: a, b
+        integer(i8), allocatable :: ints(:)
+        real(wp), allocatable :: reals(:)
+        real(wp) :: frame_t(3, 3)
+        integer :: q, info
+
+        call lyapunov_start(acc, 3, 9000)
+        do q = 1, 9000
+            if (q == 5000) then
+                call lyapunov_pack(acc, ints, reals)
+                call lyapunov_unpack(ints, reals, copy, info)
+                call check(t, info == 0, 'pack: unpacked')
+            end if
+            call step(acc, q)
+            if (q >= 5000) call step(copy, q)
+        end do
+        a = lyapunov_result(acc, 1, 1.0_wp)
+        b = lyapunov_result(copy, 1, 1.0_wp)
+        call check(t, all(a%bits_per_cycle == b%bits_per_cycle) .and. &
+                   all(a%stderr_bits == b%stderr_bits) .and. &
+                   all(a%running_bits == b%running_bits) .and. &
+                   all(a%running_steps == b%running_steps), &
+                   'pack: packed, unpacked and continued = never packed, bit for bit')
+        ints(1) = ints(1) + 1
+        call lyapunov_unpack(ints, reals, copy, info)
+        call check(t, info /= 0, 'pack: arrays of another layout are refused')
+        call lyapunov_pack(acc, ints, reals)
+        call lyapunov_unpack(ints, reals(2:), copy, info)
+        call check(t, info /= 0, 'pack: arrays of the wrong size are refused')
+
+    contains
+
+        subroutine step(acc, q)
+            type(lyapunov_acc_t), intent(inout) :: acc
+            integer, intent(in) :: q
+
+            frame_t = reshape([1.0_wp + modulo(q, 7), 0.3_wp, 0.1_wp, 0.2_wp, 0.5_wp, 0.0_wp, &
+                               0.1_wp, 0.2_wp, 1.0_wp/(1 + modulo(q, 5))], [3, 3])
+            call lyapunov_step(acc, frame_t, info)
+        end subroutine step
+
+    end subroutine pack_round_trip
 
     !> The running estimates take the same memory for a run of 10^4 QR steps as for one of
     !> 10^9: the accumulator's buffer is bounded, not sized by the planned steps.
