@@ -11,7 +11,7 @@ HDF5 path                 dataclass field         shape (h5py / numpy order)
 /initial, /final          ``Run.initial/final``   ``x``, ``v`` (n,)
 /strobe                   ``Run.strobe``          ``x``, ``v`` (n_record, n); ``cycle``
 /events                   ``Run.events``          ``time``, ``site``, ... (n_events,)
-/stats                    ``Run.stats``           ``site_counts`` (n+1,)
+/stats                    ``Run.stats``           ``site_counts`` (n+1,), ``cycles_done``
 /lyapunov                 ``Run.lyapunov``        ``exponents`` (k,), ``running`` (m, k),
                                                   ``running_cycle`` (m,)
 /sweep                    ``Run.sweep``           ``x`` (n_points, cycles, n)
@@ -181,6 +181,7 @@ class Stats:
     sticks: int
     releases: int
     site_counts: np.ndarray  # (n+1,)
+    cycles_done: int | None = None  # records done (params.cycles planned); None: older file
 
 
 @dataclass(frozen=True, eq=False)
@@ -439,6 +440,8 @@ def _read_stats(g: h5py.Group, path: str, n: int) -> Stats:
         sticks=_int(_attr(g, path, "sticks"), path, "stats/sticks"),
         releases=_int(_attr(g, path, "releases"), path, "stats/releases"),
         site_counts=_dataset(g, path, "site_counts", (n + 1,), int),
+        cycles_done=_int(_dataset(g, path, "cycles_done", None, int), path,
+                         "stats/cycles_done") if "cycles_done" in g else None,
     )
 
 

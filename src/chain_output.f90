@@ -10,6 +10,7 @@
 !> ids closed on the way out of a failure cannot hide it.
 module chain_output
     use, intrinsic :: iso_c_binding, only: c_char, c_int, c_null_char, c_ptr, c_loc
+    use, intrinsic :: iso_fortran_env, only: byte => int8
     use hdf5
     use h5lt
     use chain_kinds, only: wp, i8
@@ -21,10 +22,38 @@ module chain_output
     public :: output_end, output_abort, read_final_state, output_sweep_write, output_group
     public :: schema_version, code_version, output_truncate_strobe, output_sweep_attributes
     public :: output_sweep_write_int, rename_file
+    public :: resume_data_t, output_resume, read_resume, output_inspect, output_continue
+    public :: file_absent, file_continuable, file_other_input, file_other
 
     integer, parameter :: schema_version = 1
     character(len=*), parameter :: code_version = '0.1.0'
     integer(hsize_t), parameter :: event_chunk = 65536
+
+    !> What output_inspect finds under an output file's name.
+    integer, parameter :: file_absent = 0       !! nothing
+    integer, parameter :: file_continuable = 1  !! a run stopped early, of the same input text
+    integer, parameter :: file_other_input = 2  !! a run stopped early, of another input
+    integer, parameter :: file_other = 3        !! anything else (a finished run, not ours)
+
+    !> What a run stopped early keeps for its continuation in /resume (written only while the
+    !> file is incomplete), and what the continuation reads back from /stats and /strobe. The
+    !> engine's state itself is /final (read_final_state). Plain arrays: this module knows no
+    !> other module's types.
+    type :: resume_data_t
+        integer(i8) :: cycles_done = 0       !! records done (/stats/cycles_done)
+        integer(i8) :: start_cycle = 0       !! cycle and time within it of the run's start
+        real(wp) :: start_s = 0
+        real(wp) :: last_event = 0           !! the engine's record of simultaneous impacts
+        integer :: same_instant = 0
+        logical :: has_tangent = .false.     !! with &lyapunov:
+        real(wp), allocatable :: tangent(:, :)      !! (n_vectors, 2n), as the engine keeps it
+        integer :: tangent_scale_bits = 0
+        integer(i8), allocatable :: lyapunov_int(:) !! the accumulator (lyapunov_pack)
+        real(wp), allocatable :: lyapunov_real(:)
+        integer(i8) :: impacts = 0, sticks = 0, releases = 0 !! /stats
+        integer(i8), allocatable :: site_counts(:)
+        real(wp), allocatable :: x_last(:, :), v_last(:, :) !! (n, m): the last m records
+    end type resume_data_t
 
     type :: output_t
         integer(hid_t) :: file = -1
@@ -260,10 +289,10 @@ contains
     end subroutine output_final
 
     subroutine output_stats(out, collisions_per_cycle, impacts, sticks, releases, &
-                            site_counts, err)
+                            site_counts, cycles_done, err)
         type(output_t), intent(inout) :: out
         real(wp), intent(in) :: collisions_per_cycle
-        integer(i8), intent(in) :: impacts, sticks, releases
+        integer(i8), intent(in) :: impacts, sticks, releases, cycles_done
         integer(i8), intent(in), target, contiguous :: site_counts(:)
         type(error_t), allocatable, intent(out) :: err
         integer(hsize_t) :: dims(1)
@@ -279,6 +308,9 @@ contains
         call write_dataset(out, 'stats/site_counts', H5T_STD_I64LE, &
                            h5kind_to_type(i8, H5_INTEGER_KIND), dims, c_loc(site_counts), &
                            'impacts', err)
+        ! /params/cycles is the number planned; a run stopped early did fewer
+        if (.not. allocated(err)) call write_scalar_int8(out, 'stats/cycles_done', cycles_done, &
+                                                         'drive cycles', err)
     end subroutine output_stats
 
     subroutine output_periods(out, period, err)
@@ -435,6 +467,229 @@ contains
         open (newunit=u, file=out%part_path, status='old', iostat=e)
         if (e == 0) close (u, status='delete')
     end subroutine output_abort
+
+    !> /resume of a run stopped early (see resume_data_t).
+    subroutine output_resume(out, data, err)
+        type(output_t), intent(inout) :: out
+        type(resume_data_t), intent(in), target :: data
+        type(error_t), allocatable, intent(out) :: err
+
+        call output_group(out, 'resume', err)
+        if (.not. allocated(err)) call write_scalar_int8(out, 'resume/start_cycle', &
+                                                         data%start_cycle, 'drive cycles', err)
+        if (.not. allocated(err)) call write_real_1d(out, 'resume/start_time_in_cycle', &
+                                                     [data%start_s], 'time', err)
+        if (.not. allocated(err)) call write_real_1d(out, 'resume/last_event', &
+                                                     [data%last_event], &
+                                                     'time within the drive cycle', err)
+        if (.not. allocated(err)) call write_int_1d(out, 'resume/same_instant', &
+                                                    [data%same_instant], &
+                                                    'impacts at the time of last_event', err)
+        if (allocated(err) .or. .not. data%has_tangent) return
+        call write_real_2d(out, 'resume/tangent', data%tangent, &
+                           '1 (times 2**-tangent_scale_bits)', err)
+        if (.not. allocated(err)) call write_int_1d(out, 'resume/tangent_scale_bits', &
+                                                    [data%tangent_scale_bits], '1', err)
+        if (.not. allocated(err)) &
+            call write_dataset(out, 'resume/lyapunov_int', H5T_STD_I64LE, &
+                               h5kind_to_type(i8, H5_INTEGER_KIND), &
+                               [int(size(data%lyapunov_int), hsize_t)], &
+                               c_loc(data%lyapunov_int), '1', err)
+        if (.not. allocated(err)) call write_real_1d(out, 'resume/lyapunov_real', &
+                                                     data%lyapunov_real, 'nats', err)
+    end subroutine output_resume
+
+    !> What a continuation of the run stopped early in `path` needs besides /final: /resume,
+    !> the counters of /stats, and the last min(cycles done, window) strobe records.
+    subroutine read_resume(path, n, with_tangent, window, data, err)
+        character(len=*), intent(in) :: path
+        integer, intent(in) :: n, window
+        logical, intent(in) :: with_tangent
+        type(resume_data_t), intent(out), target :: data
+        type(error_t), allocatable, intent(out) :: err
+        type(output_t) :: src
+        integer(hsize_t), allocatable :: dims(:)
+        integer :: scalar(1), m
+
+        call open_for_reading(path, '&output', src, err)
+        if (allocated(err)) return
+        allocate (data%site_counts(n + 1))
+        call read_int8_scalar(src, 'stats/cycles_done', data%cycles_done, err)
+        call read_attr_int8(src, 'stats', 'impacts', data%impacts, err)
+        call read_attr_int8(src, 'stats', 'sticks', data%sticks, err)
+        call read_attr_int8(src, 'stats', 'releases', data%releases, err)
+        call read_dataset(src, 'stats/site_counts', h5kind_to_type(i8, H5_INTEGER_KIND), &
+                          [int(n + 1, hsize_t)], c_loc(data%site_counts), err)
+        call read_int8_scalar(src, 'resume/start_cycle', data%start_cycle, err)
+        call read_real_scalar(src, 'resume/start_time_in_cycle', data%start_s, err)
+        call read_real_scalar(src, 'resume/last_event', data%last_event, err)
+        call read_int_1d(src, 'resume/same_instant', scalar, err)
+        data%same_instant = scalar(1)
+        data%has_tangent = with_tangent
+        if (with_tangent) then
+            call read_real_2d(src, 'resume/tangent', data%tangent, err)
+            call read_int_1d(src, 'resume/tangent_scale_bits', scalar, err)
+            data%tangent_scale_bits = scalar(1)
+            call dataset_extent(src, 'resume/lyapunov_int', dims, err)
+            if (.not. allocated(err)) then
+                allocate (data%lyapunov_int(product(dims)))
+                call read_dataset(src, 'resume/lyapunov_int', &
+                                  h5kind_to_type(i8, H5_INTEGER_KIND), dims, &
+                                  c_loc(data%lyapunov_int), err)
+            end if
+            call dataset_extent(src, 'resume/lyapunov_real', dims, err)
+            if (.not. allocated(err)) then
+                allocate (data%lyapunov_real(product(dims)))
+                call read_real_1d(src, 'resume/lyapunov_real', data%lyapunov_real, err)
+            end if
+        end if
+        if (.not. allocated(err)) then
+            m = int(min(data%cycles_done, int(window, i8)))
+            if (data%cycles_done < 1) call set_error(err, "hdf5: /stats/cycles_done = "// &
+                                                     fmt_int8(data%cycles_done)// &
+                                                     " is not a stopped run's (file "// &
+                                                     path//")")
+        end if
+        if (.not. allocated(err)) then
+            allocate (data%x_last(n, m), data%v_last(n, m))
+            call read_slab(src, 'strobe/x', [0_hsize_t, int(data%cycles_done - m, hsize_t)], &
+                           [int(n, hsize_t), int(m, hsize_t)], c_loc(data%x_last), err)
+            call read_slab(src, 'strobe/v', [0_hsize_t, int(data%cycles_done - m, hsize_t)], &
+                           [int(n, hsize_t), int(m, hsize_t)], c_loc(data%v_last), err)
+        end if
+        if (allocated(err)) then
+            if (err%message(1:5) == 'hdf5:') err%message = "&output: cannot continue the "// &
+                                                          "run stopped early in '"//path// &
+                                                          "': "//err%message
+        end if
+        call close_file(src, err)
+    end subroutine read_resume
+
+    !> What is under an output file's name (file_absent, file_continuable, ...), for a run of
+    !> `input_text` about to write there. Anything unreadable is file_other.
+    subroutine output_inspect(path, input_text, kind)
+        character(len=*), intent(in) :: path, input_text
+        integer, intent(out) :: kind
+        type(output_t) :: src
+        type(error_t), allocatable :: err
+        integer(i8) :: complete
+        character(len=:), allocatable :: text
+        logical :: exists
+
+        inquire (file=path, exist=exists)
+        kind = merge(file_other, file_absent, exists)
+        if (.not. exists) return
+        call open_for_reading(path, '&output', src, err)
+        if (allocated(err)) return
+        call read_attr_int8(src, '/', 'complete', complete, err)
+        call link_exists(src%file, path, 'resume', exists, err)
+        call read_attr_string(src, '/', 'input_namelist', text, err)
+        if (.not. allocated(err) .and. complete == 0 .and. exists) then
+            ! (trailing blanks of the text are not stored)
+            kind = merge(file_continuable, file_other_input, text == input_text)
+        end if
+        call close_file(src, err)
+    end subroutine output_inspect
+
+    !> Reopen the run stopped early in `path` to continue it: a copy `path.part` (the file
+    !> under the final name stays as it is until the continuation ends), without the results
+    !> that the end of the run writes again (/final, /stats, /lyapunov, /floquet, /resume,
+    !> /strobe/period), with /strobe back at `n_records` records.
+    subroutine output_continue(out, path, n, n_records, err)
+        type(output_t), intent(out) :: out
+        character(len=*), intent(in) :: path
+        integer, intent(in) :: n
+        integer(i8), intent(in) :: n_records
+        type(error_t), allocatable, intent(out) :: err
+        character(len=14), parameter :: results(6) = [character(len=14) :: 'final', 'stats', &
+                                                      'lyapunov', 'floquet', 'resume', &
+                                                      'strobe/period']
+        integer(hsize_t), allocatable :: dims(:)
+        integer :: j, e
+        logical :: exists
+
+        out%path = path
+        out%part_path = path//'.part'
+        out%n = n
+        call copy_file(path, out%part_path, err)
+        if (allocated(err)) return
+        call open_library(out%part_path, err)
+        if (.not. allocated(err)) then
+            call h5fopen_f(out%part_path, H5F_ACC_RDWR_F, out%file, e)
+            call check(e, 'h5fopen_f', '/', out%part_path, err)
+            if (allocated(err)) out%file = -1
+        end if
+        do j = 1, size(results)
+            call link_exists(out%file, out%part_path, trim(results(j)), exists, err)
+            if (allocated(err)) exit
+            if (.not. exists) cycle
+            call h5ldelete_f(out%file, trim(results(j)), e)
+            call check(e, 'h5ldelete_f', '/'//trim(results(j)), out%part_path, err)
+        end do
+        if (.not. allocated(err)) call set_extent(out, 'strobe/x', &
+                                                  [int(n, hsize_t), int(n_records, hsize_t)], err)
+        if (.not. allocated(err)) call set_extent(out, 'strobe/v', &
+                                                  [int(n, hsize_t), int(n_records, hsize_t)], err)
+        if (.not. allocated(err)) call set_extent(out, 'strobe/cycle', &
+                                                  [int(n_records, hsize_t)], err)
+        if (.not. allocated(err)) call link_exists(out%file, out%part_path, 'events', &
+                                                   out%events_created, err)
+        if (.not. allocated(err) .and. out%events_created) then
+            call dataset_extent(out, 'events/time', dims, err)
+            if (.not. allocated(err)) out%n_events = int(dims(1), i8)
+        end if
+        if (allocated(err)) call output_abort(out)
+    end subroutine output_continue
+
+    !> A byte-for-byte copy of a file (the new one checked for its full size).
+    subroutine copy_file(from, to, err)
+        character(len=*), intent(in) :: from, to
+        type(error_t), allocatable, intent(out) :: err
+        integer, parameter :: chunk = 4*1024*1024
+        integer(byte), allocatable :: buf(:)
+        integer(i8) :: total, done, copied
+        character(len=256) :: msg
+        integer :: ui, uo, ios, m
+
+        msg = ''
+        open (newunit=ui, file=from, access='stream', form='unformatted', status='old', &
+              action='read', iostat=ios, iomsg=msg)
+        if (ios /= 0) then
+            call set_error(err, "output: cannot read '"//from//"' ("//trim(msg)//")")
+            return
+        end if
+        inquire (unit=ui, size=total)
+        open (newunit=uo, file=to, access='stream', form='unformatted', status='replace', &
+              action='write', iostat=ios, iomsg=msg)
+        if (ios /= 0) then
+            close (ui)
+            call set_error(err, "output: cannot create '"//to//"' ("//trim(msg)//")")
+            return
+        end if
+        allocate (buf(chunk))
+        done = 0
+        do while (done < total .and. ios == 0)
+            m = int(min(int(chunk, i8), total - done))
+            read (ui, iostat=ios, iomsg=msg) buf(:m)
+            if (ios == 0) write (uo, iostat=ios, iomsg=msg) buf(:m)
+            done = done + m
+        end do
+        close (ui)
+        if (ios == 0) then
+            close (uo, iostat=ios, iomsg=msg)
+        else
+            close (uo)
+        end if
+        copied = -1
+        if (ios == 0) inquire (file=to, size=copied)
+        if (ios /= 0 .or. copied /= total) then
+            if (ios == 0) msg = 'the copy is short: is the disk full?'
+            open (newunit=uo, file=to, status='old', iostat=m)
+            if (m == 0) close (uo, status='delete')
+            call set_error(err, "output: cannot copy '"//from//"' to '"//to//"' ("// &
+                           trim(msg)//")")
+        end if
+    end subroutine copy_file
 
     !> The final state of an earlier run, to continue from it.
     subroutine read_final_state(path, n, x, v, cycle, phase, contact, queue_time, &
@@ -638,6 +893,85 @@ contains
         text = text//')'
     end function dims_text
 
+    !> Extents of dataset `name` (Fortran order).
+    subroutine dataset_extent(src, name, dims, err)
+        type(output_t), intent(in) :: src
+        character(len=*), intent(in) :: name
+        integer(hsize_t), allocatable, intent(out) :: dims(:)
+        type(error_t), allocatable, intent(inout) :: err
+        integer(hid_t) :: dset
+        integer :: e
+
+        allocate (dims(0))
+        if (allocated(err)) return
+        call h5dopen_f(src%file, name, dset, e)
+        call check(e, 'h5dopen_f', '/'//name, src%part_path, err)
+        if (allocated(err)) return
+        call dataset_dims(src, dset, name, dims, err)
+        call h5dclose_f(dset, e)
+        call check(e, 'h5dclose_f', '/'//name, src%part_path, err)
+    end subroutine dataset_extent
+
+    !> A 2-D real dataset, whatever its extents.
+    subroutine read_real_2d(src, name, values, err)
+        type(output_t), intent(in) :: src
+        character(len=*), intent(in) :: name
+        real(wp), allocatable, target, intent(out) :: values(:, :)
+        type(error_t), allocatable, intent(inout) :: err
+        integer(hsize_t), allocatable :: dims(:)
+
+        allocate (values(0, 0))
+        call dataset_extent(src, name, dims, err)
+        if (allocated(err)) return
+        if (size(dims) /= 2) then
+            call set_error(err, "hdf5: /"//name//" has shape "//dims_text(dims)// &
+                           ", expected two axes (file "//src%part_path//")")
+            return
+        end if
+        deallocate (values)
+        allocate (values(dims(1), dims(2)))
+        call read_dataset(src, name, H5T_NATIVE_DOUBLE, dims, c_loc(values), err)
+    end subroutine read_real_2d
+
+    !> Read the hyperslab offset/block of a real dataset into `buf`.
+    subroutine read_slab(src, name, offset, block, buf, err)
+        type(output_t), intent(in) :: src
+        character(len=*), intent(in) :: name
+        integer(hsize_t), intent(in) :: offset(:), block(:)
+        type(c_ptr), intent(in) :: buf
+        type(error_t), allocatable, intent(inout) :: err
+        integer(hid_t) :: dset, fspace, mspace
+        integer :: e
+        type(c_ptr) :: target_buf ! (h5dread_f wants a definable pointer)
+
+        if (allocated(err)) return
+        call h5dopen_f(src%file, name, dset, e)
+        call check(e, 'h5dopen_f', '/'//name, src%part_path, err)
+        if (allocated(err)) return
+        call h5dget_space_f(dset, fspace, e)
+        call check(e, 'h5dget_space_f', '/'//name, src%part_path, err)
+        if (.not. allocated(err)) then
+            call h5sselect_hyperslab_f(fspace, H5S_SELECT_SET_F, offset, block, e)
+            call check(e, 'h5sselect_hyperslab_f', '/'//name, src%part_path, err)
+            if (.not. allocated(err)) then
+                call h5screate_simple_f(size(block), block, mspace, e)
+                call check(e, 'h5screate_simple_f', '/'//name, src%part_path, err)
+                if (.not. allocated(err)) then
+                    target_buf = buf
+                    call h5dread_f(dset, H5T_NATIVE_DOUBLE, target_buf, e, mem_space_id=mspace, &
+                                   file_space_id=fspace)
+                    call check(e, 'h5dread_f', '/'//name, src%part_path, err)
+                    call h5sclose_f(mspace, e)
+                    call check(e, 'h5sclose_f', '/'//name, src%part_path, err)
+                end if
+            end if
+            call h5sclose_f(fspace, e)
+            call check(e, 'h5sclose_f', '/'//name, src%part_path, err)
+        end if
+        call h5dclose_f(dset, e)
+        call check(e, 'h5dclose_f', '/'//name, src%part_path, err)
+    end subroutine read_slab
+
     subroutine read_real_1d(src, name, values, err)
         type(output_t), intent(in) :: src
         character(len=*), intent(in) :: name
@@ -742,7 +1076,8 @@ contains
         call read_attr(src, obj, name, H5T_NATIVE_DOUBLE, c_loc(value), err)
     end subroutine read_attr_real
 
-    !> A string attribute, without the terminating NULs the writer adds.
+    !> A string attribute, without the terminating NUL or the blanks that the Fortran layer of
+    !> HDF5 pads it with (it also drops trailing blanks when it writes one).
     subroutine read_attr_string(src, obj, name, text, err)
         type(output_t), intent(in) :: src
         character(len=*), intent(in) :: obj, name
@@ -776,6 +1111,7 @@ contains
         end if
         length = index(text, c_null_char) - 1
         if (length >= 0) text = text(:length)
+        text = trim(text)
     end subroutine read_attr_string
 
     ! ---- writing ---------------------------------------------------------------------------

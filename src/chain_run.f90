@@ -22,7 +22,7 @@ module chain_run
     private
     public :: record_sink_t, memory_sink_t, run_result_t, record_run, progress_callback
     public :: section_target, advance_to_point, poincare_jacobian, check_size
-    public :: period_window
+    public :: period_window, run_state_t, set_window
 
     integer, parameter :: event_flush = 65536
 
@@ -67,8 +67,18 @@ module chain_run
         procedure :: put_events => memory_put_events
     end type memory_sink_t
 
+    !> Where record_run stands after a record, beyond the chain itself (which is then at that
+    !> record, synced): with both, a stopped run continues bit for bit.
+    type :: run_state_t
+        integer(i8) :: cycles_done = 0            !! records done
+        type(lyapunov_acc_t) :: acc               !! with &lyapunov
+        real(wp), allocatable :: xwin(:, :), vwin(:, :) !! (n, window): the last records, a
+                                                  !! ring (record j at modulo(j - 1, window) + 1)
+    end type run_state_t
+
     type :: run_result_t
         integer(i8) :: cycles_done = 0
+        integer(i8) :: cycles_continued = 0      !! records done before (a continued run)
         logical :: complete = .false.
         real(wp) :: collisions_per_cycle = 0
         integer(i8) :: impacts = 0, sticks = 0, releases = 0
@@ -158,48 +168,60 @@ contains
 
     !> Transient, then `cfg%cycles` recorded cycles sent to `sink`; the chain ends in the final
     !> state. Summary numbers, periods, spectrum and Jacobian come back in `res`.
-    subroutine record_run(cfg, chain, sink, res, err, progress)
+    !>
+    !> With `state` of a stopped run (cycles_done > 0, the chain at that record with its
+    !> counters and tangent frame) the run continues after that record instead; `state` comes
+    !> back as the run ends, for a later continuation.
+    subroutine record_run(cfg, chain, sink, res, err, progress, state)
         type(run_config_t), intent(in) :: cfg
         type(chain_t), intent(inout) :: chain
         class(record_sink_t), intent(inout) :: sink
         type(run_result_t), intent(out) :: res
         type(error_t), allocatable, intent(out) :: err
         procedure(progress_callback), optional :: progress
+        type(run_state_t), intent(inout), optional :: state
         type(event_log_t) :: log
-        type(lyapunov_acc_t) :: acc
-        real(wp), allocatable :: xbuf(:, :), vbuf(:, :), xwin(:, :), vwin(:, :), frame(:, :)
+        type(run_state_t) :: st
+        real(wp), allocatable :: xbuf(:, :), vbuf(:, :), frame(:, :)
         integer(i8), allocatable :: cbuf(:)
         integer(i8) :: j, target_cycle, first
         real(wp) :: target_s
         integer :: m, k, info, i, nwin, w
         logical :: stop_now
 
-        call event_log_init(log, .false., 0)
-        call section_target(chain, cfg%transient, cfg%phase, 0_i8, target_cycle, target_s)
-        call advance_to_point(chain, target_cycle, target_s, log, err)
-        if (allocated(err)) return
-        call event_log_init(log, cfg%record_events, 1024)
-        chain%impacts = 0
-        chain%sticks = 0
-        chain%releases = 0
-        chain%site_counts = 0
-        if (cfg%lyapunov) then
-            k = cfg%vectors
-            if (k == 0) k = 2*cfg%n
-            call initial_frame(2*cfg%n, k, frame, info)
-            if (info /= 0) then
-                call set_error(err, "lyapunov: cannot build the initial tangent frame")
-                return
-            end if
-            call chain_set_tangent(chain, frame)
-            call lyapunov_start(acc, k, int(cfg%cycles/cfg%qr_every))
-        end if
-        m = int(max(1_i8, min(cfg%cycles, int(2**20/cfg%n, i8))))
-        allocate (xbuf(cfg%n, m), vbuf(cfg%n, m), cbuf(m))
         nwin = int(min(cfg%cycles, int(period_window(cfg%max_period), i8)))
-        allocate (xwin(cfg%n, nwin), vwin(cfg%n, nwin))
-        first = 1
-        do j = 1, cfg%cycles
+        if (present(state)) then
+            if (state%cycles_done > 0) call move_state(state, st)
+        end if
+        if (st%cycles_done == 0) then
+            call event_log_init(log, .false., 0)
+            call section_target(chain, cfg%transient, cfg%phase, 0_i8, target_cycle, target_s)
+            call advance_to_point(chain, target_cycle, target_s, log, err)
+            if (allocated(err)) return
+            chain%impacts = 0
+            chain%sticks = 0
+            chain%releases = 0
+            chain%site_counts = 0
+            if (cfg%lyapunov) then
+                k = cfg%vectors
+                if (k == 0) k = 2*cfg%n
+                call initial_frame(2*cfg%n, k, frame, info)
+                if (info /= 0) then
+                    call set_error(err, "lyapunov: cannot build the initial tangent frame")
+                    return
+                end if
+                call chain_set_tangent(chain, frame)
+                call lyapunov_start(st%acc, k, int(cfg%cycles/cfg%qr_every))
+            end if
+            allocate (st%xwin(cfg%n, nwin), st%vwin(cfg%n, nwin))
+        end if
+        call event_log_init(log, cfg%record_events, 1024)
+        res%cycles_continued = st%cycles_done
+        res%cycles_done = st%cycles_done
+        m = int(max(1_i8, min(cfg%cycles - st%cycles_done, int(2**20/cfg%n, i8))))
+        allocate (xbuf(cfg%n, m), vbuf(cfg%n, m), cbuf(m))
+        first = st%cycles_done + 1
+        do j = st%cycles_done + 1, cfg%cycles
             call section_target(chain, cfg%transient, cfg%phase, j, target_cycle, target_s)
             call advance_to_point(chain, target_cycle, target_s, log, err)
             if (allocated(err)) return
@@ -208,10 +230,10 @@ contains
             vbuf(:, i) = chain%v
             cbuf(i) = chain%cycle
             w = int(modulo(j - 1, int(nwin, i8))) + 1
-            xwin(:, w) = chain%x
-            vwin(:, w) = chain%v
+            st%xwin(:, w) = chain%x
+            st%vwin(:, w) = chain%v
             if (cfg%lyapunov .and. modulo(j, int(cfg%qr_every, i8)) == 0) then
-                call lyapunov_step(acc, chain%tangent, info, chain%tangent_scale_bits)
+                call lyapunov_step(st%acc, chain%tangent, info, chain%tangent_scale_bits)
                 chain%tangent_scale_bits = 0
                 if (info /= 0) then
                     call set_error(err, "lyapunov: QR factorisation failed (LAPACK info "// &
@@ -220,6 +242,7 @@ contains
                 end if
             end if
             res%cycles_done = j
+            st%cycles_done = j
             stop_now = .false.
             if (present(progress)) stop_now = .not. progress(j, cfg%cycles)
             if (i == m .or. j == cfg%cycles .or. log%count >= event_flush .or. stop_now) then
@@ -242,14 +265,14 @@ contains
         res%periods = 0
         if (nwin > 0) then
             do i = 1, cfg%n
-                res%periods(i) = detect_period(in_order(xwin(i, :), res%cycles_done, nwin), &
-                                               in_order(vwin(i, :), res%cycles_done, nwin), &
+                res%periods(i) = detect_period(in_order(st%xwin(i, :), res%cycles_done, nwin), &
+                                               in_order(st%vwin(i, :), res%cycles_done, nwin), &
                                                cfg%max_period, cfg%period_tol)
             end do
         end if
-        if (cfg%lyapunov .and. acc%steps > 0) then
+        if (cfg%lyapunov .and. st%acc%steps > 0) then
             res%has_lyapunov = .true.
-            res%lyapunov = lyapunov_result(acc, cfg%qr_every, chain%flow%period)
+            res%lyapunov = lyapunov_result(st%acc, cfg%qr_every, chain%flow%period)
             allocate (res%running_cycle(size(res%lyapunov%running_steps)))
             do i = 1, size(res%running_cycle)
                 call section_target(chain, cfg%transient, cfg%phase, &
@@ -265,7 +288,41 @@ contains
             if (info /= 0) call set_error(err, "floquet: the eigenvalue solver (LAPACK dgeev) "// &
                                           "failed")
         end if
+        if (present(state)) call move_state(st, state)
     end subroutine record_run
+
+    !> Hand a run state over without copying its arrays.
+    subroutine move_state(from, to)
+        type(run_state_t), intent(inout) :: from, to
+
+        to%cycles_done = from%cycles_done
+        call move_alloc(from%xwin, to%xwin)
+        call move_alloc(from%vwin, to%vwin)
+        to%acc = from%acc
+    end subroutine move_state
+
+    !> The period-detection ring of `state` from the last records before a continuation:
+    !> x(:, i), v(:, i) are records cycles_done - size(x, 2) + i (the ring keeps the last
+    !> window of them, as record_run would have).
+    subroutine set_window(cfg, state, x, v)
+        type(run_config_t), intent(in) :: cfg
+        type(run_state_t), intent(inout) :: state
+        real(wp), intent(in) :: x(:, :), v(:, :)
+        integer(i8) :: j
+        integer :: nwin, w, i
+
+        nwin = int(min(cfg%cycles, int(period_window(cfg%max_period), i8)))
+        if (allocated(state%xwin)) deallocate (state%xwin, state%vwin)
+        allocate (state%xwin(cfg%n, nwin), state%vwin(cfg%n, nwin))
+        state%xwin = 0
+        state%vwin = 0
+        do i = max(1, size(x, 2) - nwin + 1), size(x, 2)
+            j = state%cycles_done - size(x, 2) + i
+            w = int(modulo(j - 1, int(nwin, i8))) + 1
+            state%xwin(:, w) = x(:, i)
+            state%vwin(:, w) = v(:, i)
+        end do
+    end subroutine set_window
 
     !> Refuse, before anything is written, records larger than &output max_size_mb.
     subroutine check_size(cfg, err)
