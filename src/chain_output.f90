@@ -136,9 +136,10 @@ contains
         type(output_t), intent(inout) :: out
         character(len=*), intent(in) :: input_text, summary, boundary
         integer, intent(in) :: n
-        real(wp), intent(in) :: spacing(:), damping, restitution, amplitude, omega, period, phase
+        real(wp), intent(in) :: damping, restitution, amplitude, omega, period, phase
+        real(wp), intent(in), contiguous :: spacing(:)
         integer(i8), intent(in) :: transient, cycles
-        real(wp), intent(in) :: x0(:), v0(:)
+        real(wp), intent(in), contiguous :: x0(:), v0(:)
         type(error_t), allocatable, intent(out) :: err
 
         out%n = n
@@ -264,9 +265,10 @@ contains
     subroutine output_final(out, x, v, cycle, phase, time_in_cycle, contact, queue_time, &
                             queue_action, err)
         type(output_t), intent(inout) :: out
-        real(wp), intent(in) :: x(:), v(:), phase, time_in_cycle, queue_time(:)
+        real(wp), intent(in), contiguous :: x(:), v(:), queue_time(:)
+        real(wp), intent(in) :: phase, time_in_cycle
         integer(i8), intent(in) :: cycle
-        integer, intent(in) :: contact(:), queue_action(:)
+        integer, intent(in), contiguous :: contact(:), queue_action(:)
         type(error_t), allocatable, intent(out) :: err
 
         call output_group(out, 'final', err)
@@ -315,7 +317,7 @@ contains
 
     subroutine output_periods(out, period, err)
         type(output_t), intent(inout) :: out
-        integer, intent(in) :: period(:)
+        integer, intent(in), contiguous :: period(:)
         type(error_t), allocatable, intent(out) :: err
 
         call write_int_1d(out, 'strobe/period', period, 'drive cycles (0 = aperiodic)', err)
@@ -326,7 +328,8 @@ contains
     subroutine output_lyapunov(out, bits, per_time, stderr_bits, running_bits, running_cycle, &
                                ky, positive_sum, collisions_per_cycle, err)
         type(output_t), intent(inout) :: out
-        real(wp), intent(in) :: bits(:), per_time(:), stderr_bits(:), running_bits(:, :)
+        real(wp), intent(in), contiguous :: bits(:), per_time(:), stderr_bits(:)
+        real(wp), intent(in), contiguous :: running_bits(:, :)
         integer(i8), intent(in), target, contiguous :: running_cycle(:)
         real(wp), intent(in) :: ky, positive_sum, collisions_per_cycle
         type(error_t), allocatable, intent(out) :: err
@@ -354,13 +357,16 @@ contains
 
     subroutine output_jacobian(out, jacobian, re, im, cycles, err)
         type(output_t), intent(inout) :: out
-        real(wp), intent(in) :: jacobian(:, :), re(:), im(:)
+        real(wp), intent(in) :: jacobian(:, :)
+        real(wp), intent(in), contiguous :: re(:), im(:)
         integer, intent(in) :: cycles
         type(error_t), allocatable, intent(out) :: err
+        real(wp), allocatable :: stored(:, :)
 
+        ! rows of the Jacobian are rows in h5py
+        stored = transpose(jacobian)
         call output_group(out, 'floquet', err)
-        if (.not. allocated(err)) call write_real_2d(out, 'floquet/jacobian', &
-                                                     transpose(jacobian), '1', err)
+        if (.not. allocated(err)) call write_real_2d(out, 'floquet/jacobian', stored, '1', err)
         if (.not. allocated(err)) call write_real_1d(out, 'floquet/multipliers_re', re, &
                                                      '1', err)
         if (.not. allocated(err)) call write_real_1d(out, 'floquet/multipliers_im', im, &
