@@ -291,7 +291,7 @@ contains
         if (present(state)) call move_state(st, state)
     end subroutine record_run
 
-    !> Hand a run state over without copying its arrays.
+    !> Hand a run state over (the windows moved, the accumulator, of bounded size, copied).
     subroutine move_state(from, to)
         type(run_state_t), intent(inout) :: from, to
 
