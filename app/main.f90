@@ -1,8 +1,9 @@
 !> impactchain command line: `impactchain [--quiet] input.nml`. Parses arguments, runs the
 !> library, reports progress and errors, and sets the exit code. No physics here.
 !> SIGINT / SIGTERM ask a running simulation to stop at the next strobe record; the file is
-!> then closed cleanly and marked complete = 0. A signal handler can only talk through a flag
-!> that outlives every call, hence the one piece of module state in the project.
+!> then closed cleanly and marked complete = 0, and the same command continues it. A signal
+!> handler can only talk through a flag that outlives every call, hence the one piece of
+!> module state in the project.
 module interrupt_flag
     use, intrinsic :: iso_c_binding, only: c_int, c_funptr, c_funloc
     implicit none
@@ -57,6 +58,7 @@ program main
     character(len=:), allocatable :: input
     logical :: quiet
     integer(int64) :: clock_start, clock_last, clock_rate
+    integer(i8) :: done_at_start = -1 !! records already done when this command started
 
     call parse_arguments(input, quiet)
     call read_config(input, cfg, err)
@@ -133,6 +135,7 @@ contains
         real(wp) :: elapsed, rate
 
         keep_going = .not. interrupted()
+        if (done_at_start < 0) done_at_start = done - 1
         if (quiet) return
         call system_clock(now)
         if (now - clock_last < clock_rate .and. done < total) return
@@ -140,7 +143,7 @@ contains
         if (elapsed < 2 .and. done < total) return
         if (elapsed < 2) return
         clock_last = now
-        rate = done/max(elapsed, 1.0e-9_wp)
+        rate = (done - done_at_start)/max(elapsed, 1.0e-9_wp)
         write (error_unit, '(a,i0,a,i0,a,es9.2,a,f9.1,a)') 'impactchain: '//unit_label//' ', &
             done, ' / ', total, ', ', rate, ' '//unit_label//'s/s, ', &
             (total - done)/max(rate, 1.0e-9_wp), ' s left'
@@ -151,6 +154,8 @@ contains
         character(len=*), intent(in) :: output_file
 
         write (output_unit, '(a)') 'impactchain: wrote '//output_file
+        if (summary%cycles_continued > 0) write (output_unit, '(a,i0,a)') &
+            '  continued a run stopped early after ', summary%cycles_continued, ' records'
         write (output_unit, '(a,i0,a,f0.4,a,i0,a,i0,a)') '  cycles recorded ', &
             summary%cycles_done, ', collisions per cycle ', summary%collisions_per_cycle, &
             ', sticking contacts ', summary%sticks, ', releases ', summary%releases, ''
@@ -159,7 +164,7 @@ contains
             ' bits/cycle, Kaplan-Yorke dimension ', summary%lyapunov%ky_dimension
         if (.not. summary%complete) write (error_unit, '(a)') &
             'impactchain: the run was stopped early; the file holds the finished records '// &
-            'and is marked complete = 0'
+            'and is marked complete = 0; run the same command again to continue it'
     end subroutine report
 
     subroutine report_sweep(summary, output_file)

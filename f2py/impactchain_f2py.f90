@@ -57,7 +57,7 @@ subroutine ic_run(n, nsp, spacing, damping, restitution, amplitude, omega, nb, b
     integer(c_int64_t), intent(out), target :: cycle(nc)
     real(c_double), intent(out) :: final_x(nf), final_v(nf)
     integer(c_int), intent(out) :: periods(nf)
-    integer(c_int64_t), intent(out) :: site_counts(nf + 1), counts(3), nev
+    integer(c_int64_t), intent(out) :: site_counts(nf + 1), counts(4), nev
     real(c_double), intent(out) :: collisions_per_cycle, ky
     real(c_double), intent(out), target :: ev_time(ncap), ev_speed(ncap)
     integer(c_int), intent(out), target :: ev_site(ncap), ev_kind(ncap)
@@ -132,7 +132,7 @@ subroutine ic_run(n, nsp, spacing, damping, restitution, amplitude, omega, nb, b
     final_v = chain%v
     periods = res%periods
     site_counts = res%site_counts
-    counts = [res%impacts, res%sticks, res%releases]
+    counts = [res%impacts, res%sticks, res%releases, res%touches]
     collisions_per_cycle = res%collisions_per_cycle
     nev = sink%n_events
     if (res%has_lyapunov) then

@@ -145,6 +145,8 @@ class Simulation:
     """Impacts that ended in a sticking contact."""
     releases: int
     """Sticking contacts that let go."""
+    touches: int
+    """Contacts closing slower than their gap can resolve (no impulse; not impacts)."""
     collisions_per_cycle: float
     """Impacts per recorded drive cycle."""
     drive_period: float
@@ -260,6 +262,7 @@ def simulate(
         impacts=int(counts[0]),
         sticks=int(counts[1]),
         releases=int(counts[2]),
+        touches=int(counts[3]),
         collisions_per_cycle=float(out["collisions_per_cycle"]),
         drive_period=2 * np.pi / cfg["omega"],
         phase=cfg["phase"],

@@ -456,6 +456,8 @@ def spectrum(run: Run) -> Figure:
 
 def _running_axis(run: Run) -> tuple[np.ndarray, str]:
     assert run.lyapunov is not None
+    if run.lyapunov.running_cycle is not None:
+        return run.lyapunov.running_cycle, "cycle"
     m = run.lyapunov.running.shape[0]
     if run.strobe is not None and run.strobe.cycle.size == m:
         return run.strobe.cycle, "cycle"

@@ -11,8 +11,9 @@ HDF5 path                 dataclass field         shape (h5py / numpy order)
 /initial, /final          ``Run.initial/final``   ``x``, ``v`` (n,)
 /strobe                   ``Run.strobe``          ``x``, ``v`` (n_record, n); ``cycle``
 /events                   ``Run.events``          ``time``, ``site``, ... (n_events,)
-/stats                    ``Run.stats``           ``site_counts`` (n+1,)
-/lyapunov                 ``Run.lyapunov``        ``exponents`` (k,), ``running`` (m, k)
+/stats                    ``Run.stats``           ``site_counts`` (n+1,), ``cycles_done``
+/lyapunov                 ``Run.lyapunov``        ``exponents`` (k,), ``running`` (m, k),
+                                                  ``running_cycle`` (m,)
 /sweep                    ``Run.sweep``           ``x`` (n_points, cycles, n)
 ========================  ======================  ===================================
 
@@ -184,6 +185,8 @@ class Stats:
     sticks: int
     releases: int
     site_counts: np.ndarray  # (n+1,)
+    cycles_done: int | None = None  # records done (params.cycles planned); None: older file
+    touches: int | None = None  # contacts without impulse (kind TOUCH); None: older file
 
 
 @dataclass(frozen=True, eq=False)
@@ -193,10 +196,11 @@ class Lyapunov:
     exponents: np.ndarray  # (k,) bits/cycle
     exponents_per_time: np.ndarray  # (k,) nats/time
     stderr: np.ndarray  # (k,) bits/cycle
-    running: np.ndarray  # (n_record, k) bits/cycle
+    running: np.ndarray  # (m, k) bits/cycle, a bounded selection of the QR steps
     ky_dimension: float
     positive_sum: float
     collisions_per_cycle: float
+    running_cycle: np.ndarray | None = None  # (m,) drive cycle of each running row
 
 
 @dataclass(frozen=True, eq=False)
@@ -441,21 +445,28 @@ def _read_stats(g: h5py.Group, path: str, n: int) -> Stats:
         sticks=_int(_attr(g, path, "sticks"), path, "stats/sticks"),
         releases=_int(_attr(g, path, "releases"), path, "stats/releases"),
         site_counts=_dataset(g, path, "site_counts", (n + 1,), int),
+        cycles_done=_int(_dataset(g, path, "cycles_done", None, int), path,
+                         "stats/cycles_done") if "cycles_done" in g else None,
+        touches=_int(_attr(g, path, "touches"), path, "stats/touches")
+        if "touches" in g.attrs else None,
     )
 
 
 def _read_lyapunov(g: h5py.Group, path: str) -> Lyapunov:
     exponents = _dataset(g, path, "exponents", (None,), float)
     k = exponents.shape[0]
+    running = _dataset(g, path, "running", (None, k), float)
     return Lyapunov(
         exponents=exponents,
         exponents_per_time=_dataset(g, path, "exponents_per_time", (k,), float),
         stderr=_dataset(g, path, "stderr", (k,), float),
-        running=_dataset(g, path, "running", (None, k), float),
+        running=running,
         ky_dimension=_float(_attr(g, path, "ky_dimension"), path, "lyapunov/ky_dimension"),
         positive_sum=_float(_attr(g, path, "positive_sum"), path, "lyapunov/positive_sum"),
         collisions_per_cycle=_float(_attr(g, path, "collisions_per_cycle"), path,
                                     "lyapunov/collisions_per_cycle"),
+        running_cycle=_dataset(g, path, "running_cycle", (running.shape[0],), int)
+        if "running_cycle" in g else None,
     )
 
 

@@ -16,14 +16,14 @@ module chain_run
     use chain_events, only: event_log_t, event_log_init, event_log_clear, event_log_append
     use chain_lyapunov, only: lyapunov_acc_t, lyapunov_start, lyapunov_step, &
                               lyapunov_result_t, lyapunov_result, floquet_multipliers, &
-                              initial_frame
+                              initial_frame, running_rows
     use chain_period, only: detect_period
     use chain_config, only: run_config_t, fmt_real
     implicit none
     private
     public :: record_sink_t, memory_sink_t, run_result_t, record_run, progress_callback
     public :: section_target, advance_to_point, poincare_jacobian, check_size
-    public :: period_window
+    public :: period_window, run_state_t, set_window
 
     integer, parameter :: event_flush = 65536
 
@@ -68,15 +68,26 @@ module chain_run
         procedure :: put_events => memory_put_events
     end type memory_sink_t
 
+    !> Where record_run stands after a record, beyond the chain itself (which is then at that
+    !> record, synced): with both, a stopped run continues bit for bit.
+    type :: run_state_t
+        integer(i8) :: cycles_done = 0            !! records done
+        type(lyapunov_acc_t) :: acc               !! with &lyapunov
+        real(wp), allocatable :: xwin(:, :), vwin(:, :) !! (n, window): the last records, a
+                                                  !! ring (record j at modulo(j - 1, window) + 1)
+    end type run_state_t
+
     type :: run_result_t
         integer(i8) :: cycles_done = 0
+        integer(i8) :: cycles_continued = 0      !! records done before (a continued run)
         logical :: complete = .false.
         real(wp) :: collisions_per_cycle = 0
-        integer(i8) :: impacts = 0, sticks = 0, releases = 0
+        integer(i8) :: impacts = 0, sticks = 0, releases = 0, touches = 0
         integer(i8), allocatable :: site_counts(:) !! site_counts(n+1): impacts per bond 0..n
         integer, allocatable :: periods(:)         !! periods(n): 0 = aperiodic
         logical :: has_lyapunov = .false.
         type(lyapunov_result_t) :: lyapunov
+        integer(i8), allocatable :: running_cycle(:) !! drive cycle of each running estimate
         real(wp), allocatable :: jacobian(:, :)    !! jacobian(2n, 2n) of the Poincare map
         real(wp), allocatable :: multipliers_re(:), multipliers_im(:)
     end type run_result_t
@@ -181,16 +192,21 @@ contains
 
     !> Transient, then `cfg%cycles` recorded cycles sent to `sink`; the chain ends in the final
     !> state. Summary numbers, periods, spectrum and Jacobian come back in `res`.
-    subroutine record_run(cfg, chain, sink, res, err, progress)
+    !>
+    !> With `state` of a stopped run (cycles_done > 0, the chain at that record with its
+    !> counters and tangent frame) the run continues after that record instead; `state` comes
+    !> back as the run ends, for a later continuation.
+    subroutine record_run(cfg, chain, sink, res, err, progress, state)
         type(run_config_t), intent(in) :: cfg
         type(chain_t), intent(inout) :: chain
         class(record_sink_t), intent(inout) :: sink
         type(run_result_t), intent(out) :: res
         type(error_t), allocatable, intent(out) :: err
         procedure(progress_callback), optional :: progress
+        type(run_state_t), intent(inout), optional :: state
         type(event_log_t) :: log
-        type(lyapunov_acc_t) :: acc
-        real(wp), allocatable :: xbuf(:, :), vbuf(:, :), xwin(:, :), vwin(:, :), frame(:, :)
+        type(run_state_t) :: st
+        real(wp), allocatable :: xbuf(:, :), vbuf(:, :), frame(:, :)
         integer(i8), allocatable :: cbuf(:)
         integer(i8) :: j, target_cycle, first
         real(wp) :: target_s
@@ -198,41 +214,29 @@ contains
         integer(i8) :: align_start
         logical :: stop_now
 
-        call event_log_init(log, .false., 0)
-        call section_target(chain, cfg%transient, cfg%phase, 0_i8, target_cycle, target_s)
-        ! the frame starts `align` whole cycles before the end of the transient, at the end
-        ! of a cycle (where the state is synced anyway: the run's own numbers do not depend
-        ! on whether exponents are computed), or at the end of the transient
-        align_start = target_cycle - min(cfg%transient, int(cfg%align, i8))
-        if (cfg%lyapunov .and. align_start > chain%cycle) then
-            call advance_cycles(chain, align_start, log, err)
-            if (allocated(err)) return
-            call start_tangent(chain, cfg, err)
-            if (allocated(err)) return
-            call advance_cycles(chain, target_cycle, log, err, cfg%qr_every)
-            if (.not. allocated(err)) call advance_to_point(chain, target_cycle, target_s, &
-                                                            log, err)
-            if (.not. allocated(err)) call orthonormalise_unaveraged(chain, err)
-            if (allocated(err)) return
-        else
-            call advance_to_point(chain, target_cycle, target_s, log, err)
-            if (allocated(err)) return
-            if (cfg%lyapunov) call start_tangent(chain, cfg, err)
-            if (allocated(err)) return
-        end if
-        if (cfg%lyapunov) call lyapunov_start(acc, chain%n_vectors, int(cfg%cycles/cfg%qr_every))
-        call event_log_init(log, cfg%record_events, 1024)
-        chain%impacts = 0
-        chain%sticks = 0
-        chain%releases = 0
-        chain%touches = 0
-        chain%site_counts = 0
-        m = int(max(1_i8, min(cfg%cycles, int(2**20/cfg%n, i8))))
-        allocate (xbuf(cfg%n, m), vbuf(cfg%n, m), cbuf(m))
         nwin = int(min(cfg%cycles, int(period_window(cfg%max_period), i8)))
-        allocate (xwin(cfg%n, nwin), vwin(cfg%n, nwin))
-        first = 1
-        do j = 1, cfg%cycles
+        if (present(state)) then
+            if (state%cycles_done > 0) call move_state(state, st)
+        end if
+        if (st%cycles_done == 0) then
+            call transient_part(cfg, chain, log, err)
+            if (allocated(err)) return
+            chain%impacts = 0
+            chain%sticks = 0
+            chain%releases = 0
+            chain%touches = 0
+            chain%site_counts = 0
+            if (cfg%lyapunov) call lyapunov_start(st%acc, chain%n_vectors, &
+                                                  int(cfg%cycles/cfg%qr_every))
+            allocate (st%xwin(cfg%n, nwin), st%vwin(cfg%n, nwin))
+        end if
+        call event_log_init(log, cfg%record_events, 1024)
+        res%cycles_continued = st%cycles_done
+        res%cycles_done = st%cycles_done
+        m = int(max(1_i8, min(cfg%cycles - st%cycles_done, int(2**20/cfg%n, i8))))
+        allocate (xbuf(cfg%n, m), vbuf(cfg%n, m), cbuf(m))
+        first = st%cycles_done + 1
+        do j = st%cycles_done + 1, cfg%cycles
             call section_target(chain, cfg%transient, cfg%phase, j, target_cycle, target_s)
             call advance_to_point(chain, target_cycle, target_s, log, err)
             if (allocated(err)) return
@@ -241,10 +245,10 @@ contains
             vbuf(:, i) = chain%v
             cbuf(i) = chain%cycle
             w = int(modulo(j - 1, int(nwin, i8))) + 1
-            xwin(:, w) = chain%x
-            vwin(:, w) = chain%v
+            st%xwin(:, w) = chain%x
+            st%vwin(:, w) = chain%v
             if (cfg%lyapunov .and. modulo(j, int(cfg%qr_every, i8)) == 0) then
-                call lyapunov_step(acc, chain%tangent, info, chain%tangent_scale_bits, &
+                call lyapunov_step(st%acc, chain%tangent, info, chain%tangent_scale_bits, &
                                    chain%tangent_log, chain%rank_losses > 0)
                 chain%tangent_scale_bits = 0
                 chain%rank_losses = 0
@@ -257,6 +261,7 @@ contains
                 end if
             end if
             res%cycles_done = j
+            st%cycles_done = j
             stop_now = .false.
             if (present(progress)) stop_now = .not. progress(j, cfg%cycles)
             if (i == m .or. j == cfg%cycles .or. log%count >= event_flush .or. stop_now) then
@@ -272,6 +277,7 @@ contains
         res%impacts = chain%impacts
         res%sticks = chain%sticks
         res%releases = chain%releases
+        res%touches = chain%touches
         res%site_counts = chain%site_counts
         res%collisions_per_cycle = real(chain%impacts, wp)/max(1_i8, res%cycles_done)
         nwin = int(min(res%cycles_done, int(nwin, i8)))
@@ -279,14 +285,20 @@ contains
         res%periods = 0
         if (nwin > 0) then
             do i = 1, cfg%n
-                res%periods(i) = detect_period(in_order(xwin(i, :), res%cycles_done, nwin), &
-                                               in_order(vwin(i, :), res%cycles_done, nwin), &
+                res%periods(i) = detect_period(in_order(st%xwin(i, :), res%cycles_done, nwin), &
+                                               in_order(st%vwin(i, :), res%cycles_done, nwin), &
                                                cfg%max_period, cfg%period_tol)
             end do
         end if
-        if (cfg%lyapunov .and. acc%steps > 0) then
+        if (cfg%lyapunov .and. st%acc%steps > 0) then
             res%has_lyapunov = .true.
-            res%lyapunov = lyapunov_result(acc, cfg%qr_every, chain%flow%period)
+            res%lyapunov = lyapunov_result(st%acc, cfg%qr_every, chain%flow%period)
+            allocate (res%running_cycle(size(res%lyapunov%running_steps)))
+            do i = 1, size(res%running_cycle)
+                call section_target(chain, cfg%transient, cfg%phase, &
+                                    int(res%lyapunov%running_steps(i), i8)*cfg%qr_every, &
+                                    res%running_cycle(i), target_s)
+            end do
         end if
         if (cfg%jacobian) then
             call poincare_jacobian(chain, cfg%jacobian_cycles, res%jacobian, err)
@@ -296,7 +308,40 @@ contains
             if (info /= 0) call set_error(err, "floquet: the eigenvalue solver (LAPACK dgeev) "// &
                                           "failed")
         end if
+        if (present(state)) call move_state(st, state)
     end subroutine record_run
+
+    !> The transient: the chain runs to the first record. With exponents, the tangent frame
+    !> starts `align` whole cycles before its end, at the end of a cycle (where the state is
+    !> synced anyway: the run's own numbers do not depend on whether exponents are
+    !> computed), or at the end of the transient.
+    subroutine transient_part(cfg, chain, log, err)
+        type(run_config_t), intent(in) :: cfg
+        type(chain_t), intent(inout) :: chain
+        type(event_log_t), intent(inout) :: log
+        type(error_t), allocatable, intent(out) :: err
+        integer(i8) :: target_cycle, align_start
+        real(wp) :: target_s
+
+        call event_log_init(log, .false., 0)
+        call section_target(chain, cfg%transient, cfg%phase, 0_i8, target_cycle, target_s)
+        align_start = target_cycle - min(cfg%transient, int(cfg%align, i8))
+        ! (a fresh start at t = 0 is the start of a cycle too)
+        if (cfg%lyapunov .and. (align_start > chain%cycle .or. &
+                                (align_start == chain%cycle .and. chain%s == 0))) then
+            call advance_cycles(chain, align_start, log, err)
+            if (allocated(err)) return
+            call start_tangent(chain, cfg, err)
+            if (allocated(err)) return
+            call advance_cycles(chain, target_cycle, log, err, cfg%qr_every)
+            if (.not. allocated(err)) call advance_to_point(chain, target_cycle, target_s, &
+                                                            log, err)
+            if (.not. allocated(err)) call orthonormalise_unaveraged(chain, err)
+        else
+            call advance_to_point(chain, target_cycle, target_s, log, err)
+            if (.not. allocated(err) .and. cfg%lyapunov) call start_tangent(chain, cfg, err)
+        end if
+    end subroutine transient_part
 
     !> Re-orthonormalise the tangent frame without averaging (while it aligns): a frame that
     !> starts in generic directions meets the shears of slow impacts (|S| ~ 1/u) across all
@@ -345,6 +390,39 @@ contains
         call chain_set_tangent(chain, frame, orthonormalise_jumps=.true.)
     end subroutine start_tangent
 
+    !> Hand a run state over (the windows moved, the accumulator, of bounded size, copied).
+    subroutine move_state(from, to)
+        type(run_state_t), intent(inout) :: from, to
+
+        to%cycles_done = from%cycles_done
+        call move_alloc(from%xwin, to%xwin)
+        call move_alloc(from%vwin, to%vwin)
+        to%acc = from%acc
+    end subroutine move_state
+
+    !> The period-detection ring of `state` from the last records before a continuation:
+    !> x(:, i), v(:, i) are records cycles_done - size(x, 2) + i (the ring keeps the last
+    !> window of them, as record_run would have).
+    subroutine set_window(cfg, state, x, v)
+        type(run_config_t), intent(in) :: cfg
+        type(run_state_t), intent(inout) :: state
+        real(wp), intent(in) :: x(:, :), v(:, :)
+        integer(i8) :: j
+        integer :: nwin, w, i
+
+        nwin = int(min(cfg%cycles, int(period_window(cfg%max_period), i8)))
+        if (allocated(state%xwin)) deallocate (state%xwin, state%vwin)
+        allocate (state%xwin(cfg%n, nwin), state%vwin(cfg%n, nwin))
+        state%xwin = 0
+        state%vwin = 0
+        do i = max(1, size(x, 2) - nwin + 1), size(x, 2)
+            j = state%cycles_done - size(x, 2) + i
+            w = int(modulo(j - 1, int(nwin, i8))) + 1
+            state%xwin(:, w) = x(:, i)
+            state%vwin(:, w) = v(:, i)
+        end do
+    end subroutine set_window
+
     !> Refuse, before anything is written, records larger than &output max_size_mb.
     subroutine check_size(cfg, err)
         type(run_config_t), intent(in) :: cfg
@@ -354,8 +432,9 @@ contains
 
         k = 0
         if (cfg%lyapunov) k = merge(2*cfg%n, cfg%vectors, cfg%vectors == 0)
-        mb = (16.0_wp*cfg%n + 8)*real(cfg%cycles, wp)/1.0e6_wp &
-             + 8.0_wp*k*real(cfg%cycles/cfg%qr_every, wp)/1.0e6_wp
+        ! strobe x, v, cycle; running estimates (k values and a cycle per kept row)
+        mb = (16.0_wp*cfg%n + 8)*real(cfg%cycles, wp)/1.0e6_wp
+        if (cfg%lyapunov) mb = mb + (8.0_wp*k + 8)*running_rows(cfg%cycles/cfg%qr_every)/1.0e6_wp
         if (mb > cfg%max_size_mb) then
             call set_error(err, "&output: the strobe records of this run need about "// &
                            fmt_real(mb)//" MB (n x cycles x 16 bytes, plus Lyapunov "// &

@@ -2,19 +2,28 @@
 !> explicit, or the final state of an earlier run), the records of `chain_run` streamed to
 !> disk, then the final state, statistics, periods, spectrum and Floquet multipliers.
 !> The library never prints: progress goes to an optional callback, which may also ask the run
-!> to stop (the file is then kept, marked complete = 0).
+!> to stop (the file is then kept, marked complete = 0, with /resume).
+!>
+!> A run whose output file is such a stopped run of the same input text continues it into the
+!> same file, bit for bit as if it had never stopped: the engine from /final, the rest of
+!> record_run's state from /resume, /stats and the last strobe records (`continue_chain`,
+!> `write_resume`: the one pair that saves and restores it).
 module chain_sim
     use chain_kinds, only: wp, i8
-    use chain_error, only: error_t
+    use chain_error, only: error_t, set_error
     use chain_flow, only: flow_t, make_flow
-    use chain_engine, only: chain_t, chain_init, contact_free
+    use chain_engine, only: chain_t, chain_init, contact_free, chain_set_tangent
     use chain_events, only: event_log_t
     use chain_config, only: run_config_t, config_summary
-    use chain_run, only: record_sink_t, run_result_t, record_run, progress_callback, check_size
+    use chain_lyapunov, only: lyapunov_pack, lyapunov_unpack
+    use chain_run, only: record_sink_t, run_result_t, record_run, progress_callback, check_size, &
+                         run_state_t, set_window, period_window
     use chain_output, only: output_t, output_begin, output_header, output_strobe_write, &
                             output_events_append, output_final, output_stats, output_periods, &
                             output_lyapunov, output_jacobian, output_end, output_abort, &
-                            read_final_state, output_truncate_strobe
+                            read_final_state, output_truncate_strobe, resume_data_t, &
+                            output_resume, read_resume, output_inspect, output_continue, &
+                            file_continuable, file_other_input
     implicit none
     private
     public :: run_simulation, initial_state, start_chain, write_run_header
@@ -119,7 +128,8 @@ contains
                            cfg%cycles, chain%x, chain%v, err)
     end subroutine header_for
 
-    !> The whole run described by `cfg`, written to cfg%output_file.
+    !> The whole run described by `cfg`, written to cfg%output_file; or, when that file is a
+    !> run of the same input stopped early, the rest of it, continued into that file.
     subroutine run_simulation(cfg, res, err, progress)
         type(run_config_t), intent(in) :: cfg
         type(run_result_t), intent(out) :: res
@@ -127,19 +137,38 @@ contains
         procedure(progress_callback), optional :: progress
         type(chain_t) :: chain
         type(file_sink_t) :: sink
+        type(run_state_t) :: state
         type(error_t), allocatable :: err2
+        integer :: found
 
         call check_size(cfg, err)
         if (allocated(err)) return
-        call start_chain(cfg, chain, err)
-        if (allocated(err)) return
-        call output_begin(sink%out, cfg%output_file, cfg%overwrite, err)
-        if (allocated(err)) return
-        call header_for(sink%out, cfg, chain, err)
-        if (.not. allocated(err)) call record_run(cfg, chain, sink, res, err, progress)
+        call output_inspect(cfg%output_file, cfg%input_text, found)
+        if (found == file_other_input .and. .not. cfg%overwrite) then
+            call set_error(err, "&output: file = '"//cfg%output_file//"' is a run stopped "// &
+                           "early from another input (its input_namelist differs), so it "// &
+                           "cannot be continued; choose another name, or set overwrite = "// &
+                           ".true. to replace it")
+            return
+        end if
+        if (found == file_continuable) then
+            call continue_chain(cfg, chain, state, err)
+            if (allocated(err)) return
+            call output_continue(sink%out, cfg%output_file, cfg%n, cfg%cycles, err)
+            if (allocated(err)) return
+        else
+            call start_chain(cfg, chain, err)
+            if (allocated(err)) return
+            call output_begin(sink%out, cfg%output_file, cfg%overwrite, err)
+            if (allocated(err)) return
+            call header_for(sink%out, cfg, chain, err)
+        end if
+        if (.not. allocated(err)) call record_run(cfg, chain, sink, res, err, progress, state)
         if (.not. allocated(err)) call write_results(sink%out, chain, res, cfg%jacobian_cycles, err)
-        if (.not. allocated(err) .and. .not. res%complete) &
+        if (.not. allocated(err) .and. .not. res%complete) then
             call output_truncate_strobe(sink%out, res%cycles_done, err)
+            if (.not. allocated(err)) call write_resume(sink%out, cfg, chain, state, err)
+        end if
         if (allocated(err)) then
             call output_abort(sink%out)
             return
@@ -147,6 +176,96 @@ contains
         call output_end(sink%out, res%complete, err2)
         if (allocated(err2)) call move_alloc(err2, err)
     end subroutine run_simulation
+
+    !> /resume of a run stopped at a record: what the engine holds beyond /final, the tangent
+    !> frame and the Lyapunov accumulator (undone by continue_chain).
+    subroutine write_resume(out, cfg, chain, state, err)
+        type(output_t), intent(inout) :: out
+        type(run_config_t), intent(in) :: cfg
+        type(chain_t), intent(in) :: chain
+        type(run_state_t), intent(in) :: state
+        type(error_t), allocatable, intent(out) :: err
+        type(resume_data_t) :: data
+
+        data%start_cycle = chain%start_cycle
+        data%start_s = chain%start_s
+        data%last_event = chain%last_event
+        data%same_instant = chain%same_instant
+        data%has_tangent = cfg%lyapunov
+        if (cfg%lyapunov) then
+            data%tangent = chain%tangent
+            data%tangent_scale_bits = chain%tangent_scale_bits
+            data%tangent_log = chain%tangent_log
+            data%rank_losses = chain%rank_losses
+            call lyapunov_pack(state%acc, data%lyapunov_int, data%lyapunov_real)
+        end if
+        call output_resume(out, data, err)
+    end subroutine write_resume
+
+    !> The chain and record_run's state where the run stopped early in cfg%output_file left
+    !> them (written by write_results and write_resume).
+    subroutine continue_chain(cfg, chain, state, err)
+        type(run_config_t), intent(in) :: cfg
+        type(chain_t), intent(out) :: chain
+        type(run_state_t), intent(out) :: state
+        type(error_t), allocatable, intent(out) :: err
+        type(resume_data_t) :: data
+        real(wp), allocatable :: x(:), v(:), queue_time(:), spacing(:)
+        integer, allocatable :: contact(:), queue_action(:)
+        integer(i8) :: cycle
+        real(wp) :: phase, s, model(4)
+        character(len=8) :: boundary
+        integer :: info
+
+        call read_final_state(cfg%output_file, cfg%n, x, v, cycle, phase, contact, queue_time, &
+                              queue_action, s, model, spacing, boundary, err)
+        if (allocated(err)) then
+            err%message = "&output: cannot continue '"//cfg%output_file//"': "//err%message
+            return
+        end if
+        call read_resume(cfg%output_file, cfg%n, cfg%lyapunov, &
+                         int(min(cfg%cycles, int(period_window(cfg%max_period), i8))), data, err)
+        if (allocated(err)) return
+        if (data%cycles_done >= cfg%cycles) then
+            call set_error(err, "&output: file = '"//cfg%output_file//"' holds all "// &
+                           "its records but is marked complete = 0; set overwrite = .true. "// &
+                           "to run it again")
+            return
+        end if
+        call chain_init(chain, make_flow(cfg%damping, cfg%amplitude, cfg%omega), &
+                        cfg%restitution, cfg%spacing, cfg%boundary == 'fixed', cfg%stick_speed, &
+                        x, v, cycle, s, err, contact, queue_time, queue_action)
+        if (allocated(err)) return
+        chain%start_cycle = data%start_cycle
+        chain%start_s = data%start_s
+        chain%last_event = data%last_event
+        chain%same_instant = data%same_instant
+        chain%impacts = data%impacts
+        chain%sticks = data%sticks
+        chain%releases = data%releases
+        chain%touches = data%touches
+        chain%site_counts = data%site_counts
+        if (cfg%lyapunov) then
+            if (size(data%tangent, 2) /= 2*cfg%n) then
+                call set_error(err, "&output: cannot continue '"//cfg%output_file//"': "// &
+                               "/resume/tangent is not a frame of the chain's 2n coordinates")
+                return
+            end if
+            call chain_set_tangent(chain, transpose(data%tangent), orthonormalise_jumps=.true.)
+            chain%tangent_scale_bits = data%tangent_scale_bits
+            chain%tangent_log = data%tangent_log
+            chain%rank_losses = data%rank_losses
+            call lyapunov_unpack(data%lyapunov_int, data%lyapunov_real, state%acc, info)
+            if (info /= 0) then
+                call set_error(err, "&output: cannot continue '"//cfg%output_file//"': "// &
+                               "/resume/lyapunov_int and lyapunov_real are not a Lyapunov "// &
+                               "accumulator of this version")
+                return
+            end if
+        end if
+        state%cycles_done = data%cycles_done
+        call set_window(cfg, state, data%x_last, data%v_last)
+    end subroutine continue_chain
 
     subroutine write_results(out, chain, res, jacobian_cycles, err)
         type(output_t), intent(inout) :: out
@@ -159,15 +278,15 @@ contains
                           chain%s, chain%contact, chain%queue%time, chain%action, err)
         if (allocated(err)) return
         call output_stats(out, res%collisions_per_cycle, res%impacts, res%sticks, &
-                          res%releases, res%site_counts, err)
+                          res%releases, res%touches, res%site_counts, res%cycles_done, err)
         if (allocated(err)) return
         if (res%cycles_done > 0) call output_periods(out, res%periods, err)
         if (allocated(err)) return
         if (res%has_lyapunov) then
             associate (l => res%lyapunov)
                 call output_lyapunov(out, l%bits_per_cycle, l%nats_per_time, l%stderr_bits, &
-                                     l%running_bits, l%ky_dimension, l%positive_sum, &
-                                     res%collisions_per_cycle, err)
+                                     l%running_bits, res%running_cycle, l%ky_dimension, &
+                                     l%positive_sum, res%collisions_per_cycle, err)
             end associate
             if (allocated(err)) return
         end if

@@ -22,7 +22,7 @@
 !> stopped), from which the same input resumes.
 module chain_sweep
     use chain_kinds, only: wp, i8
-    use chain_error, only: error_t, set_error, fmt_real, fmt_int
+    use chain_error, only: error_t, set_error, fmt_real, fmt_int, fmt_int8
     use chain_flow, only: make_flow
     use chain_engine, only: chain_t, chain_init
     use chain_config, only: run_config_t, validate_config
@@ -333,7 +333,7 @@ contains
         type(sweep_result_t) :: res
         type(branch_start_state_t), allocatable :: starts(:)
         type(output_t) :: out
-        type(error_t), allocatable :: err2
+        type(error_t), allocatable :: err2, ckpt_err
         character(len=:), allocatable :: checkpoint
         integer(i8) :: clock_last, clock_rate, now
         integer :: p
@@ -359,6 +359,8 @@ contains
         summary%points_resumed = count(res%done)
         call system_clock(clock_last, clock_rate)
         call run_sweep_branches(cfg, plan, res, starts, err, hook=after_point)
+        ! a periodic checkpoint that could not be written stopped the sweep
+        if (allocated(ckpt_err) .and. .not. allocated(err)) call move_alloc(ckpt_err, err)
         summary%points_done = count(res%done)
         summary%complete = all(res%done)
         if (.not. summary%complete .or. allocated(err)) then
@@ -378,18 +380,22 @@ contains
 
     contains
 
+        !> Progress, and a checkpoint every few seconds (called inside the critical section
+        !> of run_branch, so one thread at a time). A checkpoint that cannot be written stops
+        !> the sweep with that error: going on would risk hours of points on a full disk.
         logical function after_point(res, starts) result(keep_going)
             type(sweep_result_t), intent(in) :: res
             type(branch_start_state_t), intent(in) :: starts(:)
-            type(error_t), allocatable :: ckpt_err
 
             keep_going = .true.
             if (present(progress)) keep_going = progress(int(count(res%done), i8), &
                                                          int(plan%n_points, i8))
             call system_clock(now)
-            if (now - clock_last >= checkpoint_every*clock_rate) then
+            if (now - clock_last >= checkpoint_every*clock_rate .and. &
+                .not. allocated(ckpt_err)) then
                 call save_checkpoint(checkpoint, cfg, plan, res, starts, ckpt_err)
                 clock_last = now
+                if (allocated(ckpt_err)) keep_going = .false.
             end if
         end function after_point
 
@@ -449,7 +455,10 @@ contains
                                                           [np], '1', err)
     end subroutine write_sweep_file
 
-    !> Finished points and where each branch resumes, written atomically (tmp + rename).
+    !> Finished points and where each branch resumes, written atomically (tmp + rename). A
+    !> failed write is an error and leaves the previous checkpoint as it was; since a full
+    !> disk can go unreported by buffered writes, the file's size is checked before it
+    !> replaces the previous one.
     subroutine save_checkpoint(path, cfg, plan, res, starts, err)
         character(len=*), intent(in) :: path
         type(run_config_t), intent(in) :: cfg
@@ -457,24 +466,48 @@ contains
         type(sweep_result_t), intent(in) :: res
         type(branch_start_state_t), intent(in) :: starts(:)
         type(error_t), allocatable, intent(out) :: err
+        character(len=256) :: msg
         integer :: u, ios, b
+        integer(i8) :: written, on_disk
 
+        msg = ''
         open (newunit=u, file=path//'.tmp', access='stream', form='unformatted', &
-              status='replace', action='write', iostat=ios)
+              status='replace', action='write', iostat=ios, iomsg=msg)
         if (ios /= 0) then
-            call set_error(err, "&sweep: cannot write the checkpoint '"//path//"'")
+            call set_error(err, "&sweep: cannot write the checkpoint '"//path//".tmp' ("// &
+                           trim(msg)//")")
             return
         end if
-        write (u) checkpoint_magic, len(cfg%input_text), cfg%input_text, plan%n_points, &
-            cfg%n, cfg%cycles, plan%k, plan%n_branches
-        write (u) merge(1, 0, res%done), res%x, res%collisions, res%period, res%exponents, &
-            res%stderr, res%ky
+        write (u, iostat=ios, iomsg=msg) checkpoint_magic, len(cfg%input_text), &
+            cfg%input_text, plan%n_points, cfg%n, cfg%cycles, plan%k, plan%n_branches
+        if (ios == 0) write (u, iostat=ios, iomsg=msg) merge(1, 0, res%done), res%x, &
+            res%collisions, res%period, res%exponents, res%stderr, res%ky
         do b = 1, plan%n_branches
-            write (u) merge(1, 0, starts(b)%resume)
-            if (starts(b)%resume) write (u) starts(b)%x, starts(b)%v, starts(b)%contact, &
-                starts(b)%cycle, starts(b)%s
+            if (ios /= 0) exit
+            write (u, iostat=ios, iomsg=msg) merge(1, 0, starts(b)%resume)
+            if (starts(b)%resume .and. ios == 0) write (u, iostat=ios, iomsg=msg) &
+                starts(b)%x, starts(b)%v, starts(b)%contact, starts(b)%cycle, starts(b)%s
         end do
-        close (u)
+        written = -1
+        if (ios == 0) inquire (unit=u, pos=written, iostat=ios, iomsg=msg)
+        if (ios == 0) then
+            close (u, iostat=ios, iomsg=msg)
+        else
+            close (u)
+        end if
+        on_disk = -2
+        if (ios == 0) inquire (file=path//'.tmp', size=on_disk, iostat=ios, iomsg=msg)
+        if (ios == 0 .and. on_disk /= written - 1) then
+            ios = 1
+            msg = fmt_int8(written - 1)//" bytes written, "// &
+                  fmt_int8(on_disk)//" on disk: is the disk full?"
+        end if
+        if (ios /= 0) then
+            call remove_file(path//'.tmp')
+            call set_error(err, "&sweep: cannot write the checkpoint '"//path//".tmp' ("// &
+                           trim(msg)//")")
+            return
+        end if
         call rename_file(path//'.tmp', path, err)
     end subroutine save_checkpoint
 

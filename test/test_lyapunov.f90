@@ -10,8 +10,11 @@ module test_lyapunov
     use chain_events, only: event_log_t, event_log_init
     use chain_config, only: run_config_t
     use chain_run, only: record_run, memory_sink_t, run_result_t, advance_to_point, &
-                         poincare_jacobian
-    use chain_lyapunov, only: ky_dimension, floquet_multipliers
+                         poincare_jacobian, check_size
+    use chain_lyapunov, only: ky_dimension, floquet_multipliers, lyapunov_acc_t, &
+                              lyapunov_start, lyapunov_step, lyapunov_result_t, &
+                              lyapunov_result, running_capacity, running_rows, &
+                              lyapunov_pack, lyapunov_unpack
     use chain_lapack, only: qr_orthonormalise, qr_workspace_t
     use test_engine, only: make_chain
     use testing, only: tally_t, check, check_close
@@ -40,7 +43,151 @@ contains
         call kaplan_yorke(t)
         call qr_factors(t)
         call qr_in_threads(t)
+        call running_memory_is_bounded(t)
+        call running_estimates_decimated(t, 10000, 10000)
+        call running_estimates_decimated(t, 10001, 10001)
+        call running_estimates_decimated(t, 5000, 1000000)
+        call running_estimates_decimated(t, 300, 300)
+        call size_check_matches_storage(t)
+        call pack_round_trip(t)
     end subroutine run_lyapunov_tests
+
+    !> An accumulator packed to plain arrays and unpacked goes on exactly as the original
+    !> (a run stopped and continued); arrays of another layout are refused.
+    subroutine pack_round_trip(t)
+        type(tally_t), intent(inout) :: t
+        type(lyapunov_acc_t) :: acc, copy
+        type(lyapunov_result_t) :: a, b
+        integer(i8), allocatable :: ints(:)
+        real(wp), allocatable :: reals(:)
+        real(wp), allocatable :: frame_t(:, :)
+        integer :: q, info
+
+        call lyapunov_start(acc, 3, 9000)
+        do q = 1, 9000
+            if (q == 5000) then
+                call lyapunov_pack(acc, ints, reals)
+                call lyapunov_unpack(ints, reals, copy, info)
+                call check(t, info == 0, 'pack: unpacked')
+            end if
+            call step(acc, q)
+            if (q >= 5000) call step(copy, q)
+        end do
+        a = lyapunov_result(acc, 1, 1.0_wp)
+        b = lyapunov_result(copy, 1, 1.0_wp)
+        call check(t, all(a%bits_per_cycle == b%bits_per_cycle) .and. &
+                   all(a%stderr_bits == b%stderr_bits) .and. &
+                   all(a%running_bits == b%running_bits) .and. &
+                   all(a%running_steps == b%running_steps), &
+                   'pack: packed, unpacked and continued = never packed, bit for bit')
+        ints(1) = ints(1) + 1
+        call lyapunov_unpack(ints, reals, copy, info)
+        call check(t, info /= 0, 'pack: arrays of another layout are refused')
+        call lyapunov_pack(acc, ints, reals)
+        call lyapunov_unpack(ints, reals(2:), copy, info)
+        call check(t, info /= 0, 'pack: arrays of the wrong size are refused')
+
+    contains
+
+        subroutine step(acc, q)
+            type(lyapunov_acc_t), intent(inout) :: acc
+            integer, intent(in) :: q
+
+            frame_t = reshape([1.0_wp + modulo(q, 7), 0.3_wp, 0.1_wp, 0.2_wp, 0.5_wp, 0.0_wp, &
+                               0.1_wp, 0.2_wp, 1.0_wp/(1 + modulo(q, 5))], [3, 3])
+            call lyapunov_step(acc, frame_t, info)
+        end subroutine step
+
+    end subroutine pack_round_trip
+
+    !> The running estimates take the same memory for a run of 10^4 QR steps as for one of
+    !> 10^9: the accumulator's buffer is bounded, not sized by the planned steps.
+    subroutine running_memory_is_bounded(t)
+        type(tally_t), intent(inout) :: t
+        type(lyapunov_acc_t) :: short, long
+
+        call lyapunov_start(short, 32, 10000)
+        call lyapunov_start(long, 32, 1000000000)
+        call check(t, size(long%running) == size(short%running) .and. &
+                   size(long%running, 2) <= running_capacity, &
+                   'running estimates: the buffer does not grow with the planned steps')
+    end subroutine running_memory_is_bounded
+
+    !> `steps` QR steps of a run planned for `planned`, on a 2x2 frame stretched by 2**m(q)
+    !> at step q (a known running mean): the kept rows are the multiples of a power-of-two
+    !> stride, plus the last step; each equals the exact running mean at its step; the last
+    !> equals the final exponents; the row count is what running_rows predicts.
+    subroutine running_estimates_decimated(t, steps, planned)
+        type(tally_t), intent(inout) :: t
+        integer, intent(in) :: steps, planned
+        type(lyapunov_acc_t) :: acc
+        type(lyapunov_result_t) :: res
+        real(wp) :: sums(0:steps)
+        real(wp), allocatable :: frame_t(:, :)
+        integer :: q, info, stride, rows
+        logical :: ok
+        character(len=40) :: label
+
+        write (label, '(a,i0,a,i0,a)') ' (', steps, ' of ', planned, ' steps)'
+        call lyapunov_start(acc, 2, planned)
+        sums(0) = 0
+        ok = .true.
+        allocate (frame_t(2, 2))
+        do q = 1, steps
+            frame_t = 0
+            frame_t(1, 1) = 2.0_wp**(1 + modulo(q, 3))
+            frame_t(2, 2) = 0.5_wp
+            call lyapunov_step(acc, frame_t, info)
+            ok = ok .and. info == 0
+            sums(q) = sums(q - 1) + (1 + modulo(q, 3))
+        end do
+        call check(t, ok, 'running estimates: QR steps'//trim(label))
+        res = lyapunov_result(acc, 1, 1.0_wp)
+        rows = size(res%running_steps)
+        call check(t, rows == running_rows(int(steps, i8)) .and. &
+                   size(res%running_bits, 2) == rows .and. rows <= running_capacity + 1, &
+                   'running estimates: running_rows predicts the rows kept'//trim(label))
+        stride = 1
+        do while (steps/stride > running_capacity)
+            stride = 2*stride
+        end do
+        ok = res%running_steps(rows) == steps
+        do q = 1, rows - 1
+            ok = ok .and. res%running_steps(q) == q*stride
+        end do
+        if (modulo(steps, stride) == 0) ok = ok .and. res%running_steps(rows - 1) == steps - stride
+        call check(t, ok, 'running estimates: every stride-th step and the last'//trim(label))
+        ok = .true.
+        do q = 1, rows
+            ok = ok .and. abs(res%running_bits(1, q) - sums(res%running_steps(q)) &
+                              /res%running_steps(q)) <= 1.0e-12_wp
+            ok = ok .and. abs(res%running_bits(2, q) + 1) <= 1.0e-12_wp
+        end do
+        call check(t, ok, 'running estimates: each row is the mean up to its step'//trim(label))
+        call check(t, all(res%running_bits(:, rows) == res%bits_per_cycle), &
+                   'running estimates: the last row is the final spectrum'//trim(label))
+    end subroutine running_estimates_decimated
+
+    !> check_size refuses exactly what would be stored: the strobe records and the kept
+    !> running estimates (with their cycles), not one row per QR step.
+    subroutine size_check_matches_storage(t)
+        type(tally_t), intent(inout) :: t
+        type(run_config_t) :: cfg
+        type(error_t), allocatable :: err
+        real(wp) :: stored_mb
+        integer :: k
+
+        cfg = spectrum_config(16, 0_i8, 10000000_i8, 0)
+        k = 32
+        stored_mb = ((16*16 + 8)*real(cfg%cycles, wp) + &
+                     (8*k + 8)*real(running_rows(cfg%cycles), wp))/1.0e6_wp
+        cfg%max_size_mb = stored_mb*(1 + 1.0e-9_wp)
+        call check_size(cfg, err)
+        call check(t, .not. allocated(err), 'size check: a run that fits is accepted')
+        cfg%max_size_mb = stored_mb*(1 - 1.0e-9_wp)
+        call check_size(cfg, err)
+        call check(t, allocated(err), 'size check: a run just beyond the limit is refused')
+    end subroutine size_check_matches_storage
 
     !> A configuration for record_run: transient, recorded cycles, Lyapunov vectors (0 = all).
     function spectrum_config(n, transient, cycles, vectors) result(cfg)

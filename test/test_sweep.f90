@@ -27,6 +27,7 @@ program test_sweep
     call test_threads(t)
     call test_continuation_equals_files(t)
     call test_checkpoint_resume(t)
+    call test_checkpoint_write_failure(t)
     write (output_unit, '(i0,a,i0,a)') t%passed, ' passed, ', t%failed, ' failed'
     if (t%failed > 0) error stop 1
 
@@ -247,6 +248,44 @@ contains
         call check(t, allocated(err), 'a checkpoint of another input is refused')
         call remove_file(path)
     end subroutine test_checkpoint_resume
+
+    !> A checkpoint that cannot be written (the disk full: the temporary file is /dev/full,
+    !> which takes every write and keeps nothing; a missing directory) is an error naming
+    !> it, and the previous checkpoint stays as it was.
+    subroutine test_checkpoint_write_failure(t)
+        type(tally_t), intent(inout) :: t
+        type(run_config_t) :: cfg
+        type(sweep_plan_t) :: plan
+        type(sweep_result_t) :: res, loaded
+        type(branch_start_state_t), allocatable :: starts(:)
+        type(error_t), allocatable :: err
+        character(len=:), allocatable :: path
+        integer :: status
+
+        call config_from(cfg, "&sweep parameter = 'amplitude', start = 2.0, stop = 1.8, "// &
+                         "step = -0.1 /", 'full')
+        plan = plan_sweep(cfg)
+        call sweep_result_init(res, cfg, plan)
+        allocate (starts(plan%n_branches))
+        path = tmp//'full.ckpt'
+        call save_checkpoint(path, cfg, plan, res, starts, err)
+        call check(t, .not. allocated(err), 'a first checkpoint is written')
+        call execute_command_line('ln -s /dev/full '//path//'.tmp', exitstat=status)
+        call check(t, status == 0, 'test setup: a link to /dev/full')
+        res%done(1) = .true.
+        call save_checkpoint(path, cfg, plan, res, starts, err)
+        call check(t, allocated(err), 'a checkpoint written to a full disk is an error')
+        if (allocated(err)) call check(t, index(err%message, path) > 0, &
+                                       'the error names the checkpoint: '//err%message)
+        call sweep_result_init(loaded, cfg, plan)
+        call load_checkpoint(path, cfg, plan, loaded, starts, err)
+        call check(t, .not. allocated(err) .and. .not. any(loaded%done), &
+                   'the previous checkpoint is kept')
+        call remove_file(path//'.tmp')
+        call remove_file(path)
+        call save_checkpoint(tmp//'no/such/dir/x.ckpt', cfg, plan, res, starts, err)
+        call check(t, allocated(err), 'a checkpoint in a missing directory is an error')
+    end subroutine test_checkpoint_write_failure
 
     logical function stop_after_five(res, starts) result(keep_going)
         type(sweep_result_t), intent(in) :: res

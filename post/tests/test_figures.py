@@ -274,6 +274,22 @@ def test_spectrum_shows_exponents_with_error_bars(run_file: Path) -> None:
     np.testing.assert_array_equal(running[2].get_ydata(), run.lyapunov.running[:, 2])
 
 
+def test_spectrum_plots_decimated_running_estimates_at_their_cycles(run_file: Path) -> None:
+    """A long run keeps every d-th running estimate: /lyapunov/running_cycle places them."""
+    import h5py
+
+    with h5py.File(run_file, "r+") as f:
+        running = f["lyapunov/running"][:]
+        del f["lyapunov/running"]
+        f["lyapunov/running"] = running[1::2]
+        f["lyapunov/running_cycle"] = f["strobe/cycle"][1::2]
+    run = read_run(run_file)
+    assert run.lyapunov is not None and run.lyapunov.running_cycle is not None
+    running = _lines(figures.spectrum(run).axes[1], "running-")
+    np.testing.assert_array_equal(running[0].get_xdata(), run.lyapunov.running_cycle)
+    np.testing.assert_array_equal(running[0].get_ydata(), run.lyapunov.running[:, 0])
+
+
 # ------------------------------------------------------------------------------ general
 
 

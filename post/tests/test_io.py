@@ -66,6 +66,15 @@ def test_reads_events_stats_final_and_lyapunov(make_run: MakeRun) -> None:
     assert run.lyapunov.ky_dimension == 3.5
 
 
+def test_reads_cycles_done_of_a_stopped_run(make_run: MakeRun) -> None:
+    path = make_run(n=3, records=4, complete=0)
+    assert read_run(path).stats.cycles_done is None  # a file from before it was recorded
+    with h5py.File(path, "r+") as f:
+        f["stats/cycles_done"] = np.int64(4)
+    run = read_run(path)
+    assert not run.complete and run.stats.cycles_done == 4
+
+
 def test_reads_sweep(make_run: MakeRun) -> None:
     run = read_run(make_run(strobe=False, events=False, sweep=True))
     sweep = run.sweep

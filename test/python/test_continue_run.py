@@ -1,0 +1,118 @@
+"""A single run stopped by SIGINT/SIGTERM records planned and done cycles, and the same command
+continues it into the same file, bit for bit the file of an uninterrupted run (every dataset
+and attribute, with Lyapunov exponents, events and the Jacobian on), even when stopped twice.
+A finished file is still refused without overwrite, and a stopped run of another input is
+refused with a message saying so; neither is touched."""
+from __future__ import annotations
+
+import signal
+import subprocess
+import time
+from pathlib import Path
+
+import h5py
+import numpy as np
+
+from simulator import impactchain_exe, run_namelist  # noqa: F401 (fixture)
+
+CYCLES = 100000
+INPUT = f"""&chain n = 16, amplitude = 1.7, omega = 1.5 /
+&initial kind = 'random', seed = 4, x_amp = 0.3, v_amp = 0.4 /
+&run transient = 20, cycles = {CYCLES}, max_period = 4 /
+&lyapunov vectors = 6, qr_every = 2, jacobian = .true. /
+&output file = 'run.h5' /
+"""
+
+
+def _contents(path: Path) -> dict[str, object]:
+    """Every dataset (values and type) and attribute of a file, by path."""
+    out: dict[str, object] = {}
+    with h5py.File(path) as f:
+        for name, value in f.attrs.items():
+            out[f"@{name}"] = value
+
+        def visit(name: str, obj: object) -> None:
+            if isinstance(obj, h5py.Dataset):
+                out[name] = (obj.dtype.str, obj[()])
+            for key, value in obj.attrs.items():
+                out[f"{name}@{key}"] = value
+
+        f.visititems(visit)
+    return out
+
+
+def _same(a: object, b: object) -> bool:
+    if isinstance(a, tuple):
+        return a[0] == b[0] and _same(a[1], b[1])
+    a, b = np.asarray(a), np.asarray(b)
+    return a.dtype == b.dtype and a.shape == b.shape and bool(
+        np.array_equal(a, b, equal_nan=a.dtype.kind == "f"))
+
+
+def _stop_early(exe: Path, workdir: Path, sig: int) -> None:
+    """Run INPUT in workdir and stop it with `sig` once it has written some records."""
+    proc = subprocess.Popen([str(exe), "--quiet", "run.nml"], cwd=workdir,
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    part = workdir / "run.h5.part"
+    start_size = None
+    deadline = time.time() + 60
+    # wait for a few chunks of events to reach the file (the run has then done thousands of
+    # its 10^5 records, and is far from its end)
+    while time.time() < deadline and proc.poll() is None:
+        if part.exists():
+            size = part.stat().st_size
+            start_size = size if start_size is None else start_size
+            if size > start_size + 3_000_000:
+                break
+        time.sleep(0.01)
+    proc.send_signal(sig)
+    _, err = proc.communicate(timeout=120)
+    assert proc.returncode == 3, err
+    assert "run the same command again to continue it" in err
+
+
+def test_stopped_run_continues_bit_for_bit(impactchain_exe, tmp_path):
+    whole, parts = tmp_path / "whole", tmp_path / "parts"
+    whole.mkdir()
+    parts.mkdir()
+    run_namelist(impactchain_exe, INPUT, whole, "run.nml")
+
+    (parts / "run.nml").write_text(INPUT)
+    _stop_early(impactchain_exe, parts, signal.SIGINT)
+    with h5py.File(parts / "run.h5") as f:
+        assert int(np.ravel(f.attrs["complete"])[0]) == 0
+        done = int(f["stats/cycles_done"][()])
+        assert 0 < done < CYCLES
+        assert int(np.ravel(f["params"].attrs["cycles"])[0]) == CYCLES
+        assert f["strobe/x"].shape == (done, 16) and "resume" in f
+    assert not (parts / "run.h5.part").exists()
+
+    # a stopped run of another input is not continued, and left as it was
+    stopped = (parts / "run.h5").read_bytes()
+    other = run_namelist(impactchain_exe, INPUT.replace("seed = 4", "seed = 5"), parts,
+                         "other.nml", check=False)
+    assert other.returncode == 1
+    assert "is a run stopped early from another input" in other.stderr, other.stderr
+    assert "overwrite = .true." in other.stderr
+    assert (parts / "run.h5").read_bytes() == stopped
+    assert not (parts / "run.h5.part").exists()
+
+    # the same command continues it; stopped a second time, then once more to the end
+    _stop_early(impactchain_exe, parts, signal.SIGTERM)
+    with h5py.File(parts / "run.h5") as f:
+        assert done < int(f["stats/cycles_done"][()]) < CYCLES
+    result = run_namelist(impactchain_exe, INPUT, parts, "run.nml")
+    assert "continued a run stopped early after" in result.stdout
+
+    a, b = _contents(whole / "run.h5"), _contents(parts / "run.h5")
+    assert sorted(a) == sorted(b)
+    for name in ("events/time", "lyapunov/running", "floquet/jacobian", "stats/cycles_done"):
+        assert name in a
+    different = [name for name in a if not _same(a[name], b[name])]
+    assert not different, different
+
+    # a finished file is refused, as before
+    finished = (parts / "run.h5").read_bytes()
+    again = run_namelist(impactchain_exe, INPUT, parts, "run.nml", check=False)
+    assert again.returncode == 1 and "exists" in again.stderr
+    assert (parts / "run.h5").read_bytes() == finished

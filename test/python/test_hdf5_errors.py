@@ -1,0 +1,99 @@
+"""HDF5 failures reach the user as one clear message naming the HDF5 call, the object and the
+file: a start from a truncated file, from a file that lacks a dataset of /final or holds one of
+the wrong shape, each refused with a non-zero exit and no output left behind. Cycle counts are
+64-bit in the file, as in memory (they may reach 1e12)."""
+from __future__ import annotations
+
+import signal
+import subprocess
+import time
+
+import h5py
+import numpy as np
+import pytest
+
+from simulator import impactchain_exe, run_namelist  # noqa: F401 (fixture)
+
+CHAIN = "&chain n = 4, amplitude = 1.7, omega = 1.5 /\n"
+SOURCE = (CHAIN + "&initial kind = 'random', seed = 2, x_amp = 0.3, v_amp = 0.3 /\n"
+          "&run transient = 3, cycles = 5 /\n&output file = 'source.h5' /\n")
+FROM_FILE = CHAIN + ("&initial kind = 'file', file = 'start.h5' /\n&run cycles = 3 /\n"
+                     "&output file = 'out.h5' /\n")
+
+
+def _source(exe, tmp_path):
+    run_namelist(exe, SOURCE, tmp_path, "source.nml")
+    return (tmp_path / "source.h5").read_bytes()
+
+
+def _refused(exe, tmp_path, needles):
+    result = run_namelist(exe, FROM_FILE, tmp_path, "from.nml", check=False)
+    assert result.returncode == 1, result.stderr
+    assert result.stderr.startswith("impactchain: error: &initial: "), result.stderr
+    for needle in needles:
+        assert needle in result.stderr, result.stderr
+    assert "Backtrace" not in result.stderr
+    assert not list(tmp_path.glob("out.h5*")), "no output may be left behind"
+    return result.stderr
+
+
+def test_truncated_start_file_is_refused(impactchain_exe, tmp_path):
+    data = _source(impactchain_exe, tmp_path)
+    (tmp_path / "start.h5").write_bytes(data[: len(data) // 2])
+    _refused(impactchain_exe, tmp_path, ["hdf5: h5fopen_f failed on / (file start.h5)",
+                                         "damaged or truncated"])
+
+
+@pytest.mark.parametrize("name", ["x", "event_time", "cycle"])
+def test_start_file_lacking_a_dataset_is_refused(impactchain_exe, tmp_path, name):
+    (tmp_path / "start.h5").write_bytes(_source(impactchain_exe, tmp_path))
+    with h5py.File(tmp_path / "start.h5", "r+") as f:
+        del f[f"final/{name}"]
+    _refused(impactchain_exe, tmp_path,
+             [f"hdf5: h5dopen_f failed on /final/{name} (file start.h5)"])
+
+
+def test_start_file_with_a_dataset_of_the_wrong_shape_is_refused(impactchain_exe, tmp_path):
+    (tmp_path / "start.h5").write_bytes(_source(impactchain_exe, tmp_path))
+    with h5py.File(tmp_path / "start.h5", "r+") as f:
+        del f["final/v"]
+        f["final/v"] = np.zeros(3)
+    _refused(impactchain_exe, tmp_path, ["/final/v has shape (3,), expected (4,)",
+                                         "(file start.h5)"])
+
+
+def test_start_file_lacking_an_attribute_is_refused(impactchain_exe, tmp_path):
+    (tmp_path / "start.h5").write_bytes(_source(impactchain_exe, tmp_path))
+    with h5py.File(tmp_path / "start.h5", "r+") as f:
+        del f["params"].attrs["omega"]
+    _refused(impactchain_exe, tmp_path,
+             ["h5aopen_by_name_f failed on attribute 'omega' of /params (file start.h5)"])
+
+
+def test_cycle_counts_are_64_bit(impactchain_exe, tmp_path):
+    run_namelist(impactchain_exe, SOURCE, tmp_path, "source.nml")
+    with h5py.File(tmp_path / "source.h5") as f:
+        for name in ("transient", "cycles"):
+            assert f["params"].attrs.get_id(name).dtype == np.int64, name
+        assert int(np.ravel(f["params"].attrs["cycles"])[0]) == 5
+        assert int(np.ravel(f["params"].attrs["transient"])[0]) == 3
+
+
+def test_cycle_count_beyond_32_bits_round_trips(impactchain_exe, tmp_path):
+    """A run of 3e9 cycles (more than 2**31), stopped at once: the file says 3e9 planned."""
+    planned = 3_000_000_000
+    (tmp_path / "big.nml").write_text(
+        "&chain n = 1, amplitude = 0.1, omega = 1.5 /\n"
+        f"&run cycles = {planned}, record_events = .false. /\n"
+        "&output file = 'big.h5', max_size_mb = 1e9 /\n")
+    proc = subprocess.Popen([str(impactchain_exe), "--quiet", "big.nml"], cwd=tmp_path,
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    deadline = time.time() + 20
+    while not (tmp_path / "big.h5.part").exists() and time.time() < deadline:
+        time.sleep(0.02)
+    time.sleep(0.3)
+    proc.send_signal(signal.SIGINT)
+    _, err = proc.communicate(timeout=120)
+    assert proc.returncode == 3, err
+    with h5py.File(tmp_path / "big.h5") as f:
+        assert int(np.ravel(f["params"].attrs["cycles"])[0]) == planned
