@@ -4,6 +4,7 @@
 !> final name is never one whose writing was cut off. Strobe records and events go to disk in
 !> chunks as the run proceeds, so memory does not grow with its length. Fortran arrays x(n, m)
 !> appear in h5py as (m, n).
+!> Infrastructure, no model section: it writes the records of docs/model.md sections 6-7.
 module chain_output
     use, intrinsic :: iso_c_binding, only: c_char, c_int, c_null_char, c_ptr, c_loc
     use hdf5

@@ -3,6 +3,7 @@
 !> disk, then the final state, statistics, periods, spectrum and Floquet multipliers.
 !> The library never prints: progress goes to an optional callback, which may also ask the run
 !> to stop (the file is then kept, marked complete = 0).
+!> Implements docs/model.md section 10.2 (initial conditions); records as in sections 6-7.
 module chain_sim
     use chain_kinds, only: wp, i8
     use chain_error, only: error_t
