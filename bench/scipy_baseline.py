@@ -2,7 +2,7 @@
 impactchain, with scipy's solve_ivp and one terminal event function per bond.
 
 Between impacts solve_ivp integrates all 2n first-order equations; at the earliest bond
-closing (event direction -1) it stops, the collision law of MODEL.md section 3 is applied,
+closing (event direction -1) it stops, the collision law of docs/model.md section 3 is applied,
 and integration restarts from the impact. Nothing here is vectorised beyond numpy: that is
 the point of a baseline.
 
@@ -24,7 +24,7 @@ import time
 import numpy as np
 from scipy.integrate import solve_ivp
 
-# The paper's default case (MODEL.md section 7, figures 1c and 4-8); a = 1, fixed walls.
+# The paper's default case (its figures 1c and 4-8, README "Gallery"); a = 1, fixed walls.
 AMPLITUDE, OMEGA, DAMPING, RESTITUTION, SPACING = 1.7, 1.5, 0.05, 0.7, 1.0
 
 #: (method, rtol, atol) of the two baselines: tolerances that resolve collision times to

@@ -25,7 +25,7 @@ BITS_PER_NAT = 1.0 / math.log(2.0)
 
 
 def kaplan_yorke(exponents: ArrayLike, full_dimension: int | None = None) -> float:
-    """Kaplan-Yorke (Lyapunov) dimension of a spectrum (MODEL.md section 5).
+    """Kaplan-Yorke (Lyapunov) dimension of a spectrum (docs/model.md section 7.5).
 
     The exponents are sorted descending; with ``j`` the largest index such that
     ``l1 + ... + lj >= 0``, ``D = j + (l1 + ... + lj) / |l(j+1)|``. ``D = 0`` when

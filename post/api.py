@@ -23,7 +23,7 @@ Argument names are the namelist keys. ``x0 = v0 = None`` is a start at rest
 (``kind='rest'``); arrays are ``kind='explicit'`` (``v0 = None`` then means v = 0).
 ``spacing`` is one number (uniform) or the n+1 bond spacings, bond 0 (left wall) first.
 
-Units are the model's reduced ones (MODEL.md): time in units of 1/(natural angular
+Units are the model's reduced ones (docs/model.md section 1.5): time in units of 1/(natural angular
 frequency), so one drive cycle lasts ``T = 2 pi / omega``; lengths in the unit of
 ``spacing``; velocities in length/time. A run starts at t = 0 at drive phase 0; strobe
 record j (j = 1..cycles) is taken at t = (transient + j) T + phase/omega.
@@ -383,7 +383,7 @@ def poincare_jacobian(
     Returns:
         (2n, 2n) float64 matrix J with J[i, j] = d z'_i / d z_j, the state interleaved as
         z = (x_1, v_1, x_2, v_2, ..., x_n, v_n): the product of the exact propagators and
-        saltation matrices met along the way (MODEL.md 4-5).
+        saltation matrices met along the way (docs/model.md sections 4 and 7.9).
     """
     xs = _vector(x, "&initial: x0")
     vs = _vector(v, "&initial: v0")

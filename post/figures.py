@@ -168,7 +168,7 @@ def shock_wave(
     max_wait: float = 1.0,
     start: int | None = None,
 ) -> Figure:
-    """Shock-wave plot (MODEL.md section 6): collision time against site position.
+    """Shock-wave plot (docs/model.md section 10.4): collision time against site position.
 
     Right-wall waves in the upper axes and left-wall waves in the lower axes of each
     panel; panels as in :func:`space_time_amplitude` for the same options. Waves are

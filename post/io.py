@@ -86,7 +86,7 @@ class SchemaError(ValueError):
 
 @dataclass(frozen=True, eq=False)
 class Params:
-    """Run parameters from ``/params`` (MODEL.md sections 1-5)."""
+    """Run parameters from ``/params`` (docs/model.md sections 1 and 6)."""
 
     n: int
     damping: float

@@ -1,6 +1,6 @@
 """Shock waves: cascades of collisions running from a wall along the chain.
 
-The construction of the paper (MODEL.md section 6), made definite where the paper is
+The construction of the paper (docs/model.md section 10.4), made definite where the paper is
 silent. Sites follow the paper's convention: "oscillator k has collided" means bond k,
 so site 0 is a hit on the left wall, site k (1..n-1) the collision of oscillators k and
 k+1, and site n a hit on the right wall.

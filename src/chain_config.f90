@@ -4,6 +4,8 @@
 !> Groups: &chain (the model, required), &initial, &run, &lyapunov, &output, &sweep (optional).
 !> Every key is documented in the README. A group may appear at most once; an unknown group or
 !> key is an error, never silently ignored.
+!> The model's parameters are those of docs/model.md section 1; run, Lyapunov and sweep keys
+!> those of sections 6-8.
 module chain_config
     use, intrinsic :: iso_fortran_env, only: iostat_end
     use, intrinsic :: ieee_arithmetic, only: ieee_is_finite

@@ -1,4 +1,4 @@
-!> The event-driven chain (MODEL.md sections 1-4): exact flow between impacts, impacts in time
+!> The event-driven chain (docs/model.md sections 1-5): exact flow between impacts, impacts in time
 !> order, sticking contacts on the walls, and an optional tangent frame carried alongside.
 !>
 !> Design for speed: every moving oscillator keeps the free part of its motion, (x - xp,

@@ -1,6 +1,7 @@
 !> Error reporting without `stop`: library procedures return an allocated `error_t` whose
 !> message reads "where: what (offending value, allowed range)"; only app/ turns it into an
 !> exit code. Also the formatting of numbers inside such messages.
+!> Infrastructure, no model section.
 module chain_error
     use chain_kinds, only: wp, i8
     implicit none

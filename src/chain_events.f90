@@ -1,5 +1,6 @@
 !> The collision event stream: a growable buffer of (time, site, speed, kind) that the run
 !> driver drains to the output file in chunks, so memory does not grow with the run length.
+!> The event kinds (impact, rest, release, touch) are those of docs/model.md section 5.8.
 module chain_events
     use chain_kinds, only: wp
     implicit none

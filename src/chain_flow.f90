@@ -1,4 +1,4 @@
-!> The exact flow of one driven, damped oscillator between impacts (MODEL.md section 2).
+!> The exact flow of one driven, damped oscillator between impacts (docs/model.md section 2).
 !>
 !> x'' + 2 b x' + x = A sin(w t). The forced steady state xp = P sin(w t) + Q cos(w t) is the
 !> same for every oscillator, and y = x - xp is a free damped oscillation propagated by the

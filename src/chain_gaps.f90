@@ -1,4 +1,4 @@
-!> The next zero of a gap function (MODEL.md sections 1-2): when does a bond close?
+!> The next zero of a gap function (docs/model.md sections 2.3-2.4, 5.1): when does a bond close?
 !>
 !> Every gap the chain can have is g(tau) = c + y(tau) + beta*xp(s0 + tau), with y a free
 !> damped oscillation and beta in {-1, 0, 1} the multiple of the forced response:

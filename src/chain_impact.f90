@@ -1,9 +1,9 @@
-!> Instantaneous impacts (MODEL.md section 3) and the jump of the tangent map across them
+!> Instantaneous impacts (docs/model.md section 3) and the jump of the tangent map across them
 !> (section 4): S = DR + (f+ - DR f-) grad(h)^T / (grad(h) . f-).
 !>
 !> The engine uses the general formula with the vector fields it actually has before and after
 !> (a resting oscillator has f = 0), so sticking needs no special matrix; the closed forms of
-!> MODEL.md are kept here to test it against.
+!> docs/model.md sections 4.3-4.4 are kept here to test it against.
 module chain_impact
     use chain_kinds, only: wp
     implicit none
@@ -87,7 +87,7 @@ contains
         end do
     end subroutine saltation_matrix
 
-    !> MODEL.md section 4, pair on a bond of spacing a with approach speed u > 0.
+    !> docs/model.md section 4.4, pair on a bond of spacing a with approach speed u > 0.
     pure function pair_saltation_closed_form(k, u, a) result(s)
         real(wp), intent(in) :: k, u, a
         real(wp) :: s(4, 4), col(4), row(4), half
@@ -102,7 +102,7 @@ contains
         end do
     end function pair_saltation_closed_form
 
-    !> MODEL.md section 4, wall: [[-K, 0], [(K acc- + acc+)/v-, -K]].
+    !> docs/model.md section 4.3, wall: [[-K, 0], [(K acc- + acc+)/v-, -K]].
     pure function wall_saltation_closed_form(k, acc_minus, acc_plus, v_minus) result(s)
         real(wp), intent(in) :: k, acc_minus, acc_plus, v_minus
         real(wp) :: s(2, 2)

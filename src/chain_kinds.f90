@@ -1,4 +1,5 @@
 !> Numeric kinds used throughout impactchain (double precision reals, 64-bit counters) and pi.
+!> Infrastructure, no model section.
 module chain_kinds
     use, intrinsic :: iso_fortran_env, only: wp => real64, i8 => int64
     implicit none

@@ -1,6 +1,7 @@
 !> The few LAPACK routines impactchain needs, with explicit interfaces:
 !> QR factorisation (Lyapunov re-orthonormalisation) and the nonsymmetric eigenproblem
 !> (Floquet multipliers).
+!> The factorisations of docs/model.md sections 7.2 (QR) and 7.9 (multipliers).
 module chain_lapack
     use chain_kinds, only: wp
     implicit none

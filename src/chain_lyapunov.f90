@@ -1,4 +1,4 @@
-!> Lyapunov spectra by QR re-orthonormalisation of a tangent frame (MODEL.md section 5), the
+!> Lyapunov spectra by QR re-orthonormalisation of a tangent frame (docs/model.md section 7), the
 !> Kaplan-Yorke dimension, and Floquet multipliers from a Poincare-map Jacobian.
 !>
 !> The frame itself is carried by the engine (exact propagators between impacts, saltation

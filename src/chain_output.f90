@@ -8,6 +8,7 @@
 !> Every HDF5 status code goes through one funnel, `check`, which turns a failure into
 !> "hdf5: <call> failed on <object> (file <path>)" and never replaces an error already set, so
 !> ids closed on the way out of a failure cannot hide it.
+!> Infrastructure, no model section: it writes the records of docs/model.md sections 6-7.
 module chain_output
     use, intrinsic :: iso_c_binding, only: c_char, c_int, c_null_char, c_ptr, c_loc
     use, intrinsic :: iso_fortran_env, only: byte => int8

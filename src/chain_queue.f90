@@ -3,6 +3,7 @@
 !> a binary heap, and their keys share a cache line: a long chain's updates, which mostly
 !> move a bond down, miss the cache half as often. Ties are broken by the bond index, which
 !> makes the order of events independent of how the heap was filled.
+!> Implements docs/model.md sections 2.4 (the event schedule) and 5.6 (ties between events).
 module chain_queue
     use chain_kinds, only: wp
     implicit none

@@ -1,4 +1,4 @@
-!> The recorded part of a run, independent of where the records go (MODEL.md section 5):
+!> The recorded part of a run, independent of where the records go (docs/model.md sections 6-7):
 !> strobe records at the section, the event stream, the Lyapunov spectrum, periods, and the
 !> Poincare-map Jacobian. The CLI sends records to an HDF5 file, sweeps and the Python
 !> extension keep them in memory; all go through `record_run`, so their numbers agree bit for

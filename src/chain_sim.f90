@@ -8,6 +8,7 @@
 !> same file, bit for bit as if it had never stopped: the engine from /final, the rest of
 !> record_run's state from /resume, /stats and the last strobe records (`continue_chain`,
 !> `write_resume`: the one pair that saves and restores it).
+!> Implements docs/model.md section 10.2 (initial conditions); records as in sections 6-7.
 module chain_sim
     use chain_kinds, only: wp, i8
     use chain_error, only: error_t, set_error

@@ -1,5 +1,5 @@
 !> Parameter sweeps: bifurcation diagrams and Lyapunov scans along one parameter, or a 2-D
-!> grid of two (MODEL.md section 7, figures 10-13).
+!> grid of two (docs/model.md section 8; the paper's figures 10-13).
 !>
 !> Points are grouped in branches. Along `parameter` a branch is a continuation: each point
 !> starts from the final state of the one before (the paper's procedure; the drive phase and

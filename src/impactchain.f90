@@ -1,4 +1,5 @@
 !> The public API of impactchain in one module.
+!> It implements nothing itself: each module it re-exports names its section of docs/model.md.
 module impactchain
     use chain_kinds, only: wp, i8, pi, two_pi
     use chain_error, only: error_t, set_error

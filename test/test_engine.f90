@@ -1,4 +1,4 @@
-!> The event-driven chain (MODEL.md sections 1-3): momentum and restitution at every impact,
+!> The event-driven chain (docs/model.md sections 1-3, 5): momentum and restitution at every impact,
 !> gaps never negative, the linear response without impacts, free boundaries, and stress tests
 !> that drive the engine into chatter, sticking, grazing and plastic multi-body contacts.
 module test_engine

@@ -1,4 +1,4 @@
-!> MODEL.md section 2: the closed-form flow against the analytic steady state, the semigroup
+!> docs/model.md section 2: the closed-form flow against the analytic steady state, the semigroup
 !> property, the determinant, and an independent power-series integration of the ODE.
 module test_flow
     use chain_kinds, only: wp, two_pi

@@ -1,4 +1,4 @@
-!> Collision times (MODEL.md sections 1-2): the first zero found by `next_gap_zero` equals the
+!> Collision times (docs/model.md section 2.4): the first zero found by `next_gap_zero` equals the
 !> one found by a brute-force fine scan of the gap function, on random and on contrived
 !> near-grazing gaps, and no zero is ever missed.
 module test_gaps

@@ -1,4 +1,4 @@
-!> MODEL.md sections 3-4: collision laws and saltation matrices (general formula against the
+!> docs/model.md sections 3-4: collision laws and saltation matrices (general formula against the
 !> closed forms).
 module test_impact
     use chain_kinds, only: wp
@@ -33,7 +33,7 @@ contains
             call check_close(t, vl, 0.8_wp*k, 'wall impact: v+ = -K v-', 1.0e-15_wp)
         end do
 
-        ! general saltation formula equals MODEL.md's closed form (pair)
+        ! general saltation formula equals the closed form of docs/model.md 4.4 (pair)
         k = 0.7_wp
         a = 1.3_wp
         b = 0.05_wp

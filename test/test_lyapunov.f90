@@ -1,4 +1,4 @@
-!> Lyapunov spectra and Poincare-map Jacobians (MODEL.md sections 4-5): the exact sum rule,
+!> Lyapunov spectra and Poincare-map Jacobians (docs/model.md sections 7, 9): the exact sum rule,
 !> the spectrum without impacts, finite differences of the one-cycle map, leading vectors
 !> against the full spectrum, Floquet multipliers of a period-1 state, and a chaotic and a
 !> periodic case of the paper separated by their error bars.
