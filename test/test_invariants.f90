@@ -1,8 +1,9 @@
 !> Invariants that hold for every run and cannot be tuned (issue #15): mirror symmetry of the
 !> fixed-wall chain, no negative gap at any event, zero tangent rows for every resting
 !> oscillator, momentum at every inelastic collapse, the three-particle collapse threshold
-!> K = 7 - 4 sqrt(3), and the Lyapunov sum rule. The walker `walk_events` and the sum-rule
-!> check `check_sum_rule` are shared with the engine and Lyapunov suites.
+!> K = 7 - 4 sqrt(3), the Lyapunov sum rule, and its Poincare-map form (the Jacobian's
+!> determinant at any section phase). The walker `walk_events` and the sum-rule check
+!> `check_sum_rule` are shared with the engine and Lyapunov suites.
 module test_invariants
     use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
     use chain_kinds, only: wp, i8
@@ -15,8 +16,9 @@ module test_invariants
                             event_stick
     use chain_queue, only: queue_top
     use chain_lyapunov, only: lyapunov_acc_t, lyapunov_start, lyapunov_step, &
-                              lyapunov_result_t, lyapunov_result, initial_frame
-    use chain_run, only: advance_to_point
+                              lyapunov_result_t, lyapunov_result, initial_frame, &
+                              floquet_multipliers
+    use chain_run, only: advance_to_point, poincare_jacobian
     use testing, only: tally_t, check, check_close
     implicit none
     private
@@ -58,6 +60,7 @@ contains
         call momentum_at_collapse(t)
         call collapse_next_to_rest(t)
         call sum_rule_free_ends(t)
+        call jacobian_at_any_phase(t)
     end subroutine run_invariant_tests
 
     ! ------------------------------------------------------------------ shared helpers
@@ -835,5 +838,48 @@ contains
         call check_sum_rule(t, 'free ends n = 8, dying collisions', 8, chain%flow, 0.7_wp, &
                             real(walk%impacts, wp)/40, walk%bits_per_cycle, walk%sticks)
     end subroutine sum_rule_free_ends
+
+    !> The volume rule of the Poincare map: its Jacobian's determinant over one cycle is
+    !> exp(-2 b n T) K**(2 c), c the impacts of that cycle, wherever the section lies in the
+    !> drive cycle (a chaotic chain without rests, n = 4, A = 4.15, w = 0.9; sections at drive
+    !> phases 0, 1 and 4).
+    subroutine jacobian_at_any_phase(t)
+        type(tally_t), intent(inout) :: t
+        real(wp), parameter :: phases(3) = [0.0_wp, 1.0_wp, 4.0_wp]
+        type(chain_t) :: chain, copy
+        type(error_t), allocatable :: err
+        type(event_log_t) :: events
+        real(wp), allocatable :: jac(:, :)
+        real(wp) :: x(4), v(4), s, re(8), im(8), expected
+        integer :: i, j, info
+        character(len=:), allocatable :: label
+
+        do i = 1, 4
+            x(i) = 0.3_wp*sin(1.7_wp*i + 0.3_wp)
+            v(i) = 0.5_wp*cos(2.3_wp*i)
+        end do
+        call chain_init(chain, make_flow(0.05_wp, 4.15_wp, 0.9_wp), 0.7_wp, [(1.0_wp, i=0, 4)], &
+                        .true., 1.0e-9_wp, x, v, 0_i8, 0.0_wp, err)
+        call event_log_init(events, .false., 0)
+        do j = 1, size(phases)
+            label = 'one-cycle Jacobian at drive phase '//k_text(phases(j))
+            s = phases(j)/chain%flow%omega
+            call advance_to_point(chain, 50_i8*j, s, events, err)
+            call poincare_jacobian(chain, 1, jac, err)
+            ! the impacts of the cycle it spans (s passed by value: the chain's own clock
+            ! moves while it runs)
+            copy = chain
+            copy%impacts = 0
+            copy%sticks = 0
+            call advance_to_point(copy, chain%cycle + 1, s, events, err)
+            call check(t, .not. allocated(err) .and. copy%impacts > 0 .and. copy%sticks == 0, &
+                       label//': a cycle with impacts and no rest')
+            call floquet_multipliers(jac, re, im, info)
+            expected = -2*chain%flow%damping*4*chain%flow%period + &
+                       2*copy%impacts*log(chain%restitution)
+            call check_close(t, sum(log(hypot(re, im))), expected, label// &
+                             ': log det = -2 b n T + 2 c ln K', rel_tol=1.0e-8_wp)
+        end do
+    end subroutine jacobian_at_any_phase
 
 end module test_invariants
