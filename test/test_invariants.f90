@@ -499,6 +499,8 @@ contains
             call walk_with_frame(chain, 6, walk, err)
             call check(t, .not. allocated(err), label//' walks')
             call report_walk(t, label, walk)
+            call check_sum_rule(t, label, size(x), flow, restitution, &
+                                real(walk%impacts, wp)/6, walk%bits_per_cycle, walk%sticks)
             resting = resting + walk%resting
             stacks_left = stacks_left + walk%stacks_left
             stacks_right = stacks_right + walk%stacks_right
@@ -518,6 +520,8 @@ contains
         call check(t, walk%collapses > 0 .and. walk%resting > 0, 'plastic chain: the '// &
                    'cluster rule fires ('//int_text(walk%collapses)//') and oscillators rest')
         call report_walk(t, 'plastic chain', walk)
+        call check_sum_rule(t, 'plastic chain', 6, chain%flow, 0.0_wp, &
+                            real(walk%impacts, wp)/40, walk%bits_per_cycle, walk%sticks)
     end subroutine stress_walks
 
     subroutine walk_with_frame(chain, cycles, walk, err)
