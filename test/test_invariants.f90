@@ -373,9 +373,11 @@ contains
             chains, ' random chains differ from their mirror image'
     end subroutine mirror_symmetry
 
-    !> '' if the event streams are mirror images, else where they first differ. Events of
-    !> one instant are compared as sets (a triple contact resolved in another order of
-    !> disjoint pairs is the same instant), their times to 1e-12 + rounding / speed.
+    !> '' if the event streams are mirror images, else where they first differ. Each event's
+    !> time must agree to tol_gap (1 + 1/u), u its approach speed floored at 1e-6; events
+    !> closer together than the loosest of these tolerances may come in either order (a
+    !> triple contact resolved in another order of disjoint pairs, a chatter sequence shifted
+    !> by rounding), so such a group is compared as a set.
     function event_mismatch(a, b, n, tol_gap, scale) result(text)
         type(event_log_t), intent(in) :: a, b
         integer, intent(in) :: n
@@ -383,24 +385,25 @@ contains
         character(len=:), allocatable :: text
         integer :: i, j, ea, eb, k
         integer, allocatable :: oa(:), ob(:)
-        real(wp) :: tol
+        real(wp) :: tol, window
 
+        window = tol_gap*(1 + 1/1.0e-6_wp)
         text = ''
         if (a%count /= b%count) text = ' (counts '//int_text(a%count)//' and '// &
                                        int_text(b%count)//')'
         i = 1
         j = 1
         do while (i <= a%count .and. j <= b%count)
-            ea = instant_end(a, i)
-            eb = instant_end(b, j)
+            ea = group_end(a, i, window)
+            eb = group_end(b, j, window)
             if (ea - i /= eb - j) then
                 text = ' (at event '//int_text(i)//', t = '//real_text(a%time(i))// &
-                       ': an instant of '//int_text(ea - i + 1)//' events against '// &
+                       ': a group of '//int_text(ea - i + 1)//' events against '// &
                        int_text(eb - j + 1)//')'//text
                 return
             end if
-            oa = instant_order(a, i, ea, n, .false.)
-            ob = instant_order(b, j, eb, n, .true.)
+            oa = group_order(a, i, ea, n, .false.)
+            ob = group_order(b, j, eb, n, .true.)
             do k = 1, size(oa)
                 associate (p => oa(k), r => ob(k))
                     tol = tol_gap*(1 + 1/max(a%speed(p), 1.0e-6_wp))
@@ -422,22 +425,23 @@ contains
         end do
     end function event_mismatch
 
-    !> Last event of the instant that starts at event i (the engine's "same instant": within
-    !> 16 eps T; here within 1e-12 of the instant's first event).
-    pure integer function instant_end(log, i) result(e)
+    !> Last event of the group that starts at event i: events each closer than `window` to
+    !> the one before.
+    pure integer function group_end(log, i, window) result(e)
         type(event_log_t), intent(in) :: log
         integer, intent(in) :: i
+        real(wp), intent(in) :: window
 
         e = i
         do while (e < log%count)
-            if (log%time(e + 1) - log%time(i) > 1.0e-12_wp) exit
+            if (log%time(e + 1) - log%time(e) > window) exit
             e = e + 1
         end do
-    end function instant_end
+    end function group_end
 
     !> Events first..last sorted by (site seen from the run's left wall, kind, speed); a
     !> mirror run's sites are read as n - site.
-    pure function instant_order(log, first, last, n, mirrored) result(order)
+    pure function group_order(log, first, last, n, mirrored) result(order)
         type(event_log_t), intent(in) :: log
         integer, intent(in) :: first, last, n
         logical, intent(in) :: mirrored
@@ -469,7 +473,7 @@ contains
                 before = log%speed(p) < log%speed(r)
             end if
         end function before
-    end function instant_order
+    end function group_order
 
     ! ------------------------------------------------------------------ stress walks
 
