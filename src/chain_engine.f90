@@ -65,6 +65,8 @@ module chain_engine
     real(wp), parameter :: defer_after = 0.25_wp
     !> A saltation matrix with an entry above this re-orthonormalises a Lyapunov frame at once.
     real(wp), parameter :: large_jump = 64
+    !> ... and so does a run of jumps that shrank the frame's volume by more than e**(-18).
+    real(wp), parameter :: small_volume = -18
 
     type :: chain_t
         integer :: n = 0
@@ -105,6 +107,7 @@ module chain_engine
         !> logarithms of the diagonal of R are kept in tangent_log(k), per column, for that
         !> step. (Not for a Poincare-map Jacobian, which must be the plain product.)
         logical :: orthonormalise_jumps = .false.
+        real(wp) :: jumps_volume = 0 !! ln |det| of the jumps since the frame was orthonormal
         real(wp), allocatable :: tangent_log(:)
         real(wp), allocatable :: frame_work(:, :), r_diag(:)
         type(qr_workspace_t) :: qr
@@ -207,6 +210,7 @@ contains
         chain%orthonormalise_jumps = .false.
         if (present(orthonormalise_jumps)) chain%orthonormalise_jumps = orthonormalise_jumps
         chain%tangent_log = [(0.0_wp, i=1, size(frame, 2))]
+        chain%jumps_volume = 0
         chain%n_vectors = 0
         call chain_sync(chain)
         chain%n_vectors = size(frame, 2)
@@ -454,8 +458,12 @@ contains
         call keep_tangent_finite(chain, largest)
         ! (not while a direction removed by a rest waits for the QR step to find it: a
         ! factorisation here would turn it into a unit vector)
+        ! (nor after many strongly inelastic impacts: each shrinks the frame's volume by K**2, and
+        ! a frame shrunk by 1e-8 within one interval keeps its smallest directions poorly)
+        chain%jumps_volume = chain%jumps_volume + 2*log(max(chain%restitution, tiny(1.0_wp)))
         if (chain%orthonormalise_jumps .and. chain%rank_losses == 0 .and. &
-            maxval(abs(s)) > large_jump) call orthonormalise_tangent(chain)
+            (maxval(abs(s)) > large_jump .or. chain%jumps_volume < small_volume)) &
+            call orthonormalise_tangent(chain)
     end subroutine jump_rows
 
     !> Re-orthonormalise the frame now, keeping ln |R(j,j)| in tangent_log. Any upper
@@ -475,6 +483,7 @@ contains
         ! a zero diagonal (a direction lost exactly) is left to the QR step to report
         if (info /= 0 .or. any(chain%r_diag == 0)) return
         chain%tangent = transpose(chain%frame_work)
+        chain%jumps_volume = 0
         do j = 1, chain%n_vectors
             chain%tangent_log(j) = chain%tangent_log(j) + log(abs(chain%r_diag(j)))
         end do

@@ -149,6 +149,7 @@ contains
         logical, allocatable :: gone(:)
         integer :: b, n_blocks, j, kept
 
+        info = 0
         minus_infinity = ieee_value(1.0_wp, ieee_negative_inf)
         if (present(log_scale)) scale = log_scale
         acc%frame = transpose(frame_t)

@@ -51,6 +51,7 @@ module chain_output
         integer :: tangent_scale_bits = 0
         real(wp), allocatable :: tangent_log(:)     !! (n_vectors): growth kept by the engine
         integer(i8) :: rank_losses = 0              !! singular tangent maps since the QR step
+        real(wp) :: jumps_volume = 0                !! ln |det| of the jumps since then
         integer(i8), allocatable :: lyapunov_int(:) !! the accumulator (lyapunov_pack)
         real(wp), allocatable :: lyapunov_real(:)
         integer(i8) :: impacts = 0, sticks = 0, releases = 0, touches = 0 !! /stats
@@ -504,6 +505,8 @@ contains
                                                      data%tangent_log, '1', err)
         if (.not. allocated(err)) call write_scalar_int8(out, 'resume/rank_losses', &
                                                          data%rank_losses, '1', err)
+        if (.not. allocated(err)) call write_real_1d(out, 'resume/jumps_volume', &
+                                                     [data%jumps_volume], '1', err)
         if (.not. allocated(err)) &
             call write_dataset(out, 'resume/lyapunov_int', H5T_STD_I64LE, &
                                h5kind_to_type(i8, H5_INTEGER_KIND), &
@@ -547,6 +550,7 @@ contains
             data%tangent_scale_bits = scalar(1)
             call read_real_1d(src, 'resume/tangent_log', data%tangent_log, err)
             call read_int8_scalar(src, 'resume/rank_losses', data%rank_losses, err)
+            call read_real_scalar(src, 'resume/jumps_volume', data%jumps_volume, err)
             call dataset_extent(src, 'resume/lyapunov_int', dims, err)
             if (.not. allocated(err)) then
                 allocate (data%lyapunov_int(product(dims)))

@@ -23,7 +23,7 @@ module chain_run
     private
     public :: record_sink_t, memory_sink_t, run_result_t, record_run, progress_callback
     public :: section_target, advance_to_point, poincare_jacobian, check_size
-    public :: period_window, run_state_t, set_window
+    public :: period_window, tangent_qr_step, run_state_t, set_window
 
     integer, parameter :: event_flush = 65536
 
@@ -248,17 +248,8 @@ contains
             st%xwin(:, w) = chain%x
             st%vwin(:, w) = chain%v
             if (cfg%lyapunov .and. modulo(j, int(cfg%qr_every, i8)) == 0) then
-                call lyapunov_step(st%acc, chain%tangent, info, chain%tangent_scale_bits, &
-                                   chain%tangent_log, chain%rank_losses > 0)
-                chain%tangent_scale_bits = 0
-                chain%rank_losses = 0
-                chain%n_vectors = size(chain%tangent, 1)
-                chain%tangent_log = [(0.0_wp, i=1, chain%n_vectors)]
-                if (info /= 0) then
-                    call set_error(err, "lyapunov: QR factorisation failed (LAPACK info "// &
-                                   fmt_real(real(info, wp))//")")
-                    return
-                end if
+                call tangent_qr_step(chain, st%acc, err)
+                if (allocated(err)) return
             end if
             res%cycles_done = j
             st%cycles_done = j
@@ -310,6 +301,26 @@ contains
         end if
         if (present(state)) call move_state(st, state)
     end subroutine record_run
+
+    !> One QR step of the chain's tangent frame into `acc`: the growth the engine kept
+    !> (power-of-two scaling, re-orthonormalisations after large jumps) is added, directions
+    !> removed by singular jumps are dropped, and the engine's bookkeeping starts afresh.
+    subroutine tangent_qr_step(chain, acc, err)
+        type(chain_t), intent(inout) :: chain
+        type(lyapunov_acc_t), intent(inout) :: acc
+        type(error_t), allocatable, intent(out) :: err
+        integer :: info, i
+
+        call lyapunov_step(acc, chain%tangent, info, chain%tangent_scale_bits, &
+                           chain%tangent_log, chain%rank_losses > 0)
+        chain%tangent_scale_bits = 0
+        chain%rank_losses = 0
+        chain%n_vectors = size(chain%tangent, 1)
+        chain%tangent_log = [(0.0_wp, i=1, chain%n_vectors)]
+        chain%jumps_volume = 0
+        if (info /= 0) call set_error(err, "lyapunov: QR factorisation failed (LAPACK info "// &
+                                      fmt_real(real(info, wp))//")")
+    end subroutine tangent_qr_step
 
     !> The transient: the chain runs to the first record. With exponents, the tangent frame
     !> starts `align` whole cycles before its end, at the end of a cycle (where the state is
@@ -370,6 +381,7 @@ contains
         chain%tangent_scale_bits = 0
         chain%rank_losses = 0
         chain%tangent_log = 0
+        chain%jumps_volume = 0
     end subroutine orthonormalise_unaveraged
 
     !> Carry a tangent frame from now: k = &lyapunov vectors generic orthonormal vectors.

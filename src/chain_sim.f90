@@ -198,6 +198,7 @@ contains
             data%tangent_scale_bits = chain%tangent_scale_bits
             data%tangent_log = chain%tangent_log
             data%rank_losses = chain%rank_losses
+            data%jumps_volume = chain%jumps_volume
             call lyapunov_pack(state%acc, data%lyapunov_int, data%lyapunov_real)
         end if
         call output_resume(out, data, err)
@@ -256,6 +257,7 @@ contains
             chain%tangent_scale_bits = data%tangent_scale_bits
             chain%tangent_log = data%tangent_log
             chain%rank_losses = data%rank_losses
+            chain%jumps_volume = data%jumps_volume
             call lyapunov_unpack(data%lyapunov_int, data%lyapunov_real, state%acc, info)
             if (info /= 0) then
                 call set_error(err, "&output: cannot continue '"//cfg%output_file//"': "// &

@@ -8,6 +8,7 @@ program main
     use test_queue, only: run_queue_tests
     use test_lyapunov, only: run_lyapunov_tests
     use test_corners, only: run_corner_tests
+    use test_invariants, only: run_invariant_tests
     implicit none
     type(tally_t) :: t, before
 
@@ -25,6 +26,8 @@ program main
     call report(t, before, 'lyapunov')
     call run_corner_tests(t)
     call report(t, before, 'corners')
+    call run_invariant_tests(t)
+    call report(t, before, 'invariants')
     write (*, '(i0,a,i0,a)') t%passed, ' passed, ', t%failed, ' failed'
     if (t%failed > 0) error stop 1
 end program main

@@ -4,7 +4,8 @@ What these tests demonstrate:
 
 1. Python and the CLI (``fpm run --profile release`` on the equivalent namelist) give
    bit-identical strobe records, event streams, final states, statistics, periods, Lyapunov
-   spectra and Floquet Jacobians (``test_bit_identical_to_cli``, ``test_example_...``).
+   spectra and Floquet Jacobians (``test_bit_identical_to_cli``, ``test_example_...``);
+   every full spectrum obeys the sum rule (``post.testing.assert_sum_rule``).
 2. Every validation error of the library surfaces as a Python ValueError with exactly the
    CLI's message (``test_errors_match_cli``); Python-only misuse raises TypeError /
    ValueError with a clear message (``test_python_side_errors``).
@@ -35,6 +36,7 @@ import numpy as np
 import pytest
 
 from post import api
+from post.testing import assert_sum_rule
 
 ROOT = Path(__file__).resolve().parents[2]
 FPM = ROOT / ".venv" / "bin" / "fpm"
@@ -188,6 +190,7 @@ def test_bit_identical_to_cli(name: str, cli: Path, tmp_path: Path) -> None:
         ky = {k: np.ravel(v)[0] for k, v in g.attrs.items()}.get("ky_dimension")
         if ky is not None:
             assert lyap.ky_dimension == ky
+        params = {k: np.ravel(v)[0] for k, v in f["params"].attrs.items()}
 
         g = f["floquet"]
         np.testing.assert_array_equal(flo.jacobian, g["jacobian"][:], strict=True)
@@ -201,6 +204,12 @@ def test_bit_identical_to_cli(name: str, cli: Path, tmp_path: Path) -> None:
     assert np.all(np.diff(lyap.exponents[finite]) <= 0)
     # directions removed by rests on the walls are -infinity, and come last
     assert np.all(lyap.exponents[~finite] == -np.inf) and np.all(np.diff(finite.astype(int)) <= 0)
+    if k == 2 * case["n"]:
+        # the same run as sim's (bit-identical records), so it has sim's rests
+        assert_sum_rule(lyap.exponents, n=case["n"], damping=float(params["damping"]),
+                        omega=case["omega"], restitution=float(params["restitution"]),
+                        collisions_per_cycle=lyap.collisions_per_cycle, sticks=sim.sticks,
+                        label=name)
     assert sim.x.shape == sim.v.shape == (case["cycles"], case["n"])
     if name == "sticking":  # the case is what it claims to be
         assert sim.sticks > 0 and sim.releases > 0
@@ -244,6 +253,9 @@ def test_no_impacts_is_the_linear_response() -> None:
     assert np.mean(lyap.exponents) * math.log(2) == pytest.approx(-b * 2 * math.pi / w,
                                                                   rel=1e-12)
     assert lyap.collisions_per_cycle == 0
+    # no impacts at all, so no rests
+    assert_sum_rule(lyap.exponents, n=3, damping=b, omega=w, restitution=0.7,
+                    collisions_per_cycle=lyap.collisions_per_cycle, sticks=0)
     sim = api.simulate(3, a, w, damping=b, spacing=100.0, transient=2000, cycles=3)
     d2 = (1 - w**2) ** 2 + (2 * b * w) ** 2
     np.testing.assert_allclose(sim.x, -2 * b * w * a / d2, rtol=1e-9)  # Q, at w t = 0
@@ -453,7 +465,11 @@ def test_no_leak() -> None:
             if kind == 0:
                 api.simulate(4, 1.7, 1.5, cycles=5)
             elif kind == 1:
-                api.lyapunov(4, 1.7, 1.5, cycles=5)
+                lyap = api.lyapunov(4, 1.7, 1.5, cycles=5)
+                # from rest, five cycles: impacts but no rests (api.simulate shows sticks = 0)
+                assert_sum_rule(lyap.exponents, n=4, damping=0.05, omega=1.5,
+                                restitution=0.7, collisions_per_cycle=lyap.collisions_per_cycle,
+                                sticks=0)
             elif kind == 2:
                 api.floquet(4, 1.7, 1.5, cycles=5)
             elif kind == 3:

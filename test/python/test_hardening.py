@@ -15,6 +15,7 @@ import h5py
 import numpy as np
 import pytest
 
+from post.testing import assert_sum_rule
 from simulator import impactchain_exe, run_namelist  # noqa: F401 (fixture)
 
 VALID = """&chain
@@ -232,7 +233,8 @@ REGRESSIONS = [
 @pytest.mark.parametrize("case", range(60 + len(REGRESSIONS)))
 def test_random_chains_run_sanely(impactchain_exe, tmp_path, case):
     """Random legal chains (any n, damping from 0, K from 0 to 1, crowded spacings, both
-    boundaries, with the full Lyapunov spectrum) finish quickly with sane states."""
+    boundaries, with the full Lyapunov spectrum) finish quickly with sane states, and their
+    spectra obey the sum rule (runs with rests on a wall excluded)."""
     if case < len(REGRESSIONS):
         text, spacing, boundary = REGRESSIONS[case], None, "fixed"
     else:
@@ -248,6 +250,15 @@ def test_random_chains_run_sanely(impactchain_exe, tmp_path, case):
         assert np.all(np.isfinite(x))
         # a rest on a wall forgets perturbations: those exponents are -inf, never NaN
         assert not np.any(np.isnan(exponents)) and not np.any(exponents == np.inf)
+        if "lyapunov" in f:
+            params = {k: np.ravel(v)[0] for k, v in f["params"].attrs.items()}
+            assert_sum_rule(exponents, n=int(params["n"]), damping=float(params["damping"]),
+                            omega=float(params["omega"]),
+                            restitution=float(params["restitution"]),
+                            collisions_per_cycle=float(
+                                np.ravel(f["lyapunov"].attrs["collisions_per_cycle"])[0]),
+                            sticks=int(np.ravel(f["stats"].attrs["sticks"])[0]),
+                            label=f"random chain {case}")
         if x.shape[1] > 1:
             assert (a[1:-1] + x[:, 1:] - x[:, :-1]).min() >= -1e-9
         if boundary == "fixed":
