@@ -226,6 +226,11 @@ def count(manifest: dict[str, dict[str, str]]) -> tuple[int, int]:
     return len(keys) - attributes, attributes
 
 
+def differences(problems: list[str]) -> str:
+    n = len(problems)
+    return f"{n} difference{'' if n == 1 else 's'}; " if n else ""
+
+
 def summary(identical: dict[str, dict[str, str]]) -> str:
     datasets, attributes = count(identical)
     return (f"{datasets} datasets in {len(identical)} recipes identical "
@@ -304,7 +309,7 @@ def compare_dirs(dir_a: Path, dir_b: Path) -> int:
                 identical[name][key] = ""
     for line in problems:
         print(line)
-    print(f"{len(problems)} differences; " if problems else "", summary(identical), sep="")
+    print(differences(problems), summary(identical), sep="")
     return 1 if problems else 0
 
 
@@ -374,7 +379,7 @@ def main(argv: list[str] | None = None) -> int:
         print("(to see where values differ: `check --keep DIR` or `run DIR` with this build,"
               " `run DIR_REF --exe EXE_REF` with the reference build, then"
               " `compare DIR_REF DIR`)")
-    print(f"{len(problems)} differences; " if problems else "", summary(identical), sep="")
+    print(differences(problems), summary(identical), sep="")
     return 1 if problems else 0
 
 
