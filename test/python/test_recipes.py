@@ -13,9 +13,10 @@ supposed to keep every number: first find out why the numbers moved (to see wher
 `python test/recipes/recipe_checksums.py check --keep DIR`, the same `compute --keep DIR_REF`
 with a build of the previous commit, then `compare DIR_REF DIR`).
 
-The manifest holds the release build's bits on one environment: the same compiler, glibc and
-reference BLAS, on a CPU with FMA and AVX2 (glibc picks its own versions of sin, exp, log, ...
-by CPU, and the recipes' chaotic runs magnify any last-bit difference). The runtime-checked
+The manifest holds the release build's bits for one environment: the same compiler, glibc and
+reference BLAS. glibc picks its own versions of sin, exp, log, ... by CPU, and the recipes'
+chaotic runs magnify any last-bit difference, so the script runs the recipes with glibc's
+baseline versions (GLIBC_TUNABLES), which every x86-64 CPU has. The runtime-checked
 build (IMPACTCHAIN_FPM_FLAGS) computes other bits, so the test is skipped there.
 """
 from __future__ import annotations

@@ -29,6 +29,7 @@ import argparse
 import fnmatch
 import hashlib
 import json
+import os
 import re
 import subprocess
 import sys
@@ -122,6 +123,13 @@ def redirect_output(text: str, file_name: str) -> str:
     return text[:start] + group + text[end:]
 
 
+# glibc picks its own versions of sin, cos, exp, log, ... by CPU (FMA and AVX2 ones where the
+# CPU has them), and they differ in the last bit now and then; chaotic recipes magnify that.
+# The recipes run with the baseline versions, which every x86-64 CPU has, so that the stored
+# bits hold on whichever machine runs the check.
+PORTABLE_MATH = {"GLIBC_TUNABLES": "glibc.cpu.hwcaps=-AVX2,-FMA,-FMA4,-AVX"}
+
+
 def run_recipe(exe: Path, recipe: Path, workdir: Path) -> float:
     """Run one recipe into workdir/<name>.h5; return the wall time in seconds."""
     name = recipe.stem
@@ -136,7 +144,8 @@ def run_recipe(exe: Path, recipe: Path, workdir: Path) -> float:
     began = time.perf_counter()
     try:
         run = subprocess.run([str(exe), "--quiet", f"{name}.nml"], cwd=workdir,
-                             capture_output=True, text=True, timeout=RUN_TIMEOUT)
+                             capture_output=True, text=True, timeout=RUN_TIMEOUT,
+                             env={**os.environ, **PORTABLE_MATH})
     except subprocess.TimeoutExpired:
         raise RecipeError(f"{name}: still running after {RUN_TIMEOUT} s") from None
     seconds = time.perf_counter() - began
