@@ -18,7 +18,7 @@ PY_STAMP := $(VENV)/.requirements-installed
 DEFAULT_RUN := runs/default.h5
 
 .PHONY: all setup system-deps python-deps build run test fortran-test python-test mpi \
-        figures bench clean help
+        figures bench recipe-checksums clean help
 
 all: build
 
@@ -27,6 +27,7 @@ help:
 	@echo "make test     set up, build, run fpm test and pytest"
 	@echo "make figures  regenerate every figure of the paper into figures/"
 	@echo "make bench    build with the release profile and run the benchmark table"
+	@echo "make recipe-checksums  rewrite test/recipes/checksums.json (results meant to change)"
 
 setup: system-deps python-deps
 
@@ -86,6 +87,11 @@ test: fortran-test python-test
 
 bench: build
 	$(PY) bench/run_bench.py --fpm $(FPM)
+
+# Every recipe's results, hashed, as pytest checks them (test/python/test_recipes.py). Run it
+# only when a change is meant to alter results, and commit the manifest with that change.
+recipe-checksums: build
+	$(PY) test/recipes/recipe_checksums.py compute --jobs $$(nproc)
 
 clean:
 	rm -rf build runs/*.h5 runs/*.png post/_kernels*

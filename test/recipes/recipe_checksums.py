@@ -1,0 +1,396 @@
+"""Checksums of every recipe's results, to show that a change alters no number.
+
+Every recipe in namelists/ is run with a given simulator in a temporary directory (the recipe
+is copied there with its `&output file` pointed at that directory, so figures/runs/ and every
+other file are left alone), and every dataset and every result attribute of its output is
+hashed: sha256 of the dtype, the shape and the raw bytes, walking all groups. A hash is stored
+as `<dtype> <shape> sha256:<hex>`, e.g. `<f8 480x16 sha256:9f2c...`, under the dataset's path
+(`/strobe/x`) or the attribute's (`/stats@impacts`; `/@complete` for the root).
+
+    python test/recipes/recipe_checksums.py compute [--exe EXE] [--manifest FILE]
+    python test/recipes/recipe_checksums.py check   [--exe EXE] [--manifest FILE] [--keep DIR]
+    python test/recipes/recipe_checksums.py run DIR [--exe EXE]
+    python test/recipes/recipe_checksums.py compare DIR_A DIR_B
+
+`compute` writes the manifest, {recipe: {path: hash}} (default test/recipes/checksums.json;
+`make recipe-checksums` runs it with the release build). `check` computes again and compares
+with the manifest: it names every recipe and path that differs, is missing or is new, exits 1
+on any, and ends with one line, "N datasets in M recipes identical". A hash cannot say where
+two arrays differ; for that, `run` every recipe into a directory with each build (or keep a
+failing check's files with `check --keep DIR`) and `compare` the two directories: it reports
+the first differing element, how many differ and the largest absolute difference.
+
+`--exe` defaults to the release build (fpm builds it if needed). Recipes run one at a time
+(`--jobs N` for more); OMP_NUM_THREADS is passed on, and no result depends on it.
+"""
+from __future__ import annotations
+
+import argparse
+import fnmatch
+import hashlib
+import json
+import os
+import re
+import subprocess
+import sys
+import tempfile
+import time
+from collections.abc import Iterator
+from concurrent.futures import ThreadPoolExecutor
+from pathlib import Path
+
+import h5py
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[2]
+RECIPES = ROOT / "namelists"
+MANIFEST = Path(__file__).resolve().parent / "checksums.json"
+FPM = ROOT / ".venv" / "bin" / "fpm"
+
+# What is not compared, and why: the one place. Every other dataset and attribute is. The
+# output holds no wall-clock timestamps, host names or run times (every recipe's file was
+# inspected); should one appear, it belongs here. HDF5's own object-header times are not
+# datasets or attributes, so hashing contents rather than files ignores them anyway.
+EXCLUDED = {
+    "/@code_version": "the version string of the build, not a result",
+    "/@input_namelist": "the input text echoed back: it names the &output file, which this "
+                        "script points into a temporary directory",
+    "/@resolved_namelist": "every key as used, echoed back: it names the same rewritten "
+                           "&output file (the physical inputs are compared in /params)",
+    "*@units": "describes a dataset, is not a result",
+    "*@long_name": "describes a dataset, is not a result",
+}
+
+RUN_TIMEOUT = 900    # seconds per recipe: a hung run must fail CI, not stall it
+
+
+class RecipeError(RuntimeError):
+    """A recipe that cannot be run safely here, or a run that failed."""
+
+
+# ---- running the recipes ----------------------------------------------------------------
+
+def default_exe() -> Path:
+    """The release build of the simulator, built by fpm if needed."""
+    out = subprocess.run([str(FPM), "run", "--profile", "release", "--runner", "echo"],
+                         cwd=ROOT, capture_output=True, text=True, check=True)
+    return ROOT / out.stdout.strip().splitlines()[-1]
+
+
+def namelist_groups(text: str) -> Iterator[tuple[str, int, int]]:
+    """(name, start, end) of each `&name ... /` group: `text[start:end]` is the group from
+    `&` to its closing `/`. Comments (`!` to the end of a line) and quoted strings are
+    skipped, so a `/` or `&` inside them ends or starts nothing."""
+    j, quote, start, name = 0, "", -1, ""
+    while j < len(text):
+        c = text[j]
+        if quote:
+            if c == quote:
+                quote = ""
+        elif c == "!":
+            j = text.find("\n", j)
+            if j < 0:
+                break
+        elif start < 0 and c == "&":
+            start = j
+            name = re.match(r"\w*", text[j + 1:]).group(0).lower()
+        elif start >= 0 and c in "'\"":
+            quote = c
+        elif start >= 0 and c == "/":
+            yield name, start, j + 1
+            start = -1
+        j += 1
+
+
+def redirect_output(text: str, file_name: str) -> str:
+    """The recipe with `&output file = 'file_name'` and `overwrite = .false.` (a stray path
+    can then never replace an existing file); an `&output` group is added if there is none."""
+    groups = {name: (start, end) for name, start, end in namelist_groups(text)}
+    initial = text[slice(*groups["initial"])] if "initial" in groups else ""
+    if re.search(r"(?i)\bkind\s*=\s*['\"]file['\"]", initial):
+        raise RecipeError("starts from another run's file (&initial kind = 'file'), which "
+                          "this script does not produce")
+    new_file = f"file = '{file_name}'"
+    if "output" not in groups:
+        return text.rstrip("\n") + f"\n&output {new_file} /\n"
+    start, end = groups["output"]
+    group = text[start:end]
+    key = r"(?i)(?<![\w%])"
+    group, found = re.subn(key + r"file\s*=\s*('[^']*'|\"[^\"]*\")", new_file, group)
+    if found == 0:
+        group = f"&output {new_file} " + group[len("&output"):]
+    group = re.sub(key + r"overwrite\s*=\s*[^\s,/]+", "overwrite = .false.", group)
+    return text[:start] + group + text[end:]
+
+
+# glibc picks its own versions of sin, cos, exp, log, ... by CPU (FMA and AVX2 ones where the
+# CPU has them), and they differ in the last bit now and then; chaotic recipes magnify that.
+# The recipes run with the baseline versions, which every x86-64 CPU has, so that the stored
+# bits hold on whichever machine runs the check.
+PORTABLE_MATH = {"GLIBC_TUNABLES": "glibc.cpu.hwcaps=-AVX2,-FMA,-FMA4,-AVX"}
+
+
+def run_recipe(exe: Path, recipe: Path, workdir: Path) -> float:
+    """Run one recipe into workdir/<name>.h5; return the wall time in seconds."""
+    name = recipe.stem
+    output = workdir / f"{name}.h5"
+    if output.exists():
+        raise RecipeError(f"{name}: {output} exists; give a fresh directory")
+    try:
+        text = redirect_output(recipe.read_text(), output.name)
+    except RecipeError as err:
+        raise RecipeError(f"{name}: {err}") from None
+    (workdir / f"{name}.nml").write_text(text)
+    began = time.perf_counter()
+    try:
+        run = subprocess.run([str(exe), "--quiet", f"{name}.nml"], cwd=workdir,
+                             capture_output=True, text=True, timeout=RUN_TIMEOUT,
+                             env={**os.environ, **PORTABLE_MATH})
+    except subprocess.TimeoutExpired:
+        raise RecipeError(f"{name}: still running after {RUN_TIMEOUT} s") from None
+    seconds = time.perf_counter() - began
+    if run.returncode != 0 or not output.exists():
+        raise RecipeError(f"{name}: the simulator failed (exit {run.returncode}): "
+                          f"{run.stderr.strip() or run.stdout.strip()}")
+    return seconds
+
+
+def run_recipes(exe: Path, workdir: Path, jobs: int) -> dict[str, Path]:
+    """Run every recipe into workdir; print the time of each and in all; {name: file}."""
+    recipes = sorted(RECIPES.glob("*.nml"))
+    if not recipes:
+        raise RecipeError(f"no recipes in {RECIPES}")
+    began = time.perf_counter()
+    with ThreadPoolExecutor(max_workers=jobs) as pool:
+        seconds = list(pool.map(lambda r: run_recipe(exe, r, workdir), recipes))
+    total = time.perf_counter() - began
+    for recipe, s in sorted(zip(recipes, seconds), key=lambda rs: -rs[1]):
+        print(f"  {recipe.stem:12s} {s:6.2f} s")
+    print(f"ran {len(recipes)} recipes in {total:.1f} s ({jobs} at a time)")
+    return {r.stem: workdir / f"{r.stem}.h5" for r in recipes}
+
+
+# ---- reading and hashing ------------------------------------------------------------------
+
+def as_array(value) -> np.ndarray:
+    """A dataset's or attribute's value as a numpy array of fixed-size elements (variable-
+    length strings become bytes)."""
+    array = np.asarray(value)
+    if array.dtype.kind == "O":
+        items = [v.encode() if isinstance(v, str) else v for v in array.ravel()]
+        if not all(isinstance(v, bytes) for v in items):
+            raise TypeError(f"cannot compare values of type {type(items[0]).__name__}")
+        array = np.array(items, dtype=bytes).reshape(array.shape)
+    elif array.dtype.kind == "U":
+        array = np.char.encode(array, "utf-8")
+    return array
+
+
+def results(path: Path) -> Iterator[tuple[str, np.ndarray]]:
+    """Every compared item of one output file, in a fixed order: (path or path@attribute,
+    value), skipping EXCLUDED."""
+    with h5py.File(path, "r") as f:
+        objects = [("/", f)]
+        f.visititems(lambda name, obj: objects.append(("/" + name, obj)))
+        for name, obj in objects:
+            items = [(name, obj)] if isinstance(obj, h5py.Dataset) else []
+            items += [(f"{name}@{attribute}", attribute) for attribute in sorted(obj.attrs)]
+            for key, source in items:
+                if any(fnmatch.fnmatchcase(key, pattern) for pattern in EXCLUDED):
+                    continue
+                value = source[()] if isinstance(source, h5py.Dataset) else obj.attrs[source]
+                try:
+                    yield key, as_array(value)
+                except TypeError as err:
+                    raise RecipeError(f"{path.name}: {key}: {err}; list it in EXCLUDED "
+                                      "if it is not a result") from None
+
+
+def shape_text(shape: tuple[int, ...]) -> str:
+    return "x".join(map(str, shape)) if shape else "scalar"
+
+
+def fingerprint(array: np.ndarray) -> str:
+    """`<dtype> <shape> sha256:<hex>` of the dtype, the shape and the raw bytes (C order)."""
+    digest = hashlib.sha256(f"{array.dtype.str} {array.shape}\n".encode())
+    digest.update(array.tobytes(order="C"))
+    return f"{array.dtype.str} {shape_text(array.shape)} sha256:{digest.hexdigest()}"
+
+
+def file_checksums(path: Path) -> dict[str, str]:
+    return {key: fingerprint(value) for key, value in results(path)}
+
+
+def compute(exe: Path, workdir: Path, jobs: int) -> dict[str, dict[str, str]]:
+    files = run_recipes(exe, workdir, jobs)
+    return {name: file_checksums(path) for name, path in files.items()}
+
+
+# ---- comparing ---------------------------------------------------------------------------
+
+def count(manifest: dict[str, dict[str, str]]) -> tuple[int, int]:
+    """(datasets, attributes) in a manifest."""
+    keys = [key for entries in manifest.values() for key in entries]
+    attributes = sum("@" in key for key in keys)
+    return len(keys) - attributes, attributes
+
+
+def differences(problems: list[str]) -> str:
+    n = len(problems)
+    return f"{n} difference{'' if n == 1 else 's'}; " if n else ""
+
+
+def summary(identical: dict[str, dict[str, str]]) -> str:
+    datasets, attributes = count(identical)
+    return (f"{datasets} datasets in {len(identical)} recipes identical "
+            f"(and {attributes} attributes)")
+
+
+def diff_manifests(stored: dict, fresh: dict) -> tuple[list[str], dict]:
+    """The differences between two manifests, one line each, and the identical entries."""
+    problems, identical = [], {}
+    for recipe in sorted(stored.keys() | fresh.keys()):
+        if recipe not in fresh:
+            problems.append(f"{recipe}: in the manifest, but there is no "
+                            f"namelists/{recipe}.nml")
+            continue
+        if recipe not in stored:
+            problems.append(f"{recipe}: a recipe the manifest does not know")
+            continue
+        old, new = stored[recipe], fresh[recipe]
+        identical[recipe] = {k: v for k, v in new.items() if old.get(k) == v}
+        for key in sorted(old.keys() | new.keys()):
+            if key not in new:
+                problems.append(f"{recipe}: {key}: missing (the manifest has {old[key]})")
+            elif key not in old:
+                problems.append(f"{recipe}: {key}: new, not in the manifest ({new[key]})")
+            elif old[key] != new[key]:
+                was, now = old[key].rsplit(" ", 1)[0], new[key].rsplit(" ", 1)[0]
+                what = "values differ" if was == now else f"was {was}, now {now}"
+                problems.append(f"{recipe}: {key}: {what}")
+    return problems, identical
+
+
+def describe_difference(a: np.ndarray, b: np.ndarray) -> str | None:
+    """None if a and b are the same bits; otherwise where and by how much they differ."""
+    if a.dtype.str != b.dtype.str or a.shape != b.shape:
+        return (f"was {a.dtype.str} {shape_text(a.shape)}, "
+                f"now {b.dtype.str} {shape_text(b.shape)}")
+    bytes_a = np.ascontiguousarray(a).reshape(-1).view(np.uint8).reshape(a.size, -1)
+    bytes_b = np.ascontiguousarray(b).reshape(-1).view(np.uint8).reshape(b.size, -1)
+    differ = (bytes_a != bytes_b).any(axis=1)
+    if not differ.any():
+        return None
+    first = int(np.flatnonzero(differ)[0])
+    where = list(map(int, np.unravel_index(first, a.shape))) if a.ndim else "scalar"
+    text = (f"{int(differ.sum())} of {a.size} elements differ; first at {where}: "
+            f"{a.reshape(-1)[first].item()!r:.60} -> {b.reshape(-1)[first].item()!r:.60}")
+    if a.dtype.kind in "iufc":
+        kind = np.complex128 if a.dtype.kind == "c" else np.float64
+        with np.errstate(invalid="ignore", over="ignore"):    # inf - inf, huge - -huge
+            gap = np.abs(a.reshape(-1)[differ].astype(kind) - b.reshape(-1)[differ])
+        largest = np.nanmax(gap) if not np.isnan(gap).all() else np.nan
+        text += f"; max abs difference {largest:.3g}"
+    return text
+
+
+def compare_dirs(dir_a: Path, dir_b: Path) -> int:
+    """Compare the output files of two directories, file by file and value by value."""
+    names_a = {p.name for p in dir_a.glob("*.h5")}
+    names_b = {p.name for p in dir_b.glob("*.h5")}
+    if not names_a | names_b:
+        print(f"no .h5 files in {dir_a} or {dir_b}")
+        return 1
+    problems, identical = [], {}
+    for name in sorted(names_a | names_b):
+        if name not in names_b or name not in names_a:
+            problems.append(f"{name}: only in {dir_a if name in names_a else dir_b}")
+            continue
+        a = dict(results(dir_a / name))
+        b = dict(results(dir_b / name))
+        identical[name] = {}
+        for key in sorted(a.keys() | b.keys()):
+            if key not in b or key not in a:
+                problems.append(f"{name}: {key}: only in {dir_a if key in a else dir_b}")
+            elif (difference := describe_difference(a[key], b[key])) is not None:
+                problems.append(f"{name}: {key}: {difference}")
+            else:
+                identical[name][key] = ""
+    for line in problems:
+        print(line)
+    print(differences(problems), summary(identical), sep="")
+    return 1 if problems else 0
+
+
+# ---- command line ------------------------------------------------------------------------
+
+def workdir_for(keep: Path | None) -> tuple[Path, tempfile.TemporaryDirectory | None]:
+    """The directory the recipes run in: `keep` (new or empty, as the redirected recipes and
+    their output are written there) or a temporary one that disappears afterwards."""
+    if keep is None:
+        temporary = tempfile.TemporaryDirectory(prefix="recipe-checksums-")
+        return Path(temporary.name), temporary
+    if keep.exists() and (not keep.is_dir() or any(keep.iterdir())):
+        raise RecipeError(f"{keep} is not an empty directory; give a new one")
+    keep.mkdir(parents=True, exist_ok=True)
+    return keep.resolve(), None
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    commands = parser.add_subparsers(dest="command", required=True)
+    for command, text in (("compute", "run every recipe and write the manifest"),
+                          ("check", "run every recipe and compare with the manifest"),
+                          ("run", "run every recipe into DIR, to `compare` later")):
+        sub = commands.add_parser(command, help=text)
+        if command == "run":
+            sub.add_argument("keep", type=Path, metavar="DIR")
+        else:
+            sub.add_argument("--manifest", type=Path, default=MANIFEST,
+                             help=f"default: {MANIFEST.relative_to(ROOT)}")
+        if command == "check":
+            sub.add_argument("--keep", type=Path, metavar="DIR",
+                             help="run in DIR and keep the output files")
+        sub.add_argument("--exe", type=Path, help="the simulator (default: the release build)")
+        sub.add_argument("--jobs", type=int, default=1, help="recipes run at once")
+    sub = commands.add_parser("compare", help="compare two directories of output files")
+    sub.add_argument("dir_a", type=Path)
+    sub.add_argument("dir_b", type=Path)
+    args = parser.parse_args(argv)
+
+    if args.command == "compare":
+        return compare_dirs(args.dir_a, args.dir_b)
+    try:
+        exe = (args.exe or default_exe()).resolve()
+        workdir, temporary = workdir_for(getattr(args, "keep", None))
+        try:
+            if args.command == "run":
+                run_recipes(exe, workdir, max(1, args.jobs))
+                return 0
+            fresh = compute(exe, workdir, max(1, args.jobs))
+        finally:
+            if temporary is not None:
+                temporary.cleanup()
+    except RecipeError as err:
+        print(f"recipe_checksums: {err}", file=sys.stderr)
+        return 1
+    if args.command == "compute":
+        args.manifest.write_text(json.dumps(fresh, indent=1, sort_keys=True) + "\n")
+        datasets, attributes = count(fresh)
+        print(f"wrote {args.manifest}: {datasets} datasets and {attributes} attributes "
+              f"in {len(fresh)} recipes")
+        return 0
+    stored = json.loads(args.manifest.read_text())
+    problems, identical = diff_manifests(stored, fresh)
+    for line in problems:
+        print(line)
+    if any(line.endswith(": values differ") for line in problems):
+        print("(to see where values differ: `check --keep DIR` or `run DIR` with this build,"
+              " `run DIR_REF --exe EXE_REF` with the reference build, then"
+              " `compare DIR_REF DIR`)")
+    print(differences(problems), summary(identical), sep="")
+    return 1 if problems else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
