@@ -12,10 +12,11 @@
 !> bonds. Times are times within the current drive cycle; `chain_new_cycle` moves the frame on
 !> by one period.
 !>
-!> Chatter and sticking: an oscillator that arrives at a wall with approach speed below
-!> `stick_speed` while the net force presses it there ends the (otherwise infinite) chatter
-!> sequence and rests on the wall (x = -a(0), v = 0). Oscillators can stack on a resting one:
-!> oscillator i rests at x = -(a(0) + ... + a(i-1)), where its acceleration is
+!> Contacts at the limit of resolution (docs/model.md section 5): an approach slower than the
+!> resolvable speed of its gap (chain_gaps) is decided by rounding. Pressed into a wall or a
+!> resting stack it ends in rest (as does one below `stick_speed`: chatter ends); otherwise it
+!> is a touch, with no impulse and no jump of the tangent. Oscillators can stack on a resting
+!> one: oscillator i rests at x = -(a(0) + ... + a(i-1)), where its acceleration is
 !> a(0) + ... + a(i-1) + A sin(w t) (mirror image on the right wall). Each resting oscillator
 !> leaves when that force turns away from the wall, a time known in closed form; the top of a
 !> stack always leaves first. An impact on a resting oscillator sets it moving again. Two
@@ -23,8 +24,9 @@
 !> sticking happens only against walls.
 !>
 !> Simultaneous contacts (triple contacts) are resolved as a sequence of pair impacts in time
-!> order, ties by bond index; after each, the neighbouring bonds are re-examined and any that
-!> is closed and closing fires at the same instant.
+!> order; contacts due at exactly one time go fastest first, then nearest the middle (a rule
+!> the mirror image keeps); after each, the neighbouring bonds are re-examined and any that is
+!> closed and closing fires at the same instant.
 module chain_engine
     use chain_kinds, only: wp, i8, two_pi
     use chain_error, only: error_t, set_error, fmt_int
@@ -33,7 +35,7 @@ module chain_engine
                           resolvable_speed
     use chain_impact, only: pair_impact, wall_impact, pair_reset_jacobian, &
                             wall_reset_jacobian, saltation_matrix
-    use chain_queue, only: queue_t, queue_init, queue_set, queue_top, queue_shift
+    use chain_queue, only: queue_t, queue_init, queue_set, queue_top, queue_shift, queue_ties
     use chain_lapack, only: qr_orthonormalise, qr_workspace_t
     use chain_events, only: event_log_t, event_log_append, event_impact, event_stick, &
                             event_release, event_touch
@@ -266,6 +268,7 @@ contains
         do
             call queue_top(chain%queue, bond, time)
             if (time > s_target) exit
+            if (has_tie(chain%queue)) bond = first_of_ties(chain, time)
             chain%s = time
             call count_instant(chain, time, err)
             if (allocated(err)) return
@@ -286,6 +289,63 @@ contains
         end do
         chain%s = s_target
     end subroutine chain_advance
+
+    !> Is another bond due at exactly the time of the heap's top? (Its children hold the next
+    !> earliest keys.)
+    pure logical function has_tie(q)
+        type(queue_t), intent(in) :: q
+        integer :: c
+
+        has_tie = .false.
+        do c = 2, min(5, q%size)
+            if (q%key(c) == q%key(1)) has_tie = .true.
+        end do
+    end function has_tie
+
+    !> Of several contacts due at one instant (a cascade through touching oscillators: one
+    !> impact makes both neighbouring bonds close at once), the one that closes fastest goes
+    !> first; then the one nearer the middle of the chain; then the lower bond. The first two
+    !> keys are the same for a chain and its mirror image, so the two resolve their cascades
+    !> alike (the bond index alone would reverse the order).
+    function first_of_ties(chain, time) result(first)
+        type(chain_t), intent(inout) :: chain
+        real(wp), intent(in) :: time
+        integer :: first, count, j, bond
+        integer :: ties(0:chain%n)
+        real(wp) :: best, u, middle
+
+        chain%s = time
+        call queue_ties(chain%queue, ties, count)
+        middle = 0.5_wp*chain%n
+        first = ties(0)
+        best = -huge(1.0_wp)
+        do j = 0, count - 1
+            bond = ties(j)
+            u = -huge(1.0_wp)
+            if (chain%action(bond) == action_impact) u = approach_speed(chain, bond)
+            if (u > best .or. (u == best .and. (abs(bond - middle) < abs(first - middle) .or. &
+                (abs(bond - middle) == abs(first - middle) .and. bond < first)))) then
+                best = u
+                first = bond
+            end if
+        end do
+    end function first_of_ties
+
+    !> The rate at which a bond's gap closes now (negative: opening).
+    function approach_speed(chain, bond) result(u)
+        type(chain_t), intent(inout) :: chain
+        integer, intent(in) :: bond
+        real(wp) :: u
+        type(gap_t) :: gap
+        logical :: closes
+        integer :: resting
+
+        u = -huge(1.0_wp)
+        call gap_now(chain, bond, gap, closes, resting)
+        if (.not. closes .or. resting /= 0) return
+        call drive_now(chain)
+        u = -(gap%vy + gap%beta*chain%drive_v)
+    end function approach_speed
 
     !> Move the epoch to the current time and fill x, v (and the tangent rows) with the state
     !> now. The free parts are re-derived from x, v exactly as chain_init does, and a second

@@ -527,6 +527,7 @@ contains
         type(output_t) :: src
         integer(hsize_t), allocatable :: dims(:)
         integer :: scalar(1), m
+        real(wp) :: volume(1)
 
         call open_for_reading(path, '&output', src, err)
         if (allocated(err)) return
@@ -548,9 +549,12 @@ contains
             call read_real_2d(src, 'resume/tangent', data%tangent, err)
             call read_int_1d(src, 'resume/tangent_scale_bits', scalar, err)
             data%tangent_scale_bits = scalar(1)
-            call read_real_1d(src, 'resume/tangent_log', data%tangent_log, err)
+            if (allocated(data%tangent)) allocate (data%tangent_log(size(data%tangent, 1)))
+            if (allocated(data%tangent_log)) &
+                call read_real_1d(src, 'resume/tangent_log', data%tangent_log, err)
             call read_int8_scalar(src, 'resume/rank_losses', data%rank_losses, err)
-            call read_real_scalar(src, 'resume/jumps_volume', data%jumps_volume, err)
+            call read_real_1d(src, 'resume/jumps_volume', volume, err)
+            data%jumps_volume = volume(1)
             call dataset_extent(src, 'resume/lyapunov_int', dims, err)
             if (.not. allocated(err)) then
                 allocate (data%lyapunov_int(product(dims)))

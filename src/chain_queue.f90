@@ -2,13 +2,14 @@
 !> costs O(log n) whatever the length of the chain. Four children per node halve the depth of
 !> a binary heap, and their keys share a cache line: a long chain's updates, which mostly
 !> move a bond down, miss the cache half as often. Ties are broken by the bond index, which
-!> makes the order of events independent of how the heap was filled.
+!> makes the order of events independent of how the heap was filled; the engine orders the
+!> bonds due at exactly one time by its own rule (`queue_ties` lists them).
 !> Implements docs/model.md sections 2.4 (the event schedule) and 5.6 (ties between events).
 module chain_queue
     use chain_kinds, only: wp
     implicit none
     private
-    public :: queue_t, queue_init, queue_set, queue_top, queue_shift
+    public :: queue_t, queue_init, queue_set, queue_top, queue_shift, queue_ties
 
     integer, parameter :: arity = 4
 
@@ -49,6 +50,30 @@ contains
         bond = q%heap(1)
         time = q%key(1)
     end subroutine queue_top
+
+    !> The bonds whose event is due at exactly the earliest time (ties[1:count]). Those keys
+    !> sit in the heap's top: a node's key equals the minimum only if its parent's does.
+    pure subroutine queue_ties(q, ties, count)
+        type(queue_t), intent(in) :: q
+        integer, intent(inout) :: ties(:) !! room for every bond
+        integer, intent(out) :: count
+        integer :: seen, j, c
+
+        count = 1
+        ties(1) = 1
+        seen = 0
+        ! breadth first over heap positions; ties holds positions until the end
+        do while (seen < count)
+            seen = seen + 1
+            j = ties(seen)
+            do c = arity*(j - 1) + 2, min(arity*j + 1, q%size)
+                if (q%key(c) /= q%key(1)) cycle
+                count = count + 1
+                ties(count) = c
+            end do
+        end do
+        ties(:count) = q%heap(ties(:count))
+    end subroutine queue_ties
 
     !> Set the event time of `bond` and restore the heap order: an earlier time can only move
     !> the bond up, a later one only down.

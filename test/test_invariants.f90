@@ -293,12 +293,12 @@ contains
     !> a(n-k), with the drive shifted by half a period (A sin(w t) -> -A sin(w t)): the mirror
     !> chain starts at time T/2 within the cycle. On random chains with rests and stacks on
     !> both walls, run and mirror must give mirror-image states (sampled four times a cycle)
-    !> and event streams (site k -> n - k) to rounding, up to the first simultaneous contact
-    !> (docs/model.md section 5): contacts closed at one instant are resolved one pair after
-    !> another, ties broken by bond index, an order that the mirror image reverses, so from
-    !> there on run and mirror may differ by more than rounding. Bounces slower than 1e-6 (the
-    !> last of a chatter, touches) are not compared one by one: how many come before a rest
-    !> is decided by rounding, and a rest resets the oscillator exactly.
+    !> and event streams (site k -> n - k) to rounding. Contacts due at one instant (cascades
+    !> through touching oscillators and stacks) are resolved in an order that the mirror image
+    !> keeps (docs/model.md section 5). Bounces slower than 1e-4 (the tail of a chatter,
+    !> touches) are not compared one by one: their speeds carry the rounding of the decision
+    !> where a chatter ends (about 1e-7, the resolvable speed), so how many of them come
+    !> before a rest may differ by one; the rest then resets the oscillator exactly.
     subroutine mirror_symmetry(t)
         type(tally_t), intent(inout) :: t
         integer, parameter :: chains = 32, cycles = 6, samples = 4
@@ -307,15 +307,13 @@ contains
         type(error_t), allocatable :: err
         type(event_log_t) :: log, mirror_log
         real(wp), allocatable :: spacing(:), x(:), v(:)
-        real(wp) :: restitution, period, worst_state, tol_time, scale, cut, compared
-        real(wp) :: total_compared
+        real(wp) :: restitution, period, worst_state, tol_time, scale
         real(wp) :: diff_at(samples*cycles)
         integer :: seed, n, j, q, sticks_left, sticks_right, stacks_left, stacks_right
         integer :: failing
         character(len=:), allocatable :: label, mismatch
         logical :: contacts_mirror
 
-        total_compared = 0
         sticks_left = 0
         sticks_right = 0
         stacks_left = 0
@@ -347,38 +345,33 @@ contains
                 diff_at(j) = max(maxval(abs(run%x + mirror%x(n:1:-1))), &
                                  maxval(abs(run%v + mirror%v(n:1:-1))))
                 if (any(run%contact /= -mirror%contact(n:1:-1))) diff_at(j) = huge(1.0_wp)
-                if (j*period/samples >= first_simultaneous(log, mirror_log)) cycle
                 if (count(run%contact == contact_left) >= 2) stacks_left = stacks_left + 1
                 if (count(run%contact == contact_right) >= 2) stacks_right = stacks_right + 1
             end do
-            cut = first_simultaneous(log, mirror_log)
             do j = 1, samples*cycles
-                if (j*period/samples >= cut) exit
                 if (diff_at(j) == huge(1.0_wp)) contacts_mirror = .false.
                 if (diff_at(j) < huge(1.0_wp)) worst_state = max(worst_state, diff_at(j))
             end do
-            compared = min(cut, cycles*period)
-            total_compared = total_compared + compared/period
             call check(t, .not. allocated(err), label//': both runs complete')
             if (allocated(err)) cycle
             sticks_left = sticks_left + count(log%kind(:log%count) == event_stick .and. &
-                                              log%site(:log%count) == 0 .and. &
-                                              log%time(:log%count) < cut)
+                                              log%site(:log%count) == 0)
             sticks_right = sticks_right + count(log%kind(:log%count) == event_stick .and. &
-                                                log%site(:log%count) == n .and. &
-                                                log%time(:log%count) < cut)
+                                                log%site(:log%count) == n)
             ! states are O(1) and every rest resets an oscillator exactly, so rounding does not
             ! grow over these few cycles: 1e-9 is rounding times 10^6
             call check_close(t, worst_state, 0.0_wp, label//': mirror-image states', &
                              abs_tol=1.0e-9_wp)
             call check(t, contacts_mirror, label//': resting on mirror-image walls')
-            ! an event time is fixed by its gap to (rounding of the gap) / (approach speed):
-            ! gaps here round at 1e-15; allowed 1e-12 / u (u floored at 1e-6, the chatter
-            ! speeds near a rest), and speeds to the same time times an acceleration scale
+            ! an event time is fixed by its gap to (error of the gap) / (approach speed): gaps
+            ! here round at 1e-15 and gather rounding over a run's hundreds of events (a
+            ! grazing wall impact at u = 2e-3 was seen 1.1e-9 apart: 3e-12 in the gap); allowed
+            ! 1e-11 / u, or 10 times the states' difference if larger, and speeds to the same
+            ! time times an acceleration scale
             scale = 1 + flow%amplitude + maxval(spacing)
-            tol_time = 1.0e-12_wp
-            mismatch = event_mismatch(resolved_before(log, cut), &
-                                      resolved_before(mirror_log, cut), n, tol_time, scale)
+            tol_time = max(1.0e-11_wp, 10*worst_state)
+            mismatch = event_mismatch(resolved_events(log), resolved_events(mirror_log), n, &
+                                      tol_time, scale)
             call check(t, len(mismatch) == 0, label//': mirror-image events'//mismatch)
             if (worst_state > 1.0e-9_wp .or. len(mismatch) > 0 .or. .not. contacts_mirror) &
                 failing = failing + 1
@@ -387,63 +380,32 @@ contains
         call check(t, sticks_left > 0 .and. sticks_right > 0, 'mirror chains: rests on '// &
                    'both walls ('//int_text(sticks_left)//' left, '//int_text(sticks_right)// &
                    ' right)')
-        ! (stacks form through simultaneous contacts, so none is compared yet: see above)
-        write (*, '(a,a,a,i0,a,i0,a,i0,a)') '  mirror symmetry compared over ', &
-            real_text(total_compared), ' of ', chains*cycles, ' cycles; stacks seen before ', &
-            stacks_left, ' (left) and ', stacks_right, ' (right) samples'
-        call check(t, total_compared > 0, 'mirror chains: compared before any simultaneous contact')
+        call check(t, stacks_left > 0 .and. stacks_right > 0, 'mirror chains: stacks on '// &
+                   'both walls ('//int_text(stacks_left)//' left, '//int_text(stacks_right)// &
+                   ' right, samples)')
         if (failing > 0) write (*, '(a,i0,a,i0,a)') '  mirror symmetry: ', failing, ' of ', &
             chains, ' random chains differ from their mirror image'
     end subroutine mirror_symmetry
-
-    !> Time of the first simultaneous contact in either of two runs: two resolved events
-    !> (approach speed 1e-6 or more, or a release) at one instant, to 1e-9 of the time.
-    pure function first_simultaneous(a, b) result(cut)
-        type(event_log_t), intent(in) :: a, b
-        real(wp) :: cut
-
-        cut = min(first_in(a), first_in(b))
-    contains
-        pure real(wp) function first_in(log) result(first)
-            type(event_log_t), intent(in) :: log
-            integer :: i, last
-
-            first = huge(1.0_wp)
-            last = 0
-            do i = 1, log%count
-                if (.not. resolved(log, i)) cycle
-                if (last > 0) then
-                    if (log%time(i) - log%time(last) <= 1.0e-9_wp*(1 + abs(log%time(i)))) then
-                        first = log%time(last)
-                        return
-                    end if
-                end if
-                last = i
-            end do
-        end function first_in
-    end function first_simultaneous
 
     pure logical function resolved(log, i)
         type(event_log_t), intent(in) :: log
         integer, intent(in) :: i
 
-        resolved = log%speed(i) >= 1.0e-6_wp .or. log%kind(i) == event_release
+        resolved = log%speed(i) >= 1.0e-4_wp .or. log%kind(i) == event_release
     end function resolved
 
-    !> The resolved events of a log before time `cut`.
-    function resolved_before(log, cut) result(kept)
+    !> The resolved events of a log (approach speed 1e-6 or more, or releases).
+    function resolved_events(log) result(kept)
         type(event_log_t), intent(in) :: log
-        real(wp), intent(in) :: cut
         type(event_log_t) :: kept
         integer :: i
 
         call event_log_init(kept, .true., max(1, log%count))
         do i = 1, log%count
-            if (log%time(i) >= cut) exit
             if (resolved(log, i)) call event_log_append(kept, log%time(i), log%site(i), &
                                                         log%speed(i), log%kind(i))
         end do
-    end function resolved_before
+    end function resolved_events
 
     !> '' if the event streams are mirror images, else where they first differ. Each event's
     !> time must agree to tol_gap (1 + 1/u), u its approach speed floored at 1e-6; events
