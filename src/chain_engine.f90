@@ -69,6 +69,8 @@ module chain_engine
     real(wp), parameter :: large_jump = 64
     !> ... and so does a run of jumps that shrank the frame's volume by more than e**(-18).
     real(wp), parameter :: small_volume = -18
+    !> ... and so does a frame entry above this (the frame was orthonormal: entries <= 1).
+    real(wp), parameter :: large_growth = 1024
 
     type :: chain_t
         integer :: n = 0
@@ -521,9 +523,11 @@ contains
         ! (nor after many strongly inelastic impacts: each shrinks the frame's volume by K**2, and
         ! a frame shrunk by 1e-8 within one interval keeps its smallest directions poorly)
         chain%jumps_volume = chain%jumps_volume + 2*log(max(chain%restitution, tiny(1.0_wp)))
+        ! (nor while the frame grows fast: once an entry passes large_growth, its leading
+        ! direction outgrows the others by about as much, and their digits go)
         if (chain%orthonormalise_jumps .and. chain%rank_losses == 0 .and. &
-            (maxval(abs(s)) > large_jump .or. chain%jumps_volume < small_volume)) &
-            call orthonormalise_tangent(chain)
+            (maxval(abs(s)) > large_jump .or. chain%jumps_volume < small_volume .or. &
+             largest > large_growth)) call orthonormalise_tangent(chain)
     end subroutine jump_rows
 
     !> Re-orthonormalise the frame now, keeping ln |R(j,j)| in tangent_log. Any upper
