@@ -1,5 +1,6 @@
 !> Period of an oscillator's strobe record: the smallest p <= max_period with
-!> |x(j+p) - x(j)| and |v(j+p) - v(j)| within tol*(1 + |x(j)|) for the whole record, or 0
+!> |x(j+p) - x(j)| within tol*(1 + |x(j)|) and |v(j+p) - v(j)| within tol*(1 + |v(j)|) over the
+!> whole record, or 0
 !> (aperiodic or of period beyond max_period). This is the paper's "period-1, period-2,
 !> high period, chaotic" classification made explicit.
 !> Implements docs/model.md section 6.3.
