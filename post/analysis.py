@@ -1,83 +1,21 @@
-"""Small analysis helpers: Kaplan-Yorke dimension, period detection, panel ranges.
+"""Small analysis helpers: period labels and panel ranges.
 
-All functions are pure and work on plain numpy arrays.
+All functions are pure and work on plain numpy arrays. Periods, Lyapunov exponents and
+Kaplan-Yorke dimensions are not computed anywhere in ``post``: each has one definition, the
+simulator's (docs/model.md sections 6.3 and 7.5), and the figures read them from its files
+(``/strobe/period``, ``/lyapunov``, ``/sweep/period``, ``/sweep/exponents``,
+``/sweep/ky_dimension``).
 """
 
 from __future__ import annotations
-
-import math
 
 import numpy as np
 from numpy.typing import ArrayLike
 
 __all__ = [
-    "BITS_PER_NAT",
-    "kaplan_yorke",
-    "kaplan_yorke_rows",
-    "detect_period",
-    "detect_periods",
     "period_label",
     "panel_ranges",
 ]
-
-BITS_PER_NAT = 1.0 / math.log(2.0)
-"""Multiply an exponent in nats by this to get bits."""
-
-
-def kaplan_yorke(exponents: ArrayLike, full_dimension: int | None = None) -> float:
-    """Kaplan-Yorke (Lyapunov) dimension of a spectrum (docs/model.md section 7.5).
-
-    The exponents are sorted descending; with ``j`` the largest index such that
-    ``l1 + ... + lj >= 0``, ``D = j + (l1 + ... + lj) / |l(j+1)|``. ``D = 0`` when
-    ``l1 < 0``; when the sum of all exponents is >= 0 the attractor fills phase space
-    and ``D`` is the number of exponents. If the spectrum is truncated (fewer exponents
-    than ``full_dimension``) and its whole sum is >= 0, ``D`` cannot be determined and
-    NaN is returned. The result does not depend on the unit of the exponents.
-    """
-    spectrum = np.sort(np.asarray(exponents, dtype=np.float64).reshape(-1))[::-1]
-    if spectrum.size == 0 or np.isnan(spectrum).any():
-        return math.nan
-    partial = np.cumsum(spectrum)
-    nonnegative = np.flatnonzero(partial >= 0.0)
-    if nonnegative.size == 0:
-        return 0.0
-    j = int(nonnegative[-1]) + 1  # number of exponents in the largest non-negative sum
-    if j == spectrum.size:
-        if full_dimension is not None and spectrum.size < full_dimension:
-            return math.nan
-        return float(j)
-    return j + float(partial[j - 1]) / abs(float(spectrum[j]))
-
-
-def kaplan_yorke_rows(exponents: ArrayLike, full_dimension: int | None = None) -> np.ndarray:
-    """:func:`kaplan_yorke` of each row of an (n_points, k) array."""
-    rows = np.atleast_2d(np.asarray(exponents, dtype=np.float64))
-    return np.array([kaplan_yorke(row, full_dimension) for row in rows])
-
-
-def detect_period(series: ArrayLike, max_period: int | None = None, rtol: float = 1e-6) -> int:
-    """Smallest period p of a strobe series, or 0 if none is found (aperiodic).
-
-    ``series`` holds one oscillator's displacement at successive sections. p is accepted
-    when ``|s[j+p] - s[j]| <= rtol * max(1, max|s|)`` for every j of the series; periods
-    up to ``max_period`` (default: half the series length) are tried.
-    """
-    s = np.asarray(series, dtype=np.float64).reshape(-1)
-    if s.size < 2:
-        return 0
-    limit = s.size // 2 if max_period is None else min(max_period, s.size - 1)
-    tol = rtol * max(1.0, float(np.max(np.abs(s))))
-    for p in range(1, limit + 1):
-        if np.all(np.abs(s[p:] - s[:-p]) <= tol):
-            return p
-    return 0
-
-
-def detect_periods(x: ArrayLike, max_period: int | None = None, rtol: float = 1e-6) -> np.ndarray:
-    """:func:`detect_period` of each column of an (n_record, n) strobe array."""
-    arr = np.asarray(x, dtype=np.float64)
-    return np.array([detect_period(arr[:, i], max_period, rtol) for i in range(arr.shape[1])],
-                    dtype=np.int64)
 
 
 def period_label(period: int) -> str:

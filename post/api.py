@@ -135,8 +135,9 @@ class Simulation:
     final_v: NDArray[np.float64]
     """(n,) velocity at the end of the run [length/time]."""
     periods: NDArray[np.int32]
-    """(n,) period of each oscillator in drive cycles over the last <= 1024 records
-    (0: none found up to 16), as the CLI's ``/strobe/period``."""
+    """(n,) period of each oscillator in drive cycles, 0 when none up to 16 is found: the
+    CLI's ``/strobe/period``, by the same Fortran rule over the last min(cycles, 80)
+    records (docs/model.md section 6.3)."""
     site_counts: NDArray[np.int64]
     """(n+1,) impacts on each bond 0..n during the recorded cycles."""
     impacts: int

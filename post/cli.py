@@ -100,9 +100,9 @@ def _wait_option(parser: argparse.ArgumentParser) -> None:
 
 def _space_amplitude_options(parser: argparse.ArgumentParser) -> None:
     _cycles_option(parser)
-    parser.add_argument("--periods", choices=("file", "detect", "none"), default="file",
-                        help="period labels: from the file's /strobe/period (default), "
-                             "detected from the records when the file has none, or none")
+    parser.add_argument("--periods", choices=("file", "none"), default="file",
+                        help="period labels: the simulator's, from the file's /strobe/period "
+                             "(default), or none")
 
 
 def _shock_wave_options(parser: argparse.ArgumentParser) -> None:
@@ -172,7 +172,7 @@ COMMANDS: dict[str, Command] = {
                 lambda runs, a: figures.lyapunov(runs, a.k, a.with_bifurcation)),
         Command("ky-dimension",
                 "Kaplan-Yorke dimension against the swept parameter (sweep files)",
-                ("sweep", "sweep/ky_dimension|sweep/exponents"), (), True, _no_options,
+                ("sweep", "sweep/ky_dimension"), (), True, _no_options,
                 lambda runs, a: figures.ky_dimension(runs)),
         Command("spectrum",
                 "Lyapunov spectrum of one run and convergence of the running estimates",
@@ -269,7 +269,7 @@ def _all_figures(run: Run, args: argparse.Namespace) -> Iterator[tuple[str, Figu
             yield "bifurcation", figures.bifurcation(run)
             if sweep.exponents is not None:
                 yield "lyapunov", figures.lyapunov([run], with_bifurcation=True)
-        if sweep.ky_dimension is not None or sweep.exponents is not None:
+        if sweep.ky_dimension is not None:
             yield "ky-dimension", figures.ky_dimension([run])
 
 

@@ -23,7 +23,7 @@ from matplotlib.collections import LineCollection
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 
-from post.analysis import detect_periods, kaplan_yorke_rows, panel_ranges, period_label
+from post.analysis import panel_ranges, period_label
 from post.io import Run, Strobe, Sweep
 from post.shockwave import Wave, build_shock_waves
 
@@ -69,13 +69,14 @@ def space_amplitude(
 
     One line per recorded cycle (the last ``cycles`` records), one colour per run; walls
     as thick vertical lines when the boundary is fixed. ``periods``: ``'file'`` labels
-    each site with ``/strobe/period`` when present, ``'detect'`` computes the periods from
-    the shown records when the file has none, ``'none'`` shows no labels.
+    each site with the period the simulator stored, ``/strobe/period`` (found over the
+    run's last records, docs/model.md section 6.3, whatever ``cycles`` shows; no labels
+    for a file without it), ``'none'`` shows no labels.
     """
     if not runs:
         raise FigureError("space-amplitude needs at least one run")
-    if periods not in ("file", "detect", "none"):
-        raise FigureError(f"periods = {periods!r} must be 'file', 'detect' or 'none'")
+    if periods not in ("file", "none"):
+        raise FigureError(f"periods = {periods!r} must be 'file' or 'none'")
     fig = Figure(figsize=(8.0, 5.0), layout="constrained")
     ax = fig.add_subplot()
     colours = _overlay_colours(len(runs))
@@ -87,7 +88,7 @@ def space_amplitude(
         lines = ax.plot(pos, rows.T, color=colour, linewidth=0.5, marker="o", markersize=1.8)
         for line in lines:
             line.set_gid(f"strobe-{index}")
-        labels = _periods(strobe, rows, periods)
+        labels = None if periods == "none" else strobe.period
         if labels is not None:
             _period_labels(ax, pos, labels, colour, label_rows)
             label_rows += 1
@@ -102,16 +103,6 @@ def space_amplitude(
     ax.set_title(f"{_title(runs[0])}\nlast {shown} cycles", pad=6 + 11 * label_rows,
                  fontsize="medium")
     return fig
-
-
-def _periods(strobe: Strobe, rows: np.ndarray, mode: str) -> np.ndarray | None:
-    if mode == "none":
-        return None
-    if strobe.period is not None:
-        return strobe.period
-    if mode == "detect" and rows.shape[0] >= 2:
-        return detect_periods(rows)
-    return None
 
 
 def _period_labels(ax: Axes, pos: np.ndarray, periods: np.ndarray, colour: str, row: int) -> None:
@@ -370,9 +361,8 @@ def _exponent_lines(ax: Axes, sweep: Sweep, k: int) -> None:
 def ky_dimension(runs: Sequence[Run]) -> Figure:
     """Kaplan-Yorke dimension against the swept parameter, one line per sweep file.
 
-    Uses ``/sweep/ky_dimension`` when present, otherwise computes it from the stored
-    exponents (NaN where a truncated spectrum cannot decide it). A 2-D sweep is drawn as
-    a scatter coloured by the dimension.
+    Draws ``/sweep/ky_dimension``, the simulator's value at each point (docs/model.md
+    section 7.5). A 2-D sweep is drawn as a scatter coloured by the dimension.
     """
     if not runs:
         raise FigureError("ky-dimension needs at least one sweep file")
@@ -414,12 +404,10 @@ def _differing_parameters(runs: Sequence[Run]) -> list[str]:
 
 
 def _sweep_ky(run: Run, sweep: Sweep) -> np.ndarray:
-    if sweep.ky_dimension is not None:
-        return sweep.ky_dimension
-    if sweep.exponents is None:
-        raise FigureError(f"{run.path}: the sweep has neither Kaplan-Yorke dimensions "
-                          "nor Lyapunov exponents")
-    return kaplan_yorke_rows(sweep.exponents, full_dimension=2 * run.params.n)
+    if sweep.ky_dimension is None:
+        raise FigureError(f"{run.path}: the sweep has no Kaplan-Yorke dimensions "
+                          "(/sweep/ky_dimension; written with &lyapunov)")
+    return sweep.ky_dimension
 
 
 # ------------------------------------------------------------------------------- spectrum

@@ -9,19 +9,23 @@ HDF5 path                 dataclass field         shape (h5py / numpy order)
 ========================  ======================  ===================================
 /params (attributes)      ``Run.params``          scalars; ``spacing`` (n+1,)
 /initial, /final          ``Run.initial/final``   ``x``, ``v`` (n,)
-/strobe                   ``Run.strobe``          ``x``, ``v`` (n_record, n); ``cycle``
+/strobe                   ``Run.strobe``          ``x``, ``v`` (n_record, n); ``cycle``;
+                                                  ``period`` (n,)
 /events                   ``Run.events``          ``time``, ``site``, ... (n_events,)
 /stats                    ``Run.stats``           ``site_counts`` (n+1,), ``cycles_done``
 /lyapunov                 ``Run.lyapunov``        ``exponents`` (k,), ``running`` (m, k),
-                                                  ``running_cycle`` (m,)
-/sweep                    ``Run.sweep``           ``x`` (n_points, cycles, n)
+                                                  ``running_cycle`` (m,), ``ky_dimension``
+/sweep                    ``Run.sweep``           ``x`` (n_points, cycles, n), ``period``
+                                                  (n_points, n), ``exponents`` (n_points,
+                                                  k), ``ky_dimension`` (n_points,)
 ========================  ======================  ===================================
 
 Every group except ``/params`` is optional; a figure states what it needs through
 ``read_run(path, require=...)`` and gets a :class:`SchemaError` naming the missing
 piece when the file lacks it. The Fortran writer stores arrays as ``(n, n_record)``
 so that they appear here as ``(n_record, n)``; a file with the other order is rejected
-rather than silently transposed.
+rather than silently transposed. Periods, exponents and Kaplan-Yorke dimensions are the
+simulator's, as stored; nothing in ``post`` computes them again.
 """
 
 from __future__ import annotations
@@ -153,7 +157,7 @@ class Strobe:
     x: np.ndarray  # (n_record, n)
     v: np.ndarray  # (n_record, n)
     cycle: np.ndarray  # (n_record,) absolute cycle index
-    period: np.ndarray | None  # (n,) detected period per oscillator, 0 = aperiodic
+    period: np.ndarray | None  # (n,) the simulator's period per oscillator, 0 = aperiodic
 
     @property
     def n_record(self) -> int:
@@ -213,10 +217,10 @@ class Sweep:
     values: np.ndarray  # (n_points,) or (n_points, 2)
     x: np.ndarray  # (n_points, cycles, n)
     collisions_per_cycle: np.ndarray  # (n_points,)
-    period: np.ndarray  # (n_points, n)
+    period: np.ndarray  # (n_points, n) the simulator's period per oscillator, 0 = aperiodic
     exponents: np.ndarray | None = None  # (n_points, k) bits/cycle
     stderr: np.ndarray | None = None  # (n_points, k) bits/cycle
-    ky_dimension: np.ndarray | None = None  # (n_points,)
+    ky_dimension: np.ndarray | None = None  # (n_points,) written with the exponents
 
     @property
     def is_2d(self) -> bool:

@@ -1,6 +1,7 @@
-!> fpm test: every physics suite of impactchain (and its event queue); prints "N passed, M failed".
+!> fpm test: every physics suite of impactchain (and its event queue), each of which can be run
+!> alone (`fpm test -- <suite>`, see test/suites.f90); prints "N passed, M failed".
 program main
-    use testing, only: tally_t, report
+    use suites, only: suite_runner_t
     use test_flow, only: run_flow_tests
     use test_gaps, only: run_gap_tests
     use test_impact, only: run_impact_tests
@@ -10,24 +11,16 @@ program main
     use test_corners, only: run_corner_tests
     use test_invariants, only: run_invariant_tests
     implicit none
-    type(tally_t) :: t, before
+    type(suite_runner_t) :: runner
 
-    call run_flow_tests(t)
-    call report(t, before, 'flow')
-    call run_gap_tests(t)
-    call report(t, before, 'gaps')
-    call run_impact_tests(t)
-    call report(t, before, 'impact')
-    call run_queue_tests(t)
-    call report(t, before, 'queue')
-    call run_engine_tests(t)
-    call report(t, before, 'engine')
-    call run_lyapunov_tests(t)
-    call report(t, before, 'lyapunov')
-    call run_corner_tests(t)
-    call report(t, before, 'corners')
-    call run_invariant_tests(t)
-    call report(t, before, 'invariants')
-    write (*, '(i0,a,i0,a)') t%passed, ' passed, ', t%failed, ' failed'
-    if (t%failed > 0) error stop 1
+    call runner%start()
+    call runner%run('flow', run_flow_tests)
+    call runner%run('gaps', run_gap_tests)
+    call runner%run('impact', run_impact_tests)
+    call runner%run('queue', run_queue_tests)
+    call runner%run('engine', run_engine_tests)
+    call runner%run('lyapunov', run_lyapunov_tests)
+    call runner%run('corners', run_corner_tests)
+    call runner%run('invariants', run_invariant_tests)
+    call runner%finish()
 end program main

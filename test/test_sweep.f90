@@ -1,10 +1,10 @@
-!> fpm test test_sweep: parameter sweeps (chain_sweep) through the library, without the CLI.
-!> The number of points and their values, the configuration of one point, identical results
-!> with 1 and 2 OpenMP threads, a continuation equal to the same steps run one by one from
-!> files (`&initial kind = 'file'`), and a sweep stopped, checkpointed and resumed equal to an
-!> uninterrupted one. The CLI, MPI and signal tests are in test/python/test_sweep.py.
-!> Prints "N passed, M failed"; exits non-zero on a failure.
-program test_sweep
+!> Parameter sweeps (docs/model.md section 8, chain_sweep) through the library, without the CLI.
+!> Suite `sweep`: the number of points and their values, the configuration of one point,
+!> identical results with 1 and 2 OpenMP threads, a continuation equal to the same steps run one
+!> by one from files (`&initial kind = 'file'`). Suite `checkpoint`: a sweep stopped,
+!> checkpointed and resumed equal to an uninterrupted one, and checkpoints that cannot be
+!> written. The CLI, MPI and signal tests are in test/python/test_sweep.py.
+module test_sweep
     use, intrinsic :: iso_fortran_env, only: output_unit
     !$ use omp_lib, only: omp_set_num_threads
     use chain_kinds, only: wp, i8
@@ -18,20 +18,26 @@ program test_sweep
                            save_checkpoint, load_checkpoint, remove_file
     use testing, only: tally_t, check, check_close
     implicit none
-    type(tally_t) :: t
-    character(len=:), allocatable :: tmp
-
-    tmp = temp_prefix()
-    call test_axes(t)
-    call test_point_config(t)
-    call test_threads(t)
-    call test_continuation_equals_files(t)
-    call test_checkpoint_resume(t)
-    call test_checkpoint_write_failure(t)
-    write (output_unit, '(i0,a,i0,a)') t%passed, ' passed, ', t%failed, ' failed'
-    if (t%failed > 0) error stop 1
+    private
+    public :: run_sweep_tests, run_checkpoint_tests
 
 contains
+
+    subroutine run_sweep_tests(t)
+        type(tally_t), intent(inout) :: t
+
+        call test_axes(t)
+        call test_point_config(t)
+        call test_threads(t)
+        call test_continuation_equals_files(t)
+    end subroutine run_sweep_tests
+
+    subroutine run_checkpoint_tests(t)
+        type(tally_t), intent(inout) :: t
+
+        call test_checkpoint_resume(t)
+        call test_checkpoint_write_failure(t)
+    end subroutine run_checkpoint_tests
 
     !> Points per axis from the index (never accumulated), rounding-safe at both ends.
     subroutine test_axes(t)
@@ -121,9 +127,9 @@ contains
                              "step = 0.2, mode = '"//trim(modes(m))//"', parameter2 = "// &
                              "'omega', start2 = 1.4, stop2 = 1.6, step2 = 0.1 /", 'threads')
             !$ call omp_set_num_threads(1)
-            call whole_sweep(cfg, one)
+            call whole_sweep(t, cfg, one)
             !$ call omp_set_num_threads(2)
-            call whole_sweep(cfg, two)
+            call whole_sweep(t, cfg, two)
             call check(t, all(one%done) .and. all(two%done), trim(modes(m))//': all done')
             call check(t, same(one, two), trim(modes(m))//': 1 and 2 threads agree bit for bit')
             call check(t, any(one%collisions > 0) .and. any(one%exponents(1, :) /= 0), &
@@ -149,9 +155,10 @@ contains
         integer(i8) :: cycle
         real(wp) :: phase, s, model(4)
         character(len=8) :: boundary
-        character(len=:), allocatable :: previous, path
+        character(len=:), allocatable :: previous, path, tmp
         integer :: j
 
+        tmp = temp_prefix()
         call config_text(cfg, chain//"amplitude = 3.0 /"//new_line('a')//run//new_line('a')// &
                          "&sweep parameter = 'amplitude', start = 3.0, stop = 2.8, "// &
                          "step = -0.1 /", 'cont')
@@ -201,14 +208,15 @@ contains
         type(sweep_result_t) :: whole, part, loaded
         type(branch_start_state_t), allocatable :: starts(:), loaded_starts(:)
         type(error_t), allocatable :: err
-        character(len=:), allocatable :: path
+        character(len=:), allocatable :: path, tmp
         integer :: b
 
+        tmp = temp_prefix()
         call config_from(cfg, "&lyapunov vectors = 3 /"//new_line('a')// &
                          "&sweep parameter = 'amplitude', start = 2.4, stop = 1.6, "// &
                          "step = -0.1, parameter2 = 'restitution', start2 = 0.5, "// &
                          "stop2 = 0.7, step2 = 0.1 /", 'ckpt')
-        call whole_sweep(cfg, whole)
+        call whole_sweep(t, cfg, whole)
         plan = plan_sweep(cfg)
         call sweep_result_init(part, cfg, plan)
         allocate (starts(plan%n_branches))
@@ -259,9 +267,10 @@ contains
         type(sweep_result_t) :: res, loaded
         type(branch_start_state_t), allocatable :: starts(:)
         type(error_t), allocatable :: err
-        character(len=:), allocatable :: path
+        character(len=:), allocatable :: path, tmp
         integer :: status
 
+        tmp = temp_prefix()
         call config_from(cfg, "&sweep parameter = 'amplitude', start = 2.0, stop = 1.8, "// &
                          "step = -0.1 /", 'full')
         plan = plan_sweep(cfg)
@@ -294,7 +303,8 @@ contains
         keep_going = count(res%done) < 5 .or. size(starts) < 0
     end function stop_after_five
 
-    subroutine whole_sweep(cfg, res)
+    subroutine whole_sweep(t, cfg, res)
+        type(tally_t), intent(inout) :: t
         type(run_config_t), intent(in) :: cfg
         type(sweep_result_t), intent(out) :: res
         type(sweep_plan_t) :: plan
@@ -334,8 +344,10 @@ contains
         type(run_config_t), intent(out) :: cfg
         character(len=*), intent(in) :: text, name
         type(error_t), allocatable :: err
+        character(len=:), allocatable :: tmp
         integer :: u
 
+        tmp = temp_prefix()
         open (newunit=u, file=tmp//name//'.nml', status='replace', action='write')
         write (u, '(a)') text
         write (u, '(a)') "&output file = '"//tmp//name//".h5' /"
@@ -357,7 +369,7 @@ contains
         text = trim(adjustl(buf))
     end function real_text
 
-    !> A prefix for temporary files, unique per run: $TMPDIR (or /tmp)/impactchain-test-<clock>-
+    !> A fresh prefix for temporary files: $TMPDIR (or /tmp)/impactchain-test-sweep-<clock>-
     function temp_prefix() result(prefix)
         character(len=:), allocatable :: prefix
         character(len=512) :: dir
@@ -372,4 +384,4 @@ contains
         prefix = trim(dir)//'/impactchain-test-sweep-'//trim(stamp)//'-'
     end function temp_prefix
 
-end program test_sweep
+end module test_sweep

@@ -5,7 +5,7 @@ module testing
     use chain_kinds, only: wp
     implicit none
     private
-    public :: tally_t, check, check_close, report
+    public :: tally_t, check, check_close
 
     type :: tally_t
         integer :: passed = 0
@@ -45,16 +45,5 @@ contains
                 ': got ', got, ' want ', want, ' diff ', abs(got - want), ' tol ', tol
         end if
     end subroutine check_close
-
-    !> Print the checks of one suite: those in `t` that were not yet in `before`.
-    subroutine report(t, before, suite)
-        type(tally_t), intent(in) :: t
-        type(tally_t), intent(inout) :: before
-        character(len=*), intent(in) :: suite
-
-        write (output_unit, '(a,i0,a,i0,a)') '  '//suite//' checks: ', t%passed - before%passed, &
-            ' passed, ', t%failed - before%failed, ' failed'
-        before = t
-    end subroutine report
 
 end module testing

@@ -3,12 +3,18 @@
 ``write_run`` writes what the Fortran side writes, including its habits: scalar
 attributes as one-element arrays, space-padded fixed-length strings, and a ``units``
 attribute on every dataset.
+
+Periods, exponents and Kaplan-Yorke dimensions are stored, as the simulator stores them,
+and the figures must show the stored values (``post`` never computes them). So that a
+figure that did compute them would be caught, the stored Kaplan-Yorke dimensions are not
+those of the stored exponents, and ``write_run(periods=[...])`` stores periods other than
+those of the strobe record.
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -87,7 +93,7 @@ def write_run(
     sweep: bool | Mapping[str, Any] | None = None,
     *,
     strobe: bool = True,
-    periods: bool = True,
+    periods: bool | Sequence[int] = True,
     boundary: str = "fixed",
     spacing: np.ndarray | None = None,
     phase: float = 0.0,
@@ -101,7 +107,9 @@ def write_run(
 
     ``events``: True for :func:`cascade_events`, a mapping with ``time``, ``site`` and
     optionally ``speed``, ``kind`` for a given stream, False/None for no /events group.
-    ``sweep``: True or a mapping overriding :data:`DEFAULT_SWEEP`.
+    ``sweep``: True or a mapping overriding :data:`DEFAULT_SWEEP`. ``periods``: True
+    stores /strobe/period as the record's own (:data:`PERIODS`), a sequence stores those
+    values instead, False stores none.
     """
     path = Path(path)
     period = 2 * math.pi / omega
@@ -154,16 +162,18 @@ def _write_params(f: h5py.File, n: int, spacing: np.ndarray, boundary: str, omeg
     _dataset(g, "spacing", spacing, "a")
 
 
-def _write_strobe(f: h5py.File, n: int, records: int, cycle: np.ndarray, periods: bool,
-                  transpose: bool) -> None:
+def _write_strobe(f: h5py.File, n: int, records: int, cycle: np.ndarray,
+                  periods: bool | Sequence[int], transpose: bool) -> None:
     g = f.create_group("strobe")
     x = strobe_record(n, records)
     v = -0.5 * strobe_record(n, records, seed=2)
     _dataset(g, "x", x.T if transpose else x, "a")
     _dataset(g, "v", v.T if transpose else v, "a/time")
     _dataset(g, "cycle", cycle, "cycles")
-    if periods:
-        _dataset(g, "period", np.array([PERIODS[i % 4] for i in range(n)]), "cycles")
+    if periods is True:
+        periods = [PERIODS[i % 4] for i in range(n)]
+    if periods is not False:
+        _dataset(g, "period", np.asarray(periods, dtype=np.int32), "cycles")
 
 
 def _write_events(f: h5py.File, stream: tuple[np.ndarray, ...]) -> None:
@@ -195,7 +205,7 @@ def _write_lyapunov(f: h5py.File, n: int, records: int) -> None:
     _dataset(g, "exponents_per_time", exponents * math.log(2) / 4.0, "1/time")
     _dataset(g, "stderr", np.full(2 * n, 0.02), "bits/cycle")
     _dataset(g, "running", exponents + 0.5 / steps, "bits/cycle")
-    g.attrs["ky_dimension"] = 3.5
+    g.attrs["ky_dimension"] = 3.5  # not that of the exponents (4.44 for n = 4)
     g.attrs["positive_sum"] = float(exponents[exponents > 0].sum())
     g.attrs["collisions_per_cycle"] = 2.0 * (n + 1)
 
@@ -227,6 +237,7 @@ def _write_sweep(f: h5py.File, n: int, spec: Mapping[str, Any]) -> None:
         _dataset(g, "exponents", exponents, "bits/cycle")
         _dataset(g, "stderr", np.full((points, k), 0.01), "bits/cycle")
         if spec["ky_dimension"]:
+            # not those of the exponents (e.g. point 0: 4 + 0.2/0.7 for k = 6)
             _dataset(g, "ky_dimension", np.linspace(0.0, 3.0, points), "1")
 
 

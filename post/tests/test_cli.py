@@ -8,9 +8,13 @@ import sys
 from collections.abc import Callable
 from pathlib import Path
 
+import numpy as np
 import pytest
+from matplotlib.figure import Figure
 
+from post import cli
 from post.cli import COMMANDS, main
+from post.io import read_run
 
 MakeRun = Callable[..., Path]
 ROOT = Path(__file__).resolve().parents[2]
@@ -69,7 +73,7 @@ def test_module_figure_needing_absent_data(make_run: MakeRun, tmp_path: Path) ->
 @pytest.mark.parametrize(
     ("figure", "options"),
     [
-        ("space-amplitude", ["--cycles", "5", "--periods", "detect"]),
+        ("space-amplitude", ["--cycles", "5", "--periods", "none"]),
         ("space-time-amplitude", ["--panel-cycles", "10", "--panels", "2"]),
         ("shock-wave", ["--panel-cycles", "10", "--max-wait", "0.5"]),
         ("poincare", ["--site", "2", "--cycles", "10"]),
@@ -94,6 +98,47 @@ def test_sweep_figures(figure: str, options: list[str], sweep_file: Path, tmp_pa
     out = tmp_path / f"{figure}.pdf"
     assert main([figure, str(sweep_file), "-o", str(out), *options]) == 0
     assert out.read_bytes()[:5] == b"%PDF-"
+
+
+def _captured(monkeypatch: pytest.MonkeyPatch) -> dict[str, Figure]:
+    """Figures the CLI would write, by output name, instead of writing them."""
+    figures: dict[str, Figure] = {}
+
+    def keep(figure: Figure, out: Path, dpi: int = 150) -> None:
+        del dpi
+        figures[Path(out).name] = figure
+
+    monkeypatch.setattr(cli, "_save", keep)
+    return figures
+
+
+def _period_labels(figure: Figure) -> list[str]:
+    return [t.get_text() for t in figure.axes[0].texts if t.get_gid() == "period"]
+
+
+def test_periods_shown_are_the_stored_ones(make_run: MakeRun, tmp_path: Path,
+                                           monkeypatch: pytest.MonkeyPatch) -> None:
+    """The strobe records of the fixture have periods 1, 2, 4 and none; the file says
+    3, 0, 1, 2, and the labels of space-amplitude (alone and in `all`) must say so too."""
+    path = str(make_run(n=4, records=20, periods=[3, 0, 1, 2]))
+    made = _captured(monkeypatch)
+    assert main(["space-amplitude", path, "-o", str(tmp_path / "sa.png"), "--cycles", "8"]) == 0
+    assert main(["all", path, "-o", str(tmp_path / "r")]) == 0
+    assert _period_labels(made["sa.png"]) == ["P3", "ap", "P1", "P2"]
+    assert _period_labels(made["r_space_amplitude.png"]) == ["P3", "ap", "P1", "P2"]
+
+
+def test_ky_dimension_shown_is_the_stored_one(sweep_file: Path, tmp_path: Path,
+                                             monkeypatch: pytest.MonkeyPatch) -> None:
+    """The fixture's /sweep/ky_dimension is not the dimension of its /sweep/exponents."""
+    made = _captured(monkeypatch)
+    assert main(["ky-dimension", str(sweep_file), "-o", str(tmp_path / "ky.png")]) == 0
+    assert main(["all", str(sweep_file), "-o", str(tmp_path / "s")]) == 0
+    stored = read_run(sweep_file).sweep
+    assert stored is not None and stored.ky_dimension is not None
+    for name in ("ky.png", "s_ky_dimension.png"):
+        (line,) = [ln for ln in made[name].axes[0].get_lines() if ln.get_gid() == "ky"]
+        np.testing.assert_array_equal(line.get_ydata(), stored.ky_dimension)
 
 
 def test_overlay_of_several_files(make_run: MakeRun, tmp_path: Path) -> None:
@@ -161,6 +206,17 @@ def test_error_lyapunov_without_exponents(make_run: MakeRun, tmp_path: Path,
     _expect_error(["lyapunov", str(path)], "no /sweep/exponents", tmp_path / "o.png", capsys)
 
 
+def test_error_ky_dimension_without_stored_dimensions(make_run: MakeRun, tmp_path: Path,
+                                                    capsys: pytest.CaptureFixture[str]) -> None:
+    """The exponents alone are not enough: the dimension is never computed from them."""
+    path = make_run(sweep={"ky_dimension": False})
+    _expect_error(["ky-dimension", str(path)], "no /sweep/ky_dimension", tmp_path / "o.png",
+                  capsys)
+    assert main(["all", str(path), "-o", str(tmp_path / "r")]) == 0
+    assert not (tmp_path / "r_ky_dimension.png").exists()
+    assert (tmp_path / "r_lyapunov.png").exists()
+
+
 def test_error_spectrum_without_lyapunov(make_run: MakeRun, tmp_path: Path,
                                          capsys: pytest.CaptureFixture[str]) -> None:
     _expect_error(["spectrum", str(make_run())], "no /lyapunov", tmp_path / "o.png", capsys)
@@ -188,6 +244,13 @@ def test_bad_option_is_a_usage_error(run_file: Path, tmp_path: Path) -> None:
     with pytest.raises(SystemExit) as exit_info:
         main(["space-time-amplitude", str(run_file), "-o", str(tmp_path / "o.png"),
               "--panels", "0"])
+    assert exit_info.value.code == 2
+
+
+def test_periods_are_never_detected(run_file: Path, tmp_path: Path) -> None:
+    with pytest.raises(SystemExit) as exit_info:
+        main(["space-amplitude", str(run_file), "-o", str(tmp_path / "o.png"),
+              "--periods", "detect"])
     assert exit_info.value.code == 2
 
 

@@ -75,13 +75,26 @@ def test_space_amplitude_period_labels(make_run: MakeRun) -> None:
     assert labels == ["P1", "P2", "P4", "ap", "P1", "P2"]
 
 
-def test_space_amplitude_detects_periods_only_when_asked(make_run: MakeRun) -> None:
+def test_space_amplitude_shows_the_stored_periods_not_the_records(make_run: MakeRun) -> None:
+    """The labels are /strobe/period as stored, even where the records shown would suggest
+    other periods (the record of oscillator i has period PERIODS[i], conftest): no
+    period is computed in Python."""
+    stored = [3, 0, 1, 2]  # the records have periods 1, 2, 4 and none
+    run = read_run(make_run(n=4, records=20, periods=stored))
+    for cycles in (None, 6):
+        ax = figures.space_amplitude([run], cycles=cycles).axes[0]
+        labels = [t.get_text() for t in ax.texts if t.get_gid() == "period"]
+        assert labels == ["P3", "ap", "P1", "P2"]
+
+
+def test_space_amplitude_labels_only_stored_periods(make_run: MakeRun) -> None:
     run = read_run(make_run(n=4, records=20, periods=False))
     plain = figures.space_amplitude([run]).axes[0]
     assert [t for t in plain.texts if t.get_gid() == "period"] == []
-    detected = figures.space_amplitude([run], periods="detect").axes[0]
-    labels = [t.get_text() for t in detected.texts if t.get_gid() == "period"]
-    assert labels == ["P1", "P2", "P4", "ap"]
+    shown = figures.space_amplitude([read_run(make_run("p.h5", n=4))], periods="none").axes[0]
+    assert [t for t in shown.texts if t.get_gid() == "period"] == []
+    with pytest.raises(figures.FigureError, match="'file' or 'none'"):
+        figures.space_amplitude([run], periods="detect")
 
 
 def test_space_amplitude_overlays_runs_in_colours(make_run: MakeRun) -> None:
@@ -237,21 +250,23 @@ def test_lyapunov_with_bifurcation_panel(sweep_file: Path) -> None:
 # ------------------------------------------------------------------------ ky-dimension
 
 
-def test_ky_dimension_uses_stored_values(sweep_file: Path) -> None:
+def test_ky_dimension_draws_the_stored_values(sweep_file: Path) -> None:
+    """/sweep/ky_dimension as stored. The fixture's values are not those of its exponents
+    (point 0: 0.5, 0.2, -0.1, -0.4, -0.7, -1.0 would give 4 + 0.2/0.7), so a figure that
+    computed them would fail here."""
     run = read_run(sweep_file)
     (ax,) = figures.ky_dimension([run]).axes
     (line,) = _lines(ax, "ky")
     assert run.sweep is not None and run.sweep.ky_dimension is not None
     np.testing.assert_array_equal(line.get_ydata(), run.sweep.ky_dimension)
+    assert line.get_ydata()[0] != pytest.approx(4 + 0.2 / 0.7)
 
 
-def test_ky_dimension_computed_from_exponents(make_run: MakeRun) -> None:
+def test_ky_dimension_is_never_computed_from_the_exponents(make_run: MakeRun) -> None:
     run = read_run(make_run(n=3, sweep={"ky_dimension": False}))
-    (line,) = _lines(figures.ky_dimension([run]).axes[0], "ky")
-    # point 0: 0.5, 0.2, -0.1, -0.4, -0.7, -1.0; partial sums 0.5, 0.7, 0.6, 0.2, -0.5
-    assert line.get_ydata()[0] == pytest.approx(4 + 0.2 / 0.7)
-    # the last point's spectrum is all negative
-    assert line.get_ydata()[-1] == 0.0
+    assert run.sweep is not None and run.sweep.exponents is not None
+    with pytest.raises(figures.FigureError, match="no Kaplan-Yorke dimensions"):
+        figures.ky_dimension([run])
 
 
 # ---------------------------------------------------------------------------- spectrum
@@ -268,6 +283,8 @@ def test_spectrum_shows_exponents_with_error_bars(run_file: Path) -> None:
     np.testing.assert_array_equal(points.get_ydata(), run.lyapunov.exponents)
     spans = [seg[:, 1] for seg in vertical.get_segments()]
     np.testing.assert_allclose([hi - lo for lo, hi in spans], 2 * run.lyapunov.stderr)
+    # the stored dimension (the fixture's 3.5), not that of the exponents (4.44)
+    assert left.get_title().startswith("$D_{KY}$ = 3.500,")
     running = _lines(right, "running-")
     assert len(running) == 8
     np.testing.assert_array_equal(running[0].get_xdata(), run.strobe.cycle)
