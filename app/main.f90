@@ -1,67 +1,41 @@
-!> impactchain command line: `impactchain [--quiet] input.nml`. Parses arguments, runs the
-!> library, reports progress and errors, and sets the exit code. No physics here.
-!> SIGINT / SIGTERM ask a running simulation to stop at the next strobe record; the file is
-!> then closed cleanly and marked complete = 0, and the same command continues it. A signal
-!> handler can only talk through a flag that outlives every call, hence the one piece of
-!> module state in the project.
-module interrupt_flag
-    use, intrinsic :: iso_c_binding, only: c_int, c_funptr, c_funloc
-    implicit none
-    private
-    public :: catch_interrupts, interrupted
-
-    integer(c_int), parameter :: sigint = 2, sigterm = 15
-    logical, volatile :: stop_requested = .false.
-
-    interface
-        function c_signal(signum, handler) bind(C, name='signal') result(previous)
-            import :: c_int, c_funptr
-            integer(c_int), value :: signum
-            type(c_funptr), value :: handler
-            type(c_funptr) :: previous
-        end function c_signal
-    end interface
-
-contains
-
-    subroutine catch_interrupts()
-        type(c_funptr) :: previous
-
-        previous = c_signal(sigint, c_funloc(on_signal))
-        previous = c_signal(sigterm, c_funloc(on_signal))
-    end subroutine catch_interrupts
-
-    logical function interrupted()
-        interrupted = stop_requested
-    end function interrupted
-
-    subroutine on_signal(signum) bind(C)
-        integer(c_int), value :: signum
-
-        if (signum > 0) stop_requested = .true.
-    end subroutine on_signal
-
-end module interrupt_flag
-
+!> impactchain command line: `impactchain [--quiet] input.nml`. Parses arguments (chain_cli),
+!> runs the library, reports progress and errors, and sets the exit code. No physics here.
+!> SIGINT / SIGTERM ask a running simulation to stop at the next strobe record (chain_interrupt);
+!> the file is then closed cleanly and marked complete = 0, and the same command continues it.
 program main
     use, intrinsic :: iso_fortran_env, only: error_unit, output_unit, int64
     use impactchain, only: wp, i8, error_t, run_config_t, read_config, run_simulation, &
-                           run_result_t
-    use interrupt_flag, only: catch_interrupts, interrupted
-    use chain_sweep, only: run_sweep, sweep_summary_t
+                           run_result_t, run_sweep, sweep_summary_t, catch_interrupts, &
+                           interrupted, cli_t, parse_command_line, cli_run, cli_help, &
+                           cli_version, cli_usage, code_version
     implicit none
     type(run_config_t) :: cfg
     type(run_result_t) :: summary
     type(sweep_summary_t) :: sweep_summary
     character(len=:), allocatable :: unit_label
     type(error_t), allocatable :: err
-    character(len=:), allocatable :: input
+    type(cli_t) :: cli
     logical :: quiet
     integer(int64) :: clock_start, clock_last, clock_rate
     integer(i8) :: done_at_start = -1 !! records already done when this command started
 
-    call parse_arguments(input, quiet)
-    call read_config(input, cfg, err)
+    cli = parse_command_line()
+    select case (cli%action)
+    case (cli_help)
+        call usage(output_unit)
+        stop
+    case (cli_version)
+        write (output_unit, '(a)') 'impactchain '//code_version
+        stop
+    case (cli_usage)
+        call usage(error_unit)
+        stop 2, quiet=.true.
+    case (cli_run)
+    case default
+        call fail(cli%message)
+    end select
+    quiet = cli%quiet
+    call read_config(cli%input, cfg, err)
     if (allocated(err)) call fail(err%message)
     call system_clock(clock_start, clock_rate)
     clock_last = clock_start
@@ -81,42 +55,6 @@ program main
     end if
 
 contains
-
-    subroutine parse_arguments(input, quiet)
-        character(len=:), allocatable, intent(out) :: input
-        logical, intent(out) :: quiet
-        integer :: j, length
-        character(len=:), allocatable :: arg
-
-        quiet = .false.
-        input = ''
-        do j = 1, command_argument_count()
-            call get_command_argument(j, length=length)
-            allocate (character(len=length) :: arg)
-            call get_command_argument(j, arg)
-            select case (arg)
-            case ('-q', '--quiet')
-                quiet = .true.
-            case ('-h', '--help')
-                call usage(output_unit)
-                stop
-            case ('--version')
-                write (output_unit, '(a)') 'impactchain 0.1.0'
-                stop
-            case default
-                if (arg(1:min(1, len(arg))) == '-') call fail("unknown option '"//arg// &
-                                                              "' (see --help)")
-                if (len(input) > 0) call fail("give one input file, not '"//input// &
-                                              "' and '"//arg//"'")
-                input = arg
-            end select
-            deallocate (arg)
-        end do
-        if (len(input) == 0) then
-            call usage(error_unit)
-            stop 2, quiet=.true.
-        end if
-    end subroutine parse_arguments
 
     subroutine usage(unit)
         integer, intent(in) :: unit

@@ -17,6 +17,10 @@ module impactchain
                          progress_callback, poincare_jacobian, advance_to_point, section_target
     use chain_sim, only: run_simulation, start_chain, initial_state
     use chain_sweep, only: run_sweep, sweep_summary_t, plan_sweep, sweep_plan_t
+    use chain_output, only: code_version
+    use chain_cli, only: cli_t, parse_command_line, cli_run, cli_help, cli_version, cli_usage, &
+                         cli_error
+    use chain_interrupt, only: catch_interrupts, interrupted
     implicit none
     private
     public :: wp, i8, pi, two_pi, error_t, set_error
@@ -31,5 +35,7 @@ module impactchain
     public :: poincare_jacobian, advance_to_point, section_target
     public :: run_simulation, start_chain, initial_state
     public :: run_sweep, sweep_summary_t, plan_sweep, sweep_plan_t
+    public :: code_version, cli_t, parse_command_line, cli_run, cli_help, cli_version
+    public :: cli_usage, cli_error, catch_interrupts, interrupted
 
 end module impactchain

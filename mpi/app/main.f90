@@ -26,7 +26,8 @@ program impactchain_mpi
                            write_sweep_file, &
                            save_checkpoint, load_checkpoint, remove_file, checkpoint_every
     use chain_output, only: output_t, output_begin, output_end, output_abort
-    use interrupt_flag, only: catch_interrupts, interrupted
+    use chain_interrupt, only: catch_interrupts, interrupted
+    use chain_cli, only: cli_t, parse_command_line, cli_run
     implicit none
     type(run_config_t) :: cfg, point
     type(sweep_plan_t) :: plan
@@ -35,6 +36,7 @@ program impactchain_mpi
     type(output_t) :: out
     type(error_t), allocatable :: err
     integer :: rank, ranks, provided, b, p, failed, left, stopping, resumed
+    type(cli_t) :: cli
     logical :: quiet
     logical, allocatable :: mine(:)
     character(len=:), allocatable :: input, checkpoint
@@ -44,7 +46,10 @@ program impactchain_mpi
     call MPI_Init_thread(MPI_THREAD_FUNNELED, provided)
     call MPI_Comm_rank(MPI_COMM_WORLD, rank)
     call MPI_Comm_size(MPI_COMM_WORLD, ranks)
-    call parse_arguments(input, quiet)
+    cli = parse_command_line()
+    if (cli%action /= cli_run) call stop_all('usage: impactchain-mpi [--quiet] input.nml')
+    input = cli%input
+    quiet = cli%quiet
     call read_config(input, cfg, err)
     if (allocated(err)) call stop_all(err%message)
     if (.not. cfg%sweep) call stop_all(input//': impactchain-mpi runs sweeps; add a &sweep group')
@@ -305,30 +310,6 @@ contains
         call MPI_Finalize()
         stop 1, quiet=.true.
     end subroutine agree_or_stop
-
-    subroutine parse_arguments(input, quiet)
-        character(len=:), allocatable, intent(out) :: input
-        logical, intent(out) :: quiet
-        integer :: j, length
-        character(len=:), allocatable :: arg
-
-        quiet = .false.
-        input = ''
-        do j = 1, command_argument_count()
-            call get_command_argument(j, length=length)
-            allocate (character(len=length) :: arg)
-            call get_command_argument(j, arg)
-            if (arg == '-q' .or. arg == '--quiet') then
-                quiet = .true.
-            else if (arg(1:min(1, len(arg))) == '-' .or. len(input) > 0) then
-                call stop_all('usage: impactchain-mpi [--quiet] input.nml')
-            else
-                input = arg
-            end if
-            deallocate (arg)
-        end do
-        if (len(input) == 0) call stop_all('usage: impactchain-mpi [--quiet] input.nml')
-    end subroutine parse_arguments
 
     function err_text(e) result(text)
         type(error_t), allocatable, intent(in) :: e

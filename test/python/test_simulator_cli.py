@@ -3,6 +3,8 @@ the key and a non-zero exit and no output file, overwrite protection, and bit-id
 continuation from a file."""
 from __future__ import annotations
 
+import subprocess
+
 import h5py
 import numpy as np
 import pytest
@@ -177,3 +179,19 @@ def test_killed_run_leaves_no_file_that_claims_completion(impactchain_exe, tmp_p
     proc.communicate(timeout=60)
     assert not (tmp_path / "long.h5").exists()
     assert (tmp_path / "long.h5.part").exists()
+
+
+@pytest.mark.parametrize("args, code, says", [
+    (["--version"], 0, "impactchain 0.1.0"),
+    (["--help"], 0, "usage: impactchain"),
+    ([], 2, "usage: impactchain"),
+    (["--bogus", "run.nml"], 1, "unknown option '--bogus'"),
+    (["a.nml", "b.nml"], 1, "give one input file, not 'a.nml' and 'b.nml'"),
+])
+def test_command_line(impactchain_exe, tmp_path, args, code, says):
+    """The command line (chain_cli, shared with the MPI driver): options, exit codes, words."""
+    result = subprocess.run([str(impactchain_exe), *args], cwd=tmp_path, capture_output=True,
+                            text=True, timeout=60)
+    assert result.returncode == code
+    assert says in result.stdout + result.stderr
+    assert not list(tmp_path.iterdir())

@@ -1,8 +1,11 @@
-!> SIGINT / SIGTERM (Ctrl-C, `scancel`, a Slurm time limit) ask the MPI sweep to stop at the
-!> next finished point and write its checkpoint. A signal handler can only talk through a flag
-!> that outlives every call, hence module state; the same few lines as in app/main.f90 (an app
-!> module is not part of the library, so it cannot be shared).
-module interrupt_flag
+!> SIGINT / SIGTERM as a request to stop: a run or sweep asked to stop ends at its next record
+!> or point, writes what it has (marked complete = 0, or a checkpoint) and the same command
+!> continues it. Used by both command lines (the simulator and the MPI sweep driver).
+!> Infrastructure, no model section.
+!>
+!> A signal handler can only talk through a flag that outlives every call: this is the one
+!> piece of module state in the project, set only by the handler and read by `interrupted`.
+module chain_interrupt
     use, intrinsic :: iso_c_binding, only: c_int, c_funptr, c_funloc
     implicit none
     private
@@ -22,6 +25,7 @@ module interrupt_flag
 
 contains
 
+    !> From now on SIGINT and SIGTERM set the flag instead of ending the process.
     subroutine catch_interrupts()
         type(c_funptr) :: previous
 
@@ -29,6 +33,7 @@ contains
         previous = c_signal(sigterm, c_funloc(on_signal))
     end subroutine catch_interrupts
 
+    !> Has a stop been requested?
     logical function interrupted()
         interrupted = stop_requested
     end function interrupted
@@ -39,4 +44,4 @@ contains
         if (signum > 0) stop_requested = .true.
     end subroutine on_signal
 
-end module interrupt_flag
+end module chain_interrupt
