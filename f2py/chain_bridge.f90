@@ -7,11 +7,8 @@
 !> number comes from `chain_run` / `chain_sim`, exactly as for the CLI.
 module chain_bridge
     use, intrinsic :: iso_c_binding, only: c_int
-    use chain_kinds, only: wp, i8
-    use chain_error, only: error_t, set_error
-    use chain_config, only: run_config_t, fmt_real, fmt_int
-    use chain_events, only: event_log_t
-    use chain_run, only: record_sink_t
+    use impactchain, only: wp, i8, error_t, set_error, run_config_t, fmt_real, fmt_int, &
+                           event_log_t, record_sink_t
     implicit none
     private
     public :: array_sink_t, make_config, put_message, count_vectors

@@ -35,12 +35,8 @@ subroutine ic_run(n, nsp, spacing, damping, restitution, amplitude, omega, nb, b
                   ev_site, ev_speed, ev_kind, k, exponents, stderr_bits, per_time, ky, jac, &
                   mult_re, mult_im, status, msg_len, message)
     use, intrinsic :: iso_c_binding, only: c_int, c_int64_t, c_double
-    use chain_kinds, only: i8
-    use chain_error, only: error_t
-    use chain_config, only: run_config_t, validate_config
-    use chain_engine, only: chain_t
-    use chain_run, only: run_result_t, record_run, check_size
-    use chain_sim, only: start_chain
+    use impactchain, only: i8, error_t, run_config_t, validate_config, chain_t, run_result_t, &
+                           record_run, check_size, start_chain
     use chain_bridge, only: array_sink_t, make_config, put_message, &
                             count_vectors, status_ok, status_invalid, status_failed, &
                             status_capacity, status_internal
@@ -158,12 +154,8 @@ subroutine ic_jacobian(nsp, spacing, damping, restitution, amplitude, omega, nb,
                        nx0, x0, nv0, v0, phase, stick_speed, max_size_mb, jacobian_cycles, &
                        dry_run, mj, jac, status, msg_len, message)
     use, intrinsic :: iso_c_binding, only: c_int, c_double
-    use chain_kinds, only: wp, i8
-    use chain_error, only: error_t
-    use chain_config, only: run_config_t, validate_config
-    use chain_flow, only: make_flow
-    use chain_engine, only: chain_t, chain_init
-    use chain_run, only: poincare_jacobian, check_size
+    use impactchain, only: wp, i8, error_t, run_config_t, validate_config, chain_t, &
+                           chain_on_section, poincare_jacobian, check_size
     use chain_bridge, only: make_config, put_message, status_ok, &
                             status_invalid, status_failed, status_internal
     implicit none
@@ -190,9 +182,7 @@ subroutine ic_jacobian(nsp, spacing, damping, restitution, amplitude, omega, nb,
         allocate (v_start(cfg%n))
         v_start = 0
         if (size(cfg%v0) == cfg%n) v_start = cfg%v0
-        call chain_init(chain, make_flow(cfg%damping, cfg%amplitude, cfg%omega), &
-                        cfg%restitution, cfg%spacing, cfg%boundary == 'fixed', &
-                        cfg%stick_speed, cfg%x0, v_start, 0_i8, cfg%phase/cfg%omega, err)
+        call chain_on_section(cfg, cfg%x0, v_start, chain, err)
     end if
     if (allocated(err)) then
         call put_message(err%message, status_invalid, status, msg_len, message)
@@ -217,10 +207,7 @@ end subroutine ic_jacobian
 subroutine ic_random_start(n, nsp, spacing, seed, x_amp, v_amp, dry_run, nf, x, v, status, &
                            msg_len, message)
     use, intrinsic :: iso_c_binding, only: c_int, c_double
-    use chain_kinds, only: wp, i8
-    use chain_error, only: error_t
-    use chain_config, only: run_config_t, validate_config
-    use chain_sim, only: initial_state
+    use impactchain, only: wp, i8, error_t, run_config_t, validate_config, initial_state
     use chain_bridge, only: make_config, put_message, status_ok, status_invalid, &
                             status_internal
     implicit none

@@ -27,7 +27,7 @@ module chain_sim
                             file_continuable, file_other_input
     implicit none
     private
-    public :: run_simulation, initial_state, start_chain, write_run_header
+    public :: run_simulation, initial_state, start_chain, write_run_header, chain_on_section
 
     !> Sends records to the HDF5 file as they come.
     type, extends(record_sink_t) :: file_sink_t
@@ -104,6 +104,20 @@ contains
                             cfg%stick_speed, x, v, cycle, s, err, contact)
         end if
     end subroutine start_chain
+
+    !> A fresh chain in state (x, v) on the section (drive phase cfg%phase of cycle 0), every
+    !> oscillator moving and every bond scheduled from scratch: where the Poincare-map Jacobian
+    !> of an arbitrary state is taken.
+    subroutine chain_on_section(cfg, x, v, chain, err)
+        type(run_config_t), intent(in) :: cfg
+        real(wp), intent(in) :: x(:), v(:)
+        type(chain_t), intent(out) :: chain
+        type(error_t), allocatable, intent(out) :: err
+
+        call chain_init(chain, make_flow(cfg%damping, cfg%amplitude, cfg%omega), &
+                        cfg%restitution, cfg%spacing, cfg%boundary == 'fixed', &
+                        cfg%stick_speed, x, v, 0_i8, cfg%phase/cfg%omega, err)
+    end subroutine chain_on_section
 
     !> Root attributes, /params and /initial of the run described by cfg (for a sweep file: of
     !> its starting configuration).

@@ -18,16 +18,12 @@ program impactchain_mpi
                        MPI_Allreduce, MPI_Gatherv, MPI_COMM_WORLD, MPI_MAX, &
                        MPI_DOUBLE_PRECISION, MPI_INTEGER, MPI_INTEGER8, MPI_IN_PLACE, &
                        MPI_THREAD_FUNNELED
-    use chain_kinds, only: wp, i8
-    use chain_error, only: error_t
-    use chain_config, only: run_config_t, read_config
-    use chain_sweep, only: sweep_plan_t, sweep_result_t, branch_start_state_t, plan_sweep, &
-                           sweep_result_init, sweep_point_config, run_sweep_branches, &
-                           write_sweep_file, &
-                           save_checkpoint, load_checkpoint, remove_file, checkpoint_every
-    use chain_output, only: output_t, output_begin, output_end, output_abort
-    use chain_interrupt, only: catch_interrupts, interrupted
-    use chain_cli, only: cli_t, parse_command_line, cli_run
+    use impactchain, only: wp, i8, error_t, run_config_t, read_config, sweep_plan_t, &
+                           sweep_result_t, branch_start_state_t, plan_sweep, sweep_result_init, &
+                           sweep_point_config, run_sweep_branches, write_sweep_file, &
+                           save_checkpoint, load_checkpoint, remove_file, checkpoint_every, &
+                           output_t, output_begin, output_end, output_abort, catch_interrupts, &
+                           interrupted, cli_t, parse_command_line, cli_run
     implicit none
     type(run_config_t) :: cfg, point
     type(sweep_plan_t) :: plan
