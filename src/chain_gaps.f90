@@ -11,10 +11,10 @@
 !> a zero, and converges quadratically onto transversal zeros. No sign-change sampling.
 module chain_gaps
     use chain_kinds, only: wp, pi, two_pi
-    use chain_flow, only: flow_t, forced_response, propagator
+    use chain_flow, only: flow_t, forced_response, forced_response_at, propagator, free_rotation
     implicit none
     private
-    public :: gap_t, gap_search_t, next_gap_zero, gap_value, resolvable_speed
+    public :: gap_t, gap_search_t, next_gap_zero, gap_value, resolvable_speed, earliest_closing
     public :: search_none, search_root, search_horizon, time_tolerance
 
     integer, parameter :: search_none = 0    !! the gap never closes
@@ -90,8 +90,7 @@ contains
         b = flow%damping
         gam = flow%gam
         cc = gap%y
-        ss = (gap%vy + b*gap%y)*flow%inv_gam
-        amp = sqrt(cc**2 + ss**2)
+        call amplitude_phase(flow, gap%y, gap%vy, amp, ss)
         res%status = search_none
         res%tau = huge(1.0_wp)
         if (gap%offset - amp > 0) return
@@ -274,13 +273,13 @@ contains
         real(wp), intent(in) :: s0, horizon
         type(gap_search_t) :: res
         real(wp) :: b, w, ry0, rp, tau, e, ry, g, g1, g2, g3, m2, m4, h, tol
-        real(wp) :: cg, sg, cw, sw, cd, sd, sn, y, vy, ay, jy, xp, vp
+        real(wp) :: cg, sg, cw, sw, cd, sd, r(2, 2), y, vy, ay, jy, xp, vp
         integer :: it, turns
 
         b = flow%damping
         w = flow%omega
-        ry0 = sqrt(gap%y**2 + ((gap%vy + b*gap%y)*flow%inv_gam)**2)
-        rp = abs(gap%beta)*sqrt(flow%p_sin**2 + flow%q_cos**2)
+        ry0 = free_amplitude(flow, gap)
+        rp = abs(gap%beta)*flow%forced_amp
         tol = noise(gap%offset, ry0 + rp)
         tau = 0
         h = 0
@@ -310,12 +309,11 @@ contains
                 cw = cos(w*(s0 + tau))
                 sw = sin(w*(s0 + tau))
             end if
-            ! the propagator of eq. 17 and the forced response
-            sn = sg*flow%inv_gam
-            y = e*((cg + b*sn)*gap%y + sn*gap%vy)
-            vy = e*(-sn*gap%y + (cg - b*sn)*gap%vy)
-            xp = flow%p_sin*sw + flow%q_cos*cw
-            vp = w*(flow%p_sin*cw - flow%q_cos*sw)
+            ! the propagator of eq. 17 (its decay e applied last) and the forced response
+            call free_rotation(flow, cg, sg, r)
+            y = e*(r(1, 1)*gap%y + r(1, 2)*gap%vy)
+            vy = e*(r(2, 1)*gap%y + r(2, 2)*gap%vy)
+            call forced_response_at(flow, sw, cw, xp, vp)
             ry = ry0*e
             if (gap%offset - ry - rp > 0) then
                 res%status = search_none
@@ -407,8 +405,7 @@ contains
         type(gap_t), intent(in) :: gap
         real(wp) :: amp
 
-        amp = sqrt(gap%y**2 + ((gap%vy + flow%damping*gap%y)*flow%inv_gam)**2) + &
-              abs(gap%beta)*sqrt(flow%p_sin**2 + flow%q_cos**2)
+        amp = free_amplitude(flow, gap) + abs(gap%beta)*flow%forced_amp
     end function gap_amplitude
 
     !> Rounding level of a gap built from terms of size `offset` and `amplitude`.
@@ -418,5 +415,36 @@ contains
 
         tol = 64*epsilon(1.0_wp)*(abs(offset) + amplitude)
     end function noise
+
+    !> For an opening free pair gap (beta = 0, y' > 0): a time before which it cannot close.
+    !> The gap's curvature is bounded by the amplitude r of its free oscillation, so
+    !> g(tau) >= g(0) + y' tau - r tau**2 / 2 >= g(0) up to tau = 2 y' / r.
+    pure function earliest_closing(flow, gap) result(tau)
+        type(flow_t), intent(in) :: flow
+        type(gap_t), intent(in) :: gap
+        real(wp) :: tau
+
+        tau = 2*gap%vy/free_amplitude(flow, gap)
+    end function earliest_closing
+
+    !> The amplitude-phase form y(tau) = r exp(-b tau) cos(gam tau - phi) of the free part of
+    !> a gap (docs/model.md section 2.2): r, and q = r sin(phi) (r cos(phi) is y(0)).
+    pure subroutine amplitude_phase(flow, y, vy, r, q)
+        type(flow_t), intent(in) :: flow
+        real(wp), intent(in) :: y, vy
+        real(wp), intent(out) :: r, q
+
+        q = (vy + flow%damping*y)*flow%inv_gam
+        r = sqrt(y**2 + q**2)
+    end subroutine amplitude_phase
+
+    !> r of amplitude_phase for the free part of a gap.
+    pure function free_amplitude(flow, gap) result(r)
+        type(flow_t), intent(in) :: flow
+        type(gap_t), intent(in) :: gap
+        real(wp) :: r, q
+
+        call amplitude_phase(flow, gap%y, gap%vy, r, q)
+    end function free_amplitude
 
 end module chain_gaps
