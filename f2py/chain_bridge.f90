@@ -14,7 +14,7 @@ module chain_bridge
     use chain_run, only: record_sink_t
     implicit none
     private
-    public :: array_sink_t, make_config, put_message, count_vectors
+    public :: array_sink_t, make_config, put_message
     public :: status_ok, status_invalid, status_failed, status_capacity, status_internal
     public :: message_capacity
 
@@ -101,14 +101,6 @@ contains
         cfg%sweep_parameter2 = ''
         cfg%input_text = ''
     end subroutine make_config
-
-    !> Number of tangent vectors a (validated) configuration carries: vectors, 0 meaning 2n.
-    pure integer function count_vectors(cfg)
-        type(run_config_t), intent(in) :: cfg
-
-        count_vectors = cfg%vectors
-        if (count_vectors == 0) count_vectors = 2*cfg%n
-    end function count_vectors
 
     !> Copy `text` into the message buffer (truncated to its size) and set the status.
     subroutine put_message(text, code, status, msg_len, message)

@@ -37,13 +37,12 @@ subroutine ic_run(n, nsp, spacing, damping, restitution, amplitude, omega, nb, b
     use, intrinsic :: iso_c_binding, only: c_int, c_int64_t, c_double
     use chain_kinds, only: i8
     use chain_error, only: error_t
-    use chain_config, only: run_config_t, validate_config
+    use chain_config, only: run_config_t, validate_config, lyapunov_vectors
     use chain_engine, only: chain_t
     use chain_run, only: run_result_t, record_run, check_size
     use chain_sim, only: start_chain
-    use chain_bridge, only: array_sink_t, make_config, put_message, &
-                            count_vectors, status_ok, status_invalid, status_failed, &
-                            status_capacity, status_internal
+    use chain_bridge, only: array_sink_t, make_config, put_message, status_ok, &
+                            status_invalid, status_failed, status_capacity, status_internal
     implicit none
     !f2py threadsafe
     integer(c_int), intent(in) :: n, nsp, nb, nx0, nv0, explicit, record_events, lyapunov
@@ -104,7 +103,7 @@ subroutine ic_run(n, nsp, spacing, damping, restitution, amplitude, omega, nb, b
     if (dry_run /= 0) return
 
     sizes_ok = nf == n .and. (nc == 0 .or. (nr == n .and. nc == cycles))
-    if (cfg%lyapunov) sizes_ok = sizes_ok .and. kcap == count_vectors(cfg)
+    if (cfg%lyapunov) sizes_ok = sizes_ok .and. kcap == lyapunov_vectors(cfg)
     if (cfg%jacobian) sizes_ok = sizes_ok .and. mj == 2*n
     if (.not. sizes_ok) then
         call put_message("python layer: output sizes do not match the configuration", &

@@ -13,7 +13,7 @@ module chain_config
     use chain_error, only: error_t, set_error, fmt_real, fmt_int, fmt_int8
     implicit none
     private
-    public :: run_config_t, read_config, validate_config, config_summary
+    public :: run_config_t, read_config, validate_config, config_summary, lyapunov_vectors
     public :: max_list, fmt_real, fmt_int, sweep_parameters
 
     !> Longest explicit list in a namelist (spacing, x0, v0); longer chains use a file start.
@@ -787,6 +787,15 @@ contains
             call set_error(err, "&"//group//": "//trim(msg))
         end if
     end subroutine group_error
+
+    !> Lyapunov exponents (tangent vectors) a validated configuration computes: none without
+    !> &lyapunov, else `vectors`, 0 meaning all 2n.
+    pure integer function lyapunov_vectors(cfg)
+        type(run_config_t), intent(in) :: cfg
+
+        lyapunov_vectors = 0
+        if (cfg%lyapunov) lyapunov_vectors = merge(2*cfg%n, cfg%vectors, cfg%vectors == 0)
+    end function lyapunov_vectors
 
     !> `run.nml` -> `run.h5` in the current directory.
     pure function default_output(path) result(out)

@@ -18,7 +18,7 @@ module chain_run
                               lyapunov_result_t, lyapunov_result, floquet_multipliers, &
                               initial_frame, running_rows
     use chain_period, only: detect_period
-    use chain_config, only: run_config_t, fmt_real
+    use chain_config, only: run_config_t, fmt_real, lyapunov_vectors
     implicit none
     private
     public :: record_sink_t, memory_sink_t, run_result_t, record_run, progress_callback
@@ -384,17 +384,15 @@ contains
         chain%jumps_volume = 0
     end subroutine orthonormalise_unaveraged
 
-    !> Carry a tangent frame from now: k = &lyapunov vectors generic orthonormal vectors.
+    !> Carry a tangent frame from now: &lyapunov vectors generic orthonormal vectors.
     subroutine start_tangent(chain, cfg, err)
         type(chain_t), intent(inout) :: chain
         type(run_config_t), intent(in) :: cfg
         type(error_t), allocatable, intent(out) :: err
         real(wp), allocatable :: frame(:, :)
-        integer :: k, info
+        integer :: info
 
-        k = cfg%vectors
-        if (k == 0) k = 2*cfg%n
-        call initial_frame(2*cfg%n, k, frame, info)
+        call initial_frame(2*cfg%n, lyapunov_vectors(cfg), frame, info)
         if (info /= 0) then
             call set_error(err, "lyapunov: cannot build the initial tangent frame")
             return
@@ -442,8 +440,7 @@ contains
         real(wp) :: mb
         integer :: k
 
-        k = 0
-        if (cfg%lyapunov) k = merge(2*cfg%n, cfg%vectors, cfg%vectors == 0)
+        k = lyapunov_vectors(cfg)
         ! strobe x, v, cycle; running estimates (k values and a cycle per kept row)
         mb = (16.0_wp*cfg%n + 8)*real(cfg%cycles, wp)/1.0e6_wp
         if (cfg%lyapunov) mb = mb + (8.0_wp*k + 8)*running_rows(cfg%cycles/cfg%qr_every)/1.0e6_wp

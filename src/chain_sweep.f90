@@ -25,7 +25,7 @@ module chain_sweep
     use chain_error, only: error_t, set_error, fmt_real, fmt_int, fmt_int8
     use chain_flow, only: make_flow
     use chain_engine, only: chain_t, chain_init
-    use chain_config, only: run_config_t, validate_config
+    use chain_config, only: run_config_t, validate_config, lyapunov_vectors
     use chain_run, only: memory_sink_t, run_result_t, record_run, check_size
     use chain_sim, only: start_chain, write_run_header
     use chain_output, only: output_t, output_begin, output_group, &
@@ -119,8 +119,7 @@ contains
             plan%n_branches = plan%n_axis2
             plan%points_per_branch = plan%n_axis1
         end if
-        plan%k = 0
-        if (cfg%lyapunov) plan%k = merge(2*cfg%n, cfg%vectors, cfg%vectors == 0)
+        plan%k = lyapunov_vectors(cfg)
     end function plan_sweep
 
     !> Number of points from start to stop in steps of step (rounding-safe).
