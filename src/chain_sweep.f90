@@ -38,8 +38,10 @@ module chain_sweep
     public :: run_sweep_branches, sweep_result_init, branch_start_state_t, point_hook
     public :: run_sweep, write_sweep_file, sweep_summary_t
     public :: save_checkpoint, load_checkpoint, remove_file, checkpoint_every
+    public :: branch_record_sizes, pack_branch, unpack_branch
 
-    character(len=8), parameter :: checkpoint_magic = 'ICSWEEP1'
+    !> The checkpoint's first bytes; the number changes with the layout of pack_branch.
+    character(len=8), parameter :: checkpoint_magic = 'ICSWEEP2'
     !> Seconds between checkpoints of a running sweep (and between MPI gathers in mpi/).
     integer, parameter :: checkpoint_every = 10
 
@@ -454,9 +456,10 @@ contains
                                                           [np], '1', err)
     end subroutine write_sweep_file
 
-    !> Finished points and where each branch resumes, written atomically (tmp + rename). A
-    !> failed write is an error and leaves the previous checkpoint as it was; since a full
-    !> disk can go unreported by buffered writes, the file's size is checked before it
+    !> Finished points and where each branch resumes, written atomically (tmp + rename): a
+    !> header naming the input and the sweep's sizes, then every branch as pack_branch lays
+    !> it out. A failed write is an error and leaves the previous checkpoint as it was; since
+    !> a full disk can go unreported by buffered writes, the file's size is checked before it
     !> replaces the previous one.
     subroutine save_checkpoint(path, cfg, plan, res, starts, err)
         character(len=*), intent(in) :: path
@@ -466,8 +469,10 @@ contains
         type(branch_start_state_t), intent(in) :: starts(:)
         type(error_t), allocatable, intent(out) :: err
         character(len=256) :: msg
-        integer :: u, ios, b
+        integer :: u, ios, b, nr, ni
         integer(i8) :: written, on_disk
+        real(wp), allocatable :: reals(:)
+        integer(i8), allocatable :: ints(:)
 
         msg = ''
         open (newunit=u, file=path//'.tmp', access='stream', form='unformatted', &
@@ -479,13 +484,12 @@ contains
         end if
         write (u, iostat=ios, iomsg=msg) checkpoint_magic, len(cfg%input_text), &
             cfg%input_text, plan%n_points, cfg%n, cfg%cycles, plan%k, plan%n_branches
-        if (ios == 0) write (u, iostat=ios, iomsg=msg) merge(1, 0, res%done), res%x, &
-            res%collisions, res%period, res%exponents, res%stderr, res%ky
+        call branch_record_sizes(cfg, plan, nr, ni)
+        allocate (reals(nr), ints(ni))
         do b = 1, plan%n_branches
             if (ios /= 0) exit
-            write (u, iostat=ios, iomsg=msg) merge(1, 0, starts(b)%resume)
-            if (starts(b)%resume .and. ios == 0) write (u, iostat=ios, iomsg=msg) &
-                starts(b)%x, starts(b)%v, starts(b)%contact, starts(b)%cycle, starts(b)%s
+            call pack_branch(cfg, plan, res, starts, b, reals, ints)
+            write (u, iostat=ios, iomsg=msg) reals, ints
         end do
         written = -1
         if (ios == 0) inquire (unit=u, pos=written, iostat=ios, iomsg=msg)
@@ -520,51 +524,138 @@ contains
         type(error_t), allocatable, intent(out) :: err
         character(len=8) :: magic
         character(len=:), allocatable :: text
-        integer :: u, ios, length, n_points, n, k, n_branches, b, flag
-        integer, allocatable :: done(:)
+        integer :: u, ios, length, n_points, n, k, n_branches, b, nr, ni
         integer(i8) :: cycles
-        logical :: exists
+        real(wp), allocatable :: reals(:)
+        integer(i8), allocatable :: ints(:)
+        logical :: exists, ours
 
         inquire (file=path, exist=exists)
         if (.not. exists) return
         open (newunit=u, file=path, access='stream', form='unformatted', status='old', &
               action='read', iostat=ios)
         if (ios /= 0) return
+        ours = .false.
         read (u, iostat=ios) magic, length
-        if (ios /= 0 .or. magic /= checkpoint_magic .or. length /= len(cfg%input_text)) then
+        if (ios == 0 .and. magic == checkpoint_magic .and. length == len(cfg%input_text)) then
+            allocate (character(len=length) :: text)
+            read (u, iostat=ios) text, n_points, n, cycles, k, n_branches
+            ours = ios == 0 .and. text == cfg%input_text .and. n_points == plan%n_points .and. &
+                   n == cfg%n .and. cycles == cfg%cycles .and. k == plan%k .and. &
+                   n_branches == plan%n_branches
+        end if
+        if (.not. ours) then
             close (u)
-            call set_error(err, "&sweep: '"//path//"' is a checkpoint of another input; "// &
-                           "remove it to start afresh")
+            call set_error(err, "&sweep: '"//path//"' is a checkpoint of another input "// &
+                           "(or of another version); remove it to start afresh")
             return
         end if
-        allocate (character(len=length) :: text)
-        read (u, iostat=ios) text, n_points, n, cycles, k, n_branches
-        if (ios /= 0 .or. text /= cfg%input_text .or. n_points /= plan%n_points .or. &
-            n /= cfg%n .or. cycles /= cfg%cycles .or. k /= plan%k .or. &
-            n_branches /= plan%n_branches) then
-            close (u)
-            call set_error(err, "&sweep: '"//path//"' is a checkpoint of another input; "// &
-                           "remove it to start afresh")
-            return
-        end if
-        allocate (done(n_points))
-        read (u, iostat=ios) done, res%x, res%collisions, res%period, res%exponents, &
-            res%stderr, res%ky
-        res%done = done == 1
+        call branch_record_sizes(cfg, plan, nr, ni)
+        allocate (reals(nr), ints(ni))
         do b = 1, n_branches
+            read (u, iostat=ios) reals, ints
             if (ios /= 0) exit
-            read (u, iostat=ios) flag
-            starts(b)%resume = flag == 1
-            if (starts(b)%resume .and. ios == 0) then
-                allocate (starts(b)%x(n), starts(b)%v(n), starts(b)%contact(n))
-                read (u, iostat=ios) starts(b)%x, starts(b)%v, starts(b)%contact, &
-                    starts(b)%cycle, starts(b)%s
-            end if
+            call unpack_branch(cfg, plan, b, reals, ints, res, starts)
         end do
         close (u)
         if (ios /= 0) call set_error(err, "&sweep: the checkpoint '"//path//"' is damaged; "// &
                                      "remove it to start afresh")
     end subroutine load_checkpoint
+
+    !> Lengths of one branch in pack_branch's layout: nr reals and ni integers.
+    pure subroutine branch_record_sizes(cfg, plan, nr, ni)
+        type(run_config_t), intent(in) :: cfg
+        type(sweep_plan_t), intent(in) :: plan
+        integer, intent(out) :: nr, ni
+
+        nr = plan%points_per_branch*point_reals(cfg, plan) + 2*cfg%n + 1
+        ni = plan%points_per_branch*point_ints(cfg) + cfg%n + 2
+    end subroutine branch_record_sizes
+
+    !> Reals per point: collisions, x (n x cycles), exponents, stderr, Kaplan-Yorke dimension.
+    pure integer function point_reals(cfg, plan)
+        type(run_config_t), intent(in) :: cfg
+        type(sweep_plan_t), intent(in) :: plan
+
+        point_reals = 2 + cfg%n*int(cfg%cycles) + 2*plan%k
+    end function point_reals
+
+    !> Integers per point: done, periods (n).
+    pure integer function point_ints(cfg)
+        type(run_config_t), intent(in) :: cfg
+
+        point_ints = 1 + cfg%n
+    end function point_ints
+
+    !> Branch b of a sweep, its points and the state it resumes from, as two plain arrays
+    !> (sizes from branch_record_sizes): the one layout of the sweep's results outside
+    !> memory, for the checkpoint and for MPI (values as they are, so bit for bit). Point
+    !> by point, the reals of point_reals and the integers of point_ints; then the resume
+    !> state, reals x, v, s and integers resume, contact, cycle (zeros when not resuming).
+    pure subroutine pack_branch(cfg, plan, res, starts, b, reals, ints)
+        type(run_config_t), intent(in) :: cfg
+        type(sweep_plan_t), intent(in) :: plan
+        type(sweep_result_t), intent(in) :: res
+        type(branch_start_state_t), intent(in) :: starts(:)
+        integer, intent(in) :: b
+        real(wp), intent(out) :: reals(:)
+        integer(i8), intent(out) :: ints(:)
+        integer :: q, p, nr, ni
+
+        nr = point_reals(cfg, plan)
+        ni = point_ints(cfg)
+        do q = 1, plan%points_per_branch
+            p = (b - 1)*plan%points_per_branch + q
+            reals((q - 1)*nr + 1:q*nr) = [res%collisions(p), &
+                                          reshape(res%x(:, :, p), [cfg%n*int(cfg%cycles)]), &
+                                          res%exponents(:, p), res%stderr(:, p), res%ky(p)]
+            ints((q - 1)*ni + 1:q*ni) = [merge(1_i8, 0_i8, res%done(p)), &
+                                         int(res%period(:, p), i8)]
+        end do
+        reals(plan%points_per_branch*nr + 1:) = 0
+        ints(plan%points_per_branch*ni + 1:) = 0
+        if (.not. starts(b)%resume) return
+        reals(plan%points_per_branch*nr + 1:) = [starts(b)%x, starts(b)%v, starts(b)%s]
+        ints(plan%points_per_branch*ni + 1:) = [1_i8, int(starts(b)%contact, i8), &
+                                                starts(b)%cycle]
+    end subroutine pack_branch
+
+    !> Branch b of a sweep back from pack_branch's arrays into `res` and `starts`.
+    pure subroutine unpack_branch(cfg, plan, b, reals, ints, res, starts)
+        type(run_config_t), intent(in) :: cfg
+        type(sweep_plan_t), intent(in) :: plan
+        integer, intent(in) :: b
+        real(wp), intent(in) :: reals(:)
+        integer(i8), intent(in) :: ints(:)
+        type(sweep_result_t), intent(inout) :: res
+        type(branch_start_state_t), intent(inout) :: starts(:)
+        integer :: q, p, n, m, k, j, i
+
+        n = cfg%n
+        m = n*int(cfg%cycles)
+        k = plan%k
+        do q = 1, plan%points_per_branch
+            p = (b - 1)*plan%points_per_branch + q
+            j = (q - 1)*point_reals(cfg, plan)
+            i = (q - 1)*point_ints(cfg)
+            res%collisions(p) = reals(j + 1)
+            res%x(:, :, p) = reshape(reals(j + 2:j + 1 + m), [n, int(cfg%cycles)])
+            res%exponents(:, p) = reals(j + 2 + m:j + 1 + m + k)
+            res%stderr(:, p) = reals(j + 2 + m + k:j + 1 + m + 2*k)
+            res%ky(p) = reals(j + 2 + m + 2*k)
+            res%done(p) = ints(i + 1) == 1
+            res%period(:, p) = int(ints(i + 2:i + 1 + n))
+        end do
+        j = plan%points_per_branch*point_reals(cfg, plan)
+        i = plan%points_per_branch*point_ints(cfg)
+        starts(b)%resume = ints(i + 1) == 1
+        if (.not. starts(b)%resume) return
+        starts(b)%x = reals(j + 1:j + n)
+        starts(b)%v = reals(j + n + 1:j + 2*n)
+        starts(b)%s = reals(j + 2*n + 1)
+        starts(b)%contact = int(ints(i + 2:i + 1 + n))
+        starts(b)%cycle = ints(i + 2 + n)
+    end subroutine unpack_branch
 
     !> Delete a file if it exists (the checkpoint of a finished sweep).
     subroutine remove_file(path)
