@@ -965,36 +965,9 @@ contains
         integer(hsize_t), intent(in) :: offset(:), block(:)
         type(c_ptr), intent(in) :: buf
         type(error_t), allocatable, intent(inout) :: err
-        integer(hid_t) :: dset, fspace, mspace
-        integer :: e
-        type(c_ptr) :: target_buf ! (h5dread_f wants a definable pointer)
 
-        if (allocated(err)) return
-        call h5dopen_f(src%file, name, dset, e)
-        call check(e, 'h5dopen_f', '/'//name, src%part_path, err)
-        if (allocated(err)) return
-        call h5dget_space_f(dset, fspace, e)
-        call check(e, 'h5dget_space_f', '/'//name, src%part_path, err)
-        if (.not. allocated(err)) then
-            call h5sselect_hyperslab_f(fspace, H5S_SELECT_SET_F, offset, block, e)
-            call check(e, 'h5sselect_hyperslab_f', '/'//name, src%part_path, err)
-            if (.not. allocated(err)) then
-                call h5screate_simple_f(size(block), block, mspace, e)
-                call check(e, 'h5screate_simple_f', '/'//name, src%part_path, err)
-                if (.not. allocated(err)) then
-                    target_buf = buf
-                    call h5dread_f(dset, H5T_NATIVE_DOUBLE, target_buf, e, mem_space_id=mspace, &
-                                   file_space_id=fspace)
-                    call check(e, 'h5dread_f', '/'//name, src%part_path, err)
-                    call h5sclose_f(mspace, e)
-                    call check(e, 'h5sclose_f', '/'//name, src%part_path, err)
-                end if
-            end if
-            call h5sclose_f(fspace, e)
-            call check(e, 'h5sclose_f', '/'//name, src%part_path, err)
-        end if
-        call h5dclose_f(dset, e)
-        call check(e, 'h5dclose_f', '/'//name, src%part_path, err)
+        call transfer_slab(src, name, offset, block, H5T_NATIVE_DOUBLE, buf, .false., .false., &
+                           err)
     end subroutine read_slab
 
     subroutine read_real_1d(src, name, values, err)
@@ -1399,39 +1372,63 @@ contains
         integer(hid_t), intent(in) :: mem_type
         type(c_ptr), intent(in) :: buf
         type(error_t), allocatable, intent(out) :: err
+
+        call transfer_slab(out, name, offset, block, mem_type, buf, .true., extend, err)
+    end subroutine write_slab
+
+    !> Move `buf` (memory type `mem_type`) between memory and the hyperslab offset/block of
+    !> dataset `name`: write it (`writing`), first growing the dataset to hold it when
+    !> `extend`, or read it. Nothing is done after an earlier error.
+    subroutine transfer_slab(file, name, offset, block, mem_type, buf, writing, extend, err)
+        type(output_t), intent(in) :: file
+        character(len=*), intent(in) :: name
+        integer(hsize_t), intent(in) :: offset(:), block(:)
+        integer(hid_t), intent(in) :: mem_type
+        type(c_ptr), intent(in) :: buf
+        logical, intent(in) :: writing, extend
+        type(error_t), allocatable, intent(inout) :: err
         integer(hid_t) :: dset, fspace, mspace
         integer :: e
+        type(c_ptr) :: target_buf ! (h5dread_f wants a definable pointer)
 
-        call h5dopen_f(out%file, name, dset, e)
-        call check(e, 'h5dopen_f', '/'//name, out%part_path, err)
+        if (allocated(err)) return
+        call h5dopen_f(file%file, name, dset, e)
+        call check(e, 'h5dopen_f', '/'//name, file%part_path, err)
         if (allocated(err)) return
         if (extend) then
             call h5dset_extent_f(dset, offset + block, e)
-            call check(e, 'h5dset_extent_f', '/'//name, out%part_path, err)
+            call check(e, 'h5dset_extent_f', '/'//name, file%part_path, err)
         end if
         if (.not. allocated(err)) then
             call h5dget_space_f(dset, fspace, e)
-            call check(e, 'h5dget_space_f', '/'//name, out%part_path, err)
+            call check(e, 'h5dget_space_f', '/'//name, file%part_path, err)
             if (.not. allocated(err)) then
                 call h5sselect_hyperslab_f(fspace, H5S_SELECT_SET_F, offset, block, e)
-                call check(e, 'h5sselect_hyperslab_f', '/'//name, out%part_path, err)
+                call check(e, 'h5sselect_hyperslab_f', '/'//name, file%part_path, err)
                 if (.not. allocated(err)) then
                     call h5screate_simple_f(size(block), block, mspace, e)
-                    call check(e, 'h5screate_simple_f', '/'//name, out%part_path, err)
+                    call check(e, 'h5screate_simple_f', '/'//name, file%part_path, err)
                     if (.not. allocated(err)) then
-                        call h5dwrite_f(dset, mem_type, buf, e, mem_space_id=mspace, &
-                                        file_space_id=fspace)
-                        call check(e, 'h5dwrite_f', '/'//name, out%part_path, err)
+                        if (writing) then
+                            call h5dwrite_f(dset, mem_type, buf, e, mem_space_id=mspace, &
+                                            file_space_id=fspace)
+                            call check(e, 'h5dwrite_f', '/'//name, file%part_path, err)
+                        else
+                            target_buf = buf
+                            call h5dread_f(dset, mem_type, target_buf, e, &
+                                           mem_space_id=mspace, file_space_id=fspace)
+                            call check(e, 'h5dread_f', '/'//name, file%part_path, err)
+                        end if
                         call h5sclose_f(mspace, e)
-                        call check(e, 'h5sclose_f', '/'//name, out%part_path, err)
+                        call check(e, 'h5sclose_f', '/'//name, file%part_path, err)
                     end if
                 end if
                 call h5sclose_f(fspace, e)
-                call check(e, 'h5sclose_f', '/'//name, out%part_path, err)
+                call check(e, 'h5sclose_f', '/'//name, file%part_path, err)
             end if
         end if
         call h5dclose_f(dset, e)
-        call check(e, 'h5dclose_f', '/'//name, out%part_path, err)
-    end subroutine write_slab
+        call check(e, 'h5dclose_f', '/'//name, file%part_path, err)
+    end subroutine transfer_slab
 
 end module chain_output
