@@ -22,7 +22,7 @@
 !> stopped), from which the same input resumes.
 module chain_sweep
     use chain_kinds, only: wp, i8
-    use chain_error, only: error_t, set_error, fmt_real, fmt_int, fmt_int8
+    use chain_error, only: error_t, set_error, fmt_real, fmt_int
     use chain_flow, only: make_flow
     use chain_engine, only: chain_t, chain_init
     use chain_config, only: run_config_t, validate_config, lyapunov_vectors
@@ -30,14 +30,17 @@ module chain_sweep
     use chain_sim, only: start_chain, write_run_header
     use chain_output, only: output_t, output_begin, output_group, &
                             output_sweep_write, output_sweep_attributes, output_end, output_abort, &
-                            output_sweep_write_int, rename_file
+                            output_sweep_write_int
+    use chain_files, only: rename_file, remove_file, close_checked
     use hdf5, only: hsize_t
     implicit none
     private
     public :: sweep_plan_t, sweep_result_t, plan_sweep, sweep_point_config, run_branch
     public :: run_sweep_branches, sweep_result_init, branch_start_state_t, point_hook
     public :: run_sweep, write_sweep_file, sweep_summary_t
-    public :: save_checkpoint, load_checkpoint, remove_file, checkpoint_every
+    public :: save_checkpoint, load_checkpoint, checkpoint_every
+    ! (chain_files' remove_file, for the drivers that delete a finished sweep's checkpoint)
+    public :: remove_file
     public :: branch_record_sizes, pack_branch, unpack_branch
 
     !> The checkpoint's first bytes; the number changes with the layout of pack_branch.
@@ -470,7 +473,7 @@ contains
         type(error_t), allocatable, intent(out) :: err
         character(len=256) :: msg
         integer :: u, ios, b, nr, ni
-        integer(i8) :: written, on_disk
+        integer(i8) :: written
         real(wp), allocatable :: reals(:)
         integer(i8), allocatable :: ints(:)
 
@@ -491,22 +494,10 @@ contains
             call pack_branch(cfg, plan, res, starts, b, reals, ints)
             write (u, iostat=ios, iomsg=msg) reals, ints
         end do
-        written = -1
+        written = 0
         if (ios == 0) inquire (unit=u, pos=written, iostat=ios, iomsg=msg)
-        if (ios == 0) then
-            close (u, iostat=ios, iomsg=msg)
-        else
-            close (u)
-        end if
-        on_disk = -2
-        if (ios == 0) inquire (file=path//'.tmp', size=on_disk, iostat=ios, iomsg=msg)
-        if (ios == 0 .and. on_disk /= written - 1) then
-            ios = 1
-            msg = fmt_int8(written - 1)//" bytes written, "// &
-                  fmt_int8(on_disk)//" on disk: is the disk full?"
-        end if
+        call close_checked(u, path//'.tmp', written - 1, ios, msg)
         if (ios /= 0) then
-            call remove_file(path//'.tmp')
             call set_error(err, "&sweep: cannot write the checkpoint '"//path//".tmp' ("// &
                            trim(msg)//")")
             return
@@ -657,13 +648,5 @@ contains
         starts(b)%cycle = ints(i + 2 + n)
     end subroutine unpack_branch
 
-    !> Delete a file if it exists (the checkpoint of a finished sweep).
-    subroutine remove_file(path)
-        character(len=*), intent(in) :: path
-        integer :: u, ios
-
-        open (newunit=u, file=path, status='old', iostat=ios)
-        if (ios == 0) close (u, status='delete')
-    end subroutine remove_file
 
 end module chain_sweep
