@@ -37,7 +37,8 @@ module chain_sweep
     private
     public :: sweep_plan_t, sweep_result_t, plan_sweep, sweep_point_config, run_branch
     public :: run_sweep_branches, sweep_result_init, branch_start_state_t, point_hook
-    public :: run_sweep, write_sweep_file, sweep_summary_t
+    public :: run_sweep, write_sweep_file, sweep_summary_t, validate_sweep_points
+    public :: checkpoint_path
     public :: save_checkpoint, load_checkpoint, checkpoint_every
     ! (chain_files' remove_file, for the drivers that delete a finished sweep's checkpoint)
     public :: remove_file
@@ -340,18 +341,15 @@ contains
         type(error_t), allocatable :: err2, ckpt_err
         character(len=:), allocatable :: checkpoint
         integer(i8) :: clock_last, clock_rate, now
-        integer :: p
 
         plan = plan_sweep(cfg)
-        do p = 1, plan%n_points
-            call sweep_point_config_check(cfg, plan, p, err)
-            if (allocated(err)) return
-        end do
+        call validate_sweep_points(cfg, plan, err)
+        if (allocated(err)) return
         call check_size(cfg, err)
         if (allocated(err)) return
         call output_begin(out, cfg%output_file, cfg%overwrite, err)
         if (allocated(err)) return
-        checkpoint = cfg%output_file//'.ckpt'
+        checkpoint = checkpoint_path(cfg)
         call sweep_result_init(res, cfg, plan)
         allocate (starts(plan%n_branches))
         call load_checkpoint(checkpoint, cfg, plan, res, starts, err)
@@ -406,15 +404,27 @@ contains
     end subroutine run_sweep
 
     !> Validate every point before any work (an out-of-range point is an error up front).
-    subroutine sweep_point_config_check(cfg, plan, p, err)
+    subroutine validate_sweep_points(cfg, plan, err)
         type(run_config_t), intent(in) :: cfg
         type(sweep_plan_t), intent(in) :: plan
-        integer, intent(in) :: p
         type(error_t), allocatable, intent(out) :: err
         type(run_config_t) :: point
+        integer :: p
 
-        call sweep_point_config(cfg, plan, p, point, err)
-    end subroutine sweep_point_config_check
+        do p = 1, plan%n_points
+            call sweep_point_config(cfg, plan, p, point, err)
+            if (allocated(err)) return
+        end do
+    end subroutine validate_sweep_points
+
+    !> The checkpoint of the sweep writing cfg%output_file (the same for every driver, so that
+    !> any of them resumes any other's).
+    pure function checkpoint_path(cfg) result(path)
+        type(run_config_t), intent(in) :: cfg
+        character(len=:), allocatable :: path
+
+        path = cfg%output_file//'.ckpt'
+    end function checkpoint_path
 
     !> Header of a normal run (for the sweep's starting configuration) and the /sweep group.
     subroutine write_sweep_file(out, cfg, plan, res, err)

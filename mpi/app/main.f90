@@ -22,19 +22,20 @@ program impactchain_mpi
     use chain_error, only: error_t
     use chain_config, only: run_config_t, read_config
     use chain_sweep, only: sweep_plan_t, sweep_result_t, branch_start_state_t, plan_sweep, &
-                           sweep_result_init, sweep_point_config, run_sweep_branches, &
+                           sweep_result_init, validate_sweep_points, checkpoint_path, &
+                           run_sweep_branches, &
                            write_sweep_file, save_checkpoint, load_checkpoint, remove_file, &
                            checkpoint_every, branch_record_sizes, pack_branch, unpack_branch
     use chain_output, only: output_t, output_begin, output_end, output_abort
     use interrupt_flag, only: catch_interrupts, interrupted
     implicit none
-    type(run_config_t) :: cfg, point
+    type(run_config_t) :: cfg
     type(sweep_plan_t) :: plan
     type(sweep_result_t) :: res
     type(branch_start_state_t), allocatable :: starts(:)
     type(output_t) :: out
     type(error_t), allocatable :: err
-    integer :: rank, ranks, provided, b, p, failed, left, stopping, resumed
+    integer :: rank, ranks, provided, b, failed, left, stopping, resumed
     logical :: quiet
     logical, allocatable :: mine(:)
     character(len=:), allocatable :: input, checkpoint
@@ -51,10 +52,8 @@ program impactchain_mpi
     round_seconds = round_length()
     plan = plan_sweep(cfg)
     ! every point is checked before any work (every rank alike)
-    do p = 1, plan%n_points
-        call sweep_point_config(cfg, plan, p, point, err)
-        if (allocated(err)) call stop_all(err%message)
-    end do
+    call validate_sweep_points(cfg, plan, err)
+    if (allocated(err)) call stop_all(err%message)
     ! rank 0 refuses an existing or unwritable output before anyone works
     failed = 0
     if (rank == 0) then
@@ -66,7 +65,7 @@ program impactchain_mpi
     call sweep_result_init(res, cfg, plan)
     allocate (starts(plan%n_branches))
     ! every rank reads the checkpoint (if any), so every rank can own any branch
-    checkpoint = cfg%output_file//'.ckpt'
+    checkpoint = checkpoint_path(cfg)
     call load_checkpoint(checkpoint, cfg, plan, res, starts, err)
     call agree_or_stop(err)
     resumed = count(res%done)
