@@ -5,9 +5,9 @@
 program main
     use, intrinsic :: iso_fortran_env, only: error_unit, output_unit, int64
     use impactchain, only: wp, i8, error_t, run_config_t, read_config, run_simulation, &
-                           run_result_t, run_sweep, sweep_summary_t, catch_interrupts, &
-                           interrupted, cli_t, parse_command_line, cli_run, cli_help, &
-                           cli_version, cli_usage, code_version
+                           run_result_t, run_sweep, sweep_summary_t, checkpoint_path, &
+                           catch_interrupts, interrupted, cli_t, parse_command_line, cli_run, &
+                           cli_help, cli_version, cli_usage, code_version
     implicit none
     type(run_config_t) :: cfg
     type(run_result_t) :: summary
@@ -44,7 +44,7 @@ program main
         unit_label = 'point'
         call run_sweep(cfg, sweep_summary, err, progress)
         if (allocated(err)) call fail(err%message)
-        call report_sweep(sweep_summary, cfg%output_file)
+        call report_sweep(sweep_summary, cfg%output_file, checkpoint_path(cfg))
         if (.not. sweep_summary%complete) stop 3, quiet=.true.
     else
         unit_label = 'cycle'
@@ -105,9 +105,9 @@ contains
             'and is marked complete = 0; run the same command again to continue it'
     end subroutine report
 
-    subroutine report_sweep(summary, output_file)
+    subroutine report_sweep(summary, output_file, checkpoint)
         type(sweep_summary_t), intent(in) :: summary
-        character(len=*), intent(in) :: output_file
+        character(len=*), intent(in) :: output_file, checkpoint
 
         if (summary%complete) then
             write (output_unit, '(a)') 'impactchain: wrote '//output_file
@@ -117,7 +117,7 @@ contains
         else
             write (error_unit, '(a,i0,a,i0,a)') 'impactchain: the sweep was stopped after ', &
                 summary%points_done, ' of ', summary%n_points, ' points; run the same '// &
-                'command again to resume from '//output_file//'.ckpt'
+                'command again to resume from '//checkpoint
         end if
     end subroutine report_sweep
 

@@ -6,12 +6,12 @@
 !> it copies error messages into a buffer of byte values. There is no physics here: every
 !> number comes from `chain_run` / `chain_sim`, exactly as for the CLI.
 module chain_bridge
-    use, intrinsic :: iso_c_binding, only: c_int
+    use, intrinsic :: iso_c_binding, only: c_int, c_int64_t, c_double
     use impactchain, only: wp, i8, error_t, set_error, run_config_t, fmt_real, fmt_int, &
-                           event_log_t, record_sink_t
+                           lyapunov_vectors, event_log_t, chain_t, record_sink_t, run_result_t
     implicit none
     private
-    public :: array_sink_t, make_config, put_message, count_vectors
+    public :: array_sink_t, make_config, put_message, run_sizes_ok, put_run_results
     public :: status_ok, status_invalid, status_failed, status_capacity, status_internal
     public :: message_capacity
 
@@ -99,13 +99,67 @@ contains
         cfg%input_text = ''
     end subroutine make_config
 
-    !> Number of tangent vectors a (validated) configuration carries: vectors, 0 meaning 2n.
-    pure integer function count_vectors(cfg)
+    !> Do ic_run's caller-given sizes fit the (validated) configuration? nf = n always; the
+    !> strobe records, when kept (nc > 0), are (n, cycles); kcap exponents with &lyapunov;
+    !> a 2n x 2n Jacobian when asked.
+    pure logical function run_sizes_ok(cfg, nr, nc, nf, kcap, mj)
         type(run_config_t), intent(in) :: cfg
+        integer, intent(in) :: nr, nf, kcap, mj
+        integer(i8), intent(in) :: nc
 
-        count_vectors = cfg%vectors
-        if (count_vectors == 0) count_vectors = 2*cfg%n
-    end function count_vectors
+        run_sizes_ok = nf == cfg%n .and. (nc == 0 .or. (nr == cfg%n .and. nc == cfg%cycles))
+        if (cfg%lyapunov) run_sizes_ok = run_sizes_ok .and. kcap == lyapunov_vectors(cfg)
+        if (cfg%jacobian) run_sizes_ok = run_sizes_ok .and. mj == 2*cfg%n
+    end function run_sizes_ok
+
+    !> ic_run's outputs besides the records and events: the final state, counters, periods,
+    !> spectrum and Jacobian of a run (`res`, `chain`), or all zero without one (an invalid
+    !> configuration, a dry run, a failed run).
+    subroutine put_run_results(final_x, final_v, periods, site_counts, counts, &
+                               collisions_per_cycle, k, exponents, stderr_bits, per_time, ky, &
+                               jac, mult_re, mult_im, res, chain)
+        real(c_double), intent(out) :: final_x(:), final_v(:), collisions_per_cycle, ky
+        integer(c_int), intent(out) :: periods(:), k
+        integer(c_int64_t), intent(out) :: site_counts(:), counts(:)
+        real(c_double), intent(out) :: exponents(:), stderr_bits(:), per_time(:)
+        real(c_double), intent(out) :: jac(:, :), mult_re(:), mult_im(:)
+        type(run_result_t), intent(in), optional :: res
+        type(chain_t), intent(in), optional :: chain
+
+        final_x = 0
+        final_v = 0
+        periods = 0
+        site_counts = 0
+        counts = 0
+        collisions_per_cycle = 0
+        k = 0
+        ky = 0
+        exponents = 0
+        stderr_bits = 0
+        per_time = 0
+        jac = 0
+        mult_re = 0
+        mult_im = 0
+        if (.not. (present(res) .and. present(chain))) return
+        final_x = chain%x
+        final_v = chain%v
+        periods = res%periods
+        site_counts = res%site_counts
+        counts = [res%impacts, res%sticks, res%releases, res%touches]
+        collisions_per_cycle = res%collisions_per_cycle
+        if (res%has_lyapunov) then
+            k = size(res%lyapunov%bits_per_cycle)
+            exponents = res%lyapunov%bits_per_cycle
+            stderr_bits = res%lyapunov%stderr_bits
+            per_time = res%lyapunov%nats_per_time
+            ky = res%lyapunov%ky_dimension
+        end if
+        if (allocated(res%jacobian)) then
+            jac = res%jacobian
+            mult_re = res%multipliers_re
+            mult_im = res%multipliers_im
+        end if
+    end subroutine put_run_results
 
     !> Copy `text` into the message buffer (truncated to its size) and set the status.
     subroutine put_message(text, code, status, msg_len, message)

@@ -27,6 +27,8 @@
 !> Strobe records are kept when nc > 0 (then nr = n, nc = cycles), events when record_events;
 !> the Lyapunov spectrum (kcap = number of exponents) and the Jacobian of the `jacobian_cycles`
 !> Poincare map at the final state with its eigenvalues (mj = 2n) when asked. nf = n always.
+!> (Long because f2py's protocol flattens a whole run into 57 plain arguments: their list and
+!> declarations are half of it; the rest validates, runs and hands the results over.)
 subroutine ic_run(n, nsp, spacing, damping, restitution, amplitude, omega, nb, boundary, &
                   explicit, nx0, x0, nv0, v0, transient, cycles, phase, stick_speed, &
                   max_size_mb, record_events, lyapunov, vectors, qr_every, jacobian, &
@@ -37,8 +39,8 @@ subroutine ic_run(n, nsp, spacing, damping, restitution, amplitude, omega, nb, b
     use, intrinsic :: iso_c_binding, only: c_int, c_int64_t, c_double
     use impactchain, only: i8, error_t, run_config_t, validate_config, chain_t, run_result_t, &
                            record_run, check_size, start_chain
-    use chain_bridge, only: array_sink_t, make_config, put_message, &
-                            count_vectors, status_ok, status_invalid, status_failed, &
+    use chain_bridge, only: array_sink_t, make_config, put_message, run_sizes_ok, &
+                            put_run_results, status_ok, status_invalid, status_failed, &
                             status_capacity, status_internal
     implicit none
     !f2py threadsafe
@@ -67,25 +69,11 @@ subroutine ic_run(n, nsp, spacing, damping, restitution, amplitude, omega, nb, b
     type(array_sink_t) :: sink
     type(run_result_t) :: res
     type(error_t), allocatable :: err
-    logical :: sizes_ok
 
     call put_message('', status_ok, status, msg_len, message)
-    final_x = 0
-    final_v = 0
-    periods = 0
-    site_counts = 0
-    counts = 0
-    collisions_per_cycle = 0
     nev = 0
-    k = 0
-    ky = 0
-    exponents = 0
-    stderr_bits = 0
-    per_time = 0
-    jac = 0
-    mult_re = 0
-    mult_im = 0
-
+    call put_run_results(final_x, final_v, periods, site_counts, counts, collisions_per_cycle, &
+                         k, exponents, stderr_bits, per_time, ky, jac, mult_re, mult_im)
     call make_config(cfg, int(n), spacing, damping, restitution, amplitude, omega, boundary, &
                      explicit /= 0, x0, v0, int(transient, i8), int(cycles, i8), phase, &
                      stick_speed, max_size_mb, record_events /= 0, lyapunov /= 0, &
@@ -99,10 +87,7 @@ subroutine ic_run(n, nsp, spacing, damping, restitution, amplitude, omega, nb, b
     end if
     if (dry_run /= 0) return
 
-    sizes_ok = nf == n .and. (nc == 0 .or. (nr == n .and. nc == cycles))
-    if (cfg%lyapunov) sizes_ok = sizes_ok .and. kcap == count_vectors(cfg)
-    if (cfg%jacobian) sizes_ok = sizes_ok .and. mj == 2*n
-    if (.not. sizes_ok) then
+    if (.not. run_sizes_ok(cfg, int(nr), int(nc, i8), int(nf), int(kcap), int(mj))) then
         call put_message("python layer: output sizes do not match the configuration", &
                          status_internal, status, msg_len, message)
         return
@@ -124,25 +109,10 @@ subroutine ic_run(n, nsp, spacing, damping, restitution, amplitude, omega, nb, b
         return
     end if
 
-    final_x = chain%x
-    final_v = chain%v
-    periods = res%periods
-    site_counts = res%site_counts
-    counts = [res%impacts, res%sticks, res%releases, res%touches]
-    collisions_per_cycle = res%collisions_per_cycle
+    call put_run_results(final_x, final_v, periods, site_counts, counts, collisions_per_cycle, &
+                         k, exponents, stderr_bits, per_time, ky, jac, mult_re, mult_im, res, &
+                         chain)
     nev = sink%n_events
-    if (res%has_lyapunov) then
-        k = size(res%lyapunov%bits_per_cycle)
-        exponents = res%lyapunov%bits_per_cycle
-        stderr_bits = res%lyapunov%stderr_bits
-        per_time = res%lyapunov%nats_per_time
-        ky = res%lyapunov%ky_dimension
-    end if
-    if (cfg%jacobian) then
-        jac = res%jacobian
-        mult_re = res%multipliers_re
-        mult_im = res%multipliers_im
-    end if
     if (nev > ncap) call put_message("python layer: more events than the capacity ncap", &
                                      status_capacity, status, msg_len, message)
 end subroutine ic_run

@@ -13,7 +13,7 @@ module chain_config
     use chain_error, only: error_t, set_error, fmt_real, fmt_int, fmt_int8
     implicit none
     private
-    public :: run_config_t, read_config, validate_config, config_summary
+    public :: run_config_t, read_config, validate_config, config_summary, lyapunov_vectors
     public :: max_list, fmt_real, fmt_int, sweep_parameters
 
     !> Longest explicit list in a namelist (spacing, x0, v0); longer chains use a file start.
@@ -321,11 +321,8 @@ contains
                            fmt_int(max_n)//"]")
             return
         end if
-        if (n < 1 .or. n > max_n) then
-            call set_error(err, "&chain: n = "//fmt_int(n)//" is outside [1, "// &
-                           fmt_int(max_n)//"]")
-            return
-        end if
+        call check_n(err, n)
+        if (allocated(err)) return
         if (amplitude == unset) then
             call set_error(err, "&chain: amplitude (A, drive amplitude) is required, >= 0")
             return
@@ -347,8 +344,7 @@ contains
         else if (m == n + 1) then
             cfg%spacing = spacing(1:n + 1)
         else
-            call set_error(err, "&chain: spacing has "//fmt_int(m)//" values; give one "// &
-                           "(uniform) or n+1 = "//fmt_int(n + 1)//" (one per bond, 0..n)")
+            call check_spacing_count(err, n, m)
             return
         end if
         cfg%n = n
@@ -537,24 +533,29 @@ contains
         end if
     end subroutine read_sweep
 
-    !> Check every value against its allowed range (also used for values given from Python).
+    !> Check every value against its allowed range (also used for values given from Python),
+    !> group by group; the first value out of range is the error.
     subroutine validate_config(cfg, err)
         type(run_config_t), intent(in) :: cfg
         type(error_t), allocatable, intent(out) :: err
-        integer :: j
-        real(wp) :: smallest
 
-        if (cfg%n < 1 .or. cfg%n > max_n) then
-            call set_error(err, "&chain: n = "//fmt_int(cfg%n)//" is outside [1, "// &
-                           fmt_int(max_n)//"]")
-            return
-        end if
-        if (size(cfg%spacing) /= cfg%n + 1) then
-            call set_error(err, "&chain: spacing has "//fmt_int(size(cfg%spacing))// &
-                           " values; give one (uniform) or n+1 = "//fmt_int(cfg%n + 1)// &
-                           " (one per bond, 0..n)")
-            return
-        end if
+        call validate_chain(cfg, err)
+        if (.not. allocated(err)) call validate_initial(cfg, err)
+        if (.not. allocated(err)) call validate_run(cfg, err)
+        if (.not. allocated(err)) call validate_lyapunov(cfg, err)
+        if (.not. allocated(err)) call validate_output(cfg, err)
+        if (.not. allocated(err) .and. cfg%sweep) call validate_sweep(cfg, err)
+    end subroutine validate_config
+
+    subroutine validate_chain(cfg, err)
+        type(run_config_t), intent(in) :: cfg
+        type(error_t), allocatable, intent(out) :: err
+        integer :: j
+
+        call check_n(err, cfg%n)
+        if (allocated(err)) return
+        call check_spacing_count(err, cfg%n, size(cfg%spacing))
+        if (allocated(err)) return
         do j = 1, size(cfg%spacing)
             if (.not. (ieee_is_finite(cfg%spacing(j)) .and. cfg%spacing(j) > 0)) then
                 call set_error(err, "&chain: spacing of bond "//fmt_int(j - 1)//" = "// &
@@ -580,8 +581,14 @@ contains
         if (cfg%boundary /= 'fixed' .and. cfg%boundary /= 'free') then
             call set_error(err, "&chain: boundary = '"//cfg%boundary// &
                            "' is not one of 'fixed', 'free'")
-            return
         end if
+    end subroutine validate_chain
+
+    subroutine validate_initial(cfg, err)
+        type(run_config_t), intent(in) :: cfg
+        type(error_t), allocatable, intent(out) :: err
+        real(wp) :: smallest
+
         select case (cfg%initial_kind)
         case ('rest', 'random', 'explicit', 'file')
         case default
@@ -617,8 +624,13 @@ contains
         end if
         if (cfg%initial_kind == 'file' .and. len_trim(cfg%initial_file) == 0) then
             call set_error(err, "&initial: kind = 'file' needs file = 'earlier-run.h5'")
-            return
         end if
+    end subroutine validate_initial
+
+    subroutine validate_run(cfg, err)
+        type(run_config_t), intent(in) :: cfg
+        type(error_t), allocatable, intent(out) :: err
+
         if (cfg%transient < 0 .or. cfg%transient > 10_i8**12) then
             call set_error(err, "&run: transient = "//fmt_int8(cfg%transient)// &
                            " is outside [0, 1e12]")
@@ -641,7 +653,12 @@ contains
         end if
         call check_range(err, 'run', 'period_tol', cfg%period_tol, tiny(1.0_wp), 1.0_wp, &
                          '(0, 1)', open_high=.true.)
-        if (allocated(err)) return
+    end subroutine validate_run
+
+    subroutine validate_lyapunov(cfg, err)
+        type(run_config_t), intent(in) :: cfg
+        type(error_t), allocatable, intent(out) :: err
+
         if (cfg%vectors < 0 .or. cfg%vectors > 2*cfg%n) then
             call set_error(err, "&lyapunov: vectors = "//fmt_int(cfg%vectors)// &
                            " is outside [0, 2n = "//fmt_int(2*cfg%n)//"] (0 means all 2n)")
@@ -660,17 +677,39 @@ contains
         if (cfg%jacobian_cycles < 1 .or. cfg%jacobian_cycles > 1000) then
             call set_error(err, "&lyapunov: jacobian_cycles = "//fmt_int(cfg%jacobian_cycles) &
                            //" is outside [1, 1000]")
-            return
         end if
+    end subroutine validate_lyapunov
+
+    subroutine validate_output(cfg, err)
+        type(run_config_t), intent(in) :: cfg
+        type(error_t), allocatable, intent(out) :: err
+
         if (len_trim(cfg%output_file) == 0) then
             call set_error(err, "&output: file must not be empty")
             return
         end if
         call check_range(err, 'output', 'max_size_mb', cfg%max_size_mb, 0.0_wp, 1.0e9_wp, &
                          '(0, 1e9]')
-        if (allocated(err)) return
-        if (cfg%sweep) call validate_sweep(cfg, err)
-    end subroutine validate_config
+    end subroutine validate_output
+
+    !> n, the number of oscillators, within [1, max_n].
+    subroutine check_n(err, n)
+        type(error_t), allocatable, intent(out) :: err
+        integer, intent(in) :: n
+
+        if (n < 1 .or. n > max_n) call set_error(err, "&chain: n = "//fmt_int(n)// &
+                                                 " is outside [1, "//fmt_int(max_n)//"]")
+    end subroutine check_n
+
+    !> m spacings for n oscillators: one per bond, 0..n (a single value is expanded on reading).
+    subroutine check_spacing_count(err, n, m)
+        type(error_t), allocatable, intent(out) :: err
+        integer, intent(in) :: n, m
+
+        if (m /= n + 1) call set_error(err, "&chain: spacing has "//fmt_int(m)// &
+                                       " values; give one (uniform) or n+1 = "// &
+                                       fmt_int(n + 1)//" (one per bond, 0..n)")
+    end subroutine check_spacing_count
 
     subroutine validate_sweep(cfg, err)
         type(run_config_t), intent(in) :: cfg
@@ -787,6 +826,15 @@ contains
             call set_error(err, "&"//group//": "//trim(msg))
         end if
     end subroutine group_error
+
+    !> Lyapunov exponents (tangent vectors) a validated configuration computes: none without
+    !> &lyapunov, else `vectors`, 0 meaning all 2n.
+    pure integer function lyapunov_vectors(cfg)
+        type(run_config_t), intent(in) :: cfg
+
+        lyapunov_vectors = 0
+        if (cfg%lyapunov) lyapunov_vectors = merge(2*cfg%n, cfg%vectors, cfg%vectors == 0)
+    end function lyapunov_vectors
 
     !> `run.nml` -> `run.h5` in the current directory.
     pure function default_output(path) result(out)

@@ -30,9 +30,9 @@
 module chain_engine
     use chain_kinds, only: wp, i8, two_pi
     use chain_error, only: error_t, set_error, fmt_int
-    use chain_flow, only: flow_t
+    use chain_flow, only: flow_t, propagator_pair, forced_response_at, acceleration_at
     use chain_gaps, only: gap_t, gap_search_t, next_gap_zero, search_root, search_horizon, &
-                          resolvable_speed
+                          resolvable_speed, earliest_closing
     use chain_impact, only: pair_impact, wall_impact, pair_reset_jacobian, &
                             wall_reset_jacobian, saltation_matrix
     use chain_queue, only: queue_t, queue_init, queue_set, queue_top, queue_shift, queue_ties
@@ -394,7 +394,7 @@ contains
     !> The propagator from the epoch to the current time (and its inverse), once per event time.
     pure subroutine frame_now(chain)
         type(chain_t), intent(inout) :: chain
-        real(wp) :: tau, b, e, cs, sn, inv_det
+        real(wp) :: tau
         integer :: i
 
         if (chain%frame_s == chain%s) return
@@ -402,20 +402,7 @@ contains
         chain%frame_s = chain%s
         chain%instant = chain%instant + 1
         tau = chain%s - chain%epoch
-        ! the propagator of eq. 17 (as chain_flow's) and its inverse, det M = exp(-2 b tau)
-        b = chain%flow%damping
-        e = exp(-b*tau)
-        cs = cos(chain%flow%gam*tau)
-        sn = sin(chain%flow%gam*tau)*chain%flow%inv_gam
-        chain%m(1, 1) = e*(cs + b*sn)
-        chain%m(1, 2) = e*sn
-        chain%m(2, 1) = -e*sn
-        chain%m(2, 2) = e*(cs - b*sn)
-        inv_det = 1/(e*e)
-        chain%m_inv(1, 1) = chain%m(2, 2)*inv_det
-        chain%m_inv(2, 1) = -chain%m(2, 1)*inv_det
-        chain%m_inv(1, 2) = -chain%m(1, 2)*inv_det
-        chain%m_inv(2, 2) = chain%m(1, 1)*inv_det
+        call propagator_pair(chain%flow, tau, chain%m, chain%m_inv)
         if (chain%flow%damping*tau > rebase_after) then
             do i = 1, chain%n
                 if (chain%contact(i) /= contact_free) cycle
@@ -441,15 +428,12 @@ contains
     !> resting oscillators and the tangent frame need it (a pair impact does not).
     pure subroutine drive_now(chain)
         type(chain_t), intent(inout) :: chain
-        real(wp) :: sn, cs
 
         if (chain%drive_s == chain%s) return
         chain%drive_s = chain%s
-        sn = sin(chain%flow%omega*chain%s)
-        cs = cos(chain%flow%omega*chain%s)
-        chain%drive_sin = sn
-        chain%drive_x = chain%flow%p_sin*sn + chain%flow%q_cos*cs
-        chain%drive_v = chain%flow%omega*(chain%flow%p_sin*cs - chain%flow%q_cos*sn)
+        chain%drive_sin = sin(chain%flow%omega*chain%s)
+        call forced_response_at(chain%flow, chain%drive_sin, cos(chain%flow%omega*chain%s), &
+                                chain%drive_x, chain%drive_v)
     end subroutine drive_now
 
     !> Tangent rows of moving oscillators from the epoch to now (after frame_now); rows already
@@ -641,7 +625,7 @@ contains
         real(wp), intent(in) :: x, v
         real(wp) :: acc
 
-        acc = -2*chain%flow%damping*v - x + chain%flow%amplitude*chain%drive_sin
+        acc = acceleration_at(chain%flow, chain%drive_sin, x, v)
     end function acceleration_now
 
     !> Find and queue the next event of a bond from the current time.
@@ -953,7 +937,7 @@ contains
     end subroutine pair_event
 
     !> Schedule a pair bond that is opening: rather than searching its next impact now, look
-    !> again when it could first close at the earliest (|g''| <= amp for a free gap), as long
+    !> again when it could first close at the earliest (chain_gaps' earliest_closing), as long
     !> as that is not soon; a neighbour's impact usually reschedules it before then.
     subroutine schedule_separating(chain, bond, err)
         type(chain_t), intent(inout) :: chain
@@ -962,12 +946,11 @@ contains
         type(gap_t) :: gap
         logical :: closes
         integer :: resting
-        real(wp) :: amp, earliest
+        real(wp) :: earliest
 
         call gap_now(chain, bond, gap, closes, resting)
         if (closes .and. resting == 0 .and. gap%beta == 0 .and. gap%vy > 0) then
-            amp = sqrt(gap%y**2 + ((gap%vy + chain%flow%damping*gap%y)*chain%flow%inv_gam)**2)
-            earliest = 2*gap%vy/amp
+            earliest = earliest_closing(chain%flow, gap)
             if (earliest > defer_after) then
                 chain%action(bond) = action_recheck
                 call queue_set(chain%queue, bond, chain%s + earliest)

@@ -55,25 +55,38 @@ contains
         log%count = 0
     end subroutine event_log_clear
 
+    !> Double the capacity (at least 16), keeping the events logged.
     pure subroutine grow(log)
         type(event_log_t), intent(inout) :: log
         integer :: m
-        real(wp), allocatable :: rtmp(:)
-        integer, allocatable :: itmp(:)
 
         m = max(16, 2*size(log%time))
-        allocate (rtmp(m))
-        rtmp(:log%count) = log%time(:log%count)
-        call move_alloc(rtmp, log%time)
-        allocate (rtmp(m))
-        rtmp(:log%count) = log%speed(:log%count)
-        call move_alloc(rtmp, log%speed)
-        allocate (itmp(m))
-        itmp(:log%count) = log%site(:log%count)
-        call move_alloc(itmp, log%site)
-        allocate (itmp(m))
-        itmp(:log%count) = log%kind(:log%count)
-        call move_alloc(itmp, log%kind)
+        call grow_real(log%time, m, log%count)
+        call grow_real(log%speed, m, log%count)
+        call grow_int(log%site, m, log%count)
+        call grow_int(log%kind, m, log%count)
     end subroutine grow
+
+    !> `a` with room for m entries, its first `kept` kept.
+    pure subroutine grow_real(a, m, kept)
+        real(wp), allocatable, intent(inout) :: a(:)
+        integer, intent(in) :: m, kept
+        real(wp), allocatable :: tmp(:)
+
+        allocate (tmp(m))
+        tmp(:kept) = a(:kept)
+        call move_alloc(tmp, a)
+    end subroutine grow_real
+
+    !> `a` with room for m entries, its first `kept` kept.
+    pure subroutine grow_int(a, m, kept)
+        integer, allocatable, intent(inout) :: a(:)
+        integer, intent(in) :: m, kept
+        integer, allocatable :: tmp(:)
+
+        allocate (tmp(m))
+        tmp(:kept) = a(:kept)
+        call move_alloc(tmp, a)
+    end subroutine grow_int
 
 end module chain_events

@@ -1,14 +1,20 @@
 !> The exact flow of one driven, damped oscillator between impacts (docs/model.md section 2).
 !>
 !> x'' + 2 b x' + x = A sin(w t). The forced steady state xp = P sin(w t) + Q cos(w t) is the
-!> same for every oscillator, and y = x - xp is a free damped oscillation propagated by the
-!> 2x2 matrix of the paper's eq. 17. Times are always times within the current drive cycle,
-!> so no sine or exponential ever sees a large argument.
+!> same for every oscillator (section 2.1), and y = x - xp is a free damped oscillation
+!> propagated by the 2x2 matrix of the paper's eq. 17 (section 2.2). Times are always times
+!> within the current drive cycle, so no sine or exponential ever sees a large argument.
+!>
+!> This module is the one place of these formulas. Besides the forms that start from a time,
+!> it has forms that start from the sines, cosines and exponentials a caller already holds:
+!> the engine computes one propagator per event time, and chain_gaps turns its phases by
+!> Taylor polynomials from one search step to the next.
 module chain_flow
     use chain_kinds, only: wp, two_pi
     implicit none
     private
-    public :: flow_t, make_flow, forced_response, forced_acceleration, propagator, advance_state
+    public :: flow_t, make_flow, forced_response, forced_response_at, acceleration_at
+    public :: propagator, propagator_pair, free_rotation, advance_state
 
     type :: flow_t
         real(wp) :: damping = 0     !! b, 0 <= b < 1
@@ -20,6 +26,7 @@ module chain_flow
         real(wp) :: period = two_pi !! T = 2 pi / w
         real(wp) :: p_sin = 0       !! P of the steady state
         real(wp) :: q_cos = 0       !! Q of the steady state
+        real(wp) :: forced_amp = 0  !! sqrt(P**2 + Q**2), the amplitude of the steady state
     end type flow_t
 
 contains
@@ -40,6 +47,7 @@ contains
         d2 = (1 - omega**2)**2 + (2*damping*omega)**2
         flow%p_sin = amplitude*(1 - omega**2) / d2
         flow%q_cos = -2*damping*omega*amplitude / d2
+        flow%forced_amp = sqrt(flow%p_sin**2 + flow%q_cos**2)
     end function make_flow
 
     !> Steady-state position and velocity at time s within the drive cycle.
@@ -47,38 +55,66 @@ contains
         type(flow_t), intent(in) :: flow
         real(wp), intent(in) :: s
         real(wp), intent(out) :: xp, vp
-        real(wp) :: sn, cs
 
-        sn = sin(flow%omega*s)
-        cs = cos(flow%omega*s)
-        xp = flow%p_sin*sn + flow%q_cos*cs
-        vp = flow%omega*(flow%p_sin*cs - flow%q_cos*sn)
+        call forced_terms(flow, sin(flow%omega*s), cos(flow%omega*s), xp, vp)
     end subroutine forced_response
 
-    !> Acceleration of a free oscillator in state (x, v) at time s within the cycle.
-    elemental function forced_acceleration(flow, s, x, v) result(acc)
+    !> Steady-state position and velocity where the drive phase w t has sine sin_wt and
+    !> cosine cos_wt.
+    pure subroutine forced_response_at(flow, sin_wt, cos_wt, xp, vp)
         type(flow_t), intent(in) :: flow
-        real(wp), intent(in) :: s, x, v
+        real(wp), value :: sin_wt, cos_wt
+        real(wp), intent(out) :: xp, vp
+
+        call forced_terms(flow, sin_wt, cos_wt, xp, vp)
+    end subroutine forced_response_at
+
+    !> Acceleration of a moving oscillator in state (x, v) where the drive phase has sine
+    !> sin_wt (section 1.1).
+    pure function acceleration_at(flow, sin_wt, x, v) result(acc)
+        type(flow_t), intent(in) :: flow
+        real(wp), intent(in) :: sin_wt, x, v
         real(wp) :: acc
 
-        acc = -2*flow%damping*v - x + flow%amplitude*sin(flow%omega*s)
-    end function forced_acceleration
+        acc = -2*flow%damping*v - x + flow%amplitude*sin_wt
+    end function acceleration_at
 
     !> The 2x2 propagator of (y, y') over a time tau (eq. 17); also propagates tangent vectors.
     pure function propagator(flow, tau) result(m)
         type(flow_t), intent(in) :: flow
         real(wp), intent(in) :: tau
-        real(wp) :: m(2, 2)
-        real(wp) :: e, cs, sn
+        real(wp) :: m(2, 2), r(2, 2)
+
+        call rotation_terms(flow, cos(flow%gam*tau), sin(flow%gam*tau), r)
+        m = exp(-flow%damping*tau)*r
+    end function propagator
+
+    !> The propagator over tau and its inverse, from one exponential (det M = exp(-2 b tau)).
+    pure subroutine propagator_pair(flow, tau, m, m_inv)
+        type(flow_t), intent(in) :: flow
+        real(wp), value :: tau
+        real(wp), intent(out) :: m(2, 2), m_inv(2, 2)
+        real(wp) :: e, inv_det, r(2, 2)
 
         e = exp(-flow%damping*tau)
-        cs = cos(flow%gam*tau)
-        sn = sin(flow%gam*tau)*flow%inv_gam
-        m(1, 1) = e*(cs + flow%damping*sn)
-        m(1, 2) = e*sn
-        m(2, 1) = -e*sn
-        m(2, 2) = e*(cs - flow%damping*sn)
-    end function propagator
+        call rotation_terms(flow, cos(flow%gam*tau), sin(flow%gam*tau), r)
+        m = e*r
+        inv_det = 1/(e*e)
+        m_inv(1, 1) = m(2, 2)*inv_det
+        m_inv(2, 1) = -m(2, 1)*inv_det
+        m_inv(1, 2) = -m(1, 2)*inv_det
+        m_inv(2, 2) = m(1, 1)*inv_det
+    end subroutine propagator_pair
+
+    !> The propagator over tau without its decay, from cos_gt = cos(gam tau) and
+    !> sin_gt = sin(gam tau): M(tau) = exp(-b tau) r.
+    pure subroutine free_rotation(flow, cos_gt, sin_gt, r)
+        type(flow_t), intent(in) :: flow
+        real(wp), value :: cos_gt, sin_gt
+        real(wp), intent(out) :: r(2, 2)
+
+        call rotation_terms(flow, cos_gt, sin_gt, r)
+    end subroutine free_rotation
 
     !> Move (x, v) from time s0 to s0 + tau within the cycle frame, exactly.
     pure subroutine advance_state(flow, s0, tau, x, v)
@@ -95,5 +131,33 @@ contains
         x = m(1, 1)*y + m(1, 2)*vy + xp
         v = m(2, 1)*y + m(2, 2)*vy + vp
     end subroutine advance_state
+
+    ! The formulas themselves, private: the compiler inlines a private procedure into the
+    ! others of its module, never a public one of a position-independent library.
+
+    !> xp = P sin(w t) + Q cos(w t) and its rate (section 2.1).
+    pure subroutine forced_terms(flow, sin_wt, cos_wt, xp, vp)
+        type(flow_t), intent(in) :: flow
+        real(wp), intent(in) :: sin_wt, cos_wt
+        real(wp), intent(out) :: xp, vp
+
+        xp = flow%p_sin*sin_wt + flow%q_cos*cos_wt
+        vp = flow%omega*(flow%p_sin*cos_wt - flow%q_cos*sin_wt)
+    end subroutine forced_terms
+
+    !> M(tau) exp(b tau) = [[cs + b sn, sn], [-sn, cs - b sn]], cs = cos(gam tau),
+    !> sn = sin(gam tau) / gam (section 2.2).
+    pure subroutine rotation_terms(flow, cos_gt, sin_gt, r)
+        type(flow_t), intent(in) :: flow
+        real(wp), intent(in) :: cos_gt, sin_gt
+        real(wp), intent(out) :: r(2, 2)
+        real(wp) :: sn
+
+        sn = sin_gt*flow%inv_gam
+        r(1, 1) = cos_gt + flow%damping*sn
+        r(1, 2) = sn
+        r(2, 1) = -sn
+        r(2, 2) = cos_gt - flow%damping*sn
+    end subroutine rotation_terms
 
 end module chain_flow

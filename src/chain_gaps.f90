@@ -11,10 +11,10 @@
 !> a zero, and converges quadratically onto transversal zeros. No sign-change sampling.
 module chain_gaps
     use chain_kinds, only: wp, pi, two_pi
-    use chain_flow, only: flow_t, forced_response, propagator
+    use chain_flow, only: flow_t, forced_response, forced_response_at, propagator, free_rotation
     implicit none
     private
-    public :: gap_t, gap_search_t, next_gap_zero, gap_value, resolvable_speed
+    public :: gap_t, gap_search_t, next_gap_zero, gap_value, resolvable_speed, earliest_closing
     public :: search_none, search_root, search_horizon, time_tolerance
 
     integer, parameter :: search_none = 0    !! the gap never closes
@@ -74,50 +74,69 @@ contains
         end if
     end function next_gap_zero
 
-    !> Zero of c + y(tau) with y a free damped oscillation: closed-form bracket, then Halley.
-    !> y = amp exp(-b tau) cos(theta), theta = gam tau - phi. The iteration carries exp(-b tau),
-    !> cos(theta) and sin(theta) along and updates them by the step (angle addition), so a
-    !> search costs one atan2, one acos and an exponential or two, whatever the steps.
+    !> Zero of c + y(tau) with y a free damped oscillation: closed-form bracket, then Halley
+    !> (halley_zero). y = amp exp(-b tau) cos(theta), theta = gam tau - phi.
     pure function free_gap_zero(flow, gap) result(res)
         type(flow_t), intent(in) :: flow
         type(gap_t), intent(in) :: gap
         type(gap_search_t) :: res
-        real(wp) :: b, gam, cc, ss, amp, phi, alpha, tau_min, lo, hi, tau
-        real(wp) :: g, g1, g2, denom, step, e, q, decay, cos_th, sin_th
+        real(wp) :: ss, amp, tau_min, e
+        logical :: touching
+
+        call amplitude_phase(flow, gap%y, gap%vy, amp, ss)
+        res%status = search_none
+        res%tau = huge(1.0_wp)
+        if (gap%offset - amp > 0) return
+        touching = gap%offset + gap%y <= noise(gap%offset, amp)
+        if (touching .and. gap%vy < 0) then
+            res%status = search_root
+            res%tau = 0
+            return
+        end if
+        tau_min = first_minimum(flow, gap%y, ss, touching)
+        e = 1
+        if (flow%damping /= 0) e = exp(-flow%damping*tau_min)
+        if (gap%offset - amp*flow%gam*e > 0) return
+        res%status = search_root
+        res%tau = halley_zero(flow, gap%offset, gap%y, ss, amp, tau_min, e)
+    end function free_gap_zero
+
+    !> The first minimum of y = amp exp(-b tau) cos(theta), with amp cos(phi) = cc and
+    !> amp sin(phi) = ss, from now on: theta = pi - alpha (mod 2 pi), value
+    !> -amp gam exp(-b tau); each minimum is shallower than the one before. In contact and not
+    !> closing (`touching`), the minimum we sit at is not a new impact: the next one.
+    pure function first_minimum(flow, cc, ss, touching) result(tau_min)
+        type(flow_t), intent(in) :: flow
+        real(wp), intent(in) :: cc, ss
+        logical, intent(in) :: touching
+        real(wp) :: tau_min
+
+        tau_min = modulo(pi - flow%alpha + atan2(ss, cc), two_pi)*flow%inv_gam
+        if (touching .and. tau_min < 0.5_wp*pi*flow%inv_gam) &
+            tau_min = tau_min + two_pi*flow%inv_gam
+    end function first_minimum
+
+    !> The zero of c + y(tau) on the decreasing branch of y before its minimum at tau_min
+    !> (where exp(-b tau_min) = e and c + y < 0), by Halley's method safeguarded by bisection.
+    !> The iteration carries exp(-b tau), cos(theta) and sin(theta) along and updates them by
+    !> the step (angle addition), so a search costs one atan2, one acos and an exponential or
+    !> two, whatever the steps.
+    pure function halley_zero(flow, offset, cc, ss, amp, tau_min, e) result(root)
+        type(flow_t), intent(in) :: flow
+        real(wp), intent(in) :: offset, cc, ss, amp, tau_min, e
+        real(wp) :: root
+        real(wp) :: b, gam, lo, hi, tau, g, g1, g2, denom, step, q, decay, cos_th, sin_th
         integer :: it
         logical :: halley
 
         b = flow%damping
         gam = flow%gam
-        cc = gap%y
-        ss = (gap%vy + b*gap%y)*flow%inv_gam
-        amp = sqrt(cc**2 + ss**2)
-        res%status = search_none
-        res%tau = huge(1.0_wp)
-        if (gap%offset - amp > 0) return
-        g = gap%offset + gap%y
-        if (g <= noise(gap%offset, amp) .and. gap%vy < 0) then
-            res%status = search_root
-            res%tau = 0
-            return
-        end if
-        ! minima of y where theta = pi - alpha (mod 2 pi), with value -amp gam exp(-b tau);
-        ! each minimum is shallower than the one before
-        phi = atan2(ss, cc)
-        alpha = flow%alpha
-        tau_min = modulo(pi - alpha + phi, two_pi)*flow%inv_gam
-        ! in contact and not closing: the minimum we sit at is not a new impact
-        if (g <= noise(gap%offset, amp) .and. tau_min < 0.5_wp*pi*flow%inv_gam) &
-            tau_min = tau_min + two_pi*flow%inv_gam
-        e = 1
-        if (b /= 0) e = exp(-b*tau_min)
-        if (gap%offset - amp*gam*e > 0) return
         lo = max(0.0_wp, tau_min - pi*flow%inv_gam)
         hi = tau_min
         ! first guess: the zero of the same (decreasing) branch with the decay frozen at
         ! tau_min, theta = acos(q); it lies at or after the true zero, whose |cos| is smaller
-        q = max(-1.0_wp, -gap%offset/(amp*e))
-        step = (pi - alpha - acos(q))*flow%inv_gam
+        q = max(-1.0_wp, -offset/(amp*e))
+        step = (pi - flow%alpha - acos(q))*flow%inv_gam
         tau = tau_min - step
         cos_th = q
         sin_th = sqrt(max(0.0_wp, 1 - q**2))
@@ -125,21 +144,19 @@ contains
         if (b /= 0) decay = e*exp(b*step)
         if (tau < lo .or. tau > hi) then
             tau = min(hi, max(lo, tau))
-            call phase_at(tau, decay, cos_th, sin_th)
+            call phase_at(flow, cc, ss, amp, tau, decay, cos_th, sin_th)
         end if
-        res%status = search_root
-        res%tau = lo
         do it = 1, 100
-            g = gap%offset + amp*decay*cos_th
+            g = offset + amp*decay*cos_th
             g1 = -amp*decay*(b*cos_th + gam*sin_th)
-            g2 = -2*b*g1 - (g - gap%offset)
+            g2 = -2*b*g1 - (g - offset)
             if (g > 0) then
                 lo = tau
             else
                 hi = tau
             end if
             if (hi - lo <= time_tolerance) then
-                res%tau = lo
+                root = lo
                 return
             end if
             ! Halley's step (cubic convergence; g'' comes free from the oscillator equation)
@@ -148,7 +165,7 @@ contains
             if (denom /= 0) step = -2*g*g1/denom
             ! on the zero to within rounding (a step that would not even change tau)
             if (abs(step) <= 0.25_wp*time_tolerance) then
-                res%tau = min(hi, max(lo, tau))
+                root = min(hi, max(lo, tau))
                 return
             end if
             halley = tau + step > lo .and. tau + step < hi
@@ -157,7 +174,7 @@ contains
                 ! error is below 1e-15 (no need to evaluate there); near grazing (small slope)
                 ! iterate to the tolerance instead
                 if (abs(step) <= 1.0e-5_wp .and. abs(g1) >= 1.0e-3_wp*amp) then
-                    res%tau = min(hi, max(lo, tau + step))
+                    root = min(hi, max(lo, tau + step))
                     return
                 end if
                 call rotate_phase(flow, step, decay, cos_th, sin_th)
@@ -166,32 +183,30 @@ contains
                 ! bisection: a fresh evaluation, no accumulated rotations
                 step = 0.5_wp*(lo + hi) - tau
                 tau = tau + step
-                call phase_at(tau, decay, cos_th, sin_th)
+                call phase_at(flow, cc, ss, amp, tau, decay, cos_th, sin_th)
                 if (abs(step) <= 0.25_wp*time_tolerance) then
-                    res%tau = min(hi, max(lo, tau))
+                    root = min(hi, max(lo, tau))
                     return
                 end if
             end if
         end do
-        res%tau = lo
+        root = lo
+    end function halley_zero
 
-    contains
+    !> exp(-b t), cos(theta), sin(theta) at time t, from scratch (theta = gam t - phi,
+    !> amp cos(phi) = cc, amp sin(phi) = ss).
+    pure subroutine phase_at(flow, cc, ss, amp, t, decay, cos_th, sin_th)
+        type(flow_t), intent(in) :: flow
+        real(wp), intent(in) :: cc, ss, amp, t
+        real(wp), intent(out) :: decay, cos_th, sin_th
+        real(wp) :: cg, sg
 
-        !> exp(-b t), cos(theta), sin(theta) at time t, from scratch.
-        pure subroutine phase_at(t, decay, cos_th, sin_th)
-            real(wp), intent(in) :: t
-            real(wp), intent(out) :: decay, cos_th, sin_th
-            real(wp) :: cg, sg
-
-            decay = exp(-b*t)
-            cg = cos(gam*t)
-            sg = sin(gam*t)
-            ! theta = gam t - phi, cos(phi) = cc / amp, sin(phi) = ss / amp
-            cos_th = (cg*cc + sg*ss)/amp
-            sin_th = (sg*cc - cg*ss)/amp
-        end subroutine phase_at
-
-    end function free_gap_zero
+        decay = exp(-flow%damping*t)
+        cg = cos(flow%gam*t)
+        sg = sin(flow%gam*t)
+        cos_th = (cg*cc + sg*ss)/amp
+        sin_th = (sg*cc - cg*ss)/amp
+    end subroutine phase_at
 
     !> Move exp(-b t), cos(theta), sin(theta) on by a time step h: short steps (the Halley
     !> corrections) by Taylor polynomials accurate to rounding, long ones by the library.
@@ -274,48 +289,24 @@ contains
         real(wp), intent(in) :: s0, horizon
         type(gap_search_t) :: res
         real(wp) :: b, w, ry0, rp, tau, e, ry, g, g1, g2, g3, m2, m4, h, tol
-        real(wp) :: cg, sg, cw, sw, cd, sd, sn, y, vy, ay, jy, xp, vp
+        real(wp) :: cg, sg, cw, sw, r(2, 2), y, vy, ay, jy, xp, vp
         integer :: it, turns
 
         b = flow%damping
         w = flow%omega
-        ry0 = sqrt(gap%y**2 + ((gap%vy + b*gap%y)*flow%inv_gam)**2)
-        rp = abs(gap%beta)*sqrt(flow%p_sin**2 + flow%q_cos**2)
+        ry0 = free_amplitude(flow, gap)
+        rp = abs(gap%beta)*flow%forced_amp
         tol = noise(gap%offset, ry0 + rp)
         tau = 0
         h = 0
         turns = 0
         do it = 1, max_steps
-            ! exp(-b tau), cos and sin of gam tau and of w (s0 + tau): short steps turn the
-            ! previous ones (Taylor), others (and every max_turns-th) start afresh
-            if (tau == 0) then
-                e = 1
-                cg = 1
-                sg = 0
-                cw = cos(w*s0)
-                sw = sin(w*s0)
-            else if (max(flow%gam*h, b*h, w*h) <= short_angle .and. turns < max_turns) then
-                turns = turns + 1
-                e = e*short_exp(-b*h)
-                call short_cis(flow%gam*h, cd, sd)
-                call turn(cd, sd, cg, sg)
-                call short_cis(w*h, cd, sd)
-                call turn(cd, sd, cw, sw)
-            else
-                turns = 0
-                e = 1
-                if (b /= 0) e = exp(-b*tau)
-                cg = cos(flow%gam*tau)
-                sg = sin(flow%gam*tau)
-                cw = cos(w*(s0 + tau))
-                sw = sin(w*(s0 + tau))
-            end if
-            ! the propagator of eq. 17 and the forced response
-            sn = sg*flow%inv_gam
-            y = e*((cg + b*sn)*gap%y + sn*gap%vy)
-            vy = e*(-sn*gap%y + (cg - b*sn)*gap%vy)
-            xp = flow%p_sin*sw + flow%q_cos*cw
-            vp = w*(flow%p_sin*cw - flow%q_cos*sw)
+            call phases_at_step(flow, s0, tau, h, turns, e, cg, sg, cw, sw)
+            ! the propagator of eq. 17 (its decay e applied last) and the forced response
+            call free_rotation(flow, cg, sg, r)
+            y = e*(r(1, 1)*gap%y + r(1, 2)*gap%vy)
+            vy = e*(r(2, 1)*gap%y + r(2, 2)*gap%vy)
+            call forced_response_at(flow, sw, cw, xp, vp)
             ry = ry0*e
             if (gap%offset - ry - rp > 0) then
                 res%status = search_none
@@ -357,6 +348,42 @@ contains
         res%tau = tau
         if (it > max_steps) res%info = 1
     end function forced_gap_zero
+
+    !> exp(-b tau) = e, cos and sin of gam tau (cg, sg) and of w (s0 + tau) (cw, sw) after a
+    !> step h to tau: short steps turn the previous ones by Taylor polynomials (counted in
+    !> `turns`), others (and every max_turns-th) start afresh.
+    pure subroutine phases_at_step(flow, s0, tau, h, turns, e, cg, sg, cw, sw)
+        type(flow_t), intent(in) :: flow
+        real(wp), intent(in) :: s0, tau, h
+        integer, intent(inout) :: turns
+        real(wp), intent(inout) :: e, cg, sg, cw, sw
+        real(wp) :: b, w, cd, sd
+
+        b = flow%damping
+        w = flow%omega
+        if (tau == 0) then
+            e = 1
+            cg = 1
+            sg = 0
+            cw = cos(w*s0)
+            sw = sin(w*s0)
+        else if (max(flow%gam*h, b*h, w*h) <= short_angle .and. turns < max_turns) then
+            turns = turns + 1
+            e = e*short_exp(-b*h)
+            call short_cis(flow%gam*h, cd, sd)
+            call turn(cd, sd, cg, sg)
+            call short_cis(w*h, cd, sd)
+            call turn(cd, sd, cw, sw)
+        else
+            turns = 0
+            e = 1
+            if (b /= 0) e = exp(-b*tau)
+            cg = cos(flow%gam*tau)
+            sg = sin(flow%gam*tau)
+            cw = cos(w*(s0 + tau))
+            sw = sin(w*(s0 + tau))
+        end if
+    end subroutine phases_at_step
 
     !> Largest h with g + g1 h - m h**2/2 >= 0 on [0, h] (g >= 0, m > 0).
     pure function quadratic_step(g, g1, m) result(h)
@@ -407,8 +434,7 @@ contains
         type(gap_t), intent(in) :: gap
         real(wp) :: amp
 
-        amp = sqrt(gap%y**2 + ((gap%vy + flow%damping*gap%y)*flow%inv_gam)**2) + &
-              abs(gap%beta)*sqrt(flow%p_sin**2 + flow%q_cos**2)
+        amp = free_amplitude(flow, gap) + abs(gap%beta)*flow%forced_amp
     end function gap_amplitude
 
     !> Rounding level of a gap built from terms of size `offset` and `amplitude`.
@@ -418,5 +444,36 @@ contains
 
         tol = 64*epsilon(1.0_wp)*(abs(offset) + amplitude)
     end function noise
+
+    !> For an opening free pair gap (beta = 0, y' > 0): a time before which it cannot close.
+    !> The gap's curvature is bounded by the amplitude r of its free oscillation, so
+    !> g(tau) >= g(0) + y' tau - r tau**2 / 2 >= g(0) up to tau = 2 y' / r.
+    pure function earliest_closing(flow, gap) result(tau)
+        type(flow_t), intent(in) :: flow
+        type(gap_t), intent(in) :: gap
+        real(wp) :: tau
+
+        tau = 2*gap%vy/free_amplitude(flow, gap)
+    end function earliest_closing
+
+    !> The amplitude-phase form y(tau) = r exp(-b tau) cos(gam tau - phi) of the free part of
+    !> a gap (docs/model.md section 2.2): r, and q = r sin(phi) (r cos(phi) is y(0)).
+    pure subroutine amplitude_phase(flow, y, vy, r, q)
+        type(flow_t), intent(in) :: flow
+        real(wp), intent(in) :: y, vy
+        real(wp), intent(out) :: r, q
+
+        q = (vy + flow%damping*y)*flow%inv_gam
+        r = sqrt(y**2 + q**2)
+    end subroutine amplitude_phase
+
+    !> r of amplitude_phase for the free part of a gap.
+    pure function free_amplitude(flow, gap) result(r)
+        type(flow_t), intent(in) :: flow
+        type(gap_t), intent(in) :: gap
+        real(wp) :: r, q
+
+        call amplitude_phase(flow, gap%y, gap%vy, r, q)
+    end function free_amplitude
 
 end module chain_gaps

@@ -10,19 +10,19 @@
 !> ids closed on the way out of a failure cannot hide it.
 !> Infrastructure, no model section: it writes the records of docs/model.md sections 6-7.
 module chain_output
-    use, intrinsic :: iso_c_binding, only: c_char, c_int, c_null_char, c_ptr, c_loc
-    use, intrinsic :: iso_fortran_env, only: byte => int8
+    use, intrinsic :: iso_c_binding, only: c_null_char, c_ptr, c_loc
     use hdf5
     use h5lt
     use chain_kinds, only: wp, i8
     use chain_error, only: error_t, set_error, fmt_int, fmt_int8
+    use chain_files, only: rename_file, remove_file, copy_file
     implicit none
     private
     public :: output_t, output_begin, output_header, output_strobe_write, output_events_append
     public :: output_final, output_stats, output_periods, output_lyapunov, output_jacobian
     public :: output_end, output_abort, read_final_state, output_sweep_write, output_group
     public :: schema_version, code_version, output_truncate_strobe, output_sweep_attributes
-    public :: output_sweep_write_int, rename_file
+    public :: output_sweep_write_int
     public :: resume_data_t, output_resume, read_resume, output_inspect, output_continue
     public :: file_absent, file_continuable, file_other_input, file_other
 
@@ -66,14 +66,6 @@ module chain_output
         integer(i8) :: n_events = 0
         logical :: events_created = .false.
     end type output_t
-
-    interface
-        function c_rename(old, new) bind(C, name='rename') result(status)
-            import :: c_char, c_int
-            character(kind=c_char), intent(in) :: old(*), new(*)
-            integer(c_int) :: status
-        end function c_rename
-    end interface
 
 contains
 
@@ -453,30 +445,19 @@ contains
         call rename_file(out%part_path, out%path, err)
     end subroutine output_end
 
-    !> Move a finished file to its final name (atomic on one file system).
-    subroutine rename_file(from, to, err)
-        character(len=*), intent(in) :: from, to
-        type(error_t), allocatable, intent(out) :: err
-
-        if (c_rename(from//c_null_char, to//c_null_char) /= 0) &
-            call set_error(err, "output: cannot rename '"//from//"' to '"//to//"'")
-    end subroutine rename_file
-
     !> Close and delete the partial file after an error. The error that brought us here is
     !> the one reported; a failure to close the file now is part of it (the file is deleted).
     subroutine output_abort(out)
         type(output_t), intent(inout) :: out
         type(error_t), allocatable :: ignored
-        integer :: e, u
+        integer :: e
 
         if (out%file >= 0) then
             call h5fclose_f(out%file, e)
             call check(e, 'h5fclose_f', '/', out%part_path, ignored)
         end if
         out%file = -1
-        if (.not. allocated(out%part_path)) return
-        open (newunit=u, file=out%part_path, status='old', iostat=e)
-        if (e == 0) close (u, status='delete')
+        if (allocated(out%part_path)) call remove_file(out%part_path)
     end subroutine output_abort
 
     !> /resume of a run stopped early (see resume_data_t).
@@ -665,56 +646,6 @@ contains
         end if
         if (allocated(err)) call output_abort(out)
     end subroutine output_continue
-
-    !> A byte-for-byte copy of a file (the new one checked for its full size).
-    subroutine copy_file(from, to, err)
-        character(len=*), intent(in) :: from, to
-        type(error_t), allocatable, intent(out) :: err
-        integer, parameter :: chunk = 4*1024*1024
-        integer(byte), allocatable :: buf(:)
-        integer(i8) :: total, done, copied
-        character(len=256) :: msg
-        integer :: ui, uo, ios, m
-
-        msg = ''
-        open (newunit=ui, file=from, access='stream', form='unformatted', status='old', &
-              action='read', iostat=ios, iomsg=msg)
-        if (ios /= 0) then
-            call set_error(err, "output: cannot read '"//from//"' ("//trim(msg)//")")
-            return
-        end if
-        inquire (unit=ui, size=total)
-        open (newunit=uo, file=to, access='stream', form='unformatted', status='replace', &
-              action='write', iostat=ios, iomsg=msg)
-        if (ios /= 0) then
-            close (ui)
-            call set_error(err, "output: cannot create '"//to//"' ("//trim(msg)//")")
-            return
-        end if
-        allocate (buf(chunk))
-        done = 0
-        do while (done < total .and. ios == 0)
-            m = int(min(int(chunk, i8), total - done))
-            read (ui, iostat=ios, iomsg=msg) buf(:m)
-            if (ios == 0) write (uo, iostat=ios, iomsg=msg) buf(:m)
-            done = done + m
-        end do
-        close (ui)
-        if (ios == 0) then
-            close (uo, iostat=ios, iomsg=msg)
-        else
-            close (uo)
-        end if
-        copied = -1
-        if (ios == 0) inquire (file=to, size=copied)
-        if (ios /= 0 .or. copied /= total) then
-            if (ios == 0) msg = 'the copy is short: is the disk full?'
-            open (newunit=uo, file=to, status='old', iostat=m)
-            if (m == 0) close (uo, status='delete')
-            call set_error(err, "output: cannot copy '"//from//"' to '"//to//"' ("// &
-                           trim(msg)//")")
-        end if
-    end subroutine copy_file
 
     !> The final state of an earlier run, to continue from it.
     subroutine read_final_state(path, n, x, v, cycle, phase, contact, queue_time, &
@@ -965,36 +896,9 @@ contains
         integer(hsize_t), intent(in) :: offset(:), block(:)
         type(c_ptr), intent(in) :: buf
         type(error_t), allocatable, intent(inout) :: err
-        integer(hid_t) :: dset, fspace, mspace
-        integer :: e
-        type(c_ptr) :: target_buf ! (h5dread_f wants a definable pointer)
 
-        if (allocated(err)) return
-        call h5dopen_f(src%file, name, dset, e)
-        call check(e, 'h5dopen_f', '/'//name, src%part_path, err)
-        if (allocated(err)) return
-        call h5dget_space_f(dset, fspace, e)
-        call check(e, 'h5dget_space_f', '/'//name, src%part_path, err)
-        if (.not. allocated(err)) then
-            call h5sselect_hyperslab_f(fspace, H5S_SELECT_SET_F, offset, block, e)
-            call check(e, 'h5sselect_hyperslab_f', '/'//name, src%part_path, err)
-            if (.not. allocated(err)) then
-                call h5screate_simple_f(size(block), block, mspace, e)
-                call check(e, 'h5screate_simple_f', '/'//name, src%part_path, err)
-                if (.not. allocated(err)) then
-                    target_buf = buf
-                    call h5dread_f(dset, H5T_NATIVE_DOUBLE, target_buf, e, mem_space_id=mspace, &
-                                   file_space_id=fspace)
-                    call check(e, 'h5dread_f', '/'//name, src%part_path, err)
-                    call h5sclose_f(mspace, e)
-                    call check(e, 'h5sclose_f', '/'//name, src%part_path, err)
-                end if
-            end if
-            call h5sclose_f(fspace, e)
-            call check(e, 'h5sclose_f', '/'//name, src%part_path, err)
-        end if
-        call h5dclose_f(dset, e)
-        call check(e, 'h5dclose_f', '/'//name, src%part_path, err)
+        call transfer_slab(src, name, offset, block, H5T_NATIVE_DOUBLE, buf, .false., .false., &
+                           err)
     end subroutine read_slab
 
     subroutine read_real_1d(src, name, values, err)
@@ -1399,39 +1303,63 @@ contains
         integer(hid_t), intent(in) :: mem_type
         type(c_ptr), intent(in) :: buf
         type(error_t), allocatable, intent(out) :: err
+
+        call transfer_slab(out, name, offset, block, mem_type, buf, .true., extend, err)
+    end subroutine write_slab
+
+    !> Move `buf` (memory type `mem_type`) between memory and the hyperslab offset/block of
+    !> dataset `name`: write it (`writing`), first growing the dataset to hold it when
+    !> `extend`, or read it. Nothing is done after an earlier error.
+    subroutine transfer_slab(file, name, offset, block, mem_type, buf, writing, extend, err)
+        type(output_t), intent(in) :: file
+        character(len=*), intent(in) :: name
+        integer(hsize_t), intent(in) :: offset(:), block(:)
+        integer(hid_t), intent(in) :: mem_type
+        type(c_ptr), intent(in) :: buf
+        logical, intent(in) :: writing, extend
+        type(error_t), allocatable, intent(inout) :: err
         integer(hid_t) :: dset, fspace, mspace
         integer :: e
+        type(c_ptr) :: target_buf ! (h5dread_f wants a definable pointer)
 
-        call h5dopen_f(out%file, name, dset, e)
-        call check(e, 'h5dopen_f', '/'//name, out%part_path, err)
+        if (allocated(err)) return
+        call h5dopen_f(file%file, name, dset, e)
+        call check(e, 'h5dopen_f', '/'//name, file%part_path, err)
         if (allocated(err)) return
         if (extend) then
             call h5dset_extent_f(dset, offset + block, e)
-            call check(e, 'h5dset_extent_f', '/'//name, out%part_path, err)
+            call check(e, 'h5dset_extent_f', '/'//name, file%part_path, err)
         end if
         if (.not. allocated(err)) then
             call h5dget_space_f(dset, fspace, e)
-            call check(e, 'h5dget_space_f', '/'//name, out%part_path, err)
+            call check(e, 'h5dget_space_f', '/'//name, file%part_path, err)
             if (.not. allocated(err)) then
                 call h5sselect_hyperslab_f(fspace, H5S_SELECT_SET_F, offset, block, e)
-                call check(e, 'h5sselect_hyperslab_f', '/'//name, out%part_path, err)
+                call check(e, 'h5sselect_hyperslab_f', '/'//name, file%part_path, err)
                 if (.not. allocated(err)) then
                     call h5screate_simple_f(size(block), block, mspace, e)
-                    call check(e, 'h5screate_simple_f', '/'//name, out%part_path, err)
+                    call check(e, 'h5screate_simple_f', '/'//name, file%part_path, err)
                     if (.not. allocated(err)) then
-                        call h5dwrite_f(dset, mem_type, buf, e, mem_space_id=mspace, &
-                                        file_space_id=fspace)
-                        call check(e, 'h5dwrite_f', '/'//name, out%part_path, err)
+                        if (writing) then
+                            call h5dwrite_f(dset, mem_type, buf, e, mem_space_id=mspace, &
+                                            file_space_id=fspace)
+                            call check(e, 'h5dwrite_f', '/'//name, file%part_path, err)
+                        else
+                            target_buf = buf
+                            call h5dread_f(dset, mem_type, target_buf, e, &
+                                           mem_space_id=mspace, file_space_id=fspace)
+                            call check(e, 'h5dread_f', '/'//name, file%part_path, err)
+                        end if
                         call h5sclose_f(mspace, e)
-                        call check(e, 'h5sclose_f', '/'//name, out%part_path, err)
+                        call check(e, 'h5sclose_f', '/'//name, file%part_path, err)
                     end if
                 end if
                 call h5sclose_f(fspace, e)
-                call check(e, 'h5sclose_f', '/'//name, out%part_path, err)
+                call check(e, 'h5sclose_f', '/'//name, file%part_path, err)
             end if
         end if
         call h5dclose_f(dset, e)
-        call check(e, 'h5dclose_f', '/'//name, out%part_path, err)
-    end subroutine write_slab
+        call check(e, 'h5dclose_f', '/'//name, file%part_path, err)
+    end subroutine transfer_slab
 
 end module chain_output

@@ -121,14 +121,10 @@ contains
             p = (j - 2)/arity + 1
             parent = q%heap(p)
             if (.not. earlier(t, bond, q%key(p), parent)) exit
-            q%heap(j) = parent
-            q%key(j) = q%key(p)
-            q%slot(parent) = j
+            call place(q, j, parent, q%key(p))
             j = p
         end do
-        q%heap(j) = bond
-        q%key(j) = t
-        q%slot(bond) = j
+        call place(q, j, bond, t)
     end subroutine sift_up
 
     !> Move `bond` down past every earlier child (the earliest child shifts up into the hole).
@@ -149,14 +145,22 @@ contains
                 if (earlier(q%key(c), q%heap(c), q%key(child), q%heap(child))) child = c
             end do
             if (.not. earlier(q%key(child), q%heap(child), t, bond)) exit
-            q%heap(j) = q%heap(child)
-            q%key(j) = q%key(child)
-            q%slot(q%heap(j)) = j
+            call place(q, j, q%heap(child), q%key(child))
             j = child
         end do
-        q%heap(j) = bond
-        q%key(j) = t
-        q%slot(bond) = j
+        call place(q, j, bond, t)
     end subroutine sift_down
+
+    !> Put `bond`, due at `time`, at heap position j.
+    pure subroutine place(q, j, bond, time)
+        type(queue_t), intent(inout) :: q
+        integer, intent(in) :: j
+        integer, value :: bond
+        real(wp), value :: time
+
+        q%heap(j) = bond
+        q%key(j) = time
+        q%slot(bond) = j
+    end subroutine place
 
 end module chain_queue

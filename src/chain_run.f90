@@ -18,7 +18,7 @@ module chain_run
                               lyapunov_result_t, lyapunov_result, floquet_multipliers, &
                               initial_frame, running_rows
     use chain_period, only: detect_period
-    use chain_config, only: run_config_t, fmt_real
+    use chain_config, only: run_config_t, fmt_real, lyapunov_vectors
     implicit none
     private
     public :: record_sink_t, memory_sink_t, run_result_t, record_run, progress_callback
@@ -206,29 +206,19 @@ contains
         type(run_state_t), intent(inout), optional :: state
         type(event_log_t) :: log
         type(run_state_t) :: st
-        real(wp), allocatable :: xbuf(:, :), vbuf(:, :), frame(:, :)
+        real(wp), allocatable :: xbuf(:, :), vbuf(:, :)
         integer(i8), allocatable :: cbuf(:)
         integer(i8) :: j, target_cycle, first
         real(wp) :: target_s
-        integer :: m, k, info, i, nwin, w
-        integer(i8) :: align_start
+        integer :: m, i, w
         logical :: stop_now
 
-        nwin = int(min(cfg%cycles, int(period_window(cfg%max_period), i8)))
         if (present(state)) then
             if (state%cycles_done > 0) call move_state(state, st)
         end if
         if (st%cycles_done == 0) then
-            call transient_part(cfg, chain, log, err)
+            call begin_records(cfg, chain, st, err)
             if (allocated(err)) return
-            chain%impacts = 0
-            chain%sticks = 0
-            chain%releases = 0
-            chain%touches = 0
-            chain%site_counts = 0
-            if (cfg%lyapunov) call lyapunov_start(st%acc, chain%n_vectors, &
-                                                  int(cfg%cycles/cfg%qr_every))
-            allocate (st%xwin(cfg%n, nwin), st%vwin(cfg%n, nwin))
         end if
         call event_log_init(log, cfg%record_events, 1024)
         res%cycles_continued = st%cycles_done
@@ -244,7 +234,7 @@ contains
             xbuf(:, i) = chain%x
             vbuf(:, i) = chain%v
             cbuf(i) = chain%cycle
-            w = int(modulo(j - 1, int(nwin, i8))) + 1
+            w = int(modulo(j - 1, int(size(st%xwin, 2), i8))) + 1
             st%xwin(:, w) = chain%x
             st%vwin(:, w) = chain%v
             if (cfg%lyapunov .and. modulo(j, int(cfg%qr_every, i8)) == 0) then
@@ -264,6 +254,44 @@ contains
             end if
             if (stop_now) exit
         end do
+        call summarise_run(cfg, chain, st, res)
+        if (present(state)) call move_state(st, state)
+        if (cfg%jacobian) call floquet_result(chain, cfg%jacobian_cycles, res, err)
+    end subroutine record_run
+
+    !> A fresh run up to its first record: the transient, counters from zero, an empty
+    !> Lyapunov accumulator and period window.
+    subroutine begin_records(cfg, chain, st, err)
+        type(run_config_t), intent(in) :: cfg
+        type(chain_t), intent(inout) :: chain
+        type(run_state_t), intent(inout) :: st
+        type(error_t), allocatable, intent(out) :: err
+        type(event_log_t) :: log
+        integer :: nwin
+
+        call transient_part(cfg, chain, log, err)
+        if (allocated(err)) return
+        chain%impacts = 0
+        chain%sticks = 0
+        chain%releases = 0
+        chain%touches = 0
+        chain%site_counts = 0
+        if (cfg%lyapunov) call lyapunov_start(st%acc, chain%n_vectors, &
+                                              int(cfg%cycles/cfg%qr_every))
+        nwin = int(min(cfg%cycles, int(period_window(cfg%max_period), i8)))
+        allocate (st%xwin(cfg%n, nwin), st%vwin(cfg%n, nwin))
+    end subroutine begin_records
+
+    !> The numbers of a run that has recorded res%cycles_done records: counters, collisions per
+    !> cycle, periods of the last records, and the Lyapunov spectrum.
+    subroutine summarise_run(cfg, chain, st, res)
+        type(run_config_t), intent(in) :: cfg
+        type(chain_t), intent(in) :: chain
+        type(run_state_t), intent(in) :: st
+        type(run_result_t), intent(inout) :: res
+        real(wp) :: target_s
+        integer :: i, nwin
+
         res%complete = res%cycles_done == cfg%cycles
         res%impacts = chain%impacts
         res%sticks = chain%sticks
@@ -271,7 +299,7 @@ contains
         res%touches = chain%touches
         res%site_counts = chain%site_counts
         res%collisions_per_cycle = real(chain%impacts, wp)/max(1_i8, res%cycles_done)
-        nwin = int(min(res%cycles_done, int(nwin, i8)))
+        nwin = int(min(res%cycles_done, int(size(st%xwin, 2), i8)))
         allocate (res%periods(cfg%n))
         res%periods = 0
         if (nwin > 0) then
@@ -291,16 +319,24 @@ contains
                                     res%running_cycle(i), target_s)
             end do
         end if
-        if (cfg%jacobian) then
-            call poincare_jacobian(chain, cfg%jacobian_cycles, res%jacobian, err)
-            if (allocated(err)) return
-            allocate (res%multipliers_re(2*cfg%n), res%multipliers_im(2*cfg%n))
-            call floquet_multipliers(res%jacobian, res%multipliers_re, res%multipliers_im, info)
-            if (info /= 0) call set_error(err, "floquet: the eigenvalue solver (LAPACK dgeev) "// &
-                                          "failed")
-        end if
-        if (present(state)) call move_state(st, state)
-    end subroutine record_run
+    end subroutine summarise_run
+
+    !> The Jacobian of the p-cycle Poincare map at the chain's final state and its
+    !> eigenvalues, the Floquet multipliers.
+    subroutine floquet_result(chain, cycles, res, err)
+        type(chain_t), intent(in) :: chain
+        integer, intent(in) :: cycles
+        type(run_result_t), intent(inout) :: res
+        type(error_t), allocatable, intent(out) :: err
+        integer :: info
+
+        call poincare_jacobian(chain, cycles, res%jacobian, err)
+        if (allocated(err)) return
+        allocate (res%multipliers_re(2*chain%n), res%multipliers_im(2*chain%n))
+        call floquet_multipliers(res%jacobian, res%multipliers_re, res%multipliers_im, info)
+        if (info /= 0) call set_error(err, "floquet: the eigenvalue solver (LAPACK dgeev) "// &
+                                      "failed")
+    end subroutine floquet_result
 
     !> One QR step of the chain's tangent frame into `acc`: the growth the engine kept
     !> (power-of-two scaling, re-orthonormalisations after large jumps) is added, directions
@@ -384,17 +420,15 @@ contains
         chain%jumps_volume = 0
     end subroutine orthonormalise_unaveraged
 
-    !> Carry a tangent frame from now: k = &lyapunov vectors generic orthonormal vectors.
+    !> Carry a tangent frame from now: &lyapunov vectors generic orthonormal vectors.
     subroutine start_tangent(chain, cfg, err)
         type(chain_t), intent(inout) :: chain
         type(run_config_t), intent(in) :: cfg
         type(error_t), allocatable, intent(out) :: err
         real(wp), allocatable :: frame(:, :)
-        integer :: k, info
+        integer :: info
 
-        k = cfg%vectors
-        if (k == 0) k = 2*cfg%n
-        call initial_frame(2*cfg%n, k, frame, info)
+        call initial_frame(2*cfg%n, lyapunov_vectors(cfg), frame, info)
         if (info /= 0) then
             call set_error(err, "lyapunov: cannot build the initial tangent frame")
             return
@@ -442,8 +476,7 @@ contains
         real(wp) :: mb
         integer :: k
 
-        k = 0
-        if (cfg%lyapunov) k = merge(2*cfg%n, cfg%vectors, cfg%vectors == 0)
+        k = lyapunov_vectors(cfg)
         ! strobe x, v, cycle; running estimates (k values and a cycle per kept row)
         mb = (16.0_wp*cfg%n + 8)*real(cfg%cycles, wp)/1.0e6_wp
         if (cfg%lyapunov) mb = mb + (8.0_wp*k + 8)*running_rows(cfg%cycles/cfg%qr_every)/1.0e6_wp

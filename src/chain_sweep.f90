@@ -22,24 +22,30 @@
 !> stopped), from which the same input resumes.
 module chain_sweep
     use chain_kinds, only: wp, i8
-    use chain_error, only: error_t, set_error, fmt_real, fmt_int, fmt_int8
+    use chain_error, only: error_t, set_error, fmt_real, fmt_int
     use chain_flow, only: make_flow
     use chain_engine, only: chain_t, chain_init
-    use chain_config, only: run_config_t, validate_config
+    use chain_config, only: run_config_t, validate_config, lyapunov_vectors
     use chain_run, only: memory_sink_t, run_result_t, record_run, check_size
     use chain_sim, only: start_chain, write_run_header
     use chain_output, only: output_t, output_begin, output_group, &
                             output_sweep_write, output_sweep_attributes, output_end, output_abort, &
-                            output_sweep_write_int, rename_file
+                            output_sweep_write_int
+    use chain_files, only: rename_file, remove_file, close_checked
     use hdf5, only: hsize_t
     implicit none
     private
     public :: sweep_plan_t, sweep_result_t, plan_sweep, sweep_point_config, run_branch
     public :: run_sweep_branches, sweep_result_init, branch_start_state_t, point_hook
-    public :: run_sweep, write_sweep_file, sweep_summary_t
-    public :: save_checkpoint, load_checkpoint, remove_file, checkpoint_every
+    public :: run_sweep, write_sweep_file, sweep_summary_t, validate_sweep_points
+    public :: checkpoint_path
+    public :: save_checkpoint, load_checkpoint, checkpoint_every
+    ! (chain_files' remove_file, for the drivers that delete a finished sweep's checkpoint)
+    public :: remove_file
+    public :: branch_record_sizes, pack_branch, unpack_branch
 
-    character(len=8), parameter :: checkpoint_magic = 'ICSWEEP1'
+    !> The checkpoint's first bytes; the number changes with the layout of pack_branch.
+    character(len=8), parameter :: checkpoint_magic = 'ICSWEEP2'
     !> Seconds between checkpoints of a running sweep (and between MPI gathers in mpi/).
     integer, parameter :: checkpoint_every = 10
 
@@ -119,8 +125,7 @@ contains
             plan%n_branches = plan%n_axis2
             plan%points_per_branch = plan%n_axis1
         end if
-        plan%k = 0
-        if (cfg%lyapunov) plan%k = merge(2*cfg%n, cfg%vectors, cfg%vectors == 0)
+        plan%k = lyapunov_vectors(cfg)
     end function plan_sweep
 
     !> Number of points from start to stop in steps of step (rounding-safe).
@@ -336,18 +341,15 @@ contains
         type(error_t), allocatable :: err2, ckpt_err
         character(len=:), allocatable :: checkpoint
         integer(i8) :: clock_last, clock_rate, now
-        integer :: p
 
         plan = plan_sweep(cfg)
-        do p = 1, plan%n_points
-            call sweep_point_config_check(cfg, plan, p, err)
-            if (allocated(err)) return
-        end do
+        call validate_sweep_points(cfg, plan, err)
+        if (allocated(err)) return
         call check_size(cfg, err)
         if (allocated(err)) return
         call output_begin(out, cfg%output_file, cfg%overwrite, err)
         if (allocated(err)) return
-        checkpoint = cfg%output_file//'.ckpt'
+        checkpoint = checkpoint_path(cfg)
         call sweep_result_init(res, cfg, plan)
         allocate (starts(plan%n_branches))
         call load_checkpoint(checkpoint, cfg, plan, res, starts, err)
@@ -402,15 +404,27 @@ contains
     end subroutine run_sweep
 
     !> Validate every point before any work (an out-of-range point is an error up front).
-    subroutine sweep_point_config_check(cfg, plan, p, err)
+    subroutine validate_sweep_points(cfg, plan, err)
         type(run_config_t), intent(in) :: cfg
         type(sweep_plan_t), intent(in) :: plan
-        integer, intent(in) :: p
         type(error_t), allocatable, intent(out) :: err
         type(run_config_t) :: point
+        integer :: p
 
-        call sweep_point_config(cfg, plan, p, point, err)
-    end subroutine sweep_point_config_check
+        do p = 1, plan%n_points
+            call sweep_point_config(cfg, plan, p, point, err)
+            if (allocated(err)) return
+        end do
+    end subroutine validate_sweep_points
+
+    !> The checkpoint of the sweep writing cfg%output_file (the same for every driver, so that
+    !> any of them resumes any other's).
+    pure function checkpoint_path(cfg) result(path)
+        type(run_config_t), intent(in) :: cfg
+        character(len=:), allocatable :: path
+
+        path = cfg%output_file//'.ckpt'
+    end function checkpoint_path
 
     !> Header of a normal run (for the sweep's starting configuration) and the /sweep group.
     subroutine write_sweep_file(out, cfg, plan, res, err)
@@ -455,9 +469,10 @@ contains
                                                           [np], '1', err)
     end subroutine write_sweep_file
 
-    !> Finished points and where each branch resumes, written atomically (tmp + rename). A
-    !> failed write is an error and leaves the previous checkpoint as it was; since a full
-    !> disk can go unreported by buffered writes, the file's size is checked before it
+    !> Finished points and where each branch resumes, written atomically (tmp + rename): a
+    !> header naming the input and the sweep's sizes, then every branch as pack_branch lays
+    !> it out. A failed write is an error and leaves the previous checkpoint as it was; since
+    !> a full disk can go unreported by buffered writes, the file's size is checked before it
     !> replaces the previous one.
     subroutine save_checkpoint(path, cfg, plan, res, starts, err)
         character(len=*), intent(in) :: path
@@ -467,8 +482,10 @@ contains
         type(branch_start_state_t), intent(in) :: starts(:)
         type(error_t), allocatable, intent(out) :: err
         character(len=256) :: msg
-        integer :: u, ios, b
-        integer(i8) :: written, on_disk
+        integer :: u, ios, b, nr, ni
+        integer(i8) :: written
+        real(wp), allocatable :: reals(:)
+        integer(i8), allocatable :: ints(:)
 
         msg = ''
         open (newunit=u, file=path//'.tmp', access='stream', form='unformatted', &
@@ -480,30 +497,17 @@ contains
         end if
         write (u, iostat=ios, iomsg=msg) checkpoint_magic, len(cfg%input_text), &
             cfg%input_text, plan%n_points, cfg%n, cfg%cycles, plan%k, plan%n_branches
-        if (ios == 0) write (u, iostat=ios, iomsg=msg) merge(1, 0, res%done), res%x, &
-            res%collisions, res%period, res%exponents, res%stderr, res%ky
+        call branch_record_sizes(cfg, plan, nr, ni)
+        allocate (reals(nr), ints(ni))
         do b = 1, plan%n_branches
             if (ios /= 0) exit
-            write (u, iostat=ios, iomsg=msg) merge(1, 0, starts(b)%resume)
-            if (starts(b)%resume .and. ios == 0) write (u, iostat=ios, iomsg=msg) &
-                starts(b)%x, starts(b)%v, starts(b)%contact, starts(b)%cycle, starts(b)%s
+            call pack_branch(cfg, plan, res, starts, b, reals, ints)
+            write (u, iostat=ios, iomsg=msg) reals, ints
         end do
-        written = -1
+        written = 0
         if (ios == 0) inquire (unit=u, pos=written, iostat=ios, iomsg=msg)
-        if (ios == 0) then
-            close (u, iostat=ios, iomsg=msg)
-        else
-            close (u)
-        end if
-        on_disk = -2
-        if (ios == 0) inquire (file=path//'.tmp', size=on_disk, iostat=ios, iomsg=msg)
-        if (ios == 0 .and. on_disk /= written - 1) then
-            ios = 1
-            msg = fmt_int8(written - 1)//" bytes written, "// &
-                  fmt_int8(on_disk)//" on disk: is the disk full?"
-        end if
+        call close_checked(u, path//'.tmp', written - 1, ios, msg)
         if (ios /= 0) then
-            call remove_file(path//'.tmp')
             call set_error(err, "&sweep: cannot write the checkpoint '"//path//".tmp' ("// &
                            trim(msg)//")")
             return
@@ -521,59 +525,138 @@ contains
         type(error_t), allocatable, intent(out) :: err
         character(len=8) :: magic
         character(len=:), allocatable :: text
-        integer :: u, ios, length, n_points, n, k, n_branches, b, flag
-        integer, allocatable :: done(:)
+        integer :: u, ios, length, n_points, n, k, n_branches, b, nr, ni
         integer(i8) :: cycles
-        logical :: exists
+        real(wp), allocatable :: reals(:)
+        integer(i8), allocatable :: ints(:)
+        logical :: exists, ours
 
         inquire (file=path, exist=exists)
         if (.not. exists) return
         open (newunit=u, file=path, access='stream', form='unformatted', status='old', &
               action='read', iostat=ios)
         if (ios /= 0) return
+        ours = .false.
         read (u, iostat=ios) magic, length
-        if (ios /= 0 .or. magic /= checkpoint_magic .or. length /= len(cfg%input_text)) then
+        if (ios == 0 .and. magic == checkpoint_magic .and. length == len(cfg%input_text)) then
+            allocate (character(len=length) :: text)
+            read (u, iostat=ios) text, n_points, n, cycles, k, n_branches
+            ours = ios == 0 .and. text == cfg%input_text .and. n_points == plan%n_points .and. &
+                   n == cfg%n .and. cycles == cfg%cycles .and. k == plan%k .and. &
+                   n_branches == plan%n_branches
+        end if
+        if (.not. ours) then
             close (u)
-            call set_error(err, "&sweep: '"//path//"' is a checkpoint of another input; "// &
-                           "remove it to start afresh")
+            call set_error(err, "&sweep: '"//path//"' is a checkpoint of another input "// &
+                           "(or of another version); remove it to start afresh")
             return
         end if
-        allocate (character(len=length) :: text)
-        read (u, iostat=ios) text, n_points, n, cycles, k, n_branches
-        if (ios /= 0 .or. text /= cfg%input_text .or. n_points /= plan%n_points .or. &
-            n /= cfg%n .or. cycles /= cfg%cycles .or. k /= plan%k .or. &
-            n_branches /= plan%n_branches) then
-            close (u)
-            call set_error(err, "&sweep: '"//path//"' is a checkpoint of another input; "// &
-                           "remove it to start afresh")
-            return
-        end if
-        allocate (done(n_points))
-        read (u, iostat=ios) done, res%x, res%collisions, res%period, res%exponents, &
-            res%stderr, res%ky
-        res%done = done == 1
+        call branch_record_sizes(cfg, plan, nr, ni)
+        allocate (reals(nr), ints(ni))
         do b = 1, n_branches
+            read (u, iostat=ios) reals, ints
             if (ios /= 0) exit
-            read (u, iostat=ios) flag
-            starts(b)%resume = flag == 1
-            if (starts(b)%resume .and. ios == 0) then
-                allocate (starts(b)%x(n), starts(b)%v(n), starts(b)%contact(n))
-                read (u, iostat=ios) starts(b)%x, starts(b)%v, starts(b)%contact, &
-                    starts(b)%cycle, starts(b)%s
-            end if
+            call unpack_branch(cfg, plan, b, reals, ints, res, starts)
         end do
         close (u)
         if (ios /= 0) call set_error(err, "&sweep: the checkpoint '"//path//"' is damaged; "// &
                                      "remove it to start afresh")
     end subroutine load_checkpoint
 
-    !> Delete a file if it exists (the checkpoint of a finished sweep).
-    subroutine remove_file(path)
-        character(len=*), intent(in) :: path
-        integer :: u, ios
+    !> Lengths of one branch in pack_branch's layout: nr reals and ni integers.
+    pure subroutine branch_record_sizes(cfg, plan, nr, ni)
+        type(run_config_t), intent(in) :: cfg
+        type(sweep_plan_t), intent(in) :: plan
+        integer, intent(out) :: nr, ni
 
-        open (newunit=u, file=path, status='old', iostat=ios)
-        if (ios == 0) close (u, status='delete')
-    end subroutine remove_file
+        nr = plan%points_per_branch*point_reals(cfg, plan) + 2*cfg%n + 1
+        ni = plan%points_per_branch*point_ints(cfg) + cfg%n + 2
+    end subroutine branch_record_sizes
+
+    !> Reals per point: collisions, x (n x cycles), exponents, stderr, Kaplan-Yorke dimension.
+    pure integer function point_reals(cfg, plan)
+        type(run_config_t), intent(in) :: cfg
+        type(sweep_plan_t), intent(in) :: plan
+
+        point_reals = 2 + cfg%n*int(cfg%cycles) + 2*plan%k
+    end function point_reals
+
+    !> Integers per point: done, periods (n).
+    pure integer function point_ints(cfg)
+        type(run_config_t), intent(in) :: cfg
+
+        point_ints = 1 + cfg%n
+    end function point_ints
+
+    !> Branch b of a sweep, its points and the state it resumes from, as two plain arrays
+    !> (sizes from branch_record_sizes): the one layout of the sweep's results outside
+    !> memory, for the checkpoint and for MPI (values as they are, so bit for bit). Point
+    !> by point, the reals of point_reals and the integers of point_ints; then the resume
+    !> state, reals x, v, s and integers resume, contact, cycle (zeros when not resuming).
+    pure subroutine pack_branch(cfg, plan, res, starts, b, reals, ints)
+        type(run_config_t), intent(in) :: cfg
+        type(sweep_plan_t), intent(in) :: plan
+        type(sweep_result_t), intent(in) :: res
+        type(branch_start_state_t), intent(in) :: starts(:)
+        integer, intent(in) :: b
+        real(wp), intent(out) :: reals(:)
+        integer(i8), intent(out) :: ints(:)
+        integer :: q, p, nr, ni
+
+        nr = point_reals(cfg, plan)
+        ni = point_ints(cfg)
+        do q = 1, plan%points_per_branch
+            p = (b - 1)*plan%points_per_branch + q
+            reals((q - 1)*nr + 1:q*nr) = [res%collisions(p), &
+                                          reshape(res%x(:, :, p), [cfg%n*int(cfg%cycles)]), &
+                                          res%exponents(:, p), res%stderr(:, p), res%ky(p)]
+            ints((q - 1)*ni + 1:q*ni) = [merge(1_i8, 0_i8, res%done(p)), &
+                                         int(res%period(:, p), i8)]
+        end do
+        reals(plan%points_per_branch*nr + 1:) = 0
+        ints(plan%points_per_branch*ni + 1:) = 0
+        if (.not. starts(b)%resume) return
+        reals(plan%points_per_branch*nr + 1:) = [starts(b)%x, starts(b)%v, starts(b)%s]
+        ints(plan%points_per_branch*ni + 1:) = [1_i8, int(starts(b)%contact, i8), &
+                                                starts(b)%cycle]
+    end subroutine pack_branch
+
+    !> Branch b of a sweep back from pack_branch's arrays into `res` and `starts`.
+    pure subroutine unpack_branch(cfg, plan, b, reals, ints, res, starts)
+        type(run_config_t), intent(in) :: cfg
+        type(sweep_plan_t), intent(in) :: plan
+        integer, intent(in) :: b
+        real(wp), intent(in) :: reals(:)
+        integer(i8), intent(in) :: ints(:)
+        type(sweep_result_t), intent(inout) :: res
+        type(branch_start_state_t), intent(inout) :: starts(:)
+        integer :: q, p, n, m, k, j, i
+
+        n = cfg%n
+        m = n*int(cfg%cycles)
+        k = plan%k
+        do q = 1, plan%points_per_branch
+            p = (b - 1)*plan%points_per_branch + q
+            j = (q - 1)*point_reals(cfg, plan)
+            i = (q - 1)*point_ints(cfg)
+            res%collisions(p) = reals(j + 1)
+            res%x(:, :, p) = reshape(reals(j + 2:j + 1 + m), [n, int(cfg%cycles)])
+            res%exponents(:, p) = reals(j + 2 + m:j + 1 + m + k)
+            res%stderr(:, p) = reals(j + 2 + m + k:j + 1 + m + 2*k)
+            res%ky(p) = reals(j + 2 + m + 2*k)
+            res%done(p) = ints(i + 1) == 1
+            res%period(:, p) = int(ints(i + 2:i + 1 + n))
+        end do
+        j = plan%points_per_branch*point_reals(cfg, plan)
+        i = plan%points_per_branch*point_ints(cfg)
+        starts(b)%resume = ints(i + 1) == 1
+        if (.not. starts(b)%resume) return
+        starts(b)%x = reals(j + 1:j + n)
+        starts(b)%v = reals(j + n + 1:j + 2*n)
+        starts(b)%s = reals(j + 2*n + 1)
+        starts(b)%contact = int(ints(i + 2:i + 1 + n))
+        starts(b)%cycle = ints(i + 2 + n)
+    end subroutine unpack_branch
+
 
 end module chain_sweep

@@ -8,7 +8,8 @@
 module impactchain
     use chain_kinds, only: wp, i8, pi, two_pi
     use chain_error, only: error_t, set_error
-    use chain_config, only: run_config_t, read_config, validate_config, fmt_real, fmt_int
+    use chain_config, only: run_config_t, read_config, validate_config, fmt_real, fmt_int, &
+                            lyapunov_vectors
     use chain_engine, only: chain_t
     use chain_events, only: event_log_t
     use chain_run, only: record_sink_t, memory_sink_t, run_result_t, record_run, &
@@ -17,7 +18,9 @@ module impactchain
     use chain_sweep, only: run_sweep, sweep_summary_t, plan_sweep, sweep_plan_t, &
                            sweep_result_t, branch_start_state_t, sweep_result_init, &
                            sweep_point_config, run_sweep_branches, write_sweep_file, &
-                           save_checkpoint, load_checkpoint, remove_file, checkpoint_every
+                           save_checkpoint, load_checkpoint, remove_file, checkpoint_every, &
+                           validate_sweep_points, checkpoint_path, branch_record_sizes, &
+                           pack_branch, unpack_branch
     use chain_output, only: code_version, output_t, output_begin, output_end, output_abort
     use chain_cli, only: cli_t, parse_command_line, cli_run, cli_help, cli_version, cli_usage, &
                          cli_error
@@ -26,12 +29,15 @@ module impactchain
     private
     public :: wp, i8, pi, two_pi, error_t, set_error
     public :: run_config_t, read_config, validate_config, fmt_real, fmt_int, check_size
+    public :: lyapunov_vectors
     public :: chain_t, event_log_t
     public :: record_sink_t, memory_sink_t, run_result_t, record_run, progress_callback
     public :: poincare_jacobian, run_simulation, start_chain, initial_state, chain_on_section
     public :: run_sweep, sweep_summary_t, plan_sweep, sweep_plan_t, sweep_result_t
     public :: branch_start_state_t, sweep_result_init, sweep_point_config, run_sweep_branches
     public :: write_sweep_file, save_checkpoint, load_checkpoint, remove_file, checkpoint_every
+    public :: validate_sweep_points, checkpoint_path, branch_record_sizes, pack_branch
+    public :: unpack_branch
     public :: code_version, output_t, output_begin, output_end, output_abort
     public :: cli_t, parse_command_line, cli_run, cli_help, cli_version, cli_usage, cli_error
     public :: catch_interrupts, interrupted

@@ -20,18 +20,19 @@ program impactchain_mpi
                        MPI_THREAD_FUNNELED
     use impactchain, only: wp, i8, error_t, run_config_t, read_config, sweep_plan_t, &
                            sweep_result_t, branch_start_state_t, plan_sweep, sweep_result_init, &
-                           sweep_point_config, run_sweep_branches, write_sweep_file, &
-                           save_checkpoint, load_checkpoint, remove_file, checkpoint_every, &
+                           validate_sweep_points, checkpoint_path, run_sweep_branches, &
+                           write_sweep_file, save_checkpoint, load_checkpoint, remove_file, &
+                           checkpoint_every, branch_record_sizes, pack_branch, unpack_branch, &
                            output_t, output_begin, output_end, output_abort, catch_interrupts, &
                            interrupted, cli_t, parse_command_line, cli_run
     implicit none
-    type(run_config_t) :: cfg, point
+    type(run_config_t) :: cfg
     type(sweep_plan_t) :: plan
     type(sweep_result_t) :: res
     type(branch_start_state_t), allocatable :: starts(:)
     type(output_t) :: out
     type(error_t), allocatable :: err
-    integer :: rank, ranks, provided, b, p, failed, left, stopping, resumed
+    integer :: rank, ranks, provided, b, failed, left, stopping, resumed
     type(cli_t) :: cli
     logical :: quiet
     logical, allocatable :: mine(:)
@@ -52,10 +53,8 @@ program impactchain_mpi
     round_seconds = round_length()
     plan = plan_sweep(cfg)
     ! every point is checked before any work (every rank alike)
-    do p = 1, plan%n_points
-        call sweep_point_config(cfg, plan, p, point, err)
-        if (allocated(err)) call stop_all(err%message)
-    end do
+    call validate_sweep_points(cfg, plan, err)
+    if (allocated(err)) call stop_all(err%message)
     ! rank 0 refuses an existing or unwritable output before anyone works
     failed = 0
     if (rank == 0) then
@@ -67,7 +66,7 @@ program impactchain_mpi
     call sweep_result_init(res, cfg, plan)
     allocate (starts(plan%n_branches))
     ! every rank reads the checkpoint (if any), so every rank can own any branch
-    checkpoint = cfg%output_file//'.ckpt'
+    checkpoint = checkpoint_path(cfg)
     call load_checkpoint(checkpoint, cfg, plan, res, starts, err)
     call agree_or_stop(err)
     resumed = count(res%done)
@@ -138,14 +137,15 @@ contains
     end function round_hook
 
     !> Rank 0 receives every rank's branches: their points (results and done flags) and the
-    !> states they resume from. Values travel as they are (no arithmetic), so bit for bit.
+    !> states they resume from, in the layout of chain_sweep's pack_branch (the checkpoint's).
+    !> Values travel as they are (no arithmetic), so bit for bit.
     subroutine collect_on_root()
         real(wp), allocatable :: rsend(:), rrecv(:)
         integer(i8), allocatable :: isend(:), irecv(:)
         integer :: nr, ni, r, c, owned(0:ranks - 1), rcounts(0:ranks - 1), icounts(0:ranks - 1)
         integer :: rdispl(0:ranks - 1), idispl(0:ranks - 1), ro, io, b
 
-        call record_sizes(nr, ni)
+        call branch_record_sizes(cfg, plan, nr, ni)
         owned = 0
         do b = 1, plan%n_branches
             owned(modulo(b - 1, ranks)) = owned(modulo(b - 1, ranks)) + 1
@@ -162,7 +162,8 @@ contains
         c = 0
         do b = 1, plan%n_branches
             if (.not. mine(b)) cycle
-            call pack_branch(b, rsend(c*nr + 1:(c + 1)*nr), isend(c*ni + 1:(c + 1)*ni))
+            call pack_branch(cfg, plan, res, starts, b, rsend(c*nr + 1:(c + 1)*nr), &
+                             isend(c*ni + 1:(c + 1)*ni))
             c = c + 1
         end do
         if (rank == 0) then
@@ -180,89 +181,13 @@ contains
             ro = rdispl(r)
             io = idispl(r)
             do b = r + 1, plan%n_branches, ranks
-                call unpack_branch(b, rrecv(ro + 1:ro + nr), irecv(io + 1:io + ni))
+                call unpack_branch(cfg, plan, b, rrecv(ro + 1:ro + nr), irecv(io + 1:io + ni), &
+                                   res, starts)
                 ro = ro + nr
                 io = io + ni
             end do
         end do
     end subroutine collect_on_root
-
-    !> Reals and integers per branch: per point collisions, x, exponents, stderr, ky and
-    !> done, period; then the resume state x, v, s and resume, contact, cycle.
-    subroutine record_sizes(nr, ni)
-        integer, intent(out) :: nr, ni
-
-        nr = plan%points_per_branch*(2 + cfg%n*int(cfg%cycles) + 2*plan%k) + 2*cfg%n + 1
-        ni = plan%points_per_branch*(1 + cfg%n) + cfg%n + 2
-    end subroutine record_sizes
-
-    subroutine pack_branch(b, rbuf, ibuf)
-        integer, intent(in) :: b
-        real(wp), intent(out) :: rbuf(:)
-        integer(i8), intent(out) :: ibuf(:)
-        integer :: q, p, j, i, n, m, k
-
-        n = cfg%n
-        m = n*int(cfg%cycles)
-        k = plan%k
-        j = 0
-        i = 0
-        do q = 1, plan%points_per_branch
-            p = (b - 1)*plan%points_per_branch + q
-            rbuf(j + 1) = res%collisions(p)
-            rbuf(j + 2:j + 1 + m) = reshape(res%x(:, :, p), [m])
-            rbuf(j + 2 + m:j + 1 + m + k) = res%exponents(:, p)
-            rbuf(j + 2 + m + k:j + 1 + m + 2*k) = res%stderr(:, p)
-            rbuf(j + 2 + m + 2*k) = res%ky(p)
-            j = j + 2 + m + 2*k
-            ibuf(i + 1) = merge(1, 0, res%done(p))
-            ibuf(i + 2:i + 1 + n) = res%period(:, p)
-            i = i + 1 + n
-        end do
-        rbuf(j + 1:) = 0
-        ibuf(i + 1:) = 0
-        ibuf(i + 1) = merge(1, 0, starts(b)%resume)
-        if (starts(b)%resume) then
-            rbuf(j + 1:j + n) = starts(b)%x
-            rbuf(j + n + 1:j + 2*n) = starts(b)%v
-            rbuf(j + 2*n + 1) = starts(b)%s
-            ibuf(i + 2:i + 1 + n) = starts(b)%contact
-            ibuf(i + 2 + n) = starts(b)%cycle
-        end if
-    end subroutine pack_branch
-
-    subroutine unpack_branch(b, rbuf, ibuf)
-        integer, intent(in) :: b
-        real(wp), intent(in) :: rbuf(:)
-        integer(i8), intent(in) :: ibuf(:)
-        integer :: q, p, j, i, n, m, k
-
-        n = cfg%n
-        m = n*int(cfg%cycles)
-        k = plan%k
-        j = 0
-        i = 0
-        do q = 1, plan%points_per_branch
-            p = (b - 1)*plan%points_per_branch + q
-            res%collisions(p) = rbuf(j + 1)
-            res%x(:, :, p) = reshape(rbuf(j + 2:j + 1 + m), [n, int(cfg%cycles)])
-            res%exponents(:, p) = rbuf(j + 2 + m:j + 1 + m + k)
-            res%stderr(:, p) = rbuf(j + 2 + m + k:j + 1 + m + 2*k)
-            res%ky(p) = rbuf(j + 2 + m + 2*k)
-            j = j + 2 + m + 2*k
-            res%done(p) = ibuf(i + 1) == 1
-            res%period(:, p) = int(ibuf(i + 2:i + 1 + n))
-            i = i + 1 + n
-        end do
-        starts(b)%resume = ibuf(i + 1) == 1
-        if (starts(b)%resume) then
-            starts(b)%x = rbuf(j + 1:j + n)
-            starts(b)%v = rbuf(j + n + 1:j + 2*n)
-            starts(b)%s = rbuf(j + 2*n + 1)
-            starts(b)%contact = int(ibuf(i + 2:i + 1 + n))
-            starts(b)%cycle = ibuf(i + 2 + n)
-        end if
-    end subroutine unpack_branch
 
     !> Points done / total, rate and time left (rank 0, stderr; at most once a round).
     subroutine report_progress()
