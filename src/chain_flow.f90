@@ -83,10 +83,9 @@ contains
     pure function propagator(flow, tau) result(m)
         type(flow_t), intent(in) :: flow
         real(wp), intent(in) :: tau
-        real(wp) :: m(2, 2), r(2, 2)
+        real(wp) :: m(2, 2), m_inv(2, 2)
 
-        call rotation_terms(flow, cos(flow%gam*tau), sin(flow%gam*tau), r)
-        m = exp(-flow%damping*tau)*r
+        call propagator_pair(flow, tau, m, m_inv)
     end function propagator
 
     !> The propagator over tau and its inverse, from one exponential (det M = exp(-2 b tau)).
