@@ -14,7 +14,7 @@ module chain_flow
     implicit none
     private
     public :: flow_t, make_flow, forced_response, forced_response_at, acceleration_at
-    public :: propagator, propagator_pair, free_rotation, advance_state
+    public :: propagator, propagator_pair, motion_at, advance_state
 
     type :: flow_t
         real(wp) :: damping = 0     !! b, 0 <= b < 1
@@ -83,10 +83,9 @@ contains
     pure function propagator(flow, tau) result(m)
         type(flow_t), intent(in) :: flow
         real(wp), intent(in) :: tau
-        real(wp) :: m(2, 2), r(2, 2)
+        real(wp) :: m(2, 2), m_inv(2, 2)
 
-        call rotation_terms(flow, cos(flow%gam*tau), sin(flow%gam*tau), r)
-        m = exp(-flow%damping*tau)*r
+        call propagator_pair(flow, tau, m, m_inv)
     end function propagator
 
     !> The propagator over tau and its inverse, from one exponential (det M = exp(-2 b tau)).
@@ -106,15 +105,24 @@ contains
         m_inv(2, 2) = m(1, 1)*inv_det
     end subroutine propagator_pair
 
-    !> The propagator over tau without its decay, from cos_gt = cos(gam tau) and
-    !> sin_gt = sin(gam tau): M(tau) = exp(-b tau) r.
-    pure subroutine free_rotation(flow, cos_gt, sin_gt, r)
+    !> Both parts of the motion a time tau after the free part was (y0, vy0): the free part
+    !> (y, vy), carried by the propagator with its decay `decay` = exp(-b tau) applied last,
+    !> and the forced response (xp, vp), for a caller that holds cos_gt = cos(gam tau),
+    !> sin_gt = sin(gam tau) and the sine and cosine of the drive phase (chain_gaps turns
+    !> them by Taylor polynomials from one search step to the next). The arguments are
+    !> passed by value: this is called on every step of a gap search.
+    pure subroutine motion_at(flow, decay, cos_gt, sin_gt, sin_wt, cos_wt, y0, vy0, y, vy, &
+                              xp, vp)
         type(flow_t), intent(in) :: flow
-        real(wp), value :: cos_gt, sin_gt
-        real(wp), intent(out) :: r(2, 2)
+        real(wp), value :: decay, cos_gt, sin_gt, sin_wt, cos_wt, y0, vy0
+        real(wp), intent(out) :: y, vy, xp, vp
+        real(wp) :: r(2, 2)
 
         call rotation_terms(flow, cos_gt, sin_gt, r)
-    end subroutine free_rotation
+        y = decay*(r(1, 1)*y0 + r(1, 2)*vy0)
+        vy = decay*(r(2, 1)*y0 + r(2, 2)*vy0)
+        call forced_terms(flow, sin_wt, cos_wt, xp, vp)
+    end subroutine motion_at
 
     !> Move (x, v) from time s0 to s0 + tau within the cycle frame, exactly.
     pure subroutine advance_state(flow, s0, tau, x, v)

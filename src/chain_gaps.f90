@@ -11,7 +11,7 @@
 !> a zero, and converges quadratically onto transversal zeros. No sign-change sampling.
 module chain_gaps
     use chain_kinds, only: wp, pi, two_pi
-    use chain_flow, only: flow_t, forced_response, forced_response_at, propagator, free_rotation
+    use chain_flow, only: flow_t, forced_response, propagator, motion_at
     implicit none
     private
     public :: gap_t, gap_search_t, next_gap_zero, gap_value, resolvable_speed, earliest_closing
@@ -289,7 +289,7 @@ contains
         real(wp), intent(in) :: s0, horizon
         type(gap_search_t) :: res
         real(wp) :: b, w, ry0, rp, tau, e, ry, g, g1, g2, g3, m2, m4, h, tol
-        real(wp) :: cg, sg, cw, sw, r(2, 2), y, vy, ay, jy, xp, vp
+        real(wp) :: cg, sg, cw, sw, y, vy, ay, jy, xp, vp
         integer :: it, turns
 
         b = flow%damping
@@ -302,11 +302,7 @@ contains
         turns = 0
         do it = 1, max_steps
             call phases_at_step(flow, s0, tau, h, turns, e, cg, sg, cw, sw)
-            ! the propagator of eq. 17 (its decay e applied last) and the forced response
-            call free_rotation(flow, cg, sg, r)
-            y = e*(r(1, 1)*gap%y + r(1, 2)*gap%vy)
-            vy = e*(r(2, 1)*gap%y + r(2, 2)*gap%vy)
-            call forced_response_at(flow, sw, cw, xp, vp)
+            call motion_at(flow, e, cg, sg, sw, cw, gap%y, gap%vy, y, vy, xp, vp)
             ry = ry0*e
             if (gap%offset - ry - rp > 0) then
                 res%status = search_none
