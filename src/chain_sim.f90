@@ -28,6 +28,7 @@ module chain_sim
     implicit none
     private
     public :: run_simulation, initial_state, start_chain, write_run_header, chain_on_section
+    public :: uniform
 
     !> Sends records to the HDF5 file as they come.
     type, extends(record_sink_t) :: file_sink_t

@@ -7,7 +7,8 @@
 module test_invariants
     use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
     use chain_kinds, only: wp, i8
-    use chain_error, only: error_t
+    use chain_error, only: error_t, fmt_int
+    use chain_sim, only: uniform
     use chain_flow, only: flow_t, make_flow, advance_state, propagator
     use chain_engine, only: chain_t, chain_init, chain_advance, chain_sync, chain_new_cycle, &
                             chain_set_tangent, chain_gaps_now, contact_free, contact_left, &
@@ -136,15 +137,6 @@ contains
         text = trim(adjustl(buf))
     end function k_text
 
-    function int_text(i) result(text)
-        integer, intent(in) :: i
-        character(len=:), allocatable :: text
-        character(len=16) :: buf
-
-        write (buf, '(i0)') i
-        text = trim(buf)
-    end function int_text
-
     !> Run `cycles` drive cycles one event time at a time, with records at every cycle end
     !> (phase 0), as record_run does; after every event time and at every record look at the
     !> gaps, the tangent rows of resting oscillators and, for free ends, the momentum across the
@@ -250,13 +242,6 @@ contains
     end subroutine look_at_gaps
 
     !> A MINSTD step: portable, reproducible random chains.
-    function uniform(state) result(u)
-        integer(i8), intent(inout) :: state
-        real(wp) :: u
-
-        state = modulo(48271_i8*state, 2147483647_i8)
-        u = real(state, wp)/2147483647.0_wp
-    end function uniform
 
     !> A random fixed-wall chain that rests and stacks on both walls: a slow drive (w in
     !> [0.15, 0.45]) strong enough (A in [1.5, 4]) to push oscillators into the walls for a
@@ -322,7 +307,7 @@ contains
         do seed = 1, chains
             call random_chain(seed, flow, restitution, spacing, x, v)
             n = size(x)
-            label = 'mirror seed '//int_text(seed)//' (n = '//int_text(n)//')'
+            label = 'mirror seed '//fmt_int(seed)//' (n = '//fmt_int(n)//')'
             period = flow%period
             call chain_init(run, flow, restitution, spacing, .true., 1.0e-9_wp, x, v, 0_i8, &
                             0.0_wp, err)
@@ -378,10 +363,10 @@ contains
         end do
         ! the set must exercise what the symmetry is about
         call check(t, sticks_left > 0 .and. sticks_right > 0, 'mirror chains: rests on '// &
-                   'both walls ('//int_text(sticks_left)//' left, '//int_text(sticks_right)// &
+                   'both walls ('//fmt_int(sticks_left)//' left, '//fmt_int(sticks_right)// &
                    ' right)')
         call check(t, stacks_left > 0 .and. stacks_right > 0, 'mirror chains: stacks on '// &
-                   'both walls ('//int_text(stacks_left)//' left, '//int_text(stacks_right)// &
+                   'both walls ('//fmt_int(stacks_left)//' left, '//fmt_int(stacks_right)// &
                    ' right, samples)')
         if (failing > 0) write (*, '(a,i0,a,i0,a)') '  mirror symmetry: ', failing, ' of ', &
             chains, ' random chains differ from their mirror image'
@@ -423,17 +408,17 @@ contains
 
         window = tol_gap*(1 + 1/1.0e-6_wp)
         text = ''
-        if (a%count /= b%count) text = ' (counts '//int_text(a%count)//' and '// &
-                                       int_text(b%count)//')'
+        if (a%count /= b%count) text = ' (counts '//fmt_int(a%count)//' and '// &
+                                       fmt_int(b%count)//')'
         i = 1
         j = 1
         do while (i <= a%count .and. j <= b%count)
             ea = group_end(a, i, window)
             eb = group_end(b, j, window)
             if (ea - i /= eb - j) then
-                text = ' (at event '//int_text(i)//', t = '//real_text(a%time(i))// &
-                       ': a group of '//int_text(ea - i + 1)//' events against '// &
-                       int_text(eb - j + 1)//')'//text
+                text = ' (at event '//fmt_int(i)//', t = '//real_text(a%time(i))// &
+                       ': a group of '//fmt_int(ea - i + 1)//' events against '// &
+                       fmt_int(eb - j + 1)//')'//text
                 return
             end if
             oa = group_order(a, i, ea, n, .false.)
@@ -444,11 +429,11 @@ contains
                     if (a%site(p) /= n - b%site(r) .or. a%kind(p) /= b%kind(r) .or. &
                         abs(a%time(p) - b%time(r)) > tol .or. &
                         abs(a%speed(p) - b%speed(r)) > 10*scale*tol) then
-                        text = ' (event '//int_text(p)//' at t = '//real_text(a%time(p))// &
-                               ': site '//int_text(a%site(p))//', kind '// &
-                               int_text(a%kind(p))//', speed '//real_text(a%speed(p))// &
+                        text = ' (event '//fmt_int(p)//' at t = '//real_text(a%time(p))// &
+                               ': site '//fmt_int(a%site(p))//', kind '// &
+                               fmt_int(a%kind(p))//', speed '//real_text(a%speed(p))// &
                                '; mirror t = '//real_text(b%time(r))//', site '// &
-                               int_text(n - b%site(r))//', kind '//int_text(b%kind(r))// &
+                               fmt_int(n - b%site(r))//', kind '//fmt_int(b%kind(r))// &
                                ', speed '//real_text(b%speed(r))//')'//text
                         return
                     end if
@@ -531,7 +516,7 @@ contains
         stacks_right = 0
         do seed = 1, 16
             call random_chain(seed, flow, restitution, spacing, x, v)
-            label = 'random chain '//int_text(seed)
+            label = 'random chain '//fmt_int(seed)
             call chain_init(chain, flow, restitution, spacing, .true., 1.0e-9_wp, x, v, 0_i8, &
                             0.0_wp, err)
             call walk_with_frame(chain, 6, walk, err)
@@ -544,9 +529,9 @@ contains
             stacks_right = stacks_right + walk%stacks_right
         end do
         call check(t, resting > 0 .and. stacks_left > 0 .and. stacks_right > 0, &
-                   'random chains walked: rests ('//int_text(resting)//' instants) and '// &
-                   'stacks on both walls ('//int_text(stacks_left)//', '// &
-                   int_text(stacks_right)//')')
+                   'random chains walked: rests ('//fmt_int(resting)//' instants) and '// &
+                   'stacks on both walls ('//fmt_int(stacks_left)//', '// &
+                   fmt_int(stacks_right)//')')
         ! K = 0 in a crowded chain against the walls: plastic cascades, rests, the cluster rule
         spacing = [(0.2_wp, seed=0, 6)]
         x = [(0.05_wp*sin(1.7_wp*seed + 0.3_wp), seed=1, 6)]
@@ -556,7 +541,7 @@ contains
         call walk_with_frame(chain, 40, walk, err)
         call check(t, .not. allocated(err), 'plastic chain walks')
         call check(t, walk%collapses > 0 .and. walk%resting > 0, 'plastic chain: the '// &
-                   'cluster rule fires ('//int_text(walk%collapses)//') and oscillators rest')
+                   'cluster rule fires ('//fmt_int(walk%collapses)//') and oscillators rest')
         call report_walk(t, 'plastic chain', walk)
         call check_sum_rule(t, 'plastic chain', 6, chain%flow, 0.0_wp, &
                             real(walk%impacts, wp)/40, walk%bits_per_cycle, walk%sticks)
@@ -585,8 +570,8 @@ contains
                    'at any event or record (worst '//real_text(walk%worst_gap)// &
                    ' roundings)')
         call check(t, walk%nonzero_rows == 0, label//': tangent rows of resting '// &
-                   'oscillators zero after every event ('//int_text(walk%nonzero_rows)// &
-                   ' of '//int_text(walk%resting)//' instants with rests break it)')
+                   'oscillators zero after every event ('//fmt_int(walk%nonzero_rows)// &
+                   ' of '//fmt_int(walk%resting)//' instants with rests break it)')
     end subroutine report_walk
 
     ! ------------------------------------------------------------------ inelastic collapse
@@ -665,7 +650,7 @@ contains
             write (kt, '(f6.3)') above(j)
             call three_particles(t, above(j), impacts, spread, first_speed, last_speed)
             call check(t, impacts == ballistic_impacts(above(j), 1.0_wp, 1.0_wp, cap), &
-                       'three particles, K = '//trim(adjustl(kt))//': '//int_text(impacts)// &
+                       'three particles, K = '//trim(adjustl(kt))//': '//fmt_int(impacts)// &
                        ' impacts, as the ballistic cascade')
             call check(t, spread > 1.0e-6_wp, 'three particles, K = '//trim(adjustl(kt))// &
                        ': they separate (relative speed '//real_text(spread)//')')
@@ -678,7 +663,7 @@ contains
             together = spread <= 1.0e-8_wp
             call check(t, together .and. last_speed <= 1.0e-8_wp*first_speed, &
                        'three particles, K = '//trim(adjustl(kt))//' (below 7 - 4 sqrt(3)): '// &
-                       'collapse, '//int_text(impacts)//' impacts down to approach speed '// &
+                       'collapse, '//fmt_int(impacts)//' impacts down to approach speed '// &
                        real_text(last_speed)//', relative speed after '//real_text(spread))
         end do
     end subroutine three_particle_collapse
