@@ -97,13 +97,13 @@ contains
         type(error_t), allocatable :: err
         integer :: k
 
-        cfg%n = n
-        cfg%spacing = [(1.0_wp, k=0, n)]
-        cfg%amplitude = amplitude
-        cfg%omega = omega
-        cfg%damping = damping
-        cfg%restitution = restitution
-        cfg%boundary = 'fixed'
+        cfg%model%n = n
+        cfg%model%spacing = [(1.0_wp, k=0, n)]
+        cfg%model%amplitude = amplitude
+        cfg%model%omega = omega
+        cfg%model%damping = damping
+        cfg%model%restitution = restitution
+        cfg%model%walls = .true.
         cfg%initial_kind = 'random'
         if (x_amp == 0 .and. v_amp == 0) cfg%initial_kind = 'rest'
         cfg%seed = 1
@@ -292,10 +292,12 @@ contains
         impacts = 0
         chain = new_chain(cfg)
         do p = 1, points
-            cfg%amplitude = 6 - 0.01_wp*(p - 1)
+            cfg%model%amplitude = 6 - 0.01_wp*(p - 1)
             if (p > 1) then
-                call chain_init(next, make_flow(cfg%damping, cfg%amplitude, cfg%omega), &
-                                cfg%restitution, cfg%spacing, .true., cfg%stick_speed, &
+                call chain_init(next, make_flow(cfg%model%damping, cfg%model%amplitude, &
+                    cfg%model%omega), &
+                                cfg%model%restitution, cfg%model%spacing, .true., &
+                                    cfg%model%stick_speed, &
                                 chain%x, chain%v, 0_i8, 0.0_wp, err, chain%contact)
                 if (allocated(err)) call fail(err%message)
                 chain = next
@@ -364,7 +366,7 @@ contains
         cycles = 0
         impacts = 0
         do p = 1, points
-            cfg%amplitude = 1 + 0.05_wp*(p - 1)
+            cfg%model%amplitude = 1 + 0.05_wp*(p - 1)
             chain = new_chain(cfg)
             call record_run(cfg, chain, sink, res, err)
             if (allocated(err)) call fail(err%message)

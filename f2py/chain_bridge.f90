@@ -8,7 +8,8 @@
 module chain_bridge
     use, intrinsic :: iso_c_binding, only: c_int, c_int64_t, c_double
     use impactchain, only: wp, i8, error_t, set_error, run_config_t, fmt_real, fmt_int, &
-                           lyapunov_vectors, event_log_t, chain_t, record_sink_t, run_result_t
+                           lyapunov_vectors, event_log_t, chain_t, record_sink_t, run_result_t, &
+                           set_boundary
     implicit none
     private
     public :: array_sink_t, make_config, put_message, run_sizes_ok, put_run_results
@@ -47,7 +48,7 @@ contains
     subroutine make_config(cfg, n, spacing, damping, restitution, amplitude, omega, boundary, &
                            explicit, x0, v0, transient, cycles, phase, stick_speed, &
                            max_size_mb, record_events, lyapunov, vectors, qr_every, jacobian, &
-                           jacobian_cycles)
+                           jacobian_cycles, err)
         type(run_config_t), intent(out) :: cfg
         integer, intent(in) :: n, vectors, qr_every, jacobian_cycles
         real(wp), intent(in) :: spacing(:), damping, restitution, amplitude, omega
@@ -55,23 +56,26 @@ contains
         integer(c_int), intent(in) :: boundary(:)   !! byte values 0..255
         logical, intent(in) :: explicit, record_events, lyapunov, jacobian
         integer(i8), intent(in) :: transient, cycles
+        type(error_t), allocatable, intent(out) :: err
         integer :: j
+        character(len=:), allocatable :: name
 
-        cfg%n = n
+        cfg%model%n = n
         if (size(spacing) == 1) then
-            allocate (cfg%spacing(max(n + 1, 1)))
-            cfg%spacing = spacing(1)
+            allocate (cfg%model%spacing(max(n + 1, 1)))
+            cfg%model%spacing = spacing(1)
         else
-            cfg%spacing = spacing
+            cfg%model%spacing = spacing
         end if
-        cfg%damping = damping
-        cfg%restitution = restitution
-        cfg%amplitude = amplitude
-        cfg%omega = omega
-        allocate (character(len=size(boundary)) :: cfg%boundary)
+        cfg%model%damping = damping
+        cfg%model%restitution = restitution
+        cfg%model%amplitude = amplitude
+        cfg%model%omega = omega
+        allocate (character(len=size(boundary)) :: name)
         do j = 1, size(boundary)
-            cfg%boundary(j:j) = achar(iand(int(boundary(j)), 255))
+            name(j:j) = achar(iand(int(boundary(j)), 255))
         end do
+        call set_boundary(cfg%model, name, err)
         if (explicit) then
             cfg%initial_kind = 'explicit'
         else
@@ -83,7 +87,7 @@ contains
         cfg%transient = transient
         cfg%cycles = cycles
         cfg%phase = phase
-        cfg%stick_speed = stick_speed
+        cfg%model%stick_speed = stick_speed
         cfg%record_events = record_events
         cfg%lyapunov = lyapunov
         cfg%vectors = vectors
@@ -107,9 +111,10 @@ contains
         integer, intent(in) :: nr, nf, kcap, mj
         integer(i8), intent(in) :: nc
 
-        run_sizes_ok = nf == cfg%n .and. (nc == 0 .or. (nr == cfg%n .and. nc == cfg%cycles))
+        run_sizes_ok = nf == cfg%model%n .and. &
+                       (nc == 0 .or. (nr == cfg%model%n .and. nc == cfg%cycles))
         if (cfg%lyapunov) run_sizes_ok = run_sizes_ok .and. kcap == lyapunov_vectors(cfg)
-        if (cfg%jacobian) run_sizes_ok = run_sizes_ok .and. mj == 2*cfg%n
+        if (cfg%jacobian) run_sizes_ok = run_sizes_ok .and. mj == 2*cfg%model%n
     end function run_sizes_ok
 
     !> ic_run's outputs besides the records and events: the final state, counters, periods,

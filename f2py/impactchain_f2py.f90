@@ -77,8 +77,8 @@ subroutine ic_run(n, nsp, spacing, damping, restitution, amplitude, omega, nb, b
     call make_config(cfg, int(n), spacing, damping, restitution, amplitude, omega, boundary, &
                      explicit /= 0, x0, v0, int(transient, i8), int(cycles, i8), phase, &
                      stick_speed, max_size_mb, record_events /= 0, lyapunov /= 0, &
-                     int(vectors), int(qr_every), jacobian /= 0, int(jacobian_cycles))
-    call validate_config(cfg, err)
+                     int(vectors), int(qr_every), jacobian /= 0, int(jacobian_cycles), err)
+    if (.not. allocated(err)) call validate_config(cfg, err)
     if (.not. allocated(err)) call check_size(cfg, err)
     if (.not. allocated(err)) call start_chain(cfg, chain, err)
     if (allocated(err)) then
@@ -145,13 +145,13 @@ subroutine ic_jacobian(nsp, spacing, damping, restitution, amplitude, omega, nb,
     call put_message('', status_ok, status, msg_len, message)
     call make_config(cfg, int(nx0), spacing, damping, restitution, amplitude, omega, boundary, &
                      .true., x0, v0, 0_i8, 1_i8, phase, stick_speed, max_size_mb, .false., &
-                     .false., 0, 1, .true., int(jacobian_cycles))
-    call validate_config(cfg, err)
+                     .false., 0, 1, .true., int(jacobian_cycles), err)
+    if (.not. allocated(err)) call validate_config(cfg, err)
     if (.not. allocated(err)) call check_size(cfg, err)
     if (.not. allocated(err)) then
-        allocate (v_start(cfg%n))
+        allocate (v_start(cfg%model%n))
         v_start = 0
-        if (size(cfg%v0) == cfg%n) v_start = cfg%v0
+        if (size(cfg%v0) == cfg%model%n) v_start = cfg%v0
         call chain_on_section(cfg, cfg%x0, v_start, chain, err)
     end if
     if (allocated(err)) then
@@ -159,7 +159,7 @@ subroutine ic_jacobian(nsp, spacing, damping, restitution, amplitude, omega, nb,
         return
     end if
     if (dry_run /= 0) return
-    if (mj /= 2*cfg%n) then
+    if (mj /= 2*cfg%model%n) then
         call put_message("python layer: output sizes do not match the configuration", &
                          status_internal, status, msg_len, message)
         return
@@ -202,12 +202,12 @@ subroutine ic_random_start(n, nsp, spacing, seed, x_amp, v_amp, dry_run, nf, x, 
                      [iachar('f'), iachar('i'), iachar('x'), iachar('e'), iachar('d')], &
                      .false., no_list, &
                      no_list, 0_i8, 1_i8, 0.0_wp, 1.0e-9_wp, 4096.0_wp, .false., .false., 0, &
-                     1, .false., 1)
+                     1, .false., 1, err)
     cfg%initial_kind = 'random'
     cfg%seed = seed
     cfg%x_amp = x_amp
     cfg%v_amp = v_amp
-    call validate_config(cfg, err)
+    if (.not. allocated(err)) call validate_config(cfg, err)
     if (.not. allocated(err)) call initial_state(cfg, xs, vs, cycle, s, contact, queue_time, &
                                                  queue_action, err)
     if (allocated(err)) then

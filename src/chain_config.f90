@@ -11,10 +11,11 @@ module chain_config
     use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
     use chain_kinds, only: wp, i8, two_pi
     use chain_error, only: error_t, set_error, fmt_real, fmt_int, fmt_int8
+    use chain_model, only: model_t, model_walls
     implicit none
     private
     public :: run_config_t, read_config, validate_config, config_summary, lyapunov_vectors
-    public :: max_list, fmt_real, fmt_int, sweep_parameters
+    public :: max_list, fmt_real, fmt_int, sweep_parameters, set_boundary
 
     !> Longest explicit list in a namelist (spacing, x0, v0); longer chains use a file start.
     integer, parameter :: max_list = 100001
@@ -26,14 +27,8 @@ module chain_config
         [character(len=11) :: 'amplitude', 'omega', 'damping', 'restitution', 'spacing']
 
     type :: run_config_t
-        ! &chain
-        integer :: n = 0
-        real(wp), allocatable :: spacing(:)    !! spacing(n+1): bond 0 (left wall) first
-        real(wp) :: damping = 0.05_wp
-        real(wp) :: restitution = 0.7_wp
-        real(wp) :: amplitude = 0
-        real(wp) :: omega = 1
-        character(len=:), allocatable :: boundary
+        !> &chain, and &run stick_speed: everything the dynamics depends on
+        type(model_t) :: model
         ! &initial
         character(len=:), allocatable :: initial_kind
         integer :: seed = 1
@@ -45,7 +40,6 @@ module chain_config
         integer(i8) :: cycles = 200
         real(wp) :: phase = 0
         logical :: record_events = .true.
-        real(wp) :: stick_speed = 1.0e-9_wp
         integer :: max_period = 16
         real(wp) :: period_tol = 1.0e-6_wp
         ! &lyapunov
@@ -338,21 +332,21 @@ contains
             return
         end if
         if (m == 0) then
-            cfg%spacing = [(1.0_wp, m=0, n)]
+            cfg%model%spacing = [(1.0_wp, m=0, n)]
         else if (m == 1) then
-            cfg%spacing = [(spacing(1), m=0, n)]
+            cfg%model%spacing = [(spacing(1), m=0, n)]
         else if (m == n + 1) then
-            cfg%spacing = spacing(1:n + 1)
+            cfg%model%spacing = spacing(1:n + 1)
         else
             call check_spacing_count(err, n, m)
             return
         end if
-        cfg%n = n
-        cfg%damping = damping
-        cfg%restitution = restitution
-        cfg%amplitude = amplitude
-        cfg%omega = omega
-        cfg%boundary = lower(trim(adjustl(boundary)))
+        cfg%model%n = n
+        cfg%model%damping = damping
+        cfg%model%restitution = restitution
+        cfg%model%amplitude = amplitude
+        cfg%model%omega = omega
+        call set_boundary(cfg%model, boundary, err)
     end subroutine read_chain
 
     subroutine read_initial(u, cfg, err)
@@ -413,7 +407,7 @@ contains
         cycles = cfg%cycles
         phase = cfg%phase
         record_events = cfg%record_events
-        stick_speed = cfg%stick_speed
+        stick_speed = cfg%model%stick_speed
         max_period = cfg%max_period
         period_tol = cfg%period_tol
         rewind (u)
@@ -426,7 +420,7 @@ contains
         cfg%cycles = cycles
         cfg%phase = phase
         cfg%record_events = record_events
-        cfg%stick_speed = stick_speed
+        cfg%model%stick_speed = stick_speed
         cfg%max_period = max_period
         cfg%period_tol = period_tol
     end subroutine read_run
@@ -552,35 +546,32 @@ contains
         type(error_t), allocatable, intent(out) :: err
         integer :: j
 
-        call check_n(err, cfg%n)
+        call check_n(err, cfg%model%n)
         if (allocated(err)) return
-        call check_spacing_count(err, cfg%n, size(cfg%spacing))
+        call check_spacing_count(err, cfg%model%n, size(cfg%model%spacing))
         if (allocated(err)) return
-        do j = 1, size(cfg%spacing)
-            if (.not. (ieee_is_finite(cfg%spacing(j)) .and. cfg%spacing(j) > 0)) then
+        do j = 1, size(cfg%model%spacing)
+            if (.not. (ieee_is_finite(cfg%model%spacing(j)) .and. cfg%model%spacing(j) > 0)) then
                 call set_error(err, "&chain: spacing of bond "//fmt_int(j - 1)//" = "// &
-                               fmt_real(cfg%spacing(j))//" must be finite and > 0")
+                               fmt_real(cfg%model%spacing(j))//" must be finite and > 0")
                 return
             end if
         end do
-        call check_range(err, 'chain', 'damping', cfg%damping, 0.0_wp, 1.0_wp, '[0, 1)', &
+        call check_range(err, 'chain', 'damping', cfg%model%damping, 0.0_wp, 1.0_wp, '[0, 1)', &
                          open_high=.true.)
         if (allocated(err)) return
-        call check_range(err, 'chain', 'restitution', cfg%restitution, 0.0_wp, 1.0_wp, '[0, 1]')
+        call check_range(err, 'chain', 'restitution', cfg%model%restitution, 0.0_wp, 1.0_wp, &
+            '[0, 1]')
         if (allocated(err)) return
-        call check_range(err, 'chain', 'amplitude', cfg%amplitude, 0.0_wp, 1.0e6_wp, &
+        call check_range(err, 'chain', 'amplitude', cfg%model%amplitude, 0.0_wp, 1.0e6_wp, &
                          '[0, 1e6]')
         if (allocated(err)) return
-        call check_range(err, 'chain', 'omega', cfg%omega, 1.0e-3_wp, 1.0e3_wp, '[1e-3, 1e3]')
+        call check_range(err, 'chain', 'omega', cfg%model%omega, 1.0e-3_wp, 1.0e3_wp, '[1e-3, 1e3]')
         if (allocated(err)) return
-        if (cfg%damping == 0 .and. cfg%omega == 1 .and. cfg%amplitude /= 0) then
+        if (cfg%model%damping == 0 .and. cfg%model%omega == 1 .and. cfg%model%amplitude /= 0) then
             call set_error(err, "&chain: omega = 1 with damping = 0 is exact resonance: the "// &
                            "linear response grows without bound; use damping > 0 or omega /= 1")
             return
-        end if
-        if (cfg%boundary /= 'fixed' .and. cfg%boundary /= 'free') then
-            call set_error(err, "&chain: boundary = '"//cfg%boundary// &
-                           "' is not one of 'fixed', 'free'")
         end if
     end subroutine validate_chain
 
@@ -597,7 +588,7 @@ contains
             return
         end select
         if (cfg%initial_kind == 'random') then
-            smallest = minval(cfg%spacing)
+            smallest = minval(cfg%model%spacing)
             call check_range(err, 'initial', 'x_amp', cfg%x_amp, 0.0_wp, &
                              0.5_wp*smallest, '[0, half the smallest spacing = '// &
                              fmt_real(0.5_wp*smallest)//') so that no start overlaps', &
@@ -607,13 +598,13 @@ contains
             if (allocated(err)) return
         end if
         if (cfg%initial_kind == 'explicit') then
-            if (size(cfg%x0) /= cfg%n) then
+            if (size(cfg%x0) /= cfg%model%n) then
                 call set_error(err, "&initial: kind = 'explicit' needs x0 with n = "// &
-                               fmt_int(cfg%n)//" values, got "//fmt_int(size(cfg%x0)))
+                               fmt_int(cfg%model%n)//" values, got "//fmt_int(size(cfg%x0)))
                 return
             end if
-            if (size(cfg%v0) /= cfg%n .and. size(cfg%v0) /= 0) then
-                call set_error(err, "&initial: v0 needs n = "//fmt_int(cfg%n)// &
+            if (size(cfg%v0) /= cfg%model%n .and. size(cfg%v0) /= 0) then
+                call set_error(err, "&initial: v0 needs n = "//fmt_int(cfg%model%n)// &
                                " values (or none for rest), got "//fmt_int(size(cfg%v0)))
                 return
             end if
@@ -643,7 +634,7 @@ contains
         call check_range(err, 'run', 'phase', cfg%phase, 0.0_wp, two_pi, '[0, 2 pi)', &
                          open_high=.true.)
         if (allocated(err)) return
-        call check_range(err, 'run', 'stick_speed', cfg%stick_speed, tiny(1.0_wp), 1.0_wp, &
+        call check_range(err, 'run', 'stick_speed', cfg%model%stick_speed, tiny(1.0_wp), 1.0_wp, &
                          '(0, 1]')
         if (allocated(err)) return
         if (cfg%max_period < 1 .or. cfg%max_period > 10000) then
@@ -659,9 +650,9 @@ contains
         type(run_config_t), intent(in) :: cfg
         type(error_t), allocatable, intent(out) :: err
 
-        if (cfg%vectors < 0 .or. cfg%vectors > 2*cfg%n) then
+        if (cfg%vectors < 0 .or. cfg%vectors > 2*cfg%model%n) then
             call set_error(err, "&lyapunov: vectors = "//fmt_int(cfg%vectors)// &
-                           " is outside [0, 2n = "//fmt_int(2*cfg%n)//"] (0 means all 2n)")
+                           " is outside [0, 2n = "//fmt_int(2*cfg%model%n)//"] (0 means all 2n)")
             return
         end if
         if (cfg%qr_every < 1 .or. cfg%qr_every > cfg%cycles) then
@@ -756,22 +747,39 @@ contains
         end if
     end subroutine check_axis
 
+    !> The boundary from its input name, 'fixed' or 'free' (any case; blanks around ignored).
+    subroutine set_boundary(model, name, err)
+        type(model_t), intent(inout) :: model
+        character(len=*), intent(in) :: name
+        type(error_t), allocatable, intent(inout) :: err
+
+        select case (lower(trim(adjustl(name))))
+        case ('fixed')
+            model%walls = .true.
+        case ('free')
+            model%walls = .false.
+        case default
+            call set_error(err, "&chain: boundary = '"//trim(adjustl(name))// &
+                           "' is not one of 'fixed', 'free'")
+        end select
+    end subroutine set_boundary
+
     !> One line per key of the configuration actually used, in namelist form.
     function config_summary(cfg) result(text)
         type(run_config_t), intent(in) :: cfg
         character(len=:), allocatable :: text
         character(len=1), parameter :: nl = achar(10)
 
-        text = "&chain n = "//fmt_int(cfg%n)//", damping = "//fmt_real(cfg%damping)// &
-               ", restitution = "//fmt_real(cfg%restitution)//", amplitude = "// &
-               fmt_real(cfg%amplitude)//", omega = "//fmt_real(cfg%omega)// &
-               ", boundary = '"//cfg%boundary//"' /"//nl// &
+        text = "&chain n = "//fmt_int(cfg%model%n)//", damping = "//fmt_real(cfg%model%damping)// &
+               ", restitution = "//fmt_real(cfg%model%restitution)//", amplitude = "// &
+               fmt_real(cfg%model%amplitude)//", omega = "//fmt_real(cfg%model%omega)// &
+               ", boundary = '"//model_walls(cfg%model)//"' /"//nl// &
                "&initial kind = '"//cfg%initial_kind//"', seed = "//fmt_int(cfg%seed)// &
                ", x_amp = "//fmt_real(cfg%x_amp)//", v_amp = "//fmt_real(cfg%v_amp)//" /"//nl// &
                "&run transient = "//fmt_int8(cfg%transient)//", cycles = "// &
                fmt_int8(cfg%cycles)//", phase = "//fmt_real(cfg%phase)// &
                ", record_events = "//merge('T', 'F', cfg%record_events)// &
-               ", stick_speed = "//fmt_real(cfg%stick_speed)//", max_period = "// &
+               ", stick_speed = "//fmt_real(cfg%model%stick_speed)//", max_period = "// &
                fmt_int(cfg%max_period)//", period_tol = "//fmt_real(cfg%period_tol)//" /"//nl// &
                "&lyapunov enabled = "//merge('T', 'F', cfg%lyapunov)//", vectors = "// &
                fmt_int(cfg%vectors)//", qr_every = "//fmt_int(cfg%qr_every)// &
@@ -833,7 +841,7 @@ contains
         type(run_config_t), intent(in) :: cfg
 
         lyapunov_vectors = 0
-        if (cfg%lyapunov) lyapunov_vectors = merge(2*cfg%n, cfg%vectors, cfg%vectors == 0)
+        if (cfg%lyapunov) lyapunov_vectors = merge(2*cfg%model%n, cfg%vectors, cfg%vectors == 0)
     end function lyapunov_vectors
 
     !> `run.nml` -> `run.h5` in the current directory.

@@ -223,8 +223,8 @@ contains
         call event_log_init(log, cfg%record_events, 1024)
         res%cycles_continued = st%cycles_done
         res%cycles_done = st%cycles_done
-        m = int(max(1_i8, min(cfg%cycles - st%cycles_done, int(2**20/cfg%n, i8))))
-        allocate (xbuf(cfg%n, m), vbuf(cfg%n, m), cbuf(m))
+        m = int(max(1_i8, min(cfg%cycles - st%cycles_done, int(2**20/cfg%model%n, i8))))
+        allocate (xbuf(cfg%model%n, m), vbuf(cfg%model%n, m), cbuf(m))
         first = st%cycles_done + 1
         do j = st%cycles_done + 1, cfg%cycles
             call section_target(chain, cfg%transient, cfg%phase, j, target_cycle, target_s)
@@ -279,7 +279,7 @@ contains
         if (cfg%lyapunov) call lyapunov_start(st%acc, chain%n_vectors, &
                                               int(cfg%cycles/cfg%qr_every))
         nwin = int(min(cfg%cycles, int(period_window(cfg%max_period), i8)))
-        allocate (st%xwin(cfg%n, nwin), st%vwin(cfg%n, nwin))
+        allocate (st%xwin(cfg%model%n, nwin), st%vwin(cfg%model%n, nwin))
     end subroutine begin_records
 
     !> The numbers of a run that has recorded res%cycles_done records: counters, collisions per
@@ -300,10 +300,10 @@ contains
         res%site_counts = chain%site_counts
         res%collisions_per_cycle = real(chain%impacts, wp)/max(1_i8, res%cycles_done)
         nwin = int(min(res%cycles_done, int(size(st%xwin, 2), i8)))
-        allocate (res%periods(cfg%n))
+        allocate (res%periods(cfg%model%n))
         res%periods = 0
         if (nwin > 0) then
-            do i = 1, cfg%n
+            do i = 1, cfg%model%n
                 res%periods(i) = detect_period(in_order(st%xwin(i, :), res%cycles_done, nwin), &
                                                in_order(st%vwin(i, :), res%cycles_done, nwin), &
                                                cfg%max_period, cfg%period_tol)
@@ -428,7 +428,7 @@ contains
         real(wp), allocatable :: frame(:, :)
         integer :: info
 
-        call initial_frame(2*cfg%n, lyapunov_vectors(cfg), frame, info)
+        call initial_frame(2*cfg%model%n, lyapunov_vectors(cfg), frame, info)
         if (info /= 0) then
             call set_error(err, "lyapunov: cannot build the initial tangent frame")
             return
@@ -458,7 +458,7 @@ contains
 
         nwin = int(min(cfg%cycles, int(period_window(cfg%max_period), i8)))
         if (allocated(state%xwin)) deallocate (state%xwin, state%vwin)
-        allocate (state%xwin(cfg%n, nwin), state%vwin(cfg%n, nwin))
+        allocate (state%xwin(cfg%model%n, nwin), state%vwin(cfg%model%n, nwin))
         state%xwin = 0
         state%vwin = 0
         do i = max(1, size(x, 2) - nwin + 1), size(x, 2)
@@ -478,7 +478,7 @@ contains
 
         k = lyapunov_vectors(cfg)
         ! strobe x, v, cycle; running estimates (k values and a cycle per kept row)
-        mb = (16.0_wp*cfg%n + 8)*real(cfg%cycles, wp)/1.0e6_wp
+        mb = (16.0_wp*cfg%model%n + 8)*real(cfg%cycles, wp)/1.0e6_wp
         if (cfg%lyapunov) mb = mb + (8.0_wp*k + 8)*running_rows(cfg%cycles/cfg%qr_every)/1.0e6_wp
         if (mb > cfg%max_size_mb) then
             call set_error(err, "&output: the strobe records of this run need about "// &
@@ -489,8 +489,8 @@ contains
         end if
         ! tangent frames in memory: the frame, the engine's transposed copy, the QR's copy and
         ! its workspace; for the Poincare-map Jacobian the same for a full 2n x 2n frame
-        mb = 32.0_wp*k*2*cfg%n/1.0e6_wp
-        if (cfg%jacobian) mb = max(mb, 32.0_wp*(2.0_wp*cfg%n)**2/1.0e6_wp)
+        mb = 32.0_wp*k*2*cfg%model%n/1.0e6_wp
+        if (cfg%jacobian) mb = max(mb, 32.0_wp*(2.0_wp*cfg%model%n)**2/1.0e6_wp)
         if (mb > cfg%max_size_mb) then
             call set_error(err, "&lyapunov: the tangent vectors of this run need about "// &
                            fmt_real(mb)//" MB of memory, more than &output max_size_mb = "// &

@@ -16,6 +16,7 @@ module chain_sim
     use chain_engine, only: chain_t, chain_init, contact_free, chain_set_tangent
     use chain_events, only: event_log_t
     use chain_config, only: run_config_t, config_summary
+    use chain_model, only: model_walls
     use chain_lyapunov, only: lyapunov_pack, lyapunov_unpack
     use chain_run, only: record_sink_t, run_result_t, record_run, progress_callback, check_size, &
                          run_state_t, set_window, period_window
@@ -56,28 +57,29 @@ contains
 
         cycle = 0
         s = 0
-        allocate (x(cfg%n), v(cfg%n), contact(cfg%n))
+        allocate (x(cfg%model%n), v(cfg%model%n), contact(cfg%model%n))
         x = 0
         v = 0
         contact = contact_free
         select case (cfg%initial_kind)
         case ('random')
             state = seed_state(cfg%seed)
-            do i = 1, cfg%n
+            do i = 1, cfg%model%n
                 x(i) = cfg%x_amp*(2*uniform(state) - 1)
                 v(i) = cfg%v_amp*(2*uniform(state) - 1)
             end do
         case ('explicit')
             x = cfg%x0
-            if (size(cfg%v0) == cfg%n) v = cfg%v0
+            if (size(cfg%v0) == cfg%model%n) v = cfg%v0
         case ('file')
-            call read_final_state(cfg%initial_file, cfg%n, x, v, cycle, phase, contact, &
+            call read_final_state(cfg%initial_file, cfg%model%n, x, v, cycle, phase, contact, &
                                   queue_time, queue_action, s, model, spacing, boundary, err)
             if (allocated(err)) return
             ! the stored event schedule belongs to the file's model: with other parameters
             ! (a continuation step of a sweep) every bond is searched again
-            if (any(model /= [cfg%damping, cfg%restitution, cfg%amplitude, cfg%omega]) .or. &
-                any(spacing /= cfg%spacing) .or. boundary(1:len(cfg%boundary)) /= cfg%boundary) &
+            if (any(model /= [cfg%model%damping, cfg%model%restitution, cfg%model%amplitude, &
+                cfg%model%omega]) .or. &
+                any(spacing /= cfg%model%spacing) .or. trim(boundary) /= model_walls(cfg%model)) &
                 deallocate (queue_time, queue_action)
         end select
     end subroutine initial_state
@@ -95,14 +97,16 @@ contains
 
         call initial_state(cfg, x, v, cycle, s, contact, queue_time, queue_action, err)
         if (allocated(err)) return
-        flow = make_flow(cfg%damping, cfg%amplitude, cfg%omega)
+        flow = make_flow(cfg%model%damping, cfg%model%amplitude, cfg%model%omega)
         if (allocated(queue_time)) then
-            call chain_init(chain, flow, cfg%restitution, cfg%spacing, cfg%boundary == 'fixed', &
-                            cfg%stick_speed, x, v, cycle, s, err, contact, queue_time, &
+            call chain_init(chain, flow, cfg%model%restitution, cfg%model%spacing, &
+                cfg%model%walls, &
+                            cfg%model%stick_speed, x, v, cycle, s, err, contact, queue_time, &
                             queue_action)
         else
-            call chain_init(chain, flow, cfg%restitution, cfg%spacing, cfg%boundary == 'fixed', &
-                            cfg%stick_speed, x, v, cycle, s, err, contact)
+            call chain_init(chain, flow, cfg%model%restitution, cfg%model%spacing, &
+                cfg%model%walls, &
+                            cfg%model%stick_speed, x, v, cycle, s, err, contact)
         end if
     end subroutine start_chain
 
@@ -115,9 +119,9 @@ contains
         type(chain_t), intent(out) :: chain
         type(error_t), allocatable, intent(out) :: err
 
-        call chain_init(chain, make_flow(cfg%damping, cfg%amplitude, cfg%omega), &
-                        cfg%restitution, cfg%spacing, cfg%boundary == 'fixed', &
-                        cfg%stick_speed, x, v, 0_i8, cfg%phase/cfg%omega, err)
+        call chain_init(chain, make_flow(cfg%model%damping, cfg%model%amplitude, cfg%model%omega), &
+                        cfg%model%restitution, cfg%model%spacing, cfg%model%walls, &
+                        cfg%model%stick_speed, x, v, 0_i8, cfg%phase/cfg%model%omega, err)
     end subroutine chain_on_section
 
     !> Root attributes, /params and /initial of the run described by cfg (for a sweep file: of
@@ -138,9 +142,11 @@ contains
         type(chain_t), intent(in) :: chain
         type(error_t), allocatable, intent(out) :: err
 
-        call output_header(out, cfg%input_text, config_summary(cfg), cfg%n, cfg%spacing, &
-                           cfg%damping, cfg%restitution, cfg%amplitude, cfg%omega, &
-                           cfg%boundary, chain%flow%period, cfg%phase, cfg%transient, &
+        call output_header(out, cfg%input_text, config_summary(cfg), cfg%model%n, &
+            cfg%model%spacing, &
+                           cfg%model%damping, cfg%model%restitution, cfg%model%amplitude, &
+                               cfg%model%omega, &
+                           model_walls(cfg%model), chain%flow%period, cfg%phase, cfg%transient, &
                            cfg%cycles, chain%x, chain%v, err)
     end subroutine header_for
 
@@ -170,7 +176,7 @@ contains
         if (found == file_continuable) then
             call continue_chain(cfg, chain, state, err)
             if (allocated(err)) return
-            call output_continue(sink%out, cfg%output_file, cfg%n, cfg%cycles, err)
+            call output_continue(sink%out, cfg%output_file, cfg%model%n, cfg%cycles, err)
             if (allocated(err)) return
         else
             call start_chain(cfg, chain, err)
@@ -234,13 +240,14 @@ contains
         character(len=8) :: boundary
         integer :: info
 
-        call read_final_state(cfg%output_file, cfg%n, x, v, cycle, phase, contact, queue_time, &
+        call read_final_state(cfg%output_file, cfg%model%n, x, v, cycle, phase, contact, &
+            queue_time, &
                               queue_action, s, model, spacing, boundary, err)
         if (allocated(err)) then
             err%message = "&output: cannot continue '"//cfg%output_file//"': "//err%message
             return
         end if
-        call read_resume(cfg%output_file, cfg%n, cfg%lyapunov, &
+        call read_resume(cfg%output_file, cfg%model%n, cfg%lyapunov, &
                          int(min(cfg%cycles, int(period_window(cfg%max_period), i8))), data, err)
         if (allocated(err)) return
         if (data%cycles_done >= cfg%cycles) then
@@ -249,8 +256,9 @@ contains
                            "to run it again")
             return
         end if
-        call chain_init(chain, make_flow(cfg%damping, cfg%amplitude, cfg%omega), &
-                        cfg%restitution, cfg%spacing, cfg%boundary == 'fixed', cfg%stick_speed, &
+        call chain_init(chain, make_flow(cfg%model%damping, cfg%model%amplitude, cfg%model%omega), &
+                        cfg%model%restitution, cfg%model%spacing, cfg%model%walls, &
+                            cfg%model%stick_speed, &
                         x, v, cycle, s, err, contact, queue_time, queue_action)
         if (allocated(err)) return
         chain%start_cycle = data%start_cycle
@@ -263,7 +271,7 @@ contains
         chain%touches = data%touches
         chain%site_counts = data%site_counts
         if (cfg%lyapunov) then
-            if (size(data%tangent, 2) /= 2*cfg%n) then
+            if (size(data%tangent, 2) /= 2*cfg%model%n) then
                 call set_error(err, "&output: cannot continue '"//cfg%output_file//"': "// &
                                "/resume/tangent is not a frame of the chain's 2n coordinates")
                 return

@@ -148,8 +148,8 @@ contains
         do p = 1, plan%n_points
             res%values(:, p) = point_values(cfg, plan, p)
         end do
-        allocate (res%x(cfg%n, int(cfg%cycles), plan%n_points))
-        allocate (res%collisions(plan%n_points), res%period(cfg%n, plan%n_points))
+        allocate (res%x(cfg%model%n, int(cfg%cycles), plan%n_points))
+        allocate (res%collisions(plan%n_points), res%period(cfg%model%n, plan%n_points))
         allocate (res%exponents(plan%k, plan%n_points), res%stderr(plan%k, plan%n_points))
         allocate (res%ky(plan%n_points), res%done(plan%n_points))
         res%x = 0
@@ -207,15 +207,15 @@ contains
 
         select case (name)
         case ('amplitude')
-            cfg%amplitude = value
+            cfg%model%amplitude = value
         case ('omega')
-            cfg%omega = value
+            cfg%model%omega = value
         case ('damping')
-            cfg%damping = value
+            cfg%model%damping = value
         case ('restitution')
-            cfg%restitution = value
+            cfg%model%restitution = value
         case ('spacing')
-            cfg%spacing = value
+            cfg%model%spacing = value
         end select
     end subroutine set_parameter
 
@@ -248,9 +248,11 @@ contains
             call sweep_point_config(cfg, plan, p, point, err)
             if (allocated(err)) return
             if (starts(b)%resume) then
-                call chain_init(chain, make_flow(point%damping, point%amplitude, point%omega), &
-                                point%restitution, point%spacing, point%boundary == 'fixed', &
-                                point%stick_speed, starts(b)%x, starts(b)%v, starts(b)%cycle, &
+                call chain_init(chain, make_flow(point%model%damping, point%model%amplitude, &
+                    point%model%omega), &
+                                point%model%restitution, point%model%spacing, point%model%walls, &
+                                point%model%stick_speed, starts(b)%x, starts(b)%v, &
+                                    starts(b)%cycle, &
                                 starts(b)%s, err, starts(b)%contact)
             else
                 ! a start from a file reads HDF5, which is not thread-safe
@@ -443,7 +445,7 @@ contains
                                      cfg%sweep_mode, err)
         if (allocated(err)) return
         np = plan%n_points
-        n = cfg%n
+        n = cfg%model%n
         cycles = cfg%cycles
         k = plan%k
         if (plan%n_axes == 1) then
@@ -496,7 +498,7 @@ contains
             return
         end if
         write (u, iostat=ios, iomsg=msg) checkpoint_magic, len(cfg%input_text), &
-            cfg%input_text, plan%n_points, cfg%n, cfg%cycles, plan%k, plan%n_branches
+            cfg%input_text, plan%n_points, cfg%model%n, cfg%cycles, plan%k, plan%n_branches
         call branch_record_sizes(cfg, plan, nr, ni)
         allocate (reals(nr), ints(ni))
         do b = 1, plan%n_branches
@@ -542,7 +544,7 @@ contains
             allocate (character(len=length) :: text)
             read (u, iostat=ios) text, n_points, n, cycles, k, n_branches
             ours = ios == 0 .and. text == cfg%input_text .and. n_points == plan%n_points .and. &
-                   n == cfg%n .and. cycles == cfg%cycles .and. k == plan%k .and. &
+                   n == cfg%model%n .and. cycles == cfg%cycles .and. k == plan%k .and. &
                    n_branches == plan%n_branches
         end if
         if (.not. ours) then
@@ -569,8 +571,8 @@ contains
         type(sweep_plan_t), intent(in) :: plan
         integer, intent(out) :: nr, ni
 
-        nr = plan%points_per_branch*point_reals(cfg, plan) + 2*cfg%n + 1
-        ni = plan%points_per_branch*point_ints(cfg) + cfg%n + 2
+        nr = plan%points_per_branch*point_reals(cfg, plan) + 2*cfg%model%n + 1
+        ni = plan%points_per_branch*point_ints(cfg) + cfg%model%n + 2
     end subroutine branch_record_sizes
 
     !> Reals per point: collisions, x (n x cycles), exponents, stderr, Kaplan-Yorke dimension.
@@ -578,14 +580,14 @@ contains
         type(run_config_t), intent(in) :: cfg
         type(sweep_plan_t), intent(in) :: plan
 
-        point_reals = 2 + cfg%n*int(cfg%cycles) + 2*plan%k
+        point_reals = 2 + cfg%model%n*int(cfg%cycles) + 2*plan%k
     end function point_reals
 
     !> Integers per point: done, periods (n).
     pure integer function point_ints(cfg)
         type(run_config_t), intent(in) :: cfg
 
-        point_ints = 1 + cfg%n
+        point_ints = 1 + cfg%model%n
     end function point_ints
 
     !> Branch b of a sweep, its points and the state it resumes from, as two plain arrays
@@ -608,7 +610,7 @@ contains
         do q = 1, plan%points_per_branch
             p = (b - 1)*plan%points_per_branch + q
             reals((q - 1)*nr + 1:q*nr) = [res%collisions(p), &
-                                          reshape(res%x(:, :, p), [cfg%n*int(cfg%cycles)]), &
+                                          reshape(res%x(:, :, p), [cfg%model%n*int(cfg%cycles)]), &
                                           res%exponents(:, p), res%stderr(:, p), res%ky(p)]
             ints((q - 1)*ni + 1:q*ni) = [merge(1_i8, 0_i8, res%done(p)), &
                                          int(res%period(:, p), i8)]
@@ -632,7 +634,7 @@ contains
         type(branch_start_state_t), intent(inout) :: starts(:)
         integer :: q, p, n, m, k, j, i
 
-        n = cfg%n
+        n = cfg%model%n
         m = n*int(cfg%cycles)
         k = plan%k
         do q = 1, plan%points_per_branch

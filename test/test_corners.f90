@@ -50,7 +50,7 @@ contains
         real(wp), intent(in), optional :: phase
         type(run_config_t) :: cfg
 
-        cfg%n = n
+        cfg%model%n = n
         cfg%transient = transient
         cfg%cycles = cycles
         cfg%record_events = .true.
@@ -79,7 +79,8 @@ contains
         call record_run(run_config(1, 0_i8, 6_i8, .false.), chain, sink, res, err)
         call check(t, .not. allocated(err), 'right-wall release run completes')
         if (allocated(err)) return
-        call check_close(t, sink%x(1, 1), -0.42131_wp, 'right-wall release: first strobe', 5.0e-6_wp)
+        call check_close(t, sink%x(1, 1), -0.42131_wp, 'right-wall release: first strobe', &
+            5.0e-6_wp)
         call check_close(t, sink%x(1, 2), -0.42113_wp, 'right-wall release: second strobe', &
                          5.0e-6_wp)
         call check_close(t, sink%x(1, 3), -0.42110_wp, 'right-wall release: third strobe', &

@@ -197,7 +197,7 @@ contains
         integer(i8), intent(in) :: transient, cycles
         type(run_config_t) :: cfg
 
-        cfg%n = n
+        cfg%model%n = n
         cfg%transient = transient
         cfg%cycles = cycles
         cfg%record_events = .false.

@@ -96,8 +96,8 @@ contains
         call sweep_point_config(cfg, plan, 3, point, err)
         call check(t, .not. allocated(err), 'spacing point 3 is valid')
         if (allocated(err)) return
-        call check(t, size(point%spacing) == cfg%n + 1 .and. &
-                   all(point%spacing == 1.0_wp + 2*0.1_wp), "'spacing' sets every bond")
+        call check(t, size(point%model%spacing) == cfg%model%n + 1 .and. &
+                   all(point%model%spacing == 1.0_wp + 2*0.1_wp), "'spacing' sets every bond")
         call check(t, .not. point%sweep .and. .not. point%record_events, &
                    'a point is a plain run that keeps no events')
         call config_from(cfg, "&sweep parameter = 'restitution', start = 0.9, stop = 1.1, "// &
@@ -186,7 +186,8 @@ contains
             if (j > 1) call remove_file(previous)
             previous = path
         end do
-        call read_final_state(previous, cfg%n, x, v, cycle, phase, contact, qt, qa, s, model, &
+        call read_final_state(previous, cfg%model%n, x, v, cycle, phase, contact, qt, qa, s, &
+            model, &
                               spacing, boundary, err)
         call remove_file(previous)
         call check(t, .not. allocated(err), 'final state of the last step')

@@ -1,0 +1,39 @@
+!> The physical model of one chain (docs/model.md sections 1-5): n oscillators x'' + 2 b x' + x
+!> = A sin(w t) between walls (or free ends), bond k between oscillators k and k+1 of rest
+!> spacing a(k), impacts with restitution K, and the rebound speed below which chatter against
+!> a wall ends in rest. Everything the dynamics depends on, and nothing about how a run is
+!> recorded: the configuration builds it, the engine takes it.
+module chain_model
+    use chain_kinds, only: wp
+    implicit none
+    private
+    public :: model_t, model_walls
+
+    type :: model_t
+        integer :: n = 0                    !! oscillators
+        real(wp) :: damping = 0.05_wp       !! b, 0 <= b < 1
+        real(wp) :: restitution = 0.7_wp    !! K, 0 <= K <= 1
+        real(wp) :: amplitude = 0           !! A of the drive
+        real(wp) :: omega = 1               !! w of the drive
+        !> spacing(n+1): the rest gap of bond k (oscillators k, k+1; bond 0 the left wall,
+        !> bond n the right) is spacing(k+1)
+        real(wp), allocatable :: spacing(:)
+        logical :: walls = .true.           !! fixed walls (true) or free ends (false)
+        real(wp) :: stick_speed = 1.0e-9_wp !! rebound speed below which chatter ends in rest
+    end type model_t
+
+contains
+
+    !> The boundary as the input names it: 'fixed' or 'free'.
+    pure function model_walls(model) result(boundary)
+        type(model_t), intent(in) :: model
+        character(len=:), allocatable :: boundary
+
+        if (model%walls) then
+            boundary = 'fixed'
+        else
+            boundary = 'free'
+        end if
+    end function model_walls
+
+end module chain_model
