@@ -764,32 +764,129 @@ contains
         end select
     end subroutine set_boundary
 
-    !> One line per key of the configuration actually used, in namelist form.
+    !> The configuration actually used, every key of every group, as a namelist input that
+    !> reads back to the same configuration (reals to full precision, lists in full; &sweep
+    !> only when there is one).
     function config_summary(cfg) result(text)
         type(run_config_t), intent(in) :: cfg
         character(len=:), allocatable :: text
-        character(len=1), parameter :: nl = achar(10)
 
-        text = "&chain n = "//fmt_int(cfg%model%n)//", damping = "//fmt_real(cfg%model%damping)// &
-               ", restitution = "//fmt_real(cfg%model%restitution)//", amplitude = "// &
-               fmt_real(cfg%model%amplitude)//", omega = "//fmt_real(cfg%model%omega)// &
-               ", boundary = '"//model_walls(cfg%model)//"' /"//nl// &
-               "&initial kind = '"//cfg%initial_kind//"', seed = "//fmt_int(cfg%seed)// &
-               ", x_amp = "//fmt_real(cfg%x_amp)//", v_amp = "//fmt_real(cfg%v_amp)//" /"//nl// &
-               "&run transient = "//fmt_int8(cfg%transient)//", cycles = "// &
-               fmt_int8(cfg%cycles)//", phase = "//fmt_real(cfg%phase)// &
-               ", record_events = "//merge('T', 'F', cfg%record_events)// &
-               ", stick_speed = "//fmt_real(cfg%model%stick_speed)//", max_period = "// &
-               fmt_int(cfg%max_period)//", period_tol = "//fmt_real(cfg%period_tol)//" /"//nl// &
-               "&lyapunov enabled = "//merge('T', 'F', cfg%lyapunov)//", vectors = "// &
-               fmt_int(cfg%vectors)//", qr_every = "//fmt_int(cfg%qr_every)// &
-               ", align = "//fmt_int(cfg%align)// &
-               ", jacobian = "//merge('T', 'F', cfg%jacobian)//", jacobian_cycles = "// &
-               fmt_int(cfg%jacobian_cycles)//" /"//nl// &
-               "&output file = '"//cfg%output_file//"', overwrite = "// &
-               merge('T', 'F', cfg%overwrite)//", max_size_mb = "//fmt_real(cfg%max_size_mb)// &
-               " /"//nl
+        text = chain_group(cfg%model)//initial_group(cfg)//run_group(cfg)// &
+               lyapunov_group(cfg)//output_group(cfg)
+        if (cfg%sweep) text = text//sweep_group(cfg)
     end function config_summary
+
+    function chain_group(model) result(text)
+        type(model_t), intent(in) :: model
+        character(len=:), allocatable :: text
+
+        text = "&chain n = "//fmt_int(model%n)//", spacing = "
+        if (all(model%spacing == model%spacing(1))) then
+            text = text//exact(model%spacing(1))
+        else
+            text = text//exact_list(model%spacing)
+        end if
+        text = text//", damping = "//exact(model%damping)//", restitution = "// &
+               exact(model%restitution)//", amplitude = "//exact(model%amplitude)// &
+               ", omega = "//exact(model%omega)//", boundary = '"//model_walls(model)// &
+               "' /"//new_line('a')
+    end function chain_group
+
+    function initial_group(cfg) result(text)
+        type(run_config_t), intent(in) :: cfg
+        character(len=:), allocatable :: text
+
+        text = "&initial kind = '"//cfg%initial_kind//"'"
+        select case (cfg%initial_kind)
+        case ('random')
+            text = text//", seed = "//fmt_int(cfg%seed)//", x_amp = "//exact(cfg%x_amp)// &
+                   ", v_amp = "//exact(cfg%v_amp)
+        case ('explicit')
+            text = text//", x0 = "//exact_list(cfg%x0)
+            if (size(cfg%v0) > 0) text = text//", v0 = "//exact_list(cfg%v0)
+        case ('file')
+            text = text//", file = '"//cfg%initial_file//"'"
+        end select
+        text = text//" /"//new_line('a')
+    end function initial_group
+
+    function run_group(cfg) result(text)
+        type(run_config_t), intent(in) :: cfg
+        character(len=:), allocatable :: text
+
+        text = "&run transient = "//fmt_int8(cfg%transient)//", cycles = "// &
+               fmt_int8(cfg%cycles)//", phase = "//exact(cfg%phase)//", record_events = "// &
+               fmt_logical(cfg%record_events)//", stick_speed = "// &
+               exact(cfg%model%stick_speed)//", max_period = "//fmt_int(cfg%max_period)// &
+               ", period_tol = "//exact(cfg%period_tol)//" /"//new_line('a')
+    end function run_group
+
+    function lyapunov_group(cfg) result(text)
+        type(run_config_t), intent(in) :: cfg
+        character(len=:), allocatable :: text
+
+        text = "&lyapunov enabled = "//fmt_logical(cfg%lyapunov)//", vectors = "// &
+               fmt_int(cfg%vectors)//", qr_every = "//fmt_int(cfg%qr_every)//", align = "// &
+               fmt_int(cfg%align)//", jacobian = "//fmt_logical(cfg%jacobian)// &
+               ", jacobian_cycles = "//fmt_int(cfg%jacobian_cycles)//" /"//new_line('a')
+    end function lyapunov_group
+
+    function output_group(cfg) result(text)
+        type(run_config_t), intent(in) :: cfg
+        character(len=:), allocatable :: text
+
+        text = "&output file = '"//cfg%output_file//"', overwrite = "// &
+               fmt_logical(cfg%overwrite)//", max_size_mb = "//exact(cfg%max_size_mb)// &
+               " /"//new_line('a')
+    end function output_group
+
+    function sweep_group(cfg) result(text)
+        type(run_config_t), intent(in) :: cfg
+        character(len=:), allocatable :: text
+
+        text = "&sweep parameter = '"//cfg%sweep_parameter//"', start = "// &
+               exact(cfg%sweep_start)//", stop = "//exact(cfg%sweep_stop)//", step = "// &
+               exact(cfg%sweep_step)//", mode = '"//cfg%sweep_mode//"'"
+        if (len(cfg%sweep_parameter2) > 0) &
+            text = text//", parameter2 = '"//cfg%sweep_parameter2//"', start2 = "// &
+                   exact(cfg%sweep_start2)//", stop2 = "//exact(cfg%sweep_stop2)// &
+                   ", step2 = "//exact(cfg%sweep_step2)
+        text = text//" /"//new_line('a')
+    end function sweep_group
+
+    !> A real in the fewest of 15 or 17 significant digits that read back to the same value.
+    pure function exact(x) result(text)
+        real(wp), intent(in) :: x
+        character(len=:), allocatable :: text
+        character(len=40) :: buf
+        real(wp) :: back
+        integer :: ios
+
+        write (buf, '(g0.15)') x
+        read (buf, *, iostat=ios) back
+        if (ios /= 0 .or. back /= x) write (buf, '(g0.17)') x
+        text = trim(adjustl(buf))
+    end function exact
+
+    pure function exact_list(values) result(text)
+        real(wp), intent(in) :: values(:)
+        character(len=:), allocatable :: text
+        integer :: i
+
+        text = ''
+        do i = 1, size(values)
+            if (i > 1) text = text//', '
+            text = text//exact(values(i))
+        end do
+    end function exact_list
+
+    pure function fmt_logical(flag) result(text)
+        logical, intent(in) :: flag
+        character(len=:), allocatable :: text
+
+        text = merge('.true. ', '.false.', flag)
+        text = trim(text)
+    end function fmt_logical
 
     subroutine check_range(err, group, key, value, low, high, allowed, open_high)
         type(error_t), allocatable, intent(out) :: err
