@@ -32,7 +32,7 @@ program impactchain_mpi
     type(branch_start_state_t), allocatable :: starts(:)
     type(output_t) :: out
     type(error_t), allocatable :: err
-    integer :: rank, ranks, provided, b, failed, left, stopping, resumed
+    integer :: rank, ranks, provided, failed, left, stopping, resumed
     type(cli_t) :: cli
     logical :: quiet
     logical, allocatable :: mine(:)
@@ -43,48 +43,69 @@ program impactchain_mpi
     call MPI_Init_thread(MPI_THREAD_FUNNELED, provided)
     call MPI_Comm_rank(MPI_COMM_WORLD, rank)
     call MPI_Comm_size(MPI_COMM_WORLD, ranks)
-    cli = parse_command_line()
-    if (cli%action /= cli_run) call stop_all('usage: impactchain-mpi [--quiet] input.nml')
-    input = cli%input
-    quiet = cli%quiet
-    call read_config(input, cfg, err)
-    if (allocated(err)) call stop_all(err%message)
-    if (.not. cfg%sweep) call stop_all(input//': impactchain-mpi runs sweeps; add a &sweep group')
-    round_seconds = round_length()
-    plan = plan_sweep(cfg)
-    ! every point is checked before any work (every rank alike)
-    call validate_sweep_points(cfg, plan, err)
-    if (allocated(err)) call stop_all(err%message)
-    ! rank 0 refuses an existing or unwritable output before anyone works
-    failed = 0
-    if (rank == 0) then
-        call output_begin(out, cfg%output_file, cfg%overwrite, err)
-        if (allocated(err)) failed = 1
-    end if
-    call MPI_Bcast(failed, 1, MPI_INTEGER, 0, MPI_COMM_WORLD)
-    if (failed /= 0) call stop_all(err_text(err))
-    call sweep_result_init(res, cfg, plan)
-    allocate (starts(plan%n_branches))
-    ! every rank reads the checkpoint (if any), so every rank can own any branch
-    checkpoint = checkpoint_path(cfg)
-    call load_checkpoint(checkpoint, cfg, plan, res, starts, err)
-    call agree_or_stop(err)
-    resumed = count(res%done)
-    mine = [(modulo(b - 1, ranks) == rank, b=1, plan%n_branches)]
-    if (rank == 0 .and. plan%n_branches < ranks .and. .not. quiet) &
-        write (error_unit, '(a,i0,a,i0,a)') 'impactchain-mpi: note: ', plan%n_branches, &
-        ' branches for ', ranks, ' ranks, so some ranks stay idle (a continuation along '// &
-        'one parameter is one branch: add parameter2 or use mode = ''independent'')'
+    call start_sweep()
     call catch_interrupts()
     call system_clock(clock_start, clock_rate)
     do
+        call run_round()
+        if (left == 0) exit
+        if (stopping /= 0) call stop_interrupted()
+    end do
+    call finish_sweep()
+    call MPI_Finalize()
+    if (failed /= 0) stop 1, quiet=.true.
+
+contains
+
+    !> Read and check the input, refuse an existing output (rank 0) and load the checkpoint
+    !> (every rank, so that every rank can own any branch).
+    subroutine start_sweep()
+        integer :: b
+
+        cli = parse_command_line()
+        if (cli%action /= cli_run) call stop_all('usage: impactchain-mpi [--quiet] input.nml')
+        input = cli%input
+        quiet = cli%quiet
+        call read_config(input, cfg, err)
+        if (allocated(err)) call stop_all(err%message)
+        if (.not. cfg%sweep) &
+            call stop_all(input//': impactchain-mpi runs sweeps; add a &sweep group')
+        round_seconds = round_length()
+        plan = plan_sweep(cfg)
+        ! every point is checked before any work (every rank alike)
+        call validate_sweep_points(cfg, plan, err)
+        if (allocated(err)) call stop_all(err%message)
+        failed = 0
+        if (rank == 0) then
+            call output_begin(out, cfg%output_file, cfg%overwrite, err)
+            if (allocated(err)) failed = 1
+        end if
+        call MPI_Bcast(failed, 1, MPI_INTEGER, 0, MPI_COMM_WORLD)
+        if (failed /= 0) call stop_all(err_text(err))
+        call sweep_result_init(res, cfg, plan)
+        allocate (starts(plan%n_branches))
+        checkpoint = checkpoint_path(cfg)
+        call load_checkpoint(checkpoint, cfg, plan, res, starts, err)
+        call agree_or_stop(err)
+        resumed = count(res%done)
+        mine = [(modulo(b - 1, ranks) == rank, b=1, plan%n_branches)]
+        if (rank == 0 .and. plan%n_branches < ranks .and. .not. quiet) &
+            write (error_unit, '(a,i0,a,i0,a)') 'impactchain-mpi: note: ', plan%n_branches, &
+            ' branches for ', ranks, ' ranks, so some ranks stay idle (a continuation along '// &
+            'one parameter is one branch: add parameter2 or use mode = ''independent'')'
+    end subroutine start_sweep
+
+    !> One round: every rank works on its branches until the round ends, rank 0 gathers the
+    !> results, and (unless every point is done) writes the checkpoint. Sets `left` (points
+    !> not done) and `stopping` (a signal reached some rank).
+    subroutine run_round()
         call system_clock(clock_round)
         call run_sweep_branches(cfg, plan, res, starts, err, mine=mine, hook=round_hook)
         call agree_or_stop(err)
         call collect_on_root()
         left = count(.not. res%done)
         call MPI_Bcast(left, 1, MPI_INTEGER, 0, MPI_COMM_WORLD)
-        if (left == 0) exit
+        if (left == 0) return
         stopping = merge(1, 0, interrupted())
         call MPI_Allreduce(MPI_IN_PLACE, stopping, 1, MPI_INTEGER, MPI_MAX, MPI_COMM_WORLD)
         if (rank == 0) then
@@ -93,36 +114,39 @@ program impactchain_mpi
                 err%message
             call report_progress()
         end if
-        if (stopping /= 0) then
-            if (rank == 0) then
-                call output_abort(out)
-                write (error_unit, '(a,i0,a,i0,a)') 'impactchain-mpi: the sweep was stopped '// &
-                    'after ', plan%n_points - left, ' of ', plan%n_points, ' points; run the '// &
-                    'same command again to resume from '//checkpoint
-            end if
-            call MPI_Finalize()
-            stop 3, quiet=.true.
-        end if
-    end do
-    if (rank == 0) then
-        call write_sweep_file(out, cfg, plan, res, err)
-        if (.not. allocated(err)) call output_end(out, .true., err)
-        if (allocated(err)) then
-            call output_abort(out)
-            write (error_unit, '(a)') 'impactchain-mpi: error: '//err%message
-        else
-            call remove_file(checkpoint)
-            write (output_unit, '(a)') 'impactchain-mpi: wrote '//cfg%output_file
-            write (output_unit, '(a,i0,a,i0,a,i0,a)') '  sweep points ', plan%n_points, &
-                ' on ', ranks, ' ranks (resumed from a checkpoint: ', resumed, ')'
-        end if
-    end if
-    failed = merge(1, 0, allocated(err))
-    call MPI_Bcast(failed, 1, MPI_INTEGER, 0, MPI_COMM_WORLD)
-    call MPI_Finalize()
-    if (failed /= 0) stop 1, quiet=.true.
+    end subroutine run_round
 
-contains
+    !> After a signal: the checkpoint is written; say how to resume and exit with status 3.
+    subroutine stop_interrupted()
+        if (rank == 0) then
+            call output_abort(out)
+            write (error_unit, '(a,i0,a,i0,a)') 'impactchain-mpi: the sweep was stopped '// &
+                'after ', plan%n_points - left, ' of ', plan%n_points, ' points; run the '// &
+                'same command again to resume from '//checkpoint
+        end if
+        call MPI_Finalize()
+        stop 3, quiet=.true.
+    end subroutine stop_interrupted
+
+    !> Rank 0 writes the one HDF5 file and deletes the checkpoint; every rank learns whether
+    !> that failed (`failed`).
+    subroutine finish_sweep()
+        if (rank == 0) then
+            call write_sweep_file(out, cfg, plan, res, err)
+            if (.not. allocated(err)) call output_end(out, .true., err)
+            if (allocated(err)) then
+                call output_abort(out)
+                write (error_unit, '(a)') 'impactchain-mpi: error: '//err%message
+            else
+                call remove_file(checkpoint)
+                write (output_unit, '(a)') 'impactchain-mpi: wrote '//cfg%output_file
+                write (output_unit, '(a,i0,a,i0,a,i0,a)') '  sweep points ', plan%n_points, &
+                    ' on ', ranks, ' ranks (resumed from a checkpoint: ', resumed, ')'
+            end if
+        end if
+        failed = merge(1, 0, allocated(err))
+        call MPI_Bcast(failed, 1, MPI_INTEGER, 0, MPI_COMM_WORLD)
+    end subroutine finish_sweep
 
     !> Called by the sweep after each finished point: ends the round after round_seconds, or
     !> at once on a signal.
