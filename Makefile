@@ -64,7 +64,7 @@ build: setup
 
 run: build
 	@mkdir -p runs
-	$(FPM) run $(RELEASE) -- namelists/default.nml
+	$(FPM) run $(RELEASE) -- --overwrite namelists/default.nml
 	$(PY) -m post all $(DEFAULT_RUN) -o runs/default
 	@echo "impactchain: figures written next to $(DEFAULT_RUN) (runs/default_*.png)"
 
@@ -98,7 +98,7 @@ clean:
 
 # ---- every figure of the paper: `make figures` (runs in parallel on the machine's cores) ----
 RUNS := figures/runs
-SIM := $(FPM) run $(RELEASE) -- --quiet
+SIM := $(FPM) run $(RELEASE) -- --quiet --overwrite
 POST := $(PY) -m post
 GALLERY := --dpi 70
 SINGLE := fig1a fig1b fig1c fig1d fig2a fig2b fig2c fig2d fig2e fig2f fig3_red fig3_green \

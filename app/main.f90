@@ -1,4 +1,5 @@
-!> impactchain command line: `impactchain [--quiet] input.nml`. Parses arguments (chain_cli),
+!> impactchain command line: `impactchain [options] input.nml` (see usage below). Parses
+!> arguments (chain_cli),
 !> runs the library, reports progress and errors, and sets the exit code. No physics here.
 !> SIGINT / SIGTERM ask a running simulation to stop at the next strobe record (chain_interrupt);
 !> the file is then closed cleanly and marked complete = 0, and the same command continues it.
@@ -7,7 +8,8 @@ program main
     use impactchain, only: wp, i8, error_t, run_config_t, read_config, run_simulation, &
                            run_result_t, run_sweep, sweep_summary_t, checkpoint_path, &
                            catch_interrupts, interrupted, cli_t, parse_command_line, cli_run, &
-                           cli_help, cli_version, cli_usage, code_version
+                           cli_help, cli_version, cli_usage, code_version, config_summary, &
+                           plan_sweep, validate_sweep_points
     implicit none
     type(run_config_t) :: cfg
     type(run_result_t) :: summary
@@ -35,8 +37,14 @@ program main
         call fail(cli%message)
     end select
     quiet = cli%quiet
-    call read_config(cli%input, cfg, err)
+    call read_config(cli%input, cfg, err, cli%overrides)
     if (allocated(err)) call fail(err%message)
+    if (cli%check) then
+        if (cfg%sweep) call validate_sweep_points(cfg, plan_sweep(cfg), err)
+        if (allocated(err)) call fail(err%message)
+        write (output_unit, '(a)', advance='no') config_summary(cfg)
+        stop
+    end if
     call system_clock(clock_start, clock_rate)
     clock_last = clock_start
     call catch_interrupts()
@@ -59,10 +67,19 @@ contains
     subroutine usage(unit)
         integer, intent(in) :: unit
 
-        write (unit, '(a)') 'usage: impactchain [--quiet] input.nml', &
+        write (unit, '(a)') 'usage: impactchain [options] input.nml', &
             '  Runs the impact-oscillator chain described by the namelist file and writes', &
-            '  HDF5 output (see README.md for every key). Progress goes to stderr for runs', &
-            '  longer than two seconds; --quiet silences it.'
+            '  HDF5 output (see README.md for every key).', &
+            '', &
+            'options:', &
+            '  --set group.key=value  override one key of the input (repeatable), e.g.', &
+            '                         --set chain.amplitude=2.2 --set run.cycles=1000', &
+            '  -o, --output file.h5   write to this file (the same as --set output.file=...)', &
+            '  --overwrite            replace an existing output file', &
+            '  --check                validate the input, print it resolved, run nothing', &
+            '  -q, --quiet            no progress (shown on stderr for runs over 2 s)', &
+            '  -h, --help             this text', &
+            '  --version              the code version'
     end subroutine usage
 
     !> Progress on stderr at most once a second, after the first two seconds.

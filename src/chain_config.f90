@@ -12,6 +12,8 @@ module chain_config
     use chain_kinds, only: wp, i8, two_pi
     use chain_error, only: error_t, set_error, fmt_real, fmt_int, fmt_int8
     use chain_model, only: model_t, model_walls
+    use chain_namelist, only: key_spec_t, key_integer, key_real, key_logical, key_string, &
+                              check_namelist, apply_override, groups_in
     implicit none
     private
     public :: run_config_t, read_config, validate_config, config_summary, lyapunov_vectors
@@ -23,6 +25,48 @@ module chain_config
     real(wp), parameter :: unset = -huge(1.0_wp)
     character(len=*), parameter :: group_names(6) = &
         [character(len=8) :: 'chain', 'initial', 'run', 'lyapunov', 'output', 'sweep']
+    !> Every key of every group with its type: what the namelist statements of the read_*
+    !> procedures below declare (test/python/test_namelist_errors.py checks the two agree).
+    type(key_spec_t), parameter :: input_keys(*) = [ &
+        key_spec_t('chain', 'n', key_integer, .false.), &
+        key_spec_t('chain', 'spacing', key_real, .true.), &
+        key_spec_t('chain', 'damping', key_real, .false.), &
+        key_spec_t('chain', 'restitution', key_real, .false.), &
+        key_spec_t('chain', 'amplitude', key_real, .false.), &
+        key_spec_t('chain', 'omega', key_real, .false.), &
+        key_spec_t('chain', 'boundary', key_string, .false.), &
+        key_spec_t('initial', 'kind', key_string, .false.), &
+        key_spec_t('initial', 'seed', key_integer, .false.), &
+        key_spec_t('initial', 'x_amp', key_real, .false.), &
+        key_spec_t('initial', 'v_amp', key_real, .false.), &
+        key_spec_t('initial', 'x0', key_real, .true.), &
+        key_spec_t('initial', 'v0', key_real, .true.), &
+        key_spec_t('initial', 'file', key_string, .false.), &
+        key_spec_t('run', 'transient', key_integer, .false.), &
+        key_spec_t('run', 'cycles', key_integer, .false.), &
+        key_spec_t('run', 'phase', key_real, .false.), &
+        key_spec_t('run', 'record_events', key_logical, .false.), &
+        key_spec_t('run', 'stick_speed', key_real, .false.), &
+        key_spec_t('run', 'max_period', key_integer, .false.), &
+        key_spec_t('run', 'period_tol', key_real, .false.), &
+        key_spec_t('lyapunov', 'enabled', key_logical, .false.), &
+        key_spec_t('lyapunov', 'vectors', key_integer, .false.), &
+        key_spec_t('lyapunov', 'qr_every', key_integer, .false.), &
+        key_spec_t('lyapunov', 'align', key_integer, .false.), &
+        key_spec_t('lyapunov', 'jacobian', key_logical, .false.), &
+        key_spec_t('lyapunov', 'jacobian_cycles', key_integer, .false.), &
+        key_spec_t('output', 'file', key_string, .false.), &
+        key_spec_t('output', 'overwrite', key_logical, .false.), &
+        key_spec_t('output', 'max_size_mb', key_real, .false.), &
+        key_spec_t('sweep', 'parameter', key_string, .false.), &
+        key_spec_t('sweep', 'start', key_real, .false.), &
+        key_spec_t('sweep', 'stop', key_real, .false.), &
+        key_spec_t('sweep', 'step', key_real, .false.), &
+        key_spec_t('sweep', 'mode', key_string, .false.), &
+        key_spec_t('sweep', 'parameter2', key_string, .false.), &
+        key_spec_t('sweep', 'start2', key_real, .false.), &
+        key_spec_t('sweep', 'stop2', key_real, .false.), &
+        key_spec_t('sweep', 'step2', key_real, .false.)]
     character(len=*), parameter :: sweep_parameters(5) = &
         [character(len=11) :: 'amplitude', 'omega', 'damping', 'restitution', 'spacing']
 
@@ -67,21 +111,31 @@ module chain_config
 
 contains
 
-    !> Read and validate the namelist file at `path`.
-    subroutine read_config(path, cfg, err)
+    !> Read and validate the namelist file at `path`, with `overrides` (`group.key=value`,
+    !> in order) applied to its text first.
+    subroutine read_config(path, cfg, err, overrides)
         character(len=*), intent(in) :: path
         type(run_config_t), intent(out) :: cfg
         type(error_t), allocatable, intent(out) :: err
-        integer :: u, ios
+        character(len=*), intent(in), optional :: overrides(:)
+        integer :: u, ios, j
         character(len=512) :: msg
         logical :: present_groups(size(group_names))
 
         call read_text(path, cfg%input_text, err)
         if (allocated(err)) return
-        call scan_groups(cfg%input_text, present_groups, err)
+        call check_namelist(path, cfg%input_text, input_keys, err)
         if (allocated(err)) return
+        if (present(overrides)) then
+            do j = 1, size(overrides)
+                call apply_override(cfg%input_text, trim(overrides(j)), input_keys, err)
+                if (allocated(err)) return
+            end do
+        end if
         call scan_number_sizes(cfg%input_text, err)
         if (allocated(err)) return
+        present_groups = [(any(groups_in(cfg%input_text) == group_names(j)), &
+                           j=1, size(group_names))]
         if (.not. present_groups(1)) then
             call set_error(err, trim(path)//": the required group &chain is missing")
             return
@@ -156,51 +210,6 @@ contains
             call set_error(err, trim(path)//": contains NUL bytes; not a text namelist file")
         end if
     end subroutine read_text
-
-    !> Which groups the text has; unknown and repeated groups are errors.
-    subroutine scan_groups(text, present_groups, err)
-        character(len=*), intent(in) :: text
-        logical, intent(out) :: present_groups(:)
-        type(error_t), allocatable, intent(out) :: err
-        integer :: pos, line_end, j, k, e
-        character(len=:), allocatable :: line, name
-
-        present_groups = .false.
-        pos = 1
-        do while (pos <= len(text))
-            line_end = index(text(pos:), achar(10))
-            if (line_end == 0) then
-                line_end = len(text) + 1
-            else
-                line_end = pos + line_end - 1
-            end if
-            line = adjustl(text(pos:line_end - 1))
-            pos = line_end + 1
-            if (len_trim(line) == 0) cycle
-            if (line(1:1) /= '&') cycle
-            e = scan(line(2:), ' /,'//achar(9)//achar(13))
-            if (e == 0) then
-                name = lower(trim(line(2:)))
-            else
-                name = lower(line(2:e))
-            end if
-            if (name == 'end' .or. len(name) == 0) cycle
-            k = 0
-            do j = 1, size(group_names)
-                if (trim(group_names(j)) == name) k = j
-            end do
-            if (k == 0) then
-                call set_error(err, "input: unknown group &"//name//"; allowed groups are "// &
-                               "&chain, &initial, &run, &lyapunov, &output, &sweep")
-                return
-            end if
-            if (present_groups(k)) then
-                call set_error(err, "input: group &"//name//" appears more than once")
-                return
-            end if
-            present_groups(k) = .true.
-        end do
-    end subroutine scan_groups
 
     !> Refuse numbers beyond double precision (such as 1e400) before the namelist reader
     !> meets them: converting one overflows, which is no way to report a typo.
@@ -854,19 +863,74 @@ contains
         text = text//" /"//new_line('a')
     end function sweep_group
 
-    !> A real in the fewest of 15 or 17 significant digits that read back to the same value.
+    !> A real in the fewest significant digits that read back to the same value: positional
+    !> for 1e-4 <= |x| < 1e15 (2.2, 0.05, 1000.0), else with an exponent (1e-09).
     pure function exact(x) result(text)
         real(wp), intent(in) :: x
         character(len=:), allocatable :: text
         character(len=40) :: buf
+        character(len=:), allocatable :: digits
         real(wp) :: back
-        integer :: ios
+        integer :: d, ios, e, point
 
-        write (buf, '(g0.15)') x
-        read (buf, *, iostat=ios) back
-        if (ios /= 0 .or. back /= x) write (buf, '(g0.17)') x
-        text = trim(adjustl(buf))
+        if (x == 0 .or. .not. ieee_is_finite(x)) then
+            write (buf, '(g0)') x
+            text = trim(adjustl(buf))
+            if (x == 0) text = merge('-0.0', ' 0.0', sign(1.0_wp, x) < 0)
+            text = trim(adjustl(text))
+            return
+        end if
+        do d = 1, 17
+            write (buf, '(es30.'//fmt_int(max(d - 1, 1))//'e4)') x
+            read (buf, *, iostat=ios) back
+            if (ios == 0 .and. back == x) exit
+        end do
+        buf = adjustl(buf)
+        e = index(buf, 'E')
+        read (buf(e + 1:), *) point
+        digits = buf(:e - 1)
+        if (abs(x) >= 1.0e-4_wp .and. abs(x) < 1.0e15_wp) then
+            text = positional(digits, point)
+        else
+            text = trim(strip_zeros(digits))//'e'//fmt_int(point)
+        end if
     end function exact
+
+    !> "d.ddd" (with sign) times 10**point, written without an exponent: 2.2, 0.05, 1000.0.
+    pure function positional(mantissa, point) result(text)
+        character(len=*), intent(in) :: mantissa
+        integer, intent(in) :: point
+        character(len=:), allocatable :: text, m, sign_text
+
+        sign_text = ''
+        m = mantissa
+        if (m(1:1) == '-') then
+            sign_text = '-'
+            m = m(2:)
+        end if
+        m = m(1:1)//m(3:)
+        do while (len(m) > 1 .and. m(len(m):len(m)) == '0')
+            m = m(:len(m) - 1)
+        end do
+        if (point < 0) then
+            text = sign_text//'0.'//repeat('0', -point - 1)//m
+        else if (len(m) <= point + 1) then
+            text = sign_text//m//repeat('0', point + 1 - len(m))//'.0'
+        else
+            text = sign_text//m(:point + 1)//'.'//m(point + 2:)
+        end if
+    end function positional
+
+    !> "d.dd000" -> "d.dd" (at least one digit after the point).
+    pure function strip_zeros(mantissa) result(text)
+        character(len=*), intent(in) :: mantissa
+        character(len=:), allocatable :: text
+
+        text = trim(mantissa)
+        do while (text(len(text):len(text)) == '0' .and. text(len(text) - 1:len(text) - 1) /= '.')
+            text = text(:len(text) - 1)
+        end do
+    end function strip_zeros
 
     pure function exact_list(values) result(text)
         real(wp), intent(in) :: values(:)

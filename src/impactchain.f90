@@ -10,7 +10,7 @@ module impactchain
     use chain_error, only: error_t, set_error
     use chain_model, only: model_t
     use chain_config, only: run_config_t, read_config, validate_config, fmt_real, fmt_int, &
-                            lyapunov_vectors, set_boundary
+                            lyapunov_vectors, set_boundary, config_summary
     use chain_engine, only: chain_t
     use chain_events, only: event_log_t
     use chain_run, only: record_sink_t, memory_sink_t, run_result_t, record_run, &
@@ -30,7 +30,7 @@ module impactchain
     private
     public :: wp, i8, pi, two_pi, error_t, set_error
     public :: run_config_t, read_config, validate_config, fmt_real, fmt_int, check_size
-    public :: lyapunov_vectors, model_t, set_boundary
+    public :: lyapunov_vectors, model_t, set_boundary, config_summary
     public :: chain_t, event_log_t
     public :: record_sink_t, memory_sink_t, run_result_t, record_run, progress_callback
     public :: poincare_jacobian, run_simulation, start_chain, initial_state, chain_on_section

@@ -11,7 +11,8 @@
 !> or the threaded driver) resumes without redoing finished points. When every point is done,
 !> rank 0 writes the one HDF5 file and deletes the checkpoint.
 !>
-!> Usage: mpirun -np 4 impactchain-mpi [--quiet] input.nml
+!> Usage: mpirun -np 4 impactchain-mpi [options] input.nml, with the options of impactchain
+!> (--set, -o, --overwrite, --check, --quiet).
 program impactchain_mpi
     use, intrinsic :: iso_fortran_env, only: error_unit, output_unit, int64
     use mpi_f08, only: MPI_Init_thread, MPI_Finalize, MPI_Comm_rank, MPI_Comm_size, MPI_Bcast, &
@@ -24,7 +25,7 @@ program impactchain_mpi
                            write_sweep_file, save_checkpoint, load_checkpoint, remove_file, &
                            checkpoint_every, branch_record_sizes, pack_branch, unpack_branch, &
                            output_t, output_begin, output_end, output_abort, catch_interrupts, &
-                           interrupted, cli_t, parse_command_line, cli_run
+                           interrupted, cli_t, parse_command_line, cli_run, config_summary
     implicit none
     type(run_config_t) :: cfg
     type(sweep_plan_t) :: plan
@@ -63,10 +64,11 @@ contains
         integer :: b
 
         cli = parse_command_line()
-        if (cli%action /= cli_run) call stop_all('usage: impactchain-mpi [--quiet] input.nml')
+        if (cli%action /= cli_run) call stop_all('usage: impactchain-mpi [options] input.nml '// &
+                                                  '(the options of impactchain --help)')
         input = cli%input
         quiet = cli%quiet
-        call read_config(input, cfg, err)
+        call read_config(input, cfg, err, cli%overrides)
         if (allocated(err)) call stop_all(err%message)
         if (.not. cfg%sweep) &
             call stop_all(input//': impactchain-mpi runs sweeps; add a &sweep group')
@@ -75,6 +77,11 @@ contains
         ! every point is checked before any work (every rank alike)
         call validate_sweep_points(cfg, plan, err)
         if (allocated(err)) call stop_all(err%message)
+        if (cli%check) then
+            if (rank == 0) write (output_unit, '(a)', advance='no') config_summary(cfg)
+            call MPI_Finalize()
+            stop
+        end if
         failed = 0
         if (rank == 0) then
             call output_begin(out, cfg%output_file, cfg%overwrite, err)

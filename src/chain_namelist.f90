@@ -1,0 +1,642 @@
+!> The text of a namelist input, read as a person wrote it: groups, keys and values with the
+!> line each is on. It checks an input against a schema (the groups, their keys and each key's
+!> type) before the compiler's namelist reader sees it, so that a mistake is reported as
+!> `file:line: &group: ...` with the valid keys and a "did you mean", and it applies command
+!> line overrides (`group.key=value`) to the text, so that the file's echo of the input is the
+!> input actually run. Infrastructure, no model section.
+!>
+!> The syntax understood is the namelist syntax of the inputs: `&group`, then `key = values`
+!> (values separated by commas or blanks, `r*value` repeats, quoted strings, `key(i)`
+!> subscripts), `!` comments, and `/` (or `&end`) closing the group. Text outside groups is
+!> ignored, as the compiler's reader ignores it.
+module chain_namelist
+    use chain_error, only: error_t, set_error, fmt_int
+    implicit none
+    private
+    public :: key_spec_t, key_integer, key_real, key_logical, key_string
+    public :: check_namelist, apply_override, schema_keys, groups_in
+
+    integer, parameter :: key_integer = 1
+    integer, parameter :: key_real = 2
+    integer, parameter :: key_logical = 3
+    integer, parameter :: key_string = 4
+    character(len=*), parameter :: type_names(4) = &
+        [character(len=16) :: 'an integer', 'a number', 'a logical', 'a string']
+
+    !> One key of the schema: its group, its name, its type and whether it takes a list.
+    type :: key_spec_t
+        character(len=16) :: group = ''
+        character(len=16) :: name = ''
+        integer :: kind = key_real
+        logical :: list = .false.
+    end type key_spec_t
+
+    !> One `key = values` of the text: where it starts and ends (character positions) and the
+    !> line it starts on.
+    type :: item_t
+        character(len=:), allocatable :: group, key, written
+        integer :: line = 0, first = 0, last = 0, n_values = 0
+        logical :: subscripted = .false.
+        integer, allocatable :: value_first(:), value_last(:) !! where each value token is
+    end type item_t
+
+    !> One group of the text: name, line, and the position of its closing `/` (0: none).
+    type :: group_t
+        character(len=:), allocatable :: name
+        integer :: line = 0, close = 0
+    end type group_t
+
+    type :: parsed_t
+        type(group_t), allocatable :: groups(:)
+        type(item_t), allocatable :: items(:)
+    end type parsed_t
+
+contains
+
+    !> Every group known, none twice, every one closed; every key of its group, with values of
+    !> its type (one value unless it takes a list). `source` names the text in messages.
+    subroutine check_namelist(source, text, schema, err)
+        character(len=*), intent(in) :: source, text
+        type(key_spec_t), intent(in) :: schema(:)
+        type(error_t), allocatable, intent(out) :: err
+        type(parsed_t) :: parsed
+        integer :: g, j
+
+        call parse(text, parsed)
+        do g = 1, size(parsed%groups)
+            associate (group => parsed%groups(g))
+                if (.not. any(schema%group == group%name)) then
+                    call set_error(err, at(source, group%line)//"unknown group &"// &
+                                   group%name//suggestion(group%name, group_names(schema), '&')// &
+                                   ". The groups are "//listed(group_names(schema), '&'))
+                    return
+                end if
+                do j = 1, g - 1
+                    if (parsed%groups(j)%name == group%name) then
+                        call set_error(err, at(source, group%line)//"group &"//group%name// &
+                                       " appears more than once (first at line "// &
+                                       fmt_int(parsed%groups(j)%line)//")")
+                        return
+                    end if
+                end do
+                if (group%close == 0) then
+                    call set_error(err, at(source, group%line)//"&"//group%name// &
+                                   ": the group has no closing '/'")
+                    return
+                end if
+            end associate
+        end do
+        do j = 1, size(parsed%items)
+            call check_item(at(source, parsed%items(j)%line)//"&"//parsed%items(j)%group// &
+                            ": ", text, parsed%items(j), schema, err)
+            if (allocated(err)) return
+        end do
+    end subroutine check_namelist
+
+    !> `where` starts the message (file:line: &group: ).
+    subroutine check_item(where, text, item, schema, err)
+        character(len=*), intent(in) :: where, text
+        type(item_t), intent(in) :: item
+        type(key_spec_t), intent(in) :: schema(:)
+        type(error_t), allocatable, intent(out) :: err
+        integer :: k, j
+        character(len=:), allocatable :: bad_value
+
+        k = find_key(schema, item%group, item%key)
+        if (k == 0) then
+            call set_error(err, where//unknown_key(schema, item%group, item%key))
+            return
+        end if
+        do j = size(item%value_first), 1, -1
+            if (.not. is_value_of(text(item%value_first(j):item%value_last(j)), &
+                                  schema(k)%kind)) &
+                bad_value = text(item%value_first(j):item%value_last(j))
+        end do
+        if (item%subscripted .and. .not. schema(k)%list) then
+            call set_error(err, where//item%written//": "//item%key//" takes one value, "// &
+                           "not a list")
+        else if (item%n_values == 0) then
+            call set_error(err, where//item%key//" = has no value; "//item%key//" takes "// &
+                           trim(type_names(schema(k)%kind)))
+        else if (allocated(bad_value)) then
+            call set_error(err, where//item%key//" = "//bad_value//" is not "// &
+                           trim(type_names(schema(k)%kind))//"; "//item%key//" takes "// &
+                           trim(type_names(schema(k)%kind)))
+        else if (item%n_values > 1 .and. .not. schema(k)%list) then
+            call set_error(err, where//item%key//" has "//fmt_int(item%n_values)// &
+                           " values; it takes one, "//trim(type_names(schema(k)%kind)))
+        end if
+    end subroutine check_item
+
+    !> `text` with `spec` (`group.key=value`) applied: every `key = ...` of that group is
+    !> removed and `key = value` is put at the end of the group (a new group at the end of the
+    !> text if there is none). A string value may be given without quotes.
+    subroutine apply_override(text, spec, schema, err)
+        character(len=:), allocatable, intent(inout) :: text
+        character(len=*), intent(in) :: spec
+        type(key_spec_t), intent(in) :: schema(:)
+        type(error_t), allocatable, intent(out) :: err
+        character(len=:), allocatable :: group, key, value, assignment
+        type(parsed_t) :: parsed
+        integer :: dot, eq, k, j, g
+
+        dot = index(spec, '.')
+        eq = index(spec, '=')
+        if (dot < 2 .or. eq < dot + 2) then
+            call set_error(err, "--set "//spec//": write it as group.key=value, "// &
+                           "e.g. chain.amplitude=2.2")
+            return
+        end if
+        group = lower(spec(:dot - 1))
+        key = lower(spec(dot + 1:eq - 1))
+        value = trim(adjustl(spec(eq + 1:)))
+        if (.not. any(schema%group == group)) then
+            call set_error(err, "--set "//spec//": unknown group &"//group// &
+                           suggestion(group, group_names(schema), '&')//". The groups are "// &
+                           listed(group_names(schema), '&'))
+            return
+        end if
+        k = find_key(schema, group, key)
+        if (k == 0) then
+            call set_error(err, "--set "//spec//": &"//group//": "// &
+                           unknown_key(schema, group, key))
+            return
+        end if
+        if (schema(k)%kind == key_string .and. scan(value, "'""") == 0) &
+            value = "'"//value//"'"
+        assignment = key//" = "//value
+        call parse(text, parsed)
+        do j = size(parsed%items), 1, -1
+            associate (item => parsed%items(j))
+                if (item%group == group .and. item%key == key) &
+                    text = text(:item%first - 1)//text(after_separator(text, item%last) + 1:)
+            end associate
+        end do
+        call parse(text, parsed)
+        g = 0
+        do j = 1, size(parsed%groups)
+            if (parsed%groups(j)%name == group .and. parsed%groups(j)%close > 0) g = j
+        end do
+        if (g == 0) then
+            text = text//new_line('a')//"&"//group//" "//assignment//" /"//new_line('a')
+        else
+            associate (close => parsed%groups(g)%close)
+                text = text(:close - 1)//" "//assignment//" "//text(close:)
+            end associate
+        end if
+        call parse("&"//group//" "//assignment//" /", parsed)
+        call check_item("--set "//spec//": &"//group//": ", "&"//group//" "//assignment// &
+                        " /", parsed%items(1), schema, err)
+    end subroutine apply_override
+
+    !> The end of the blanks and at most one comma after text(last:last): removing an item
+    !> with them leaves no empty value (which the reader would take as a null value).
+    pure integer function after_separator(text, last) result(end)
+        character(len=*), intent(in) :: text
+        integer, intent(in) :: last
+        logical :: comma
+
+        end = last
+        comma = .false.
+        do while (end < len(text))
+            select case (text(end + 1:end + 1))
+            case (' ', achar(9))
+            case (',')
+                if (comma) exit
+                comma = .true.
+            case default
+                exit
+            end select
+            end = end + 1
+        end do
+    end function after_separator
+
+    !> The names of the groups in `text`, in order (lower case).
+    function groups_in(text) result(names)
+        character(len=*), intent(in) :: text
+        character(len=16), allocatable :: names(:)
+        type(parsed_t) :: parsed
+        integer :: j
+
+        call parse(text, parsed)
+        allocate (names(size(parsed%groups)))
+        do j = 1, size(names)
+            names(j) = parsed%groups(j)%name
+        end do
+    end function groups_in
+
+    !> The keys of `group`, in schema order.
+    pure function schema_keys(schema, group) result(names)
+        type(key_spec_t), intent(in) :: schema(:)
+        character(len=*), intent(in) :: group
+        character(len=16), allocatable :: names(:)
+
+        names = pack(schema%name, schema%group == group)
+    end function schema_keys
+
+    ! ---- reading the text ----
+
+    !> Groups and items of `text`, with positions and lines.
+    pure subroutine parse(text, parsed)
+        character(len=*), intent(in) :: text
+        type(parsed_t), intent(out) :: parsed
+        integer :: pos, line
+
+        allocate (parsed%groups(0), parsed%items(0))
+        pos = 1
+        line = 1
+        do while (pos <= len(text))
+            if (text(pos:pos) == '&') then
+                call parse_group(text, pos, line, parsed)
+            else if (text(pos:pos) == '!') then
+                do while (pos < len(text))
+                    if (text(pos + 1:pos + 1) == new_line('a')) exit
+                    pos = pos + 1
+                end do
+                pos = pos + 1
+            else
+                if (text(pos:pos) == new_line('a')) line = line + 1
+                pos = pos + 1
+            end if
+        end do
+    end subroutine parse
+
+    !> The group starting at text(pos:pos) == '&'; pos and line move past its close.
+    pure subroutine parse_group(text, pos, line, parsed)
+        character(len=*), intent(in) :: text
+        integer, intent(inout) :: pos, line
+        type(parsed_t), intent(inout) :: parsed
+        type(group_t) :: group
+        type(item_t) :: item
+        integer :: first, last, token_line, next_first, next_last, next_line
+        logical :: in_item
+
+        first = pos + 1
+        last = pos
+        do while (last < len(text))
+            if (.not. is_name_char(text(last + 1:last + 1))) exit
+            last = last + 1
+        end do
+        group%name = lower(text(first:last))
+        group%line = line
+        pos = last + 1
+        if (group%name == 'end' .or. len(group%name) == 0) return
+        in_item = .false.
+        call next_token(text, pos, line, first, last, token_line)
+        do while (first > 0)
+            if (text(first:last) == '/' .or. lower(text(first:last)) == '&end') then
+                group%close = first
+                pos = last + 1
+                exit
+            else if (text(first:first) == '&') then
+                pos = first  ! the next group begins: this one is not closed
+                exit
+            end if
+            call next_token(text, pos, line, next_first, next_last, next_line)
+            if (next_first > 0 .and. text(next_first:next_last) == '=' .and. &
+                text(first:last) /= '=') then
+                if (in_item) parsed%items = [parsed%items, item]
+                call start_item(group%name, text(first:last), token_line, first, item)
+                in_item = .true.
+                call next_token(text, pos, line, next_first, next_last, next_line)
+            else if (in_item .and. text(first:last) /= '=') then
+                call add_value(text(first:last), first, last, item)
+            end if
+            first = next_first
+            last = next_last
+            token_line = next_line
+        end do
+        if (in_item) parsed%items = [parsed%items, item]
+        parsed%groups = [parsed%groups, group]
+    end subroutine parse_group
+
+    pure subroutine start_item(group, written, line, first, item)
+        character(len=*), intent(in) :: group, written
+        integer, intent(in) :: line, first
+        type(item_t), intent(out) :: item
+        integer :: paren
+
+        item%group = group
+        item%written = written
+        paren = index(written, '(')
+        item%subscripted = paren > 0
+        if (paren > 0) then
+            item%key = lower(written(:paren - 1))
+        else
+            item%key = lower(written)
+        end if
+        item%line = line
+        item%first = first
+        item%last = first + len(written) - 1
+        allocate (item%value_first(0), item%value_last(0))
+    end subroutine start_item
+
+    pure subroutine add_value(token, first, last, item)
+        character(len=*), intent(in) :: token
+        integer, intent(in) :: first, last
+        type(item_t), intent(inout) :: item
+
+        item%n_values = item%n_values + repeats(token)
+        item%last = last
+        item%value_first = [item%value_first, first]
+        item%value_last = [item%value_last, last]
+    end subroutine add_value
+
+    !> The next token from text(pos:): a quoted string, '=', '/', '&...', or a word (anything
+    !> else up to a blank, comma, '=', '/' or '!'); blanks, commas and comments are skipped.
+    !> first = 0 at the end of the text.
+    pure subroutine next_token(text, pos, line, first, last, token_line)
+        character(len=*), intent(in) :: text
+        integer, intent(inout) :: pos, line
+        integer, intent(out) :: first, last, token_line
+        character(len=1) :: c
+
+        first = 0
+        last = 0
+        do while (pos <= len(text))
+            c = text(pos:pos)
+            if (c == new_line('a')) line = line + 1
+            if (c == '!') then
+                do while (pos < len(text))
+                    if (text(pos + 1:pos + 1) == new_line('a')) exit
+                    pos = pos + 1
+                end do
+            else if (.not. is_separator(c)) then
+                exit
+            end if
+            pos = pos + 1
+        end do
+        if (pos > len(text)) return
+        first = pos
+        token_line = line
+        c = text(pos:pos)
+        if (c == "'" .or. c == '"') then
+            last = string_end(text, pos)
+        else if (c == '=' .or. c == '/') then
+            last = pos
+        else
+            last = pos
+            do while (last < len(text))
+                if (is_separator(text(last + 1:last + 1)) .or. &
+                    scan(text(last + 1:last + 1), "=/!'""") > 0) exit
+                last = last + 1
+            end do
+        end if
+        pos = last + 1
+    end subroutine next_token
+
+    !> Position of the quote closing the string opened at text(start:start) (a doubled quote
+    !> is part of the string); the end of the line if it is not closed.
+    pure integer function string_end(text, start) result(last)
+        character(len=*), intent(in) :: text
+        integer, intent(in) :: start
+        character(len=1) :: quote
+
+        quote = text(start:start)
+        last = start + 1
+        do while (last <= len(text))
+            if (text(last:last) == new_line('a')) exit
+            if (text(last:last) == quote) then
+                if (last == len(text)) return
+                if (text(last + 1:last + 1) /= quote) return
+                last = last + 1
+            end if
+            last = last + 1
+        end do
+        last = last - 1
+    end function string_end
+
+    ! ---- values ----
+
+    !> How many values a token stands for: `r*value` (or `r*`) is r, else 1.
+    pure integer function repeats(token)
+        character(len=*), intent(in) :: token
+        integer :: star, ios
+
+        repeats = 1
+        star = index(token, '*')
+        if (star < 2 .or. scan(token(1:1), "'""") > 0) return
+        if (verify(token(:star - 1), '0123456789') /= 0) return
+        read (token(:star - 1), *, iostat=ios) repeats
+        if (ios /= 0) repeats = 1
+    end function repeats
+
+    !> Is `token` (without its repeat count) a value of type `kind`?
+    pure logical function is_value_of(token, kind)
+        character(len=*), intent(in) :: token
+        integer, intent(in) :: kind
+        character(len=:), allocatable :: v
+        integer :: star
+
+        v = token
+        star = index(v, '*')
+        if (star > 1 .and. scan(v(1:1), "'""") == 0) then
+            if (verify(v(:star - 1), '0123456789') == 0) v = v(star + 1:)
+        end if
+        if (len(v) == 0) then
+            is_value_of = .true.
+            return
+        end if
+        select case (kind)
+        case (key_integer)
+            is_value_of = is_integer(v)
+        case (key_real)
+            is_value_of = is_number(v)
+        case (key_logical)
+            is_value_of = is_logical(v)
+        case default
+            is_value_of = .true.
+        end select
+    end function is_value_of
+
+    pure logical function is_integer(v)
+        character(len=*), intent(in) :: v
+        integer :: start
+
+        start = 1
+        if (scan(v(1:1), '+-') > 0) start = 2
+        is_integer = len(v) >= start .and. verify(v(start:), '0123456789') == 0
+    end function is_integer
+
+    !> A real literal: digits with at most one point, an optional exponent (e, E, d, D), or
+    !> NaN / Inf / Infinity, each with an optional sign.
+    pure logical function is_number(v)
+        character(len=*), intent(in) :: v
+        character(len=:), allocatable :: w
+        integer :: e, start
+
+        start = 1
+        if (scan(v(1:1), '+-') > 0) start = 2
+        is_number = .false.
+        if (len(v) < start) return
+        w = lower(v(start:))
+        if (w == 'nan' .or. w == 'inf' .or. w == 'infinity') then
+            is_number = .true.
+            return
+        end if
+        e = scan(w, 'ed')
+        if (e > 0) then
+            if (.not. is_integer(w(e + 1:))) return
+            w = w(:e - 1)
+        end if
+        is_number = len(w) > 0 .and. verify(w, '0123456789.') == 0 .and. &
+                    count_char(w, '.') <= 1 .and. verify(w, '.') /= 0
+    end function is_number
+
+    pure logical function is_logical(v)
+        character(len=*), intent(in) :: v
+        character(len=:), allocatable :: w
+
+        w = lower(v)
+        if (w(1:1) == '.') w = w(2:)
+        is_logical = .false.
+        if (len(w) == 0) return
+        is_logical = w(1:1) == 't' .or. w(1:1) == 'f'
+        if (len(w) > 1) is_logical = is_logical .and. &
+            (w == 'true' .or. w == 'false' .or. w == 'true.' .or. w == 'false.' .or. &
+             w == 't.' .or. w == 'f.')
+    end function is_logical
+
+    ! ---- messages ----
+
+    pure function at(source, line) result(text)
+        character(len=*), intent(in) :: source
+        integer, intent(in) :: line
+        character(len=:), allocatable :: text
+
+        text = source//":"//fmt_int(line)//": "
+    end function at
+
+    function unknown_key(schema, group, key) result(text)
+        type(key_spec_t), intent(in) :: schema(:)
+        character(len=*), intent(in) :: group, key
+        character(len=:), allocatable :: text
+        integer :: j
+
+        text = "unknown key '"//key//"'"//suggestion(key, schema_keys(schema, group), "'")
+        do j = 1, size(schema)
+            if (schema(j)%name == key .and. schema(j)%group /= group) then
+                text = text//" ('"//key//"' is a key of &"//trim(schema(j)%group)//")"
+                exit
+            end if
+        end do
+        text = text//". The keys of &"//group//" are "//listed(schema_keys(schema, group), '')
+    end function unknown_key
+
+    !> " (did you mean 'x'?)" (or &x) for the candidate nearest to `word` (at most two edits,
+    !> and fewer than half its letters), or nothing.
+    pure function suggestion(word, candidates, quote) result(text)
+        character(len=*), intent(in) :: word, quote
+        character(len=*), intent(in) :: candidates(:)
+        character(len=:), allocatable :: text
+        integer :: j, d, best, best_j
+
+        text = ''
+        best = huge(1)
+        best_j = 0
+        do j = 1, size(candidates)
+            d = edit_distance(word, trim(candidates(j)))
+            if (d < best) then
+                best = d
+                best_j = j
+            end if
+        end do
+        if (best_j == 0 .or. best > 2 .or. 2*best >= max(len(word), 2)) return
+        text = " (did you mean "//quote//trim(candidates(best_j))
+        if (quote == "'") text = text//quote
+        text = text//"?)"
+    end function suggestion
+
+    !> Edits (insert, delete, substitute, swap of neighbours) between a and b.
+    pure integer function edit_distance(a, b) result(d)
+        character(len=*), intent(in) :: a, b
+        integer :: table(0:len(a), 0:len(b)), i, j, cost
+
+        table(:, 0) = [(i, i=0, len(a))]
+        table(0, :) = [(j, j=0, len(b))]
+        do i = 1, len(a)
+            do j = 1, len(b)
+                cost = merge(0, 1, a(i:i) == b(j:j))
+                table(i, j) = min(table(i - 1, j) + 1, table(i, j - 1) + 1, &
+                                  table(i - 1, j - 1) + cost)
+                if (i > 1 .and. j > 1) then
+                    if (a(i:i) == b(j - 1:j - 1) .and. a(i - 1:i - 1) == b(j:j)) &
+                        table(i, j) = min(table(i, j), table(i - 2, j - 2) + 1)
+                end if
+            end do
+        end do
+        d = table(len(a), len(b))
+    end function edit_distance
+
+    pure function listed(names, prefix) result(text)
+        character(len=*), intent(in) :: names(:), prefix
+        character(len=:), allocatable :: text
+        integer :: j
+
+        text = ''
+        do j = 1, size(names)
+            if (j > 1) text = text//', '
+            text = text//prefix//trim(names(j))
+        end do
+    end function listed
+
+    !> The groups of the schema, each once, in order.
+    pure function group_names(schema) result(names)
+        type(key_spec_t), intent(in) :: schema(:)
+        character(len=16), allocatable :: names(:)
+        integer :: j
+
+        allocate (names(0))
+        do j = 1, size(schema)
+            if (.not. any(names == schema(j)%group)) names = [names, schema(j)%group]
+        end do
+    end function group_names
+
+    integer function find_key(schema, group, key) result(k)
+        type(key_spec_t), intent(in) :: schema(:)
+        character(len=*), intent(in) :: group, key
+        integer :: j
+
+        k = 0
+        do j = 1, size(schema)
+            if (schema(j)%group == group .and. schema(j)%name == key) k = j
+        end do
+    end function find_key
+
+    ! ---- characters ----
+
+    pure logical function is_separator(c)
+        character(len=1), intent(in) :: c
+        is_separator = c == ' ' .or. c == ',' .or. c == achar(9) .or. c == achar(13) .or. &
+                       c == new_line('a')
+    end function is_separator
+
+    pure logical function is_name_char(c)
+        character(len=1), intent(in) :: c
+        is_name_char = (c >= 'a' .and. c <= 'z') .or. (c >= 'A' .and. c <= 'Z') .or. &
+                       (c >= '0' .and. c <= '9') .or. c == '_'
+    end function is_name_char
+
+    pure integer function count_char(s, c)
+        character(len=*), intent(in) :: s
+        character(len=1), intent(in) :: c
+        integer :: j
+
+        count_char = 0
+        do j = 1, len(s)
+            if (s(j:j) == c) count_char = count_char + 1
+        end do
+    end function count_char
+
+    pure function lower(s) result(t)
+        character(len=*), intent(in) :: s
+        character(len=len(s)) :: t
+        integer :: j
+
+        t = s
+        do j = 1, len(s)
+            if (s(j:j) >= 'A' .and. s(j:j) <= 'Z') t(j:j) = achar(iachar(s(j:j)) + 32)
+        end do
+    end function lower
+
+end module chain_namelist

@@ -1,0 +1,133 @@
+"""Input mistakes reported so a person can act on them (file:line, the key, the valid keys, a
+"did you mean"), and the command line's overrides, output options and --check."""
+from __future__ import annotations
+
+import re
+import subprocess
+from pathlib import Path
+
+import h5py
+import numpy as np
+import pytest
+
+from simulator import ROOT, impactchain_exe, run_namelist  # noqa: F401 (fixture)
+
+GOOD = """&chain n = 4, amplitude = 1.7, omega = 1.5 /
+&initial kind = 'random', seed = 3, x_amp = 0.2, v_amp = 0.2 /
+&run transient = 5, cycles = 8 /
+&output file = 'run.h5' /
+"""
+
+MISTAKES = {
+    "misspelt key": ("&chain n = 4, omgea = 1.5, amplitude = 1 /",
+                     ["input.nml:1:", "&chain", "unknown key 'omgea'", "did you mean 'omega'",
+                      "n, spacing, damping, restitution, amplitude, omega, boundary"]),
+    "integer given a fraction": ("! a comment\n&chain\n  n = 4.5, omega = 1.5, amplitude = 1 /",
+                                 ["input.nml:3:", "n = 4.5 is not an integer"]),
+    "key of another group": ("&chain n = 4, omega = 1.5, amplitude = 1 /\n&run damping = 0.1 /",
+                             ["input.nml:2:", "&run", "'damping' is a key of &chain",
+                              "transient, cycles"]),
+    "logical": ("&chain n = 4, omega = 1.5, amplitude = 1 /\n&run record_events = yes /",
+                ["input.nml:2:", "record_events = yes is not a logical"]),
+    "number": ("&chain n = 4, omega = fast, amplitude = 1 /", ["omega = fast is not a number"]),
+    "unknown group": ("&chain n = 4, omega = 1.5, amplitude = 1 /\n\n&chian n = 3 /",
+                      ["input.nml:3:", "unknown group &chian", "did you mean &chain"]),
+    "repeated group": ("&chain n = 4, omega = 1.5, amplitude = 1 /\n&chain n = 3 /",
+                       ["input.nml:2:", "more than once (first at line 1)"]),
+    "two values": ("&chain n = 4, omega = 1.5 1.6, amplitude = 1 /",
+                   ["omega has 2 values; it takes one"]),
+    "unclosed group": ("&chain n = 4, omega = 1.5, amplitude = 1\n", ["input.nml:1:",
+                                                                      "no closing '/'"]),
+}
+
+
+@pytest.mark.parametrize("case", sorted(MISTAKES))
+def test_mistake_is_reported_where_and_how(impactchain_exe, tmp_path, case):
+    text, needles = MISTAKES[case]
+    result = run_namelist(impactchain_exe, text + "\n&output file = 'bad.h5' /\n", tmp_path,
+                          check=False)
+    assert result.returncode == 1
+    for needle in needles:
+        assert needle in result.stderr, result.stderr
+    assert "Cannot match" not in result.stderr      # never the compiler's own words
+    assert not list(tmp_path.glob("*.h5*"))
+
+
+def test_schema_lists_exactly_the_namelist_keys():
+    """chain_config's table of keys and types is the namelist statements' keys, group by
+    group (a key added in one place and not the other fails here)."""
+    source = (ROOT / "src" / "chain_config.f90").read_text()
+    statements = {}
+    for match in re.finditer(r"namelist /(\w+)/((?:[^\n]*&\s*\n)*[^\n]*)", source):
+        names = re.sub(r"&\s*\n", " ", match.group(2)).replace(",", " ").split()
+        statements[match.group(1)] = names
+    schema = {}
+    for group, key in re.findall(r"key_spec_t\('(\w+)', '(\w+)'", source):
+        schema.setdefault(group, []).append(key)
+    assert set(statements) == {"chain", "initial", "run", "lyapunov", "output", "sweep"}
+    assert statements == schema
+
+
+def run(exe, args, cwd, check=True):
+    result = subprocess.run([str(exe), "--quiet", *args], cwd=cwd, capture_output=True,
+                            text=True, timeout=120)
+    if check:
+        assert result.returncode == 0, result.stderr
+    return result
+
+
+def test_set_overrides_keys_and_the_echo_shows_them(impactchain_exe, tmp_path):
+    (tmp_path / "in.nml").write_text(GOOD)
+    run(impactchain_exe, ["--set", "chain.amplitude=2.2", "--set", "run.cycles=12",
+                          "--set", "chain.spacing=1,1,0.8,1,1", "in.nml"], tmp_path)
+    with h5py.File(tmp_path / "run.h5") as f:
+        assert f["strobe/x"].shape == (12, 4)
+        assert float(np.ravel(f["params"].attrs["amplitude"])[0]) == 2.2
+        np.testing.assert_array_equal(f["params/spacing"][()], [1, 1, 0.8, 1, 1])
+        text = f.attrs["input_namelist"]
+        text = text.decode() if isinstance(text, bytes) else str(text)
+    assert "amplitude = 2.2" in text and "amplitude = 1.7" not in text
+
+
+def test_output_option_and_overwrite_protection(impactchain_exe, tmp_path):
+    (tmp_path / "in.nml").write_text(GOOD)
+    run(impactchain_exe, ["-o", "other.h5", "in.nml"], tmp_path)
+    assert h5py.is_hdf5(tmp_path / "other.h5") and not (tmp_path / "run.h5").exists()
+    refused = run(impactchain_exe, ["--output", "other.h5", "in.nml"], tmp_path, check=False)
+    assert refused.returncode == 1 and "exists" in refused.stderr
+    before = (tmp_path / "other.h5").read_bytes()
+    run(impactchain_exe, ["-o", "other.h5", "--overwrite", "--set", "run.cycles=9",
+                          "in.nml"], tmp_path)
+    assert (tmp_path / "other.h5").read_bytes() != before
+    with h5py.File(tmp_path / "other.h5") as f:
+        assert f["strobe/x"].shape == (9, 4)
+
+
+def test_check_validates_prints_resolved_and_runs_nothing(impactchain_exe, tmp_path):
+    (tmp_path / "in.nml").write_text(GOOD)
+    result = run(impactchain_exe, ["--check", "--set", "chain.damping=0.1", "in.nml"],
+                 tmp_path)
+    assert not list(tmp_path.glob("*.h5*"))
+    assert "damping = 0.1," in result.stdout and "&lyapunov" in result.stdout
+    (tmp_path / "resolved.nml").write_text(result.stdout)
+    again = run(impactchain_exe, ["--check", "resolved.nml"], tmp_path)
+    assert again.stdout == result.stdout            # the resolved input is a fixed point
+    bad = run(impactchain_exe, ["--check", "--set", "chain.damping=1.5", "in.nml"], tmp_path,
+              check=False)
+    assert bad.returncode == 1 and "damping" in bad.stderr and not bad.stdout
+
+
+@pytest.mark.parametrize("args, needle", [
+    (["--set", "chain.amplitud=3"], "did you mean 'amplitude'"),
+    (["--set", "chain.n=4.5"], "n = 4.5 is not an integer"),
+    (["--set", "chain"], "group.key=value"),
+    (["--set", "chian.n=3"], "did you mean &chain"),
+    (["-o"], "needs a value"),
+])
+def test_bad_override_is_refused(impactchain_exe, tmp_path, args, needle):
+    (tmp_path / "in.nml").write_text(GOOD)
+    result = run(impactchain_exe, [*args, "in.nml"] if args != ["-o"] else args, tmp_path,
+                 check=False)
+    assert result.returncode == 1
+    assert needle in result.stderr, result.stderr
+    assert not list(tmp_path.glob("*.h5*"))
