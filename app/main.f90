@@ -9,17 +9,16 @@ program main
                            run_result_t, run_sweep, sweep_summary_t, checkpoint_path, &
                            catch_interrupts, interrupted, cli_t, parse_command_line, cli_run, &
                            cli_help, cli_version, cli_usage, code_version, config_summary, &
-                           plan_sweep, validate_sweep_points
+                           plan_sweep, validate_sweep_points, progress_t, &
+                           progress_start, progress_update, stderr_is_terminal
     implicit none
     type(run_config_t) :: cfg
     type(run_result_t) :: summary
     type(sweep_summary_t) :: sweep_summary
-    character(len=:), allocatable :: unit_label
     type(error_t), allocatable :: err
     type(cli_t) :: cli
     logical :: quiet
-    integer(int64) :: clock_start, clock_last, clock_rate
-    integer(i8) :: done_at_start = -1 !! records already done when this command started
+    type(progress_t) :: shown
 
     cli = parse_command_line()
     select case (cli%action)
@@ -45,18 +44,18 @@ program main
         write (output_unit, '(a)', advance='no') config_summary(cfg)
         stop
     end if
-    call system_clock(clock_start, clock_rate)
-    clock_last = clock_start
     call catch_interrupts()
     if (cfg%sweep) then
-        unit_label = 'point'
+        shown = progress_start('point', stderr_is_terminal(), seconds())
         call run_sweep(cfg, sweep_summary, err, progress)
+        call close_progress()
         if (allocated(err)) call fail(err%message)
         call report_sweep(sweep_summary, cfg%output_file, checkpoint_path(cfg))
         if (.not. sweep_summary%complete) stop 3, quiet=.true.
     else
-        unit_label = 'cycle'
+        shown = progress_start('cycle', stderr_is_terminal(), seconds())
         call run_simulation(cfg, summary, err, progress)
+        call close_progress()
         if (allocated(err)) call fail(err%message)
         call report(summary, cfg%output_file)
         if (.not. summary%complete) stop 3, quiet=.true.
@@ -82,27 +81,32 @@ contains
             '  --version              the code version'
     end subroutine usage
 
-    !> Progress on stderr at most once a second, after the first two seconds.
+    !> Progress on stderr (chain_progress decides when and how); .false. after a signal.
     function progress(done, total) result(keep_going)
         integer(i8), intent(in) :: done, total
         logical :: keep_going
-        integer(int64) :: now
-        real(wp) :: elapsed, rate
+        character(len=:), allocatable :: text
 
         keep_going = .not. interrupted()
-        if (done_at_start < 0) done_at_start = done - 1
         if (quiet) return
-        call system_clock(now)
-        if (now - clock_last < clock_rate .and. done < total) return
-        elapsed = real(now - clock_start, wp)/clock_rate
-        if (elapsed < 2 .and. done < total) return
-        if (elapsed < 2) return
-        clock_last = now
-        rate = (done - done_at_start)/max(elapsed, 1.0e-9_wp)
-        write (error_unit, '(a,i0,a,i0,a,es9.2,a,f9.1,a)') 'impactchain: '//unit_label//' ', &
-            done, ' / ', total, ', ', rate, ' '//unit_label//'s/s, ', &
-            (total - done)/max(rate, 1.0e-9_wp), ' s left'
+        call progress_update(shown, done, total, seconds(), text)
+        if (len(text) > 0) write (error_unit, '(a)', advance='no') text
+        flush (error_unit)
     end function progress
+
+    !> Seconds since an arbitrary start.
+    real(wp) function seconds()
+        integer(int64) :: now, rate
+
+        call system_clock(now, rate)
+        seconds = real(now, wp)/rate
+    end function seconds
+
+    !> A progress line left open on a terminal gets its newline before anything else is said.
+    subroutine close_progress()
+        if (shown%line_open) write (error_unit, '(a)') ''
+        shown%line_open = .false.
+    end subroutine close_progress
 
     subroutine report(summary, output_file)
         type(run_result_t), intent(in) :: summary

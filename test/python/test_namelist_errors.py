@@ -131,3 +131,56 @@ def test_bad_override_is_refused(impactchain_exe, tmp_path, args, needle):
     assert result.returncode == 1
     assert needle in result.stderr, result.stderr
     assert not list(tmp_path.glob("*.h5*"))
+
+
+LONG_RUN = """&chain n = 64, amplitude = 3.5, omega = 1.9 /
+&initial kind = 'random', seed = 2, x_amp = 0.3, v_amp = 0.3 /
+&run cycles = 300000, record_events = .false. /
+&output file = 'long.h5' /
+"""
+
+
+def progress_lines(stream: str) -> list[str]:
+    return [line for line in stream.replace("\r", "\n").splitlines() if "impactchain: cycle" in line]
+
+
+def test_progress_on_a_log_is_a_line_per_tenth(impactchain_exe, tmp_path):
+    """stderr not a terminal: a line at each tenth of the run (or each minute), no carriage
+    returns; the run is long enough (several seconds) to pass the two quiet seconds."""
+    (tmp_path / "long.nml").write_text(LONG_RUN)
+    result = subprocess.run([str(impactchain_exe), "long.nml"], cwd=tmp_path,
+                            capture_output=True, text=True, timeout=300)
+    assert result.returncode == 0, result.stderr
+    assert "\r" not in result.stderr
+    lines = progress_lines(result.stderr)
+    assert 1 <= len(lines) <= 11, result.stderr
+    assert lines[-1].startswith("impactchain: cycle 300000 / 300000 (100.0 %)")
+    percents = [float(re.search(r"\(([\d.]+) %\)", line).group(1)) for line in lines]
+    assert all(b // 10 > a // 10 for a, b in zip(percents, percents[1:]))  # a new tenth each
+
+
+def test_progress_on_a_terminal_is_one_updating_line(impactchain_exe, tmp_path):
+    """stderr a terminal (a pseudo-terminal here): one line rewritten in place with carriage
+    returns, a single newline at the end."""
+    import os
+    import pty
+
+    (tmp_path / "long.nml").write_text(LONG_RUN)
+    leader, follower = pty.openpty()
+    proc = subprocess.Popen([str(impactchain_exe), "long.nml"], cwd=tmp_path,
+                            stdout=subprocess.DEVNULL, stderr=follower)
+    os.close(follower)
+    chunks = []
+    while True:
+        try:
+            chunk = os.read(leader, 4096)
+        except OSError:
+            break
+        if not chunk:
+            break
+        chunks.append(chunk)
+    assert proc.wait(timeout=300) == 0
+    os.close(leader)
+    shown = b"".join(chunks).decode()
+    assert shown.count("\r") >= 2 and shown.count("\n") == 1, repr(shown[:400])
+    assert progress_lines(shown)[-1].startswith("impactchain: cycle 300000 / 300000")

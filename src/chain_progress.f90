@@ -1,0 +1,114 @@
+!> When and how a long run shows its progress: one line that updates in place on a terminal
+!> (at most four times a second), and on a log file or pipe a line at every tenth of the work
+!> or every minute, whichever comes first. Nothing is shown in a run's first two seconds. The
+!> library only decides and formats; the programs write. Infrastructure, no model section.
+module chain_progress
+    use, intrinsic :: iso_c_binding, only: c_int
+    use chain_kinds, only: wp, i8
+    use chain_error, only: fmt_int8
+    implicit none
+    private
+    public :: progress_t, progress_start, progress_update, stderr_is_terminal
+
+    real(wp), parameter :: quiet_start = 2       !! seconds before anything is shown
+    real(wp), parameter :: terminal_every = 0.25_wp
+    real(wp), parameter :: log_every = 60
+
+    type :: progress_t
+        logical :: terminal = .false.        !! update one line in place
+        character(len=:), allocatable :: label !! what is counted: 'cycle', 'point'
+        real(wp) :: start = 0, last = -huge(1.0_wp) !! seconds: start, last line shown
+        integer(i8) :: done_at_start = -1    !! work already done when the count started
+        integer :: tenths_shown = 0          !! (log) tenths of the work reported
+        logical :: line_open = .false.       !! (terminal) a line without its newline
+    end type progress_t
+
+    interface
+        function c_isatty(fd) bind(C, name='isatty') result(yes)
+            import :: c_int
+            integer(c_int), value :: fd
+            integer(c_int) :: yes
+        end function c_isatty
+    end interface
+
+contains
+
+    !> Is standard error a terminal?
+    logical function stderr_is_terminal()
+        stderr_is_terminal = c_isatty(2_c_int) == 1
+    end function stderr_is_terminal
+
+    pure function progress_start(label, terminal, now) result(p)
+        character(len=*), intent(in) :: label
+        logical, intent(in) :: terminal
+        real(wp), intent(in) :: now !! seconds on any clock
+        type(progress_t) :: p
+
+        p%label = label
+        p%terminal = terminal
+        p%start = now
+    end function progress_start
+
+    !> After `done` of `total` at time `now`: `text` is what to write now ('' for nothing);
+    !> on a terminal it starts with a carriage return and has no newline (`p%line_open`), and
+    !> the last update (done == total) ends with one.
+    pure subroutine progress_update(p, done, total, now, text)
+        type(progress_t), intent(inout) :: p
+        integer(i8), intent(in) :: done, total
+        real(wp), intent(in) :: now
+        character(len=:), allocatable, intent(out) :: text
+        real(wp) :: elapsed
+        integer :: tenths
+        logical :: show
+
+        text = ''
+        if (p%done_at_start < 0) p%done_at_start = done - 1
+        elapsed = now - p%start
+        if (elapsed < quiet_start) return
+        tenths = int((10*done)/max(total, 1_i8))
+        if (p%terminal) then
+            show = now - p%last >= terminal_every .or. done == total
+        else
+            show = tenths > p%tenths_shown .or. now - p%last >= log_every .or. done == total
+        end if
+        if (.not. show) return
+        p%last = now
+        p%tenths_shown = tenths
+        text = progress_text(p, done, total, elapsed)
+        if (p%terminal) then
+            text = achar(13)//text
+            p%line_open = done < total
+            if (done == total) text = text//new_line('a')
+        else
+            text = text//new_line('a')
+        end if
+    end subroutine progress_update
+
+    pure function progress_text(p, done, total, elapsed) result(text)
+        type(progress_t), intent(in) :: p
+        integer(i8), intent(in) :: done, total
+        real(wp), intent(in) :: elapsed
+        character(len=:), allocatable :: text
+        real(wp) :: rate
+
+        rate = (done - p%done_at_start)/max(elapsed, 1.0e-9_wp)
+        text = 'impactchain: '//p%label//' '//fmt_int8(done)//' / '//fmt_int8(total)//' ('// &
+               formatted('(f0.1)', 100*real(done, wp)/max(total, 1_i8))//' %), '// &
+               formatted('(es9.2)', rate)//' '//p%label//'s/s, '// &
+               formatted('(f0.1)', (total - done)/max(rate, 1.0e-9_wp))//' s left'
+        if (p%terminal) text = text//'    ' ! blanks over the end of a longer last line
+    end function progress_text
+
+    !> `value` in `format`, without blanks around.
+    pure function formatted(format, value) result(text)
+        character(len=*), intent(in) :: format
+        real(wp), intent(in) :: value
+        character(len=:), allocatable :: text
+        character(len=40) :: buf
+
+        write (buf, format) value
+        text = trim(adjustl(buf))
+        if (text(1:1) == '.') text = '0'//text
+    end function formatted
+
+end module chain_progress
