@@ -18,7 +18,7 @@ PY_STAMP := $(VENV)/.requirements-installed
 DEFAULT_RUN := runs/default.h5
 
 .PHONY: all setup system-deps python-deps build run test fortran-test python-test mpi \
-        figures bench recipe-checksums clean help
+        figures bench recipe-checksums api-docs clean help
 
 all: build
 
@@ -28,6 +28,7 @@ help:
 	@echo "make figures  regenerate every figure of the paper into figures/"
 	@echo "make bench    build with the release profile and run the benchmark table"
 	@echo "make recipe-checksums  rewrite test/recipes/checksums.json (results meant to change)"
+	@echo "make api-docs the API reference (Fortran and Python) into docs/api/"
 
 setup: system-deps python-deps
 
@@ -92,6 +93,14 @@ bench: build
 # only when a change is meant to alter results, and commit the manifest with that change.
 recipe-checksums: build
 	$(PY) test/recipes/recipe_checksums.py compute --jobs $$(nproc)
+
+# The API reference, generated from the documentation comments: FORD for the Fortran
+# library (docs/ford.md), pdoc for the Python package; into docs/api/ (not kept in git).
+api-docs: build
+	$(PY) -m pip install --quiet ford pdoc
+	$(VENV)/bin/ford --quiet docs/ford.md
+	PDOC_ALLOW_EXEC=1 $(VENV)/bin/pdoc post -o docs/api/python
+	@echo "impactchain: API reference in docs/api/fortran/index.html and docs/api/python/index.html"
 
 clean:
 	rm -rf build runs/*.h5 runs/*.png post/_kernels*
