@@ -168,9 +168,9 @@ contains
                 call h5_create_growing(f, 'strobe/cycle', h5_int8, dims(2:2), 'drive cycles', &
                                        err)
             end if
-            call h5_write_slab(f, 'strobe/x', offset, x, .false., err)
-            call h5_write_slab(f, 'strobe/v', offset, v, .false., err)
-            call h5_write_slab(f, 'strobe/cycle', offset(2:2), cycle, .false., err)
+            call h5_write_slab(f, 'strobe/x', offset, x, grow=.false., err=err)
+            call h5_write_slab(f, 'strobe/v', offset, v, grow=.false., err=err)
+            call h5_write_slab(f, 'strobe/cycle', offset(2:2), cycle, grow=.false., err=err)
         end associate
     end subroutine output_strobe_write
 
@@ -198,10 +198,10 @@ contains
             end if
             if (size(time) == 0) return
             offset = [out%n_events]
-            call h5_write_slab(f, 'events/time', offset, time, .true., err)
-            call h5_write_slab(f, 'events/site', offset, site, .true., err)
-            call h5_write_slab(f, 'events/speed', offset, speed, .true., err)
-            call h5_write_slab(f, 'events/kind', offset, kind, .true., err)
+            call h5_write_slab(f, 'events/time', offset, time, grow=.true., err=err)
+            call h5_write_slab(f, 'events/site', offset, site, grow=.true., err=err)
+            call h5_write_slab(f, 'events/speed', offset, speed, grow=.true., err=err)
+            call h5_write_slab(f, 'events/kind', offset, kind, grow=.true., err=err)
         end associate
         if (.not. allocated(err)) out%n_events = out%n_events + size(time)
     end subroutine output_events_append
@@ -476,7 +476,7 @@ contains
         out%n = n
         call copy_file(path, out%part_path, err)
         if (allocated(err)) return
-        call h5_open_file(out%file, out%part_path, .true., err)
+        call h5_open_file(out%file, out%part_path, writable=.true., err=err)
         do j = 1, size(results)
             call h5_exists(out%file, trim(results(j)), exists, err)
             if (exists) call h5_delete(out%file, trim(results(j)), err)
@@ -572,7 +572,7 @@ contains
             call set_error(err, where//": file = '"//path//"' is not an HDF5 file")
             return
         end if
-        call h5_open_file(src, path, .false., err)
+        call h5_open_file(src, path, writable=.false., err=err)
         if (allocated(err)) err%message = where//": "//err%message// &
                                           "; the file is damaged or truncated"
     end subroutine open_for_reading
