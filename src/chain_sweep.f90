@@ -28,11 +28,9 @@ module chain_sweep
     use chain_config, only: run_config_t, validate_config, lyapunov_vectors
     use chain_run, only: memory_sink_t, run_result_t, record_run, check_size
     use chain_sim, only: start_chain, write_run_header
-    use chain_output, only: output_t, output_begin, output_group, &
-                            output_sweep_write, output_sweep_attributes, output_end, output_abort, &
-                            output_sweep_write_int
+    use chain_output, only: output_t, output_begin, output_group, output_end, output_abort
+    use chain_hdf5, only: h5_write, h5_write_attr
     use chain_files, only: rename_file, remove_file, close_checked
-    use hdf5, only: hsize_t
     implicit none
     private
     public :: sweep_plan_t, sweep_result_t, plan_sweep, sweep_point_config, run_branch
@@ -428,47 +426,38 @@ contains
         path = cfg%output_file//'.ckpt'
     end function checkpoint_path
 
-    !> Header of a normal run (for the sweep's starting configuration) and the /sweep group.
+    !> Header of a normal run (for the sweep's starting configuration) and the /sweep group:
+    !> the swept parameters and the mode as attributes, then per point (h5py shows the point
+    !> index first) the parameter values, the records, the periods and any exponents.
     subroutine write_sweep_file(out, cfg, plan, res, err)
         type(output_t), intent(inout) :: out
         type(run_config_t), intent(in) :: cfg
         type(sweep_plan_t), intent(in) :: plan
         type(sweep_result_t), intent(in) :: res
         type(error_t), allocatable, intent(out) :: err
-        integer(hsize_t) :: np, n, cycles, k
 
         call write_run_header(out, cfg, err)
         if (allocated(err)) return
         call output_group(out, 'sweep', err)
         if (allocated(err)) return
-        call output_sweep_attributes(out, cfg%sweep_parameter, cfg%sweep_parameter2, &
-                                     cfg%sweep_mode, err)
-        if (allocated(err)) return
-        np = plan%n_points
-        n = cfg%model%n
-        cycles = cfg%cycles
-        k = plan%k
-        if (plan%n_axes == 1) then
-            call output_sweep_write(out, 'sweep/values', res%values, [np], 'parameter', err)
-        else
-            call output_sweep_write(out, 'sweep/values', res%values, [2_hsize_t, np], &
-                                    'parameter', err)
-        end if
-        if (.not. allocated(err)) call output_sweep_write(out, 'sweep/x', res%x, &
-                                                          [n, cycles, np], 'length', err)
-        if (.not. allocated(err)) call output_sweep_write(out, 'sweep/collisions_per_cycle', &
-                                                          res%collisions, [np], &
-                                                          'impacts per drive cycle', err)
-        if (.not. allocated(err)) call output_sweep_write_int(out, 'sweep/period', res%period, &
-                                                              [n, np], &
-                                                              'drive cycles (0 = aperiodic)', err)
-        if (allocated(err) .or. k == 0) return
-        call output_sweep_write(out, 'sweep/exponents', res%exponents, [k, np], &
-                                'bits per drive cycle', err)
-        if (.not. allocated(err)) call output_sweep_write(out, 'sweep/stderr', res%stderr, &
-                                                          [k, np], 'bits per drive cycle', err)
-        if (.not. allocated(err)) call output_sweep_write(out, 'sweep/ky_dimension', res%ky, &
-                                                          [np], '1', err)
+        associate (f => out%file)
+            call h5_write_attr(f, 'sweep', 'parameter', cfg%sweep_parameter, err)
+            call h5_write_attr(f, 'sweep', 'parameter2', cfg%sweep_parameter2//' ', err)
+            call h5_write_attr(f, 'sweep', 'mode', cfg%sweep_mode, err)
+            if (plan%n_axes == 1) then
+                call h5_write(f, 'sweep/values', res%values(1, :), 'parameter', err)
+            else
+                call h5_write(f, 'sweep/values', res%values, 'parameter', err)
+            end if
+            call h5_write(f, 'sweep/x', res%x, 'length', err)
+            call h5_write(f, 'sweep/collisions_per_cycle', res%collisions, &
+                          'impacts per drive cycle', err)
+            call h5_write(f, 'sweep/period', res%period, 'drive cycles (0 = aperiodic)', err)
+            if (plan%k == 0) return
+            call h5_write(f, 'sweep/exponents', res%exponents, 'bits per drive cycle', err)
+            call h5_write(f, 'sweep/stderr', res%stderr, 'bits per drive cycle', err)
+            call h5_write(f, 'sweep/ky_dimension', res%ky, '1', err)
+        end associate
     end subroutine write_sweep_file
 
     !> Finished points and where each branch resumes, written atomically (tmp + rename): a

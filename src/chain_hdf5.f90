@@ -1,0 +1,969 @@
+!> The HDF5 library behind one small interface, the only module with `use hdf5`: files (create,
+!> open, close), groups and links, attributes, whole datasets of reals and integers, chunked
+!> datasets that grow or shrink along their last axis, and hyperslab transfers. It knows
+!> nothing of impactchain's file layout (chain_output, chain_sweep say what goes where).
+!>
+!> A file is an `h5_file_t`: its HDF5 id (kept private here) and its path, which every error
+!> message names. Element types are `h5_real` (real(wp), the native double in the file),
+!> `h5_int` (default integer, the native integer) and `h5_int8` (integer(i8), 64-bit
+!> little-endian). Fortran arrays x(n, m) appear in h5py as (m, n).
+!>
+!> Errors: every procedure takes `err` intent(inout), does nothing when it is already set, and
+!> sets it on a failure; so a sequence of calls needs one test at its end, and the first
+!> failure is the one reported. Every HDF5 status code goes through one funnel, `check`, which
+!> turns a failure into "hdf5: <call> failed on <object> (file <path>)". Every id opened is
+!> closed on the way out, after a failure too (`h5_close_file` closes even then).
+!> Infrastructure, no model section.
+module chain_hdf5
+    use, intrinsic :: iso_c_binding, only: c_null_char, c_ptr, c_loc
+    use hdf5, only: hid_t, hsize_t, size_t, h5open_f, h5eset_auto_f, &
+                    h5fcreate_f, h5fopen_f, h5fclose_f, h5fis_hdf5_f, &
+                    H5F_ACC_TRUNC_F, H5F_ACC_RDWR_F, H5F_ACC_RDONLY_F, &
+                    h5lexists_f, h5ldelete_f, h5gcreate_f, h5gclose_f, &
+                    h5screate_f, h5screate_simple_f, h5sclose_f, h5sselect_hyperslab_f, &
+                    h5sget_simple_extent_ndims_f, h5sget_simple_extent_dims_f, &
+                    h5sget_simple_extent_npoints_f, H5S_SCALAR_F, H5S_UNLIMITED_F, &
+                    H5S_SELECT_SET_F, h5dcreate_f, h5dopen_f, h5dclose_f, h5dwrite_f, &
+                    h5dread_f, h5dset_extent_f, h5dget_space_f, &
+                    h5pcreate_f, h5pset_chunk_f, h5pclose_f, H5P_DATASET_CREATE_F, &
+                    h5acreate_by_name_f, h5aopen_by_name_f, h5awrite_f, h5aread_f, &
+                    h5aget_space_f, h5aclose_f, &
+                    H5T_NATIVE_DOUBLE, H5T_NATIVE_INTEGER, H5T_STD_I64LE, H5T_STRING_F, &
+                    h5kind_to_type, H5_INTEGER_KIND
+    use h5lt, only: h5ltset_attribute_string_f, h5ltset_attribute_int_f, &
+                    h5ltset_attribute_double_f, h5ltget_attribute_info_f, &
+                    h5ltget_attribute_string_f
+    use chain_kinds, only: wp, i8
+    use chain_error, only: error_t, set_error, fmt_int8
+    implicit none
+    private
+    public :: h5_file_t, h5_real, h5_int, h5_int8
+    public :: h5_create_file, h5_open_file, h5_close_file, h5_is_hdf5_file
+    public :: h5_create_group, h5_exists, h5_delete
+    public :: h5_write_attr, h5_read_attr
+    public :: h5_write, h5_read, h5_read_alloc, h5_extent
+    public :: h5_create_growing, h5_create_appendable, h5_set_extent
+    public :: h5_write_slab, h5_read_slab
+
+    !> An HDF5 file, open (id >= 0) or not.
+    type :: h5_file_t
+        private
+        integer(hid_t) :: id = -1
+        character(len=:), allocatable :: path  !! the name in messages
+    end type h5_file_t
+
+    !> Element types of datasets created empty (h5_create_growing, h5_create_appendable).
+    integer, parameter :: h5_real = 1   !! real(wp), stored as the native double
+    integer, parameter :: h5_int = 2    !! default integer, stored as the native integer
+    integer, parameter :: h5_int8 = 3   !! integer(i8), stored as 64-bit little-endian
+
+    !> Attribute `name` of object `obj` ('/' for the root, 'params' for /params), one value.
+    interface h5_write_attr
+        module procedure write_attr_string, write_attr_int, write_attr_int8, write_attr_real
+    end interface h5_write_attr
+
+    interface h5_read_attr
+        module procedure read_attr_string, read_attr_int8, read_attr_real
+    end interface h5_read_attr
+
+    !> A new dataset holding `values` (a scalar: a dataset without axes), with its `units`.
+    interface h5_write
+        module procedure write_real_1d, write_real_2d, write_real_3d, write_int_1d, &
+            write_int_2d, write_int8_0d, write_int8_1d
+    end interface h5_write
+
+    !> A dataset read into `values`, whose extents it must have (a scalar: one value).
+    interface h5_read
+        module procedure read_real_0d, read_real_1d, read_int_1d, read_int8_0d, read_int8_1d
+    end interface h5_read
+
+    !> A dataset of the rank of `values`, allocated to its extents and read.
+    interface h5_read_alloc
+        module procedure read_alloc_real_1d, read_alloc_real_2d, read_alloc_int8_1d
+    end interface h5_read_alloc
+
+    !> `values` written at `offset` into a dataset, first grown to hold them when `grow`.
+    interface h5_write_slab
+        module procedure write_slab_real_1d, write_slab_real_2d, write_slab_int_1d, &
+            write_slab_int8_1d
+    end interface h5_write_slab
+
+    !> `values` read from a dataset at `offset`.
+    interface h5_read_slab
+        module procedure read_slab_real_2d
+    end interface h5_read_slab
+
+contains
+
+    ! ---- the funnel, the library, files ---------------------------------------------------
+
+    !> The funnel for every HDF5 status code. A negative `status` becomes an error naming the
+    !> call, the object (`/group/dataset`, or an attribute of one) and the file; an error that
+    !> is already set is kept, because it is the first failure, the one to report.
+    subroutine check(status, call_name, object, file, err)
+        integer, intent(in) :: status
+        character(len=*), intent(in) :: call_name, object, file
+        type(error_t), allocatable, intent(inout) :: err
+
+        if (status >= 0 .or. allocated(err)) return
+        call set_error(err, "hdf5: "//call_name//" failed on "//object//" (file "//file//")")
+    end subroutine check
+
+    !> The HDF5 library, initialised (its H5T_* constants are set by h5open_f) and told to
+    !> return errors to us rather than print them. `path` is the file about to be used.
+    subroutine open_library(path, err)
+        character(len=*), intent(in) :: path
+        type(error_t), allocatable, intent(inout) :: err
+        integer :: e
+
+        if (allocated(err)) return
+        call h5open_f(e)
+        call check(e, 'h5open_f', 'the HDF5 library', path, err)
+        if (allocated(err)) return
+        call h5eset_auto_f(0, e)
+        call check(e, 'h5eset_auto_f', 'the HDF5 library', path, err)
+    end subroutine open_library
+
+    !> A new, empty file at `path` (an existing one is replaced).
+    subroutine h5_create_file(file, path, err)
+        type(h5_file_t), intent(out) :: file
+        character(len=*), intent(in) :: path
+        type(error_t), allocatable, intent(inout) :: err
+        integer :: e
+
+        file%path = path
+        call open_library(path, err)
+        if (allocated(err)) return
+        call h5fcreate_f(path, H5F_ACC_TRUNC_F, file%id, e)
+        call check(e, 'h5fcreate_f', '/', path, err)
+        if (allocated(err)) file%id = -1
+    end subroutine h5_create_file
+
+    !> An existing file, opened for reading, or for reading and writing when `writable`.
+    subroutine h5_open_file(file, path, writable, err)
+        type(h5_file_t), intent(out) :: file
+        character(len=*), intent(in) :: path
+        logical, intent(in) :: writable
+        type(error_t), allocatable, intent(inout) :: err
+        integer :: e
+
+        file%path = path
+        call open_library(path, err)
+        if (allocated(err)) return
+        call h5fopen_f(path, merge(H5F_ACC_RDWR_F, H5F_ACC_RDONLY_F, writable), file%id, e)
+        call check(e, 'h5fopen_f', '/', path, err)
+        if (allocated(err)) file%id = -1
+    end subroutine h5_open_file
+
+    !> Close the file if it is open; an earlier error is kept, and the file is closed anyway.
+    subroutine h5_close_file(file, err)
+        type(h5_file_t), intent(inout) :: file
+        type(error_t), allocatable, intent(inout) :: err
+        integer :: e
+
+        if (file%id < 0) return
+        call h5fclose_f(file%id, e)
+        call check(e, 'h5fclose_f', '/', file%path, err)
+        file%id = -1
+    end subroutine h5_close_file
+
+    !> Is the existing file at `path` an HDF5 file?
+    subroutine h5_is_hdf5_file(path, is_hdf5, err)
+        character(len=*), intent(in) :: path
+        logical, intent(out) :: is_hdf5
+        type(error_t), allocatable, intent(inout) :: err
+        integer :: e
+
+        is_hdf5 = .false.
+        call open_library(path, err)
+        if (allocated(err)) return
+        call h5fis_hdf5_f(path, is_hdf5, e)
+        call check(e, 'h5fis_hdf5_f', '/', path, err)
+    end subroutine h5_is_hdf5_file
+
+    ! ---- groups and links -----------------------------------------------------------------
+
+    !> Create group `name` unless it exists.
+    subroutine h5_create_group(file, name, err)
+        type(h5_file_t), intent(in) :: file
+        character(len=*), intent(in) :: name
+        type(error_t), allocatable, intent(inout) :: err
+        integer(hid_t) :: g
+        integer :: e
+        logical :: exists
+
+        call h5_exists(file, name, exists, err)
+        if (allocated(err) .or. exists) return
+        call h5gcreate_f(file%id, name, g, e)
+        call check(e, 'h5gcreate_f', '/'//name, file%path, err)
+        if (allocated(err)) return
+        call h5gclose_f(g, e)
+        call check(e, 'h5gclose_f', '/'//name, file%path, err)
+    end subroutine h5_create_group
+
+    !> Is there a group or dataset `name`? (.false. after an error)
+    subroutine h5_exists(file, name, exists, err)
+        type(h5_file_t), intent(in) :: file
+        character(len=*), intent(in) :: name
+        logical, intent(out) :: exists
+        type(error_t), allocatable, intent(inout) :: err
+        integer :: e
+
+        exists = .false.
+        if (allocated(err)) return
+        call h5lexists_f(file%id, name, exists, e)
+        call check(e, 'h5lexists_f', '/'//name, file%path, err)
+        if (allocated(err)) exists = .false.
+    end subroutine h5_exists
+
+    !> Remove the group or dataset `name` from the file's tree.
+    subroutine h5_delete(file, name, err)
+        type(h5_file_t), intent(in) :: file
+        character(len=*), intent(in) :: name
+        type(error_t), allocatable, intent(inout) :: err
+        integer :: e
+
+        if (allocated(err)) return
+        call h5ldelete_f(file%id, name, e)
+        call check(e, 'h5ldelete_f', '/'//name, file%path, err)
+    end subroutine h5_delete
+
+    ! ---- attributes -----------------------------------------------------------------------
+
+    !> "/" for the root, "/params" for 'params'.
+    pure function object_name(obj) result(name)
+        character(len=*), intent(in) :: obj
+        character(len=:), allocatable :: name
+
+        if (obj == '/') then
+            name = '/'
+        else
+            name = '/'//obj
+        end if
+    end function object_name
+
+    !> An attribute as error messages name it.
+    pure function attr_name(obj, name) result(what)
+        character(len=*), intent(in) :: obj, name
+        character(len=:), allocatable :: what
+
+        what = "attribute '"//name//"' of "//object_name(obj)
+    end function attr_name
+
+    subroutine write_attr_string(file, obj, name, value, err)
+        type(h5_file_t), intent(in) :: file
+        character(len=*), intent(in) :: obj, name, value
+        type(error_t), allocatable, intent(inout) :: err
+        integer :: e
+
+        if (allocated(err)) return
+        call h5ltset_attribute_string_f(file%id, obj, name, value, e)
+        call check(e, 'h5ltset_attribute_string_f', attr_name(obj, name), file%path, err)
+    end subroutine write_attr_string
+
+    subroutine write_attr_int(file, obj, name, value, err)
+        type(h5_file_t), intent(in) :: file
+        character(len=*), intent(in) :: obj, name
+        integer, intent(in) :: value
+        type(error_t), allocatable, intent(inout) :: err
+        integer :: e
+
+        if (allocated(err)) return
+        call h5ltset_attribute_int_f(file%id, obj, name, [value], 1_size_t, e)
+        call check(e, 'h5ltset_attribute_int_f', attr_name(obj, name), file%path, err)
+    end subroutine write_attr_int
+
+    subroutine write_attr_real(file, obj, name, value, err)
+        type(h5_file_t), intent(in) :: file
+        character(len=*), intent(in) :: obj, name
+        real(wp), intent(in) :: value
+        type(error_t), allocatable, intent(inout) :: err
+        integer :: e
+
+        if (allocated(err)) return
+        call h5ltset_attribute_double_f(file%id, obj, name, [value], 1_size_t, e)
+        call check(e, 'h5ltset_attribute_double_f', attr_name(obj, name), file%path, err)
+    end subroutine write_attr_real
+
+    !> A 64-bit integer attribute, a scalar (the high-level library has no 64-bit writer).
+    subroutine write_attr_int8(file, obj, name, value, err)
+        type(h5_file_t), intent(in) :: file
+        character(len=*), intent(in) :: obj, name
+        integer(i8), intent(in), target :: value
+        type(error_t), allocatable, intent(inout) :: err
+        integer(hid_t) :: space, attr
+        integer :: e
+        character(len=:), allocatable :: what
+
+        if (allocated(err)) return
+        what = attr_name(obj, name)
+        call h5screate_f(H5S_SCALAR_F, space, e)
+        call check(e, 'h5screate_f', what, file%path, err)
+        if (allocated(err)) return
+        call h5acreate_by_name_f(file%id, obj, name, H5T_STD_I64LE, space, attr, e)
+        call check(e, 'h5acreate_by_name_f', what, file%path, err)
+        if (.not. allocated(err)) then
+            call h5awrite_f(attr, h5kind_to_type(i8, H5_INTEGER_KIND), c_loc(value), e)
+            call check(e, 'h5awrite_f', what, file%path, err)
+            call h5aclose_f(attr, e)
+            call check(e, 'h5aclose_f', what, file%path, err)
+        end if
+        call h5sclose_f(space, e)
+        call check(e, 'h5sclose_f', what, file%path, err)
+    end subroutine write_attr_int8
+
+    !> One attribute value of object `obj`, into `buf` of memory type `mem_type`; the
+    !> attribute must hold exactly one value.
+    subroutine read_attr(file, obj, name, mem_type, buf, err)
+        type(h5_file_t), intent(in) :: file
+        character(len=*), intent(in) :: obj, name
+        integer(hid_t), intent(in) :: mem_type
+        type(c_ptr), intent(in) :: buf
+        type(error_t), allocatable, intent(inout) :: err
+        integer(hid_t) :: attr, space
+        integer(hsize_t) :: points
+        integer :: e
+        character(len=:), allocatable :: what
+        type(c_ptr) :: target_buf ! (h5aread_f wants a definable pointer)
+
+        if (allocated(err)) return
+        what = attr_name(obj, name)
+        call h5aopen_by_name_f(file%id, obj, name, attr, e)
+        call check(e, 'h5aopen_by_name_f', what, file%path, err)
+        if (allocated(err)) return
+        call h5aget_space_f(attr, space, e)
+        call check(e, 'h5aget_space_f', what, file%path, err)
+        if (.not. allocated(err)) then
+            call h5sget_simple_extent_npoints_f(space, points, e)
+            call check(e, 'h5sget_simple_extent_npoints_f', what, file%path, err)
+            if (.not. allocated(err) .and. points /= 1) &
+                call set_error(err, "hdf5: "//what//" holds "//fmt_int8(int(points, i8))// &
+                               " values, expected one (file "//file%path//")")
+            call h5sclose_f(space, e)
+            call check(e, 'h5sclose_f', what, file%path, err)
+        end if
+        if (.not. allocated(err)) then
+            target_buf = buf
+            call h5aread_f(attr, mem_type, target_buf, e)
+            call check(e, 'h5aread_f', what, file%path, err)
+        end if
+        call h5aclose_f(attr, e)
+        call check(e, 'h5aclose_f', what, file%path, err)
+    end subroutine read_attr
+
+    subroutine read_attr_int8(file, obj, name, value, err)
+        type(h5_file_t), intent(in) :: file
+        character(len=*), intent(in) :: obj, name
+        integer(i8), intent(out), target :: value
+        type(error_t), allocatable, intent(inout) :: err
+
+        value = 0
+        call read_attr(file, obj, name, h5kind_to_type(i8, H5_INTEGER_KIND), c_loc(value), err)
+    end subroutine read_attr_int8
+
+    subroutine read_attr_real(file, obj, name, value, err)
+        type(h5_file_t), intent(in) :: file
+        character(len=*), intent(in) :: obj, name
+        real(wp), intent(out), target :: value
+        type(error_t), allocatable, intent(inout) :: err
+
+        value = 0
+        call read_attr(file, obj, name, H5T_NATIVE_DOUBLE, c_loc(value), err)
+    end subroutine read_attr_real
+
+    !> A string attribute, without the terminating NUL or the blanks that the Fortran layer of
+    !> HDF5 pads it with (it also drops trailing blanks when it writes one).
+    subroutine read_attr_string(file, obj, name, value, err)
+        type(h5_file_t), intent(in) :: file
+        character(len=*), intent(in) :: obj, name
+        character(len=:), allocatable, intent(out) :: value
+        type(error_t), allocatable, intent(inout) :: err
+        integer(hsize_t) :: dims(1)
+        integer(size_t) :: type_size
+        integer :: e, type_class, length
+        character(len=:), allocatable :: what
+
+        value = ''
+        if (allocated(err)) return
+        what = attr_name(obj, name)
+        dims = 0
+        type_class = -1
+        type_size = 0
+        call h5ltget_attribute_info_f(file%id, obj, name, dims, type_class, type_size, e)
+        call check(e, 'h5ltget_attribute_info_f', what, file%path, err)
+        if (allocated(err)) return
+        if (type_class /= H5T_STRING_F) then
+            call set_error(err, "hdf5: "//what//" is not a string (file "//file%path//")")
+            return
+        end if
+        deallocate (value)
+        allocate (character(len=int(type_size)) :: value)
+        call h5ltget_attribute_string_f(file%id, obj, name, value, e)
+        call check(e, 'h5ltget_attribute_string_f', what, file%path, err)
+        if (allocated(err)) then
+            value = ''
+            return
+        end if
+        length = index(value, c_null_char) - 1
+        if (length >= 0) value = value(:length)
+        value = trim(value)
+    end subroutine read_attr_string
+
+    ! ---- whole datasets -------------------------------------------------------------------
+
+    !> The HDF5 types of an element type code: in the file and in memory.
+    subroutine types_of(kind, file_type, mem_type)
+        integer, intent(in) :: kind
+        integer(hid_t), intent(out) :: file_type, mem_type
+
+        select case (kind)
+        case (h5_real)
+            file_type = H5T_NATIVE_DOUBLE
+            mem_type = H5T_NATIVE_DOUBLE
+        case (h5_int)
+            file_type = H5T_NATIVE_INTEGER
+            mem_type = H5T_NATIVE_INTEGER
+        case default ! h5_int8
+            file_type = H5T_STD_I64LE
+            mem_type = h5kind_to_type(i8, H5_INTEGER_KIND)
+        end select
+    end subroutine types_of
+
+    !> A dataset of extents `dims` (none: a scalar) and element type `kind`, written whole
+    !> from `buf`, with its `units`.
+    subroutine write_dataset(file, name, kind, dims, buf, units, err)
+        type(h5_file_t), intent(in) :: file
+        character(len=*), intent(in) :: name, units
+        integer, intent(in) :: kind
+        integer(hsize_t), intent(in) :: dims(:)
+        type(c_ptr), intent(in) :: buf
+        type(error_t), allocatable, intent(inout) :: err
+        integer(hid_t) :: space, dset, file_type, mem_type
+        integer :: e
+
+        if (allocated(err)) return
+        call types_of(kind, file_type, mem_type)
+        if (size(dims) == 0) then
+            call h5screate_f(H5S_SCALAR_F, space, e)
+            call check(e, 'h5screate_f', '/'//name, file%path, err)
+        else
+            call h5screate_simple_f(size(dims), dims, space, e)
+            call check(e, 'h5screate_simple_f', '/'//name, file%path, err)
+        end if
+        if (allocated(err)) return
+        call h5dcreate_f(file%id, name, file_type, space, dset, e)
+        call check(e, 'h5dcreate_f', '/'//name, file%path, err)
+        if (.not. allocated(err)) then
+            call h5dwrite_f(dset, mem_type, buf, e)
+            call check(e, 'h5dwrite_f', '/'//name, file%path, err)
+            call h5dclose_f(dset, e)
+            call check(e, 'h5dclose_f', '/'//name, file%path, err)
+        end if
+        call h5sclose_f(space, e)
+        call check(e, 'h5sclose_f', '/'//name, file%path, err)
+        call write_attr_string(file, name, 'units', units, err)
+    end subroutine write_dataset
+
+    subroutine write_real_1d(file, name, values, units, err)
+        type(h5_file_t), intent(in) :: file
+        character(len=*), intent(in) :: name, units
+        real(wp), intent(in), target, contiguous :: values(:)
+        type(error_t), allocatable, intent(inout) :: err
+
+        call write_dataset(file, name, h5_real, shape(values, hsize_t), c_loc(values), units, err)
+    end subroutine write_real_1d
+
+    subroutine write_real_2d(file, name, values, units, err)
+        type(h5_file_t), intent(in) :: file
+        character(len=*), intent(in) :: name, units
+        real(wp), intent(in), target, contiguous :: values(:, :)
+        type(error_t), allocatable, intent(inout) :: err
+
+        call write_dataset(file, name, h5_real, shape(values, hsize_t), c_loc(values), units, err)
+    end subroutine write_real_2d
+
+    subroutine write_real_3d(file, name, values, units, err)
+        type(h5_file_t), intent(in) :: file
+        character(len=*), intent(in) :: name, units
+        real(wp), intent(in), target, contiguous :: values(:, :, :)
+        type(error_t), allocatable, intent(inout) :: err
+
+        call write_dataset(file, name, h5_real, shape(values, hsize_t), c_loc(values), units, err)
+    end subroutine write_real_3d
+
+    subroutine write_int_1d(file, name, values, units, err)
+        type(h5_file_t), intent(in) :: file
+        character(len=*), intent(in) :: name, units
+        integer, intent(in), target, contiguous :: values(:)
+        type(error_t), allocatable, intent(inout) :: err
+
+        call write_dataset(file, name, h5_int, shape(values, hsize_t), c_loc(values), units, err)
+    end subroutine write_int_1d
+
+    subroutine write_int_2d(file, name, values, units, err)
+        type(h5_file_t), intent(in) :: file
+        character(len=*), intent(in) :: name, units
+        integer, intent(in), target, contiguous :: values(:, :)
+        type(error_t), allocatable, intent(inout) :: err
+
+        call write_dataset(file, name, h5_int, shape(values, hsize_t), c_loc(values), units, err)
+    end subroutine write_int_2d
+
+    subroutine write_int8_0d(file, name, value, units, err)
+        type(h5_file_t), intent(in) :: file
+        character(len=*), intent(in) :: name, units
+        integer(i8), intent(in), target :: value
+        type(error_t), allocatable, intent(inout) :: err
+        integer(hsize_t) :: scalar(0)
+
+        call write_dataset(file, name, h5_int8, scalar, c_loc(value), units, err)
+    end subroutine write_int8_0d
+
+    subroutine write_int8_1d(file, name, values, units, err)
+        type(h5_file_t), intent(in) :: file
+        character(len=*), intent(in) :: name, units
+        integer(i8), intent(in), target, contiguous :: values(:)
+        type(error_t), allocatable, intent(inout) :: err
+
+        call write_dataset(file, name, h5_int8, shape(values, hsize_t), c_loc(values), units, err)
+    end subroutine write_int8_1d
+
+    !> Read dataset `name` whole into `buf` (element type `kind`), after checking that its
+    !> extents are `dims` (none: a scalar, or one value).
+    subroutine read_dataset(file, name, kind, dims, buf, err)
+        type(h5_file_t), intent(in) :: file
+        character(len=*), intent(in) :: name
+        integer, intent(in) :: kind
+        integer(hsize_t), intent(in) :: dims(:)
+        type(c_ptr), intent(in) :: buf
+        type(error_t), allocatable, intent(inout) :: err
+        integer(hid_t) :: dset, file_type, mem_type
+        integer(hsize_t), allocatable :: found(:)
+        integer :: e
+        type(c_ptr) :: target_buf ! (h5dread_f wants a definable pointer)
+
+        if (allocated(err)) return
+        call types_of(kind, file_type, mem_type)
+        call h5dopen_f(file%id, name, dset, e)
+        call check(e, 'h5dopen_f', '/'//name, file%path, err)
+        if (allocated(err)) return
+        call dataset_dims(file, dset, name, found, err)
+        if (.not. allocated(err)) then
+            if (.not. same_extent(found, dims)) &
+                call set_error(err, "hdf5: /"//name//" has shape "//dims_text(found)// &
+                               ", expected "//dims_text(dims)//" (file "//file%path//")")
+        end if
+        if (.not. allocated(err)) then
+            target_buf = buf
+            call h5dread_f(dset, mem_type, target_buf, e)
+            call check(e, 'h5dread_f', '/'//name, file%path, err)
+        end if
+        call h5dclose_f(dset, e)
+        call check(e, 'h5dclose_f', '/'//name, file%path, err)
+    end subroutine read_dataset
+
+    !> Extents of an open dataset (Fortran order; none for a scalar).
+    subroutine dataset_dims(file, dset, name, dims, err)
+        type(h5_file_t), intent(in) :: file
+        integer(hid_t), intent(in) :: dset
+        character(len=*), intent(in) :: name
+        integer(hsize_t), allocatable, intent(out) :: dims(:)
+        type(error_t), allocatable, intent(inout) :: err
+        integer(hid_t) :: space
+        integer(hsize_t), allocatable :: maxdims(:)
+        integer :: e, rank
+
+        allocate (dims(0))
+        call h5dget_space_f(dset, space, e)
+        call check(e, 'h5dget_space_f', '/'//name, file%path, err)
+        if (allocated(err)) return
+        call h5sget_simple_extent_ndims_f(space, rank, e)
+        call check(e, 'h5sget_simple_extent_ndims_f', '/'//name, file%path, err)
+        if (.not. allocated(err)) then
+            deallocate (dims)
+            allocate (dims(rank), maxdims(rank))
+            ! (returns the rank on success)
+            call h5sget_simple_extent_dims_f(space, dims, maxdims, e)
+            call check(e, 'h5sget_simple_extent_dims_f', '/'//name, file%path, err)
+        end if
+        call h5sclose_f(space, e)
+        call check(e, 'h5sclose_f', '/'//name, file%path, err)
+    end subroutine dataset_dims
+
+    !> Do extents `found` hold what `want` asks for (none: one value, as a scalar or (1,))?
+    pure logical function same_extent(found, want)
+        integer(hsize_t), intent(in) :: found(:), want(:)
+
+        if (size(want) == 0) then
+            same_extent = product(found) == 1
+        else
+            same_extent = size(found) == size(want)
+            if (same_extent) same_extent = all(found == want)
+        end if
+    end function same_extent
+
+    !> Extents as h5py shows them: "(3, 16)" for a Fortran (16, 3).
+    pure function dims_text(dims) result(text)
+        integer(hsize_t), intent(in) :: dims(:)
+        character(len=:), allocatable :: text
+        integer :: j
+
+        text = '('
+        do j = size(dims), 1, -1
+            text = text//fmt_int8(int(dims(j), i8))
+            if (j > 1) text = text//', '
+        end do
+        if (size(dims) == 1) text = text//','
+        text = text//')'
+    end function dims_text
+
+    !> Extents of dataset `name` (Fortran order; none for a scalar or after an error).
+    subroutine dataset_extent(file, name, dims, err)
+        type(h5_file_t), intent(in) :: file
+        character(len=*), intent(in) :: name
+        integer(hsize_t), allocatable, intent(out) :: dims(:)
+        type(error_t), allocatable, intent(inout) :: err
+        integer(hid_t) :: dset
+        integer :: e
+
+        allocate (dims(0))
+        if (allocated(err)) return
+        call h5dopen_f(file%id, name, dset, e)
+        call check(e, 'h5dopen_f', '/'//name, file%path, err)
+        if (allocated(err)) return
+        call dataset_dims(file, dset, name, dims, err)
+        call h5dclose_f(dset, e)
+        call check(e, 'h5dclose_f', '/'//name, file%path, err)
+    end subroutine dataset_extent
+
+    !> dataset_extent for the callers, who know no HDF5 kinds.
+    subroutine h5_extent(file, name, dims, err)
+        type(h5_file_t), intent(in) :: file
+        character(len=*), intent(in) :: name
+        integer(i8), allocatable, intent(out) :: dims(:)
+        type(error_t), allocatable, intent(inout) :: err
+        integer(hsize_t), allocatable :: found(:)
+
+        call dataset_extent(file, name, found, err)
+        dims = int(found, i8)
+    end subroutine h5_extent
+
+    !> Extents of dataset `name`, which must have `rank` axes (zero extents after an error).
+    subroutine extent_of_rank(file, name, rank, dims, err)
+        type(h5_file_t), intent(in) :: file
+        character(len=*), intent(in) :: name
+        integer, intent(in) :: rank
+        integer(hsize_t), intent(out) :: dims(rank)
+        type(error_t), allocatable, intent(inout) :: err
+        integer(hsize_t), allocatable :: found(:)
+        character(len=*), parameter :: axes(2) = ['one axis ', 'two axes ']
+
+        dims = 0
+        call dataset_extent(file, name, found, err)
+        if (allocated(err)) return
+        if (size(found) /= rank) then
+            call set_error(err, "hdf5: /"//name//" has shape "//dims_text(found)// &
+                           ", expected "//trim(axes(rank))//" (file "//file%path//")")
+            return
+        end if
+        dims = found
+    end subroutine extent_of_rank
+
+    subroutine read_real_0d(file, name, value, err)
+        type(h5_file_t), intent(in) :: file
+        character(len=*), intent(in) :: name
+        real(wp), intent(out), target :: value
+        type(error_t), allocatable, intent(inout) :: err
+        integer(hsize_t) :: scalar(0)
+
+        value = 0
+        call read_dataset(file, name, h5_real, scalar, c_loc(value), err)
+    end subroutine read_real_0d
+
+    subroutine read_real_1d(file, name, values, err)
+        type(h5_file_t), intent(in) :: file
+        character(len=*), intent(in) :: name
+        real(wp), intent(out), target, contiguous :: values(:)
+        type(error_t), allocatable, intent(inout) :: err
+
+        values = 0
+        call read_dataset(file, name, h5_real, shape(values, hsize_t), c_loc(values), err)
+    end subroutine read_real_1d
+
+    subroutine read_int_1d(file, name, values, err)
+        type(h5_file_t), intent(in) :: file
+        character(len=*), intent(in) :: name
+        integer, intent(out), target, contiguous :: values(:)
+        type(error_t), allocatable, intent(inout) :: err
+
+        values = 0
+        call read_dataset(file, name, h5_int, shape(values, hsize_t), c_loc(values), err)
+    end subroutine read_int_1d
+
+    subroutine read_int8_0d(file, name, value, err)
+        type(h5_file_t), intent(in) :: file
+        character(len=*), intent(in) :: name
+        integer(i8), intent(out), target :: value
+        type(error_t), allocatable, intent(inout) :: err
+        integer(hsize_t) :: scalar(0)
+
+        value = 0
+        call read_dataset(file, name, h5_int8, scalar, c_loc(value), err)
+    end subroutine read_int8_0d
+
+    subroutine read_int8_1d(file, name, values, err)
+        type(h5_file_t), intent(in) :: file
+        character(len=*), intent(in) :: name
+        integer(i8), intent(out), target, contiguous :: values(:)
+        type(error_t), allocatable, intent(inout) :: err
+
+        values = 0
+        call read_dataset(file, name, h5_int8, shape(values, hsize_t), c_loc(values), err)
+    end subroutine read_int8_1d
+
+    subroutine read_alloc_real_1d(file, name, values, err)
+        type(h5_file_t), intent(in) :: file
+        character(len=*), intent(in) :: name
+        real(wp), allocatable, intent(out) :: values(:)
+        type(error_t), allocatable, intent(inout) :: err
+        integer(hsize_t) :: dims(1)
+
+        call extent_of_rank(file, name, 1, dims, err)
+        allocate (values(dims(1)))
+        call read_real_1d(file, name, values, err)
+    end subroutine read_alloc_real_1d
+
+    subroutine read_alloc_real_2d(file, name, values, err)
+        type(h5_file_t), intent(in) :: file
+        character(len=*), intent(in) :: name
+        real(wp), allocatable, target, intent(out) :: values(:, :)
+        type(error_t), allocatable, intent(inout) :: err
+        integer(hsize_t) :: dims(2)
+
+        call extent_of_rank(file, name, 2, dims, err)
+        allocate (values(dims(1), dims(2)))
+        values = 0
+        call read_dataset(file, name, h5_real, dims, c_loc(values), err)
+    end subroutine read_alloc_real_2d
+
+    subroutine read_alloc_int8_1d(file, name, values, err)
+        type(h5_file_t), intent(in) :: file
+        character(len=*), intent(in) :: name
+        integer(i8), allocatable, intent(out) :: values(:)
+        type(error_t), allocatable, intent(inout) :: err
+        integer(hsize_t) :: dims(1)
+
+        call extent_of_rank(file, name, 1, dims, err)
+        allocate (values(dims(1)))
+        call read_int8_1d(file, name, values, err)
+    end subroutine read_alloc_int8_1d
+
+    ! ---- chunked datasets and hyperslabs --------------------------------------------------
+
+    !> A chunked dataset of extents `dims` and element type `kind` whose last axis can grow
+    !> (or shrink), with its `units`; a chunk holds up to 2**18 elements, whole columns.
+    subroutine h5_create_growing(file, name, kind, dims, units, err)
+        type(h5_file_t), intent(in) :: file
+        character(len=*), intent(in) :: name, units
+        integer, intent(in) :: kind
+        integer(i8), intent(in) :: dims(:)
+        type(error_t), allocatable, intent(inout) :: err
+        integer(hsize_t) :: extents(size(dims)), chunk(size(dims)), maxdims(size(dims))
+        integer :: last
+
+        last = size(dims)
+        extents = int(dims, hsize_t)
+        chunk = extents
+        chunk(last) = max(1_hsize_t, min(extents(last), &
+                                         int(262144/max(1_hsize_t, product(extents) &
+                                                        /max(1_hsize_t, extents(last))), &
+                                             hsize_t)))
+        maxdims = extents
+        maxdims(last) = H5S_UNLIMITED_F
+        call create_chunked(file, name, kind, extents, maxdims, chunk, units, err)
+    end subroutine h5_create_growing
+
+    !> An empty 1-D dataset of element type `kind`, in chunks of `chunk` elements, that grows
+    !> as values are appended, with its `units`.
+    subroutine h5_create_appendable(file, name, kind, chunk, units, err)
+        type(h5_file_t), intent(in) :: file
+        character(len=*), intent(in) :: name, units
+        integer, intent(in) :: kind
+        integer(i8), intent(in) :: chunk
+        type(error_t), allocatable, intent(inout) :: err
+
+        call create_chunked(file, name, kind, [0_hsize_t], [H5S_UNLIMITED_F], &
+                            [int(chunk, hsize_t)], units, err)
+    end subroutine h5_create_appendable
+
+    subroutine create_chunked(file, name, kind, dims, maxdims, chunk, units, err)
+        type(h5_file_t), intent(in) :: file
+        character(len=*), intent(in) :: name, units
+        integer, intent(in) :: kind
+        integer(hsize_t), intent(in) :: dims(:), maxdims(:), chunk(:)
+        type(error_t), allocatable, intent(inout) :: err
+        integer(hid_t) :: space, dset, plist, file_type, mem_type
+        integer :: e
+
+        if (allocated(err)) return
+        call types_of(kind, file_type, mem_type)
+        call h5screate_simple_f(size(dims), dims, space, e, maxdims=maxdims)
+        call check(e, 'h5screate_simple_f', '/'//name, file%path, err)
+        if (allocated(err)) return
+        call h5pcreate_f(H5P_DATASET_CREATE_F, plist, e)
+        call check(e, 'h5pcreate_f', '/'//name, file%path, err)
+        if (.not. allocated(err)) then
+            call h5pset_chunk_f(plist, size(dims), chunk, e)
+            call check(e, 'h5pset_chunk_f', '/'//name, file%path, err)
+            if (.not. allocated(err)) then
+                call h5dcreate_f(file%id, name, file_type, space, dset, e, dcpl_id=plist)
+                call check(e, 'h5dcreate_f', '/'//name, file%path, err)
+                if (.not. allocated(err)) then
+                    call h5dclose_f(dset, e)
+                    call check(e, 'h5dclose_f', '/'//name, file%path, err)
+                end if
+            end if
+            call h5pclose_f(plist, e)
+            call check(e, 'h5pclose_f', '/'//name, file%path, err)
+        end if
+        call h5sclose_f(space, e)
+        call check(e, 'h5sclose_f', '/'//name, file%path, err)
+        call write_attr_string(file, name, 'units', units, err)
+    end subroutine create_chunked
+
+    !> Change the extents of a chunked dataset.
+    subroutine h5_set_extent(file, name, dims, err)
+        type(h5_file_t), intent(in) :: file
+        character(len=*), intent(in) :: name
+        integer(i8), intent(in) :: dims(:)
+        type(error_t), allocatable, intent(inout) :: err
+        integer(hid_t) :: dset
+        integer :: e
+
+        if (allocated(err)) return
+        call h5dopen_f(file%id, name, dset, e)
+        call check(e, 'h5dopen_f', '/'//name, file%path, err)
+        if (allocated(err)) return
+        call h5dset_extent_f(dset, int(dims, hsize_t), e)
+        call check(e, 'h5dset_extent_f', '/'//name, file%path, err)
+        call h5dclose_f(dset, e)
+        call check(e, 'h5dclose_f', '/'//name, file%path, err)
+    end subroutine h5_set_extent
+
+    subroutine write_slab_real_1d(file, name, offset, values, grow, err)
+        type(h5_file_t), intent(in) :: file
+        character(len=*), intent(in) :: name
+        integer(i8), intent(in) :: offset(1)
+        real(wp), intent(in), target, contiguous :: values(:)
+        logical, intent(in) :: grow
+        type(error_t), allocatable, intent(inout) :: err
+
+        call transfer_slab(file, name, int(offset, hsize_t), shape(values, hsize_t), h5_real, &
+                           c_loc(values), .true., grow, err)
+    end subroutine write_slab_real_1d
+
+    subroutine write_slab_real_2d(file, name, offset, values, grow, err)
+        type(h5_file_t), intent(in) :: file
+        character(len=*), intent(in) :: name
+        integer(i8), intent(in) :: offset(2)
+        real(wp), intent(in), target, contiguous :: values(:, :)
+        logical, intent(in) :: grow
+        type(error_t), allocatable, intent(inout) :: err
+
+        call transfer_slab(file, name, int(offset, hsize_t), shape(values, hsize_t), h5_real, &
+                           c_loc(values), .true., grow, err)
+    end subroutine write_slab_real_2d
+
+    subroutine write_slab_int_1d(file, name, offset, values, grow, err)
+        type(h5_file_t), intent(in) :: file
+        character(len=*), intent(in) :: name
+        integer(i8), intent(in) :: offset(1)
+        integer, intent(in), target, contiguous :: values(:)
+        logical, intent(in) :: grow
+        type(error_t), allocatable, intent(inout) :: err
+
+        call transfer_slab(file, name, int(offset, hsize_t), shape(values, hsize_t), h5_int, &
+                           c_loc(values), .true., grow, err)
+    end subroutine write_slab_int_1d
+
+    subroutine write_slab_int8_1d(file, name, offset, values, grow, err)
+        type(h5_file_t), intent(in) :: file
+        character(len=*), intent(in) :: name
+        integer(i8), intent(in) :: offset(1)
+        integer(i8), intent(in), target, contiguous :: values(:)
+        logical, intent(in) :: grow
+        type(error_t), allocatable, intent(inout) :: err
+
+        call transfer_slab(file, name, int(offset, hsize_t), shape(values, hsize_t), h5_int8, &
+                           c_loc(values), .true., grow, err)
+    end subroutine write_slab_int8_1d
+
+    subroutine read_slab_real_2d(file, name, offset, values, err)
+        type(h5_file_t), intent(in) :: file
+        character(len=*), intent(in) :: name
+        integer(i8), intent(in) :: offset(2)
+        real(wp), intent(out), target, contiguous :: values(:, :)
+        type(error_t), allocatable, intent(inout) :: err
+
+        values = 0
+        call transfer_slab(file, name, int(offset, hsize_t), shape(values, hsize_t), h5_real, &
+                           c_loc(values), .false., .false., err)
+    end subroutine read_slab_real_2d
+
+    !> Move `buf` (element type `kind`) between memory and the hyperslab offset/block of
+    !> dataset `name`: write it (`writing`), first growing the dataset to hold it when
+    !> `grow`, or read it.
+    subroutine transfer_slab(file, name, offset, block, kind, buf, writing, grow, err)
+        type(h5_file_t), intent(in) :: file
+        character(len=*), intent(in) :: name
+        integer(hsize_t), intent(in) :: offset(:), block(:)
+        integer, intent(in) :: kind
+        type(c_ptr), intent(in) :: buf
+        logical, intent(in) :: writing, grow
+        type(error_t), allocatable, intent(inout) :: err
+        integer(hid_t) :: dset, fspace, mspace, file_type, mem_type
+        integer :: e
+        type(c_ptr) :: target_buf ! (h5dread_f wants a definable pointer)
+
+        if (allocated(err)) return
+        call types_of(kind, file_type, mem_type)
+        call h5dopen_f(file%id, name, dset, e)
+        call check(e, 'h5dopen_f', '/'//name, file%path, err)
+        if (allocated(err)) return
+        if (grow) then
+            call h5dset_extent_f(dset, offset + block, e)
+            call check(e, 'h5dset_extent_f', '/'//name, file%path, err)
+        end if
+        if (.not. allocated(err)) then
+            call h5dget_space_f(dset, fspace, e)
+            call check(e, 'h5dget_space_f', '/'//name, file%path, err)
+            if (.not. allocated(err)) then
+                call h5sselect_hyperslab_f(fspace, H5S_SELECT_SET_F, offset, block, e)
+                call check(e, 'h5sselect_hyperslab_f', '/'//name, file%path, err)
+                if (.not. allocated(err)) then
+                    call h5screate_simple_f(size(block), block, mspace, e)
+                    call check(e, 'h5screate_simple_f', '/'//name, file%path, err)
+                    if (.not. allocated(err)) then
+                        if (writing) then
+                            call h5dwrite_f(dset, mem_type, buf, e, mem_space_id=mspace, &
+                                            file_space_id=fspace)
+                            call check(e, 'h5dwrite_f', '/'//name, file%path, err)
+                        else
+                            target_buf = buf
+                            call h5dread_f(dset, mem_type, target_buf, e, &
+                                           mem_space_id=mspace, file_space_id=fspace)
+                            call check(e, 'h5dread_f', '/'//name, file%path, err)
+                        end if
+                        call h5sclose_f(mspace, e)
+                        call check(e, 'h5sclose_f', '/'//name, file%path, err)
+                    end if
+                end if
+                call h5sclose_f(fspace, e)
+                call check(e, 'h5sclose_f', '/'//name, file%path, err)
+            end if
+        end if
+        call h5dclose_f(dset, e)
+        call check(e, 'h5dclose_f', '/'//name, file%path, err)
+    end subroutine transfer_slab
+
+end module chain_hdf5
