@@ -13,7 +13,7 @@ module chain_config
     use chain_error, only: error_t, set_error, fmt_real, fmt_int, fmt_int8
     use chain_model, only: model_t, model_walls
     use chain_namelist, only: key_spec_t, key_integer, key_real, key_logical, key_string, &
-                              check_namelist, apply_override, groups_in
+                              check_namelist, apply_override, groups_in, lower
     implicit none
     private
     public :: run_config_t, read_config, validate_config, config_summary, lyapunov_vectors
@@ -1017,17 +1017,5 @@ contains
         if (dot > 1) out = out(:dot - 1)
         out = out//'.h5'
     end function default_output
-
-    pure function lower(s) result(t)
-        character(len=*), intent(in) :: s
-        character(len=len(s)) :: t
-        integer :: j
-
-        t = s
-        do j = 1, len(s)
-            if (iachar(s(j:j)) >= iachar('A') .and. iachar(s(j:j)) <= iachar('Z')) &
-                t(j:j) = achar(iachar(s(j:j)) + 32)
-        end do
-    end function lower
 
 end module chain_config

@@ -14,7 +14,7 @@ module chain_namelist
     implicit none
     private
     public :: key_spec_t, key_integer, key_real, key_logical, key_string
-    public :: check_namelist, apply_override, schema_keys, groups_in
+    public :: check_namelist, apply_override, schema_keys, groups_in, lower
 
     integer, parameter :: key_integer = 1
     integer, parameter :: key_real = 2
