@@ -99,6 +99,22 @@ def _site_list(text: str) -> list[int]:
     return sites
 
 
+def _range(text: str) -> tuple[float, float]:
+    try:
+        low, high = (float(item) for item in text.split(","))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not LOW,HIGH, e.g. -2.5,1.5") from None
+    if not low < high:
+        raise argparse.ArgumentTypeError(f"{text!r}: LOW must be below HIGH")
+    return low, high
+
+
+def _ylim_option(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--ylim", type=_range, metavar="LOW,HIGH",
+                        help="y range, to share one scale between figures that are compared "
+                             "(default: the data's)")
+
+
 def _cycles_option(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--cycles", type=_positive_int, metavar="N",
                         help="use only the last N strobe records (default: all)")
@@ -123,6 +139,7 @@ def _wait_option(parser: argparse.ArgumentParser) -> None:
 
 def _space_amplitude_options(parser: argparse.ArgumentParser) -> None:
     _cycles_option(parser)
+    _ylim_option(parser)
     parser.add_argument("--periods", choices=("file", "none"), default="file",
                         help="period labels: the simulator's, from the file's /strobe/period "
                              "(default), or none")
@@ -170,7 +187,8 @@ COMMANDS: dict[str, Command] = {
         Command("space-amplitude",
                 "overlaid strobe snapshots x(site); several files overlay in colours",
                 ("strobe",), (), True, _space_amplitude_options,
-                lambda runs, a: figures.space_amplitude(runs, a.cycles, a.periods)),
+                lambda runs, a: figures.space_amplitude(runs, a.cycles, a.periods,
+                                                        ylim=a.ylim)),
         Command("space-time-amplitude",
                 "3-D waterfall of strobe snapshots, in panels of cycles",
                 ("strobe",), (), False, _panel_options,
@@ -195,8 +213,8 @@ COMMANDS: dict[str, Command] = {
                 lambda runs, a: figures.lyapunov(runs, a.k, a.with_bifurcation)),
         Command("ky-dimension",
                 "Kaplan-Yorke dimension against the swept parameter (sweep files)",
-                ("sweep", "sweep/ky_dimension"), (), True, _no_options,
-                lambda runs, a: figures.ky_dimension(runs)),
+                ("sweep", "sweep/ky_dimension"), (), True, _ylim_option,
+                lambda runs, a: figures.ky_dimension(runs, ylim=a.ylim)),
         Command("spectrum",
                 "Lyapunov spectrum of one run and convergence of the running estimates",
                 ("lyapunov",), ("strobe",), False, _no_options,

@@ -85,7 +85,7 @@ LEFT_COLOUR = "tab:blue"
 RIGHT_COLOUR = "tab:red"
 OVERLAY_COLOURS = ("tab:red", "tab:green", "tab:blue", "tab:orange", "tab:purple",
                    "tab:brown", "tab:pink", "tab:olive", "tab:cyan", "tab:gray")
-BAND_ALPHA = 0.25
+BAND_ALPHA = 0.35
 
 _SYMBOLS = {
     "n": ("oscillators", "n"),
@@ -162,14 +162,17 @@ def _axes_list(ax: Axes | Sequence[Axes] | np.ndarray, count: int, what: str) ->
 
 
 def _root(ax: Axes) -> Figure:
-    fig = ax.get_figure(root=True)
+    """The figure holding ``ax`` (the root one when ``ax`` is in a subfigure)."""
+    fig: Any = _parent(ax)
+    while isinstance(fig, SubFigure):
+        fig = fig.figure if fig.figure is not fig else fig.get_figure()
     assert isinstance(fig, Figure)
     return fig
 
 
 def _parent(ax: Axes) -> Figure | SubFigure:
     """The (sub)figure holding ``ax``: where its colour bar goes."""
-    fig = ax.get_figure(root=False)
+    fig = ax.get_figure()
     assert fig is not None
     return fig
 
@@ -390,6 +393,7 @@ def space_amplitude(
     periods: str = "file",
     labels: Sequence[str] | None = None,
     ax: Axes | None = None,
+    ylim: tuple[float, float] | None = None,
 ) -> Figure:
     """Overlaid strobe snapshots: displacement at the section against equilibrium position.
 
@@ -399,7 +403,8 @@ def space_amplitude(
     run's last records, docs/model.md section 6.3, whatever ``cycles`` shows; no labels
     for a file without it), ``'none'`` shows no labels. Several runs get a legend:
     ``labels``, or by default :func:`run_labels` (the parameter or seed that differs).
-    ``ax``: one Axes to draw into.
+    ``ax``: one Axes to draw into. ``ylim``: a displacement range shared with other figures
+    (the title says how many values fall outside it).
     """
     runs = _as_runs(runs, ("strobe",), "space-amplitude")
     if not runs:
@@ -439,6 +444,7 @@ def space_amplitude(
     shown = min(_strobe(runs[0]).n_record, cycles or _strobe(runs[0]).n_record)
     differing = _differing_parameters(runs)
     note = "; labels: period in drive cycles, ap = aperiodic" if label_rows else ""
+    note += _outside(ax, ylim, [_last(_strobe(run).x, cycles) for run in runs])
     ax.set_title(f"{_title(runs[0], skip=differing)}\nlast {shown} cycles{note}",
                  pad=6 + 11 * label_rows, fontsize="medium")
     _record_sources(fig, runs)
@@ -473,7 +479,10 @@ def space_time_amplitude(
     owned = ax is None
     if ax is None:
         n_rows, n_cols = _grid(len(ranges))
-        fig: Figure = _new_figure(5.6 * n_cols, 4.6 * n_rows)
+        # 3-D axes: placed by hand (constrained layout does not see their axis labels)
+        fig: Figure = ProvenanceFigure(figsize=(5.6 * n_cols, 4.8 * n_rows + 0.4))
+        fig.subplots_adjust(left=0.0, right=0.97, bottom=0.02,
+                            top=1.0 - 0.7 / (4.8 * n_rows + 0.4), wspace=0.02, hspace=0.08)
         axes = [fig.add_subplot(n_rows, n_cols, p + 1, projection="3d")
                 for p in range(len(ranges))]
     else:
@@ -726,7 +735,8 @@ def lyapunov(runs: RunLike | Sequence[RunLike], k: int = 10, with_bifurcation: b
     n_rows, n_cols = (2 if with_bifurcation else 1), len(runs)
     owned = ax is None
     if ax is None:
-        fig: Figure = _new_figure(5.2 * n_cols + 0.9, 3.2 * n_rows + 0.7)
+        row_height = 3.4 if n_cols > 1 else 4.2
+        fig: Figure = _new_figure(max(8.0, 5.6 * n_cols) + 1.0, row_height * n_rows + 0.8)
         grid = fig.subplots(n_rows, n_cols, squeeze=False, sharex="col")
         axes = list(grid.ravel())
     else:
@@ -762,9 +772,16 @@ def lyapunov(runs: RunLike | Sequence[RunLike], k: int = 10, with_bifurcation: b
         bar.ax.set_gid("colorbar-index")
         bar.minorticks_off()
     if owned:
-        errors = all(s.stderr is not None for s in sweeps)
-        note = " with bands of $\\pm$1 standard error" if errors else ""
-        fig.suptitle(f"the largest {shown} Lyapunov exponents{note}", fontsize="medium")
+        total = max(s.exponents.shape[1] for s in sweeps)  # type: ignore[union-attr]
+        which = f"all {shown}" if shown == total else f"the largest {shown}"
+        errors = [s.stderr[:, :shown] for s in sweeps if s.stderr is not None]
+        note = ""
+        if errors:
+            finite = np.concatenate([e[np.isfinite(e)] for e in errors])
+            largest = float(finite.max()) if finite.size else 0.0
+            note = (f", bands of $\\pm$1 standard error (at most {largest:.2g} "
+                    f"{_unit(runs[0], 'sweep/stderr')})")
+        fig.suptitle(f"{which} Lyapunov exponents{note}", fontsize="medium")
     _record_sources(fig, runs)
     return fig
 
@@ -789,7 +806,7 @@ def _exponent_lines(ax: Axes, sweep: Sweep, k: int, cmap: ListedColormap,
                                    ecolor=colour, elinewidth=0.6, alpha=0.6)
                 for collection in bars.lines[2]:
                     collection.set_gid(f"stderr-{j + 1}")
-        ax.plot(sweep.values, exponent, color=colour, linewidth=0.8,
+        ax.plot(sweep.values, exponent, color=colour, linewidth=0.7,
                 gid=f"exponent-{j + 1}", **style)
     ax.axhline(0.0, color="0.3", linewidth=0.8, linestyle="--", gid="zero")
 
@@ -825,14 +842,15 @@ def _index_ticks(count: int) -> list[int]:
 
 
 def ky_dimension(runs: RunLike | Sequence[RunLike], labels: Sequence[str] | None = None,
-                 ax: Axes | None = None) -> Figure:
+                 ax: Axes | None = None, ylim: tuple[float, float] | None = None) -> Figure:
     """Kaplan-Yorke dimension against the swept parameter, one line per sweep file.
 
     Draws ``/sweep/ky_dimension``, the simulator's value at each point (docs/model.md
     section 7.5; the file stores no standard error for it). Several files get a legend:
     ``labels``, or by default :func:`run_labels` (the parameter that differs). A 2-D
     sweep is drawn as a scatter coloured by the dimension, with a colour bar. ``ax``: one
-    Axes.
+    Axes. ``ylim``: a range shared with other figures (1-D sweeps; the title says how many
+    values fall outside it).
     """
     runs = _as_runs(runs, ("sweep", "sweep/ky_dimension"), "ky-dimension")
     if not runs:
@@ -870,7 +888,10 @@ def ky_dimension(runs: RunLike | Sequence[RunLike], labels: Sequence[str] | None
     if len(runs) > 1 or labels is not None:
         ax.legend(fontsize="small")
     differing = _differing_parameters(runs)
-    ax.set_title(_title(runs[0], skip=(*swept, *differing)), fontsize="medium")
+    note = ""
+    if not any(_sweep(run).is_2d for run in runs):
+        note = _outside(ax, ylim, [_sweep_ky(run, _sweep(run)) for run in runs])
+    ax.set_title(_title(runs[0], skip=(*swept, *differing)) + note, fontsize="medium")
     _record_sources(fig, runs)
     return fig
 
@@ -1032,6 +1053,19 @@ def _same_limits(axes: Sequence[Axes], values: Sequence[np.ndarray]) -> None:
     low, high = _padded(np.concatenate([np.ravel(v) for v in values]))
     for axis in axes:
         axis.set_ylim(low, high)
+
+
+def _outside(ax: Axes, ylim: tuple[float, float] | None, values: Sequence[np.ndarray]) -> str:
+    """Set a given y range; a title note when some values fall outside it."""
+    if ylim is None:
+        return ""
+    low, high = (float(v) for v in ylim)
+    if not low < high:
+        raise FigureError(f"ylim = {ylim}: the lower limit must be below the upper one")
+    ax.set_ylim(low, high)
+    data = np.concatenate([np.ravel(v) for v in values])
+    count = int(np.count_nonzero((data < low) | (data > high)))
+    return f"\n{count} of {data.size} values outside the y range shown" if count else ""
 
 
 def _x_limits(runs: Sequence[Run]) -> tuple[float, float]:

@@ -302,3 +302,16 @@ def test_format_and_extension_must_agree(run_file: Path, tmp_path: Path,
                   "does not end in .pdf (--format pdf)", tmp_path / "o.png", capsys)
     with pytest.raises(SystemExit):
         main(["poincare", str(run_file), "-o", str(tmp_path / "o.png"), "--dpi", "0"])
+
+
+def test_ylim_option(run_file: Path, sweep_file: Path, tmp_path: Path,
+                     monkeypatch: pytest.MonkeyPatch) -> None:
+    made = _captured(monkeypatch)
+    assert main(["space-amplitude", str(run_file), "-o", str(tmp_path / "sa.png"),
+                 "--ylim=-2.5,1.5"]) == 0
+    assert main(["ky-dimension", str(sweep_file), "-o", str(tmp_path / "ky.png"),
+                 "--ylim", "0,11"]) == 0
+    assert made["sa.png"].axes[0].get_ylim() == (-2.5, 1.5)
+    assert made["ky.png"].axes[0].get_ylim() == (0.0, 11.0)
+    with pytest.raises(SystemExit):
+        main(["ky-dimension", str(sweep_file), "-o", str(tmp_path / "x.png"), "--ylim", "3,1"])

@@ -675,3 +675,20 @@ def test_saved_pdf_and_svg_have_the_provenance(run_file: Path, tmp_path: Path) -
     fig.savefig(tmp_path / "s.svg")
     svg = (tmp_path / "s.svg").read_text()
     assert "impactchain 0.1.0" in svg and str(run_file) in svg
+
+
+def test_a_given_y_range_is_shared_and_what_it_cuts_is_counted(make_run: MakeRun,
+                                                               sweep_file: Path) -> None:
+    """Figures compared side by side (the gallery's 1a-1d, 2a-2f, 12) take one y range."""
+    run = read_run(make_run(n=4, records=10))
+    assert run.strobe is not None
+    ax = figures.space_amplitude(run, ylim=(-3.0, 3.0)).axes[0]
+    assert ax.get_ylim() == (-3.0, 3.0) and "outside" not in ax.get_title()
+    cut = figures.space_amplitude(run, ylim=(-0.1, 0.1)).axes[0]
+    outside = int(np.count_nonzero(np.abs(run.strobe.x) > 0.1))
+    assert f"{outside} of 40 values outside the y range shown" in cut.get_title()
+    ky = figures.ky_dimension(read_run(sweep_file), ylim=(0.0, 2.0)).axes[0]
+    assert ky.get_ylim() == (0.0, 2.0)
+    assert "2 of 7 values outside" in ky.get_title()  # the fixture's 2.5 and 3.0
+    with pytest.raises(figures.FigureError, match="lower limit must be below"):
+        figures.space_amplitude(run, ylim=(1.0, 1.0))
