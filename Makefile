@@ -109,7 +109,13 @@ clean:
 RUNS := figures/runs
 SIM := $(FPM) run $(RELEASE) -- --quiet --overwrite
 POST := $(PY) -m post
-GALLERY := --dpi 70
+# 150 dpi PNG; every figure carries the code version, inputs and sources in its metadata
+GALLERY := --dpi 150
+# One y range for the figures compared side by side (1a-1d, 2a-2f, the two of 12); a value
+# outside it is counted in the figure's title.
+FIG1_Y := --ylim=-3.0,1.1
+FIG2_Y := --ylim=-2.3,1.2
+FIG12_Y := --ylim=0,11
 SINGLE := fig1a fig1b fig1c fig1d fig2a fig2b fig2c fig2d fig2e fig2f fig3_red fig3_green \
           fig4_7
 SWEEPS := fig10 fig11_b005 fig11_b010 fig11_b015 fig12_K08 fig12_K06 fig12_K04 fig13
@@ -133,9 +139,9 @@ $(RUNS)/%.h5: namelists/%.nml
 	$(SIM) $<
 
 figures/fig1%.png: $(RUNS)/fig1%.h5
-	$(POST) space-amplitude $< -o $@ $(GALLERY)
+	$(POST) space-amplitude $< -o $@ $(FIG1_Y) $(GALLERY)
 figures/fig2%.png: $(RUNS)/fig2%.h5
-	$(POST) space-amplitude $< -o $@ $(GALLERY)
+	$(POST) space-amplitude $< -o $@ $(FIG2_Y) $(GALLERY)
 figures/fig3.png: $(RUNS)/fig3_red.h5 $(RUNS)/fig3_green.h5
 	$(POST) space-amplitude $^ -o $@ $(GALLERY)
 figures/fig4.png: $(RUNS)/fig4_7.h5
@@ -153,8 +159,8 @@ figures/fig10.png: $(RUNS)/fig10.h5
 figures/fig11.png: $(RUNS)/fig11_b005.h5 $(RUNS)/fig11_b010.h5 $(RUNS)/fig11_b015.h5
 	$(POST) lyapunov $^ --k 10 --with-bifurcation -o $@ $(GALLERY)
 figures/fig12_damping.png: $(RUNS)/fig11_b005.h5 $(RUNS)/fig11_b010.h5 $(RUNS)/fig11_b015.h5
-	$(POST) ky-dimension $^ -o $@ $(GALLERY)
+	$(POST) ky-dimension $^ -o $@ $(FIG12_Y) $(GALLERY)
 figures/fig12_restitution.png: $(RUNS)/fig12_K08.h5 $(RUNS)/fig12_K06.h5 $(RUNS)/fig12_K04.h5
-	$(POST) ky-dimension $^ -o $@ $(GALLERY)
+	$(POST) ky-dimension $^ -o $@ $(FIG12_Y) $(GALLERY)
 figures/fig13.png: $(RUNS)/fig13.h5
 	$(POST) lyapunov $< --k 32 -o $@ $(GALLERY)

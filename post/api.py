@@ -41,8 +41,10 @@ Example::
 from __future__ import annotations
 
 import operator
-from dataclasses import dataclass
-from typing import Any
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from types import MappingProxyType
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -54,6 +56,9 @@ except ImportError as _exc:  # not built yet: say how to build it when a functio
     _IMPORT_ERROR: ImportError | None = _exc
 else:
     _IMPORT_ERROR = None
+
+if TYPE_CHECKING:
+    from post.io import Run
 
 __all__ = [
     "Simulation",
@@ -154,11 +159,23 @@ class Simulation:
     """T = 2 pi / omega [time]."""
     phase: float
     """Drive phase of the section [rad]."""
+    params: Mapping[str, Any] = field(default_factory=dict)
+    """The arguments as used (``n``, ``amplitude``, ..., ``spacing`` as n+1 values,
+    ``x0``, ``v0`` or None for a start at rest, ``events``): what :meth:`to_run` needs to
+    describe the run."""
 
     @property
     def time(self) -> NDArray[np.float64]:
         """(cycles,) time of each record since the start of the run [time]."""
         return self.cycle * self.drive_period + self.phase / (2 * np.pi) * self.drive_period
+
+    def to_run(self, lyapunov: Lyapunov | None = None) -> Run:
+        """This result as a :class:`post.io.Run`, as if read from the CLI's file, so that
+        the figure functions of :mod:`post.figures` draw it (they call this themselves when
+        given a Simulation). ``lyapunov``: a spectrum of the same parameters to add."""
+        from post.io import run_from_api
+
+        return run_from_api(self, lyapunov)
 
 
 @dataclass(frozen=True, eq=False)
@@ -179,6 +196,16 @@ class Lyapunov:
     """(n,) displacement at the end of the run [length]."""
     final_v: NDArray[np.float64]
     """(n,) velocity at the end of the run [length/time]."""
+    params: Mapping[str, Any] = field(default_factory=dict)
+    """The arguments as used (as :attr:`Simulation.params`, with ``vectors``,
+    ``qr_every``)."""
+
+    def to_run(self) -> Run:
+        """This spectrum as a :class:`post.io.Run` (``Run.lyapunov``, without running
+        estimates), for :func:`post.figures.spectrum`."""
+        from post.io import run_from_api
+
+        return run_from_api(None, self)
 
 
 @dataclass(frozen=True, eq=False)
@@ -267,6 +294,7 @@ def simulate(
         collisions_per_cycle=float(out["collisions_per_cycle"]),
         drive_period=2 * np.pi / cfg["omega"],
         phase=cfg["phase"],
+        params=_used(cfg, boundary, events=keep_events),
     )
 
 
@@ -315,6 +343,8 @@ def lyapunov(
         collisions_per_cycle=float(out["collisions_per_cycle"]),
         final_x=_frozen(out["final_x"]),
         final_v=_frozen(out["final_v"]),
+        params=_used(cfg, boundary, events=False, vectors=cfg["vectors"],
+                     qr_every=cfg["qr_every"]),
     )
 
 
@@ -484,6 +514,29 @@ def _config(n: Any, amplitude: Any, omega: Any, damping: Any, restitution: Any,
         jacobian=0,
         jacobian_cycles=1,
     )
+
+
+def _used(cfg: dict[str, Any], boundary: str, **extra: Any) -> Mapping[str, Any]:
+    """The arguments of a run as used, read-only (``Simulation.params``)."""
+    n = cfg["n"]
+    start = bool(cfg["explicit"])
+    x0 = cfg["x0"] if start else None
+    v0 = (cfg["v0"] if cfg["v0"].size else np.zeros(n)) if start else None
+    used = dict(
+        n=n, amplitude=cfg["amplitude"], omega=cfg["omega"], damping=cfg["damping"],
+        restitution=cfg["restitution"],
+        spacing=_frozen(np.broadcast_to(cfg["spacing"], (n + 1,)).copy()),
+        boundary=boundary.strip().lower(), x0=None if x0 is None else _frozen(x0.copy()),
+        v0=None if v0 is None else _frozen(np.array(v0, dtype=np.float64)),
+        transient=cfg["transient"], cycles=cfg["cycles"], phase=cfg["phase"],
+        stick_speed=cfg["stick_speed"], code_version=_code_version(), **extra)
+    return MappingProxyType(used)
+
+
+def _code_version() -> str:
+    from post import __version__
+
+    return f"post.api {__version__}"
 
 
 def _run(cfg: dict[str, Any], strobe: bool, events: bool) -> dict[str, Any]:

@@ -1,5 +1,10 @@
 """Command line: ``python -m post <figure> FILE.h5 [FILE2.h5 ...] -o out.png``.
 
+The format is the output's extension (``.png``, ``.pdf``, ``.svg``) or ``--format``
+(which adds the extension when the output has none); PNG at ``--dpi`` (default 150). Every
+file carries the code version, the input namelists and the source file names in its
+metadata (:func:`post.figures.metadata`).
+
 Errors in the input (missing file, wrong schema, data the figure needs but the run did
 not record) and bad options print one line ``post: error: ...`` on stderr and exit
 with status 2 without writing anything.
@@ -23,6 +28,7 @@ __all__ = ["main", "COMMANDS"]
 
 FORMATS = (".png", ".pdf", ".svg")
 EXIT_ERROR = 2
+DEFAULT_DPI = 150
 
 
 class CliError(Exception):
@@ -65,6 +71,23 @@ def _positive_float(text: str) -> float:
     return value
 
 
+def _dpi(text: str) -> float:
+    value = _positive_float(text)
+    if value < 10:
+        raise argparse.ArgumentTypeError(f"{value:g} dots per inch is too few (>= 10)")
+    return value
+
+
+def _output_options(parser: argparse.ArgumentParser, output_help: str) -> None:
+    parser.add_argument("-o", "--output", required=True, metavar="OUT", help=output_help)
+    parser.add_argument("--format", choices=[f.lstrip(".") for f in FORMATS],
+                        help="file format (default: the output's extension); added to an "
+                             "output without an extension")
+    parser.add_argument("--dpi", type=_dpi, default=DEFAULT_DPI,
+                        help=f"resolution of PNG output and of rasterised parts of PDF/SVG "
+                             f"(default: {DEFAULT_DPI})")
+
+
 def _site_list(text: str) -> list[int]:
     try:
         sites = [int(item) for item in text.split(",") if item.strip()]
@@ -74,6 +97,22 @@ def _site_list(text: str) -> list[int]:
     if not sites or min(sites) < 1:
         raise argparse.ArgumentTypeError(f"{text!r}: sites are 1-based integers")
     return sites
+
+
+def _range(text: str) -> tuple[float, float]:
+    try:
+        low, high = (float(item) for item in text.split(","))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not LOW,HIGH, e.g. -2.5,1.5") from None
+    if not low < high:
+        raise argparse.ArgumentTypeError(f"{text!r}: LOW must be below HIGH")
+    return low, high
+
+
+def _ylim_option(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--ylim", type=_range, metavar="LOW,HIGH",
+                        help="y range, to share one scale between figures that are compared "
+                             "(default: the data's)")
 
 
 def _cycles_option(parser: argparse.ArgumentParser) -> None:
@@ -100,6 +139,7 @@ def _wait_option(parser: argparse.ArgumentParser) -> None:
 
 def _space_amplitude_options(parser: argparse.ArgumentParser) -> None:
     _cycles_option(parser)
+    _ylim_option(parser)
     parser.add_argument("--periods", choices=("file", "none"), default="file",
                         help="period labels: the simulator's, from the file's /strobe/period "
                              "(default), or none")
@@ -147,7 +187,8 @@ COMMANDS: dict[str, Command] = {
         Command("space-amplitude",
                 "overlaid strobe snapshots x(site); several files overlay in colours",
                 ("strobe",), (), True, _space_amplitude_options,
-                lambda runs, a: figures.space_amplitude(runs, a.cycles, a.periods)),
+                lambda runs, a: figures.space_amplitude(runs, a.cycles, a.periods,
+                                                        ylim=a.ylim)),
         Command("space-time-amplitude",
                 "3-D waterfall of strobe snapshots, in panels of cycles",
                 ("strobe",), (), False, _panel_options,
@@ -172,8 +213,8 @@ COMMANDS: dict[str, Command] = {
                 lambda runs, a: figures.lyapunov(runs, a.k, a.with_bifurcation)),
         Command("ky-dimension",
                 "Kaplan-Yorke dimension against the swept parameter (sweep files)",
-                ("sweep", "sweep/ky_dimension"), (), True, _no_options,
-                lambda runs, a: figures.ky_dimension(runs)),
+                ("sweep", "sweep/ky_dimension"), (), True, _ylim_option,
+                lambda runs, a: figures.ky_dimension(runs, ylim=a.ylim)),
         Command("spectrum",
                 "Lyapunov spectrum of one run and convergence of the running estimates",
                 ("lyapunov",), ("strobe",), False, _no_options,
@@ -194,9 +235,7 @@ def build_parser() -> argparse.ArgumentParser:
     for command in COMMANDS.values():
         p = sub.add_parser(command.name, help=command.help, description=command.help)
         p.add_argument("files", nargs="+" if command.multiple else 1, metavar="FILE.h5")
-        p.add_argument("-o", "--output", required=True, metavar="OUT",
-                       help="output file, .png, .pdf or .svg")
-        p.add_argument("--dpi", type=int, default=150, help="resolution (default: 150)")
+        _output_options(p, "output file, .png, .pdf or .svg")
         command.options(p)
     p = sub.add_parser("all", help="every figure one file supports, written as "
                                    "PREFIX_<figure>.png",
@@ -204,9 +243,7 @@ def build_parser() -> argparse.ArgumentParser:
                                    "PREFIX_space_amplitude.png etc. (PDF or SVG when "
                                    "PREFIX ends in .pdf or .svg).")
     p.add_argument("files", nargs=1, metavar="FILE.h5")
-    p.add_argument("-o", "--output", required=True, metavar="PREFIX",
-                   help="output prefix, e.g. figs/run")
-    p.add_argument("--dpi", type=int, default=150, help="resolution (default: 150)")
+    _output_options(p, "output prefix, e.g. figs/run (figs/run.pdf: PDF files)")
     _all_options(p)
     return parser
 
@@ -229,7 +266,7 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 
 def _make_one(command: Command, args: argparse.Namespace) -> None:
-    output = _output_path(args.output)
+    output = _output_path(args.output, args.format)
     runs = [_read(path, command.require, command.optional, command.name)
             for path in args.files]
     figure = command.build(runs, args)
@@ -237,7 +274,7 @@ def _make_one(command: Command, args: argparse.Namespace) -> None:
 
 
 def _make_all(args: argparse.Namespace) -> None:
-    prefix, suffix = _output_prefix(args.output)
+    prefix, suffix = _output_prefix(args.output, args.format)
     path = args.files[0]
     run = _read(path, (), None, "all")
     made = list(_all_figures(run, args))
@@ -286,30 +323,40 @@ def _note(message: str) -> None:
     print(f"post: note: {message}", file=sys.stderr)
 
 
-def _output_path(text: str) -> Path:
+def _output_path(text: str, fmt: str | None = None) -> Path:
+    """The output file: its extension, or ``--format`` (added when it has no extension)."""
     path = Path(text)
-    if path.suffix.lower() not in FORMATS:
-        raise CliError(f"output {text!r} must end in {', '.join(FORMATS)}")
+    suffix = path.suffix.lower()
+    if fmt is not None:
+        if suffix in FORMATS and suffix != f".{fmt}":
+            raise CliError(f"output {text!r} does not end in .{fmt} (--format {fmt})")
+        return path if suffix == f".{fmt}" else Path(f"{text}.{fmt}")
+    if suffix not in FORMATS:
+        raise CliError(f"output {text!r} must end in {', '.join(FORMATS)} "
+                       "(or give --format)")
     return path
 
 
-def _output_prefix(text: str) -> tuple[str, str]:
-    """Split ``figs/run.pdf`` into ('figs/run', '.pdf'); no known suffix means PNG."""
+def _output_prefix(text: str, fmt: str | None = None) -> tuple[str, str]:
+    """Split ``figs/run.pdf`` into ('figs/run', '.pdf'); no known suffix means PNG, or
+    ``--format``."""
     path = Path(text)
     if path.suffix.lower() in FORMATS:
+        if fmt is not None and path.suffix.lower() != f".{fmt}":
+            raise CliError(f"output prefix {text!r} does not end in .{fmt} (--format {fmt})")
         return str(path.with_suffix("")), path.suffix.lower()
     if not path.name:
         raise CliError(f"output prefix {text!r} has no file name part")
-    return text, ".png"
+    return text, f".{fmt or 'png'}"
 
 
-def _save(figure: Figure, out: Path, dpi: int = 150) -> None:
+def _save(figure: Figure, out: Path, dpi: float = DEFAULT_DPI) -> None:
     """Write the figure atomically: to a hidden temporary file, then rename."""
     fmt = out.suffix.lower().lstrip(".")
     temporary = out.with_name(f".{out.name}.partial")
     try:
         out.parent.mkdir(parents=True, exist_ok=True)
-        figure.savefig(temporary, format=fmt, dpi=dpi)
+        figures.save(figure, temporary, dpi=dpi, format=fmt)
         os.replace(temporary, out)
     except OSError as exc:
         raise CliError(f"cannot write {out}: {exc.strerror or exc}") from exc

@@ -1,9 +1,33 @@
-"""Figures of the paper, built from :mod:`post.io` dataclasses.
+"""Figures of the paper, built from :mod:`post.io` runs.
 
-Every function returns a :class:`matplotlib.figure.Figure` made with ``Figure()`` (no
-pyplot, no global state); the caller saves it. Time in the space-time-amplitude and
-shock-wave figures is in drive cycles, t/T, so that the strobe record of cycle c sits at
-c + phase/(2 pi) and both figures share panel ranges for the same options.
+Every figure function takes its data as a :class:`post.io.Run`, a path to an impactchain
+HDF5 file, or an in-memory result of :mod:`post.api` (anything with a ``to_run()`` method
+returning a Run: ``api.Simulation``, ``api.Lyapunov``), and returns a
+:class:`matplotlib.figure.Figure`, without pyplot or global state. With ``ax=None`` the
+function makes its own figure (a :class:`ProvenanceFigure`); with ``ax=`` (one Axes, or a
+sequence of them for a multi-panel figure, in the order each function documents) it draws
+there and returns the root figure of those axes, leaving that figure's title to the caller.
+
+Conventions, the same in every figure:
+
+- Axis labels read ``name $symbol$ [unit]``: a short name, the symbol where the quantity has
+  one, and the unit in brackets, ``[1]`` for a dimensionless quantity. Units are the
+  ``units`` attributes of the datasets shown (:data:`post.io.FILE_UNITS` for a run made in
+  memory); the model parameters, which the file stores without units, are in the model's
+  reduced units (docs/model.md section 1.5): ``A`` and the spacing ``a`` in [length], ``w``
+  in [1/time], ``b`` and ``K`` in [1].
+- Colour that encodes a number has a colour bar; colour that tells runs apart has a legend
+  naming the parameter or the seed that differs (:func:`run_labels`), never a file name.
+- Panels that show the same quantity share their limits (y, or z in 3-D).
+- Lyapunov exponents are drawn with their stored standard errors (bands, or bars for a
+  sweep that goes back and forth).
+- Saving a figure with :func:`save` (or ``savefig`` of a figure made here) writes the code
+  version, the input namelists and the source file names into the file's metadata
+  (:func:`metadata`).
+
+Time in the space-time-amplitude and shock-wave figures is in drive cycles, t/T, so that
+the strobe record of cycle c sits at c + phase/(2 pi) and both figures share panel ranges
+for the same options.
 
 Shock-wave layout: each panel is a pair of stacked axes with the same time range on the
 y axis and the same x axis (equilibrium position of the colliding site, see
@@ -14,21 +38,37 @@ through its collisions, with a dot at every collision.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+import math
+import os
+from collections.abc import Iterable, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Protocol, Union, runtime_checkable
 
+import matplotlib
 import numpy as np
 from matplotlib import colormaps
 from matplotlib.axes import Axes
+from matplotlib.cm import ScalarMappable
 from matplotlib.collections import LineCollection
-from matplotlib.figure import Figure
+from matplotlib.colors import BoundaryNorm, ListedColormap
+from matplotlib.figure import Figure, SubFigure
 from matplotlib.lines import Line2D
 
+from post import __version__
 from post.analysis import panel_ranges, period_label
-from post.io import Run, Strobe, Sweep
+from post.io import FILE_UNITS, Run, Strobe, Sweep, read_run
 from post.shockwave import Wave, build_shock_waves
 
 __all__ = [
     "FigureError",
+    "ProvenanceFigure",
+    "RunLike",
+    "SupportsRun",
+    "as_run",
+    "run_labels",
+    "metadata",
+    "save",
     "space_amplitude",
     "space_time_amplitude",
     "shock_wave",
@@ -45,25 +85,315 @@ LEFT_COLOUR = "tab:blue"
 RIGHT_COLOUR = "tab:red"
 OVERLAY_COLOURS = ("tab:red", "tab:green", "tab:blue", "tab:orange", "tab:purple",
                    "tab:brown", "tab:pink", "tab:olive", "tab:cyan", "tab:gray")
+BAND_ALPHA = 0.35
 
 _SYMBOLS = {
+    "n": ("oscillators", "n"),
     "amplitude": ("drive amplitude", "A"),
     "omega": ("drive frequency", r"\omega"),
     "damping": ("damping", "b"),
     "restitution": ("restitution", "K"),
     "spacing": ("spacing", "a"),
 }
+PARAMETER_UNITS = {"n": "1", "amplitude": "length", "omega": "1/time", "damping": "1",
+                   "restitution": "1", "spacing": "length", "phase": "rad"}
+"""Units of the model parameters (reduced units, docs/model.md section 1.5); the file
+stores them as attributes without units."""
 
 
 class FigureError(ValueError):
     """The data or the options cannot make the requested figure."""
 
 
+# ------------------------------------------------------------------------------ inputs
+
+
+@runtime_checkable
+class SupportsRun(Protocol):
+    """An in-memory result a figure can draw: ``to_run()`` gives its :class:`Run`."""
+
+    def to_run(self) -> Run: ...
+
+
+RunLike = Union[Run, str, "os.PathLike[str]", SupportsRun]
+"""What the figure functions take for one run."""
+
+
+def as_run(data: RunLike, require: Iterable[str] = (), purpose: str | None = None) -> Run:
+    """The :class:`Run` of ``data``: a Run, a file path (read with ``require``, see
+    :func:`post.io.read_run`), or an object with ``to_run()`` (``post.api`` results)."""
+    if isinstance(data, Run):
+        return data
+    if isinstance(data, (str, os.PathLike)):
+        return read_run(data, require=require, purpose=purpose)
+    if isinstance(data, SupportsRun):
+        run = data.to_run()
+        if not isinstance(run, Run):
+            raise TypeError(f"{type(data).__name__}.to_run() returned "
+                            f"{type(run).__name__}, not a post.io.Run")
+        return run
+    raise TypeError(f"cannot draw a {type(data).__name__}: give a post.io.Run, a path to an "
+                    "impactchain file or a post.api result")
+
+
+def _as_runs(data: RunLike | Sequence[RunLike], require: Iterable[str] = (),
+             purpose: str | None = None) -> list[Run]:
+    single = isinstance(data, (Run, str, os.PathLike)) or isinstance(data, SupportsRun)
+    items = [data] if single else list(data)  # type: ignore[arg-type]
+    return [as_run(item, require, purpose) for item in items]
+
+
+# -------------------------------------------------------------------------------- axes
+
+
+def _axes_list(ax: Axes | Sequence[Axes] | np.ndarray, count: int, what: str) -> list[Axes]:
+    """The given axes as a list of ``count`` (a 2-D array is taken row by row)."""
+    if isinstance(ax, Axes):
+        items = [ax]
+    else:
+        items = list(np.ravel(np.asarray(ax, dtype=object)))
+    if len(items) != count:
+        raise FigureError(f"{what} draws into {count} axes, {len(items)} given")
+    for item in items:
+        if not isinstance(item, Axes):
+            raise FigureError(f"{what}: ax holds a {type(item).__name__}, not a "
+                              "matplotlib Axes")
+    return items
+
+
+def _root(ax: Axes) -> Figure:
+    """The figure holding ``ax`` (the root one when ``ax`` is in a subfigure)."""
+    fig: Any = _parent(ax)
+    while isinstance(fig, SubFigure):
+        fig = fig.figure if fig.figure is not fig else fig.get_figure()
+    assert isinstance(fig, Figure)
+    return fig
+
+
+def _parent(ax: Axes) -> Figure | SubFigure:
+    """The (sub)figure holding ``ax``: where its colour bar goes."""
+    fig = ax.get_figure()
+    assert fig is not None
+    return fig
+
+
+def _new_figure(width: float, height: float) -> ProvenanceFigure:
+    return ProvenanceFigure(figsize=(width, height), layout="constrained")
+
+
+# -------------------------------------------------------------------------- provenance
+
+
+@dataclass(frozen=True)
+class _Source:
+    path: str
+    code_version: str
+    input_namelist: str
+    resolved_namelist: str
+
+
+_PROVENANCE = "impactchain_sources"
+
+
+def _record_sources(fig: Figure, runs: Sequence[Run]) -> None:
+    """Note on ``fig`` which runs it shows (for :func:`metadata`)."""
+    sources: list[_Source] = getattr(fig, _PROVENANCE, None) or []
+    for run in runs:
+        source = _Source(run.path, run.code_version, run.input_namelist,
+                         run.resolved_namelist)
+        if source not in sources:
+            sources.append(source)
+    setattr(fig, _PROVENANCE, sources)
+
+
+def metadata(fig: Figure, fmt: str = "png") -> dict[str, str]:
+    """File metadata of a figure drawn here, for ``savefig(metadata=...)`` in ``fmt``.
+
+    PNG: ``Software`` (impactchain code version of every file shown, post and matplotlib
+    versions), ``Title``, ``Source`` (the files, one a line), ``Description`` (their
+    input namelists, each after a ``! source:`` line) and ``Comment`` (the resolved
+    namelists: every key as used). PDF: ``Creator``, ``Title``, ``Subject`` (the inputs),
+    ``Keywords`` (the files). SVG: ``Creator``, ``Title``, ``Description``, ``Source``.
+    Other formats: none. A figure that shows no run gets only the software versions.
+    """
+    fmt = fmt.lower().lstrip(".")
+    sources: list[_Source] = getattr(fig, _PROVENANCE, None) or []
+    versions = list(dict.fromkeys(s.code_version for s in sources if s.code_version))
+    code = [f"impactchain {v}" for v in versions] or ["impactchain"]
+    software = "; ".join([*code, f"post {__version__}", f"Matplotlib {matplotlib.__version__}"])
+    files = "\n".join(s.path for s in sources)
+    inputs = "\n".join(f"! source: {s.path}\n{s.input_namelist.rstrip()}" for s in sources
+                       if s.input_namelist)
+    resolved = "\n".join(f"! source: {s.path}\n{s.resolved_namelist.rstrip()}"
+                         for s in sources if s.resolved_namelist)
+    title = _figure_title(fig)
+    if fmt == "png":
+        data = {"Software": software, "Title": title, "Source": files,
+                "Description": inputs, "Comment": resolved}
+    elif fmt == "pdf":
+        data = {"Creator": software, "Title": title, "Subject": inputs, "Keywords": files}
+    elif fmt == "svg":
+        data = {"Creator": software, "Title": title, "Description": inputs, "Source": files}
+    else:
+        return {}
+    return {key: value for key, value in data.items() if value}
+
+
+def _figure_title(fig: Figure) -> str:
+    suptitle = fig.get_suptitle() if hasattr(fig, "get_suptitle") else ""
+    if suptitle:
+        return " ".join(suptitle.split())
+    for ax in fig.axes:
+        if ax.get_title():
+            return " ".join(ax.get_title().split())
+    return ""
+
+
+def _format_of(fname: Any, given: str | None) -> str:
+    if given:
+        return given.lower()
+    if isinstance(fname, (str, os.PathLike)):
+        suffix = Path(fname).suffix.lower().lstrip(".")
+        if suffix:
+            return suffix
+    return str(matplotlib.rcParams["savefig.format"]).lower()
+
+
+class ProvenanceFigure(Figure):
+    """A Figure whose ``savefig`` writes :func:`metadata` (explicit metadata win)."""
+
+    def savefig(self, fname: Any, **kwargs: Any) -> None:  # type: ignore[override]
+        fmt = _format_of(fname, kwargs.get("format"))
+        found = metadata(self, fmt)
+        if found:
+            kwargs["metadata"] = {**found, **(kwargs.get("metadata") or {})}
+        super().savefig(fname, **kwargs)
+
+
+def save(fig: Figure, fname: str | os.PathLike[str] | Any, dpi: float = 150,
+         format: str | None = None, **kwargs: Any) -> None:  # noqa: A002
+    """``fig.savefig`` with :func:`metadata`, for any figure drawn here (also one made by
+    the caller and passed as ``ax=``). ``format``: from the file name by default."""
+    fmt = _format_of(fname, format)
+    found = metadata(fig, fmt)
+    if found:
+        kwargs["metadata"] = {**found, **(kwargs.get("metadata") or {})}
+    Figure.savefig(fig, fname, dpi=dpi, format=fmt, **kwargs)
+
+
+# ------------------------------------------------------------------------------ labels
+
+
+def _label(name: str, unit: str, symbol: str = "") -> str:
+    """``name $symbol$ [unit]``: the axis-label convention of every figure."""
+    text = f"{name} ${symbol}$" if symbol else name
+    return f"{text} [{unit or '1'}]"
+
+
+def _parameter_label(name: str) -> str:
+    words, symbol = _SYMBOLS.get(name, (name, ""))
+    return _label(words, PARAMETER_UNITS.get(name, "1"), symbol)
+
+
+def _unit(run: Run, dataset: str) -> str:
+    return run.unit(dataset, FILE_UNITS.get(dataset, ""))
+
+
+def _cycle_label(run: Run, name: str = "cycle", symbol: str = "c") -> str:
+    return _label(name, _unit(run, "strobe/cycle"), symbol)
+
+
+TIME_LABEL_UNIT = "drive cycles"
+
+
+def run_labels(runs: Sequence[RunLike], skip: Iterable[str] = ()) -> list[str]:
+    """Legend labels telling overlaid runs apart by what differs between them.
+
+    In order: the model parameters that differ (``$A$ = 2.2``; ``skip`` names parameters
+    not to use, e.g. a swept one), else the keys of ``&initial`` that differ (``seed 4``),
+    else those of ``&run`` (``transient = 500``), else ``run 1``, ``run 2``, ... Never a
+    file name.
+    """
+    runs = [as_run(r) for r in runs]
+    if len(runs) < 2:
+        return ["" for _ in runs]
+    skipped = set(skip)
+    model = [name for name in ("n", "amplitude", "omega", "damping", "restitution")
+             if name not in skipped and len({getattr(r.params, name) for r in runs}) > 1]
+    boundary = len({r.params.boundary for r in runs}) > 1
+    spacing = "spacing" not in skipped and len({tuple(r.params.spacing) for r in runs}) > 1
+    if model or boundary or spacing:
+        labels = []
+        for run in runs:
+            parts = [f"${_SYMBOLS[name][1]}$ = {getattr(run.params, name):g}"
+                     for name in model]
+            if spacing:
+                a = run.params.spacing
+                parts.append(f"$a$ = {a[0]:g}" if np.all(a == a[0]) else "spacing varies")
+            if boundary:
+                parts.append(f"{run.params.boundary} ends")
+            labels.append(", ".join(parts))
+        return labels
+    for group, describe in (("initial", _initial_label), ("run", _run_group_label)):
+        keys = _differing_keys([r.namelist().get(group, {}) for r in runs])
+        if keys:
+            labels = [describe(r.namelist().get(group, {}), keys) for r in runs]
+            if len(set(labels)) == len(labels):
+                return labels
+    return [f"run {i}" for i in range(1, len(runs) + 1)]
+
+
+def _value(text: str) -> Any:
+    text = text.strip().strip("'\"")
+    try:
+        return float(text.replace("d", "e").replace("D", "e"))
+    except ValueError:
+        return text.lower()
+
+
+def _differing_keys(groups: Sequence[dict[str, str]]) -> list[str]:
+    keys = list(dict.fromkeys(k for g in groups for k in g))
+    return [k for k in keys
+            if len({_value(g[k]) if k in g else None for g in groups}) > 1]
+
+
+def _shown(text: str) -> str:
+    value = _value(text)
+    return f"{value:g}" if isinstance(value, float) else str(value)
+
+
+def _initial_label(group: dict[str, str], keys: Sequence[str]) -> str:
+    kind = _shown(group.get("kind", "rest"))
+    parts = []
+    if "kind" in keys:
+        parts.append(f"{kind} start")
+    if kind == "random":
+        if "seed" in keys or "kind" in keys:
+            parts.append(f"seed {_shown(group.get('seed', '1'))}")
+        for key, symbol in (("x_amp", r"x_{\mathrm{amp}}"), ("v_amp", r"v_{\mathrm{amp}}")):
+            if key in keys and key in group:
+                parts.append(f"${symbol}$ = {_shown(group[key])}")
+    if kind == "file" and ("file" in keys) and "file" in group:
+        parts.append("continued run")
+    return ", ".join(parts) or f"{kind} start"
+
+
+def _run_group_label(group: dict[str, str], keys: Sequence[str]) -> str:
+    return ", ".join(f"{key} = {_shown(group[key])}" for key in keys
+                     if key in group and key in ("transient", "cycles", "phase",
+                                                 "stick_speed"))
+
+
 # ------------------------------------------------------------------------ space-amplitude
 
 
 def space_amplitude(
-    runs: Sequence[Run], cycles: int | None = None, periods: str = "file"
+    runs: RunLike | Sequence[RunLike],
+    cycles: int | None = None,
+    periods: str = "file",
+    labels: Sequence[str] | None = None,
+    ax: Axes | None = None,
+    ylim: tuple[float, float] | None = None,
 ) -> Figure:
     """Overlaid strobe snapshots: displacement at the section against equilibrium position.
 
@@ -71,14 +401,24 @@ def space_amplitude(
     as thick vertical lines when the boundary is fixed. ``periods``: ``'file'`` labels
     each site with the period the simulator stored, ``/strobe/period`` (found over the
     run's last records, docs/model.md section 6.3, whatever ``cycles`` shows; no labels
-    for a file without it), ``'none'`` shows no labels.
+    for a file without it), ``'none'`` shows no labels. Several runs get a legend:
+    ``labels``, or by default :func:`run_labels` (the parameter or seed that differs).
+    ``ax``: one Axes to draw into. ``ylim``: a displacement range shared with other figures
+    (the title says how many values fall outside it).
     """
+    runs = _as_runs(runs, ("strobe",), "space-amplitude")
     if not runs:
         raise FigureError("space-amplitude needs at least one run")
     if periods not in ("file", "none"):
         raise FigureError(f"periods = {periods!r} must be 'file' or 'none'")
-    fig = Figure(figsize=(8.0, 5.0), layout="constrained")
-    ax = fig.add_subplot()
+    if labels is not None and len(labels) != len(runs):
+        raise FigureError(f"{len(labels)} labels for {len(runs)} runs")
+    if ax is None:
+        fig: Figure = _new_figure(8.0, 5.0)
+        ax = fig.add_subplot()
+    else:
+        (ax,) = _axes_list(ax, 1, "space-amplitude")
+        fig = _root(ax)
     colours = _overlay_colours(len(runs))
     label_rows = 0
     for index, (run, colour) in enumerate(zip(runs, colours)):
@@ -88,20 +428,26 @@ def space_amplitude(
         lines = ax.plot(pos, rows.T, color=colour, linewidth=0.5, marker="o", markersize=1.8)
         for line in lines:
             line.set_gid(f"strobe-{index}")
-        labels = None if periods == "none" else strobe.period
-        if labels is not None:
-            _period_labels(ax, pos, labels, colour, label_rows)
+        shown_periods = None if periods == "none" else strobe.period
+        if shown_periods is not None:
+            _period_labels(ax, pos, shown_periods, colour, label_rows)
             label_rows += 1
     _draw_walls(ax, runs)
     ax.set_xlim(*_x_limits(runs))
-    ax.set_xlabel(_with_unit("equilibrium position", runs[0].unit("params/spacing")))
-    ax.set_ylabel(_with_unit("displacement $x_i$ at the section", runs[0].unit("strobe/x")))
-    if len(runs) > 1:
-        handles = [Line2D([], [], color=c, label=r.name) for r, c in zip(runs, colours)]
-        ax.legend(handles=handles, loc="lower right", fontsize="small")
+    ax.set_xlabel(_label("equilibrium position", _unit(runs[0], "params/spacing")))
+    ax.set_ylabel(_label("displacement at the section", _unit(runs[0], "strobe/x"), "x_i"))
+    names = list(labels) if labels is not None else run_labels(runs)
+    if len(runs) > 1 or labels is not None:
+        handles = [Line2D([], [], color=c, marker="o", markersize=3, label=name)
+                   for name, c in zip(names, colours)]
+        ax.legend(handles=handles, loc="best", fontsize="small", framealpha=0.9)
     shown = min(_strobe(runs[0]).n_record, cycles or _strobe(runs[0]).n_record)
-    ax.set_title(f"{_title(runs[0])}\nlast {shown} cycles", pad=6 + 11 * label_rows,
-                 fontsize="medium")
+    differing = _differing_parameters(runs)
+    note = "; labels: period in drive cycles, ap = aperiodic" if label_rows else ""
+    note += _outside(ax, ylim, [_last(_strobe(run).x, cycles) for run in runs])
+    ax.set_title(f"{_title(runs[0], skip=differing)}\nlast {shown} cycles{note}",
+                 pad=6 + 11 * label_rows, fontsize="medium")
+    _record_sources(fig, runs)
     return fig
 
 
@@ -117,35 +463,55 @@ def _period_labels(ax: Axes, pos: np.ndarray, periods: np.ndarray, colour: str, 
 
 
 def space_time_amplitude(
-    run: Run, panel_cycles: int = 60, panels: int | None = None, start: int | None = None
+    run: RunLike, panel_cycles: int = 60, panels: int | None = None,
+    start: int | None = None, ax: Sequence[Axes] | None = None,
 ) -> Figure:
     """3-D waterfall of strobe snapshots: site on X, time (cycles) on Y, displacement on Z.
 
     The record from cycle ``start`` (default: the first recorded) is split into panels of
-    ``panel_cycles`` cycles (at most 8 by default).
+    ``panel_cycles`` cycles (at most 8 by default). All panels share the displacement
+    axis (the range of the whole record). ``ax``: one 3-D Axes per panel
+    (``projection='3d'``), in panel order.
     """
+    run = as_run(run, ("strobe",), "space-time-amplitude")
     strobe = _strobe(run)
     ranges = _ranges(strobe.cycle, panel_cycles, panels, start)
-    n_rows, n_cols = _grid(len(ranges))
-    fig = Figure(figsize=(5.6 * n_cols, 4.6 * n_rows), layout="constrained")
+    owned = ax is None
+    if ax is None:
+        n_rows, n_cols = _grid(len(ranges))
+        # 3-D axes: placed by hand (constrained layout does not see their axis labels)
+        fig: Figure = ProvenanceFigure(figsize=(5.6 * n_cols, 4.8 * n_rows + 0.4))
+        fig.subplots_adjust(left=0.0, right=0.97, bottom=0.02,
+                            top=1.0 - 0.7 / (4.8 * n_rows + 0.4), wspace=0.02, hspace=0.08)
+        axes = [fig.add_subplot(n_rows, n_cols, p + 1, projection="3d")
+                for p in range(len(ranges))]
+    else:
+        axes = _axes_list(ax, len(ranges), "space-time-amplitude")
+        if any(a.name != "3d" for a in axes):
+            raise FigureError("space-time-amplitude draws into 3-D axes "
+                              "(add_subplot(..., projection='3d'))")
+        fig = _root(axes[0])
     pos = run.params.equilibrium
     offset = run.params.section_offset
     z_limits = _padded(strobe.x)
-    for p, (start, stop) in enumerate(ranges):
-        ax = fig.add_subplot(n_rows, n_cols, p + 1, projection="3d")
-        chosen = (strobe.cycle >= start) & (strobe.cycle < stop)
+    for p, (ax3, (first, stop)) in enumerate(zip(axes, ranges)):
+        chosen = (strobe.cycle >= first) & (strobe.cycle < stop)
         for cycle, row in zip(strobe.cycle[chosen], strobe.x[chosen]):
-            ax.plot(pos, np.full(pos.shape, cycle + offset), row, color="k", linewidth=0.6)
-        ax.set_xlim(*_x_limits([run]))
-        ax.set_ylim(start + offset, stop + offset)
-        ax.set_zlim(*z_limits)
-        ax.set_xlabel("equilibrium position", fontsize="small")
-        ax.set_ylabel("time / T (cycles)", fontsize="small")
-        ax.set_zlabel("$x$", fontsize="small")
-        ax.tick_params(labelsize="x-small")
-        ax.set_title(f"({chr(ord('a') + p)}) cycles {start}-{stop - 1}", fontsize="small")
-        ax.view_init(elev=32, azim=-62)
-    fig.suptitle(_title(run), fontsize="medium")
+            ax3.plot(pos, np.full(pos.shape, cycle + offset), row, color="k", linewidth=0.6)
+        ax3.set_xlim(*_x_limits([run]))
+        ax3.set_ylim(first + offset, stop + offset)
+        ax3.set_zlim(*z_limits)
+        ax3.set_xlabel(_label("equilibrium position", _unit(run, "params/spacing")),
+                       fontsize="small")
+        ax3.set_ylabel(_label("time", TIME_LABEL_UNIT, "t"), fontsize="small")
+        ax3.set_zlabel(_label("displacement", _unit(run, "strobe/x"), "x_i"),
+                       fontsize="small")
+        ax3.tick_params(labelsize="x-small")
+        ax3.set_title(f"({chr(ord('a') + p)}) cycles {first}-{stop - 1}", fontsize="small")
+        ax3.view_init(elev=32, azim=-62)
+    if owned:
+        fig.suptitle(_title(run), fontsize="medium")
+    _record_sources(fig, [run])
     return fig
 
 
@@ -153,19 +519,22 @@ def space_time_amplitude(
 
 
 def shock_wave(
-    run: Run,
+    run: RunLike,
     panel_cycles: int = 60,
     panels: int | None = None,
     max_wait: float = 1.0,
     start: int | None = None,
+    ax: Sequence[Axes] | None = None,
 ) -> Figure:
     """Shock-wave plot (docs/model.md section 10.4): collision time against site position.
 
     Right-wall waves in the upper axes and left-wall waves in the lower axes of each
     panel; panels as in :func:`space_time_amplitude` for the same options. Waves are
     built from all events up to the end of the last panel, so a wave that began before
-    ``start`` keeps its history.
+    ``start`` keeps its history. ``ax``: two Axes per panel, (upper, lower) of panel 1,
+    then of panel 2, ...
     """
+    run = as_run(run, ("events",), "shock-wave")
     if run.events is None:
         raise FigureError(f"{run.path}: no events recorded, the shock-wave plot needs them")
     if max_wait <= 0:
@@ -183,37 +552,50 @@ def shock_wave(
     before_end = events.time < (ranges[-1][1] + params.section_offset) * period
     waves = build_shock_waves(events.time[before_end], events.site[before_end], params.n,
                               period, max_wait, kind=events.kind[before_end])
-    n_rows, n_cols = _grid(len(ranges))
-    fig = Figure(figsize=(5.0 * n_cols, 5.2 * n_rows), layout="constrained")
-    outer = fig.add_gridspec(n_rows, n_cols)
+    owned = ax is None
+    if ax is None:
+        n_rows, n_cols = _grid(len(ranges))
+        fig: Figure = _new_figure(5.0 * n_cols, 5.2 * n_rows)
+        outer = fig.add_gridspec(n_rows, n_cols)
+        pairs = []
+        for p in range(len(ranges)):
+            inner = outer[p // n_cols, p % n_cols].subgridspec(2, 1, hspace=0.0)
+            upper = fig.add_subplot(inner[0])
+            pairs.append((upper, fig.add_subplot(inner[1], sharex=upper)))
+    else:
+        given = _axes_list(ax, 2 * len(ranges), "shock-wave")
+        pairs = list(zip(given[0::2], given[1::2]))
+        fig = _root(given[0])
     x_limits = _x_limits([run])
-    for p, (start, stop) in enumerate(ranges):
-        inner = outer[p // n_cols, p % n_cols].subgridspec(2, 1, hspace=0.0)
-        upper = fig.add_subplot(inner[0])
-        lower = fig.add_subplot(inner[1], sharex=upper)
-        t0, t1 = start + params.section_offset, stop + params.section_offset
-        for ax, side, colour in ((upper, "right", RIGHT_COLOUR), (lower, "left", LEFT_COLOUR)):
-            ax.set_label(f"shock-{side}-{p}")
+    time_label = _label("time", TIME_LABEL_UNIT, "t")
+    for p, ((upper, lower), (first, stop)) in enumerate(zip(pairs, ranges)):
+        t0, t1 = first + params.section_offset, stop + params.section_offset
+        for axis, side, colour in ((upper, "right", RIGHT_COLOUR),
+                                   (lower, "left", LEFT_COLOUR)):
+            axis.set_label(f"shock-{side}-{p}")
             side_waves = [w for w in waves if w.side == side]
-            _draw_waves(ax, side_waves, params.site_positions, period, (t0, t1), colour)
+            _draw_waves(axis, side_waves, params.site_positions, period, (t0, t1), colour)
             if params.walls:
                 for x in (0.0, params.length):
-                    ax.axvline(x, gid="wall", **WALL_STYLE)
-            ax.set_ylim(t0, t1)
-            ax.set_xlim(*x_limits)
-            ax.set_ylabel("time / T (cycles)", fontsize="small")
-            ax.tick_params(labelsize="x-small")
-            ax.text(1.01, 0.5, f"from the {side} wall", transform=ax.transAxes,
-                    rotation=90, ha="left", va="center", fontsize="small", color=colour)
+                    axis.axvline(x, gid="wall", **WALL_STYLE)
+            axis.set_ylim(t0, t1)
+            axis.set_xlim(*x_limits)
+            axis.set_ylabel(time_label, fontsize="small")
+            axis.tick_params(labelsize="x-small")
+            axis.text(1.01, 0.5, f"from the {side} wall", transform=axis.transAxes,
+                      rotation=90, ha="left", va="center", fontsize="small", color=colour)
         upper.tick_params(labelbottom=False)
-        lower.set_xlabel("equilibrium position of the colliding site", fontsize="small")
-        upper.set_title(f"({chr(ord('a') + p)}) cycles {start}-{stop - 1}", fontsize="small")
+        lower.set_xlabel(_label("equilibrium position of the colliding site",
+                                _unit(run, "params/spacing")), fontsize="small")
+        upper.set_title(f"({chr(ord('a') + p)}) cycles {first}-{stop - 1}", fontsize="small")
     title = f"{_title(run)}; wave dies after {max_wait:g} T without a collision"
     shown = events.time[before_end] >= (ranges[0][0] + params.section_offset) * period
     if events.time.size and not shown.any():
         title += (f"\nno collision in the shown cycles: the events span t/T = "
                   f"{events.time.min() / period:.6g} to {events.time.max() / period:.6g}")
-    fig.suptitle(title, fontsize="medium")
+    if owned:
+        fig.suptitle(title, fontsize="medium")
+    _record_sources(fig, [run])
     return fig
 
 
@@ -248,32 +630,43 @@ def _draw_waves(
 # -------------------------------------------------------------------------------- poincare
 
 
-def poincare(run: Run, site: int = 1, cycles: int | None = None) -> Figure:
-    """Poincare section (x, v) of oscillator ``site`` (1-based), coloured by cycle."""
+def poincare(run: RunLike, site: int = 1, cycles: int | None = None,
+             ax: Axes | None = None) -> Figure:
+    """Poincare section (x, v) of oscillator ``site`` (1-based), coloured by cycle, with
+    a colour bar. ``ax``: one Axes."""
+    run = as_run(run, ("strobe",), "poincare")
     strobe = _strobe(run)
     _check_site(site, run.params.n)
     x = _last(strobe.x[:, site - 1], cycles)
     v = _last(strobe.v[:, site - 1], cycles)
     cycle = _last(strobe.cycle, cycles)
-    fig = Figure(figsize=(6.0, 5.0), layout="constrained")
-    ax = fig.add_subplot()
+    if ax is None:
+        fig: Figure = _new_figure(6.0, 5.0)
+        ax = fig.add_subplot()
+    else:
+        (ax,) = _axes_list(ax, 1, "poincare")
+        fig = _root(ax)
     points = ax.scatter(x, v, c=cycle, cmap="viridis", s=14, linewidths=0, gid="section")
-    fig.colorbar(points, ax=ax, label="cycle")
-    ax.set_xlabel(_with_unit(f"$x_{{{site}}}$", run.unit("strobe/x")))
-    ax.set_ylabel(_with_unit(f"$v_{{{site}}}$", run.unit("strobe/v")))
+    _parent(ax).colorbar(points, ax=ax, label=_cycle_label(run))
+    ax.set_xlabel(_label("displacement", _unit(run, "strobe/x"), f"x_{{{site}}}"))
+    ax.set_ylabel(_label("velocity", _unit(run, "strobe/v"), f"v_{{{site}}}"))
     ax.set_title(f"{_title(run)}\noscillator {site}, section phase "
                  f"{run.params.phase:.3g} rad, {x.size} cycles", fontsize="medium")
+    _record_sources(fig, [run])
     return fig
 
 
 # ---------------------------------------------------------------------------- bifurcation
 
 
-def bifurcation(run: Run, sites: Sequence[int] | None = None) -> Figure:
+def bifurcation(run: RunLike, sites: Sequence[int] | None = None,
+                ax: Sequence[Axes] | None = None) -> Figure:
     """Bifurcation diagram: recorded strobe positions against the swept parameter.
 
-    One panel per oscillator (``sites``, 1-based; all by default).
+    One panel per oscillator (``sites``, 1-based; all by default), all with the same
+    displacement range. ``ax``: one Axes per site, in the order of ``sites``.
     """
+    run = as_run(run, ("sweep",), "bifurcation")
     sweep = _sweep_1d(run)
     sites = list(range(1, run.params.n + 1)) if sites is None else list(sites)
     if not sites:
@@ -281,20 +674,30 @@ def bifurcation(run: Run, sites: Sequence[int] | None = None) -> Figure:
     for site in sites:
         _check_site(site, run.params.n)
     n_rows, n_cols = _grid(len(sites), max_cols=2 if len(sites) <= 8 else 4)
-    fig = Figure(figsize=(5.0 * n_cols, 2.6 * n_rows + 0.6), layout="constrained")
-    first = None
-    for index, site in enumerate(sites):
-        ax = fig.add_subplot(n_rows, n_cols, index + 1, sharex=first)
-        if first is None:
-            first = ax
-        _bifurcation_points(ax, sweep, site)
-        ax.set_ylabel(f"$x_{{{site}}}$")
-        ax.set_title(f"oscillator {site}", fontsize="small")
-        if index + n_cols < len(sites):
-            ax.tick_params(labelbottom=False)
+    owned = ax is None
+    if ax is None:
+        fig: Figure = _new_figure(5.0 * n_cols, 2.6 * n_rows + 0.6)
+        axes: list[Axes] = []
+        for index in range(len(sites)):
+            axes.append(fig.add_subplot(n_rows, n_cols, index + 1,
+                                        sharex=axes[0] if axes else None))
+    else:
+        axes = _axes_list(ax, len(sites), "bifurcation")
+        fig = _root(axes[0])
+    y_limits = _padded(sweep.x[:, :, [s - 1 for s in sites]])
+    unit = _unit(run, "sweep/x")
+    for index, (axis, site) in enumerate(zip(axes, sites)):
+        _bifurcation_points(axis, sweep, site)
+        axis.set_ylim(*y_limits)
+        axis.set_ylabel(_label("displacement", unit, f"x_{{{site}}}"), fontsize="small")
+        axis.set_title(f"oscillator {site}", fontsize="small")
+        if owned and index + n_cols < len(sites):
+            axis.tick_params(labelbottom=False)
         else:
-            ax.set_xlabel(_parameter_label(sweep.parameter), fontsize="small")
-    fig.suptitle(_title(run, skip=sweep.parameter), fontsize="medium")
+            axis.set_xlabel(_parameter_label(sweep.parameter), fontsize="small")
+    if owned:
+        fig.suptitle(_title(run, skip=sweep.parameter), fontsize="medium")
+    _record_sources(fig, [run])
     return fig
 
 
@@ -308,91 +711,188 @@ def _bifurcation_points(ax: Axes, sweep: Sweep, site: int) -> None:
 # ------------------------------------------------------------------------------- lyapunov
 
 
-def lyapunov(runs: Sequence[Run], k: int = 10, with_bifurcation: bool = False) -> Figure:
+def lyapunov(runs: RunLike | Sequence[RunLike], k: int = 10, with_bifurcation: bool = False,
+             ax: Sequence[Axes] | None = None) -> Figure:
     """The largest ``k`` Lyapunov exponents (bits/cycle) against the swept parameter.
 
     One column per sweep file; with ``with_bifurcation`` a bifurcation panel of
-    oscillator 1 above the exponents (the paper's fig. 11).
+    oscillator 1 above the exponents (the paper's fig. 11). Each exponent is a line with a
+    band of +-1 stored standard error (``/sweep/stderr``; bars for a sweep that goes back
+    and forth), coloured by its index j, with a colour bar for j. All exponent panels share
+    one y range, all bifurcation panels another. ``ax``: the axes row by row: with
+    ``with_bifurcation`` the bifurcation axes of every column, then the exponent axes;
+    otherwise one exponent Axes per column.
     """
+    runs = _as_runs(runs, ("sweep", "sweep/exponents"), "lyapunov")
     if not runs:
         raise FigureError("lyapunov needs at least one sweep file")
     if k < 1:
         raise FigureError(f"k = {k} must be >= 1")
-    n_rows = 2 if with_bifurcation else 1
-    fig = Figure(figsize=(5.5 * len(runs), 3.2 * n_rows + 0.6), layout="constrained")
-    for column, run in enumerate(runs):
-        sweep = _sweep_1d(run)
+    sweeps = [_sweep_1d(run) for run in runs]
+    for run, sweep in zip(runs, sweeps):
         if sweep.exponents is None:
             raise FigureError(f"{run.path}: the sweep has no Lyapunov exponents")
-        top = None
-        if with_bifurcation:
-            top = fig.add_subplot(n_rows, len(runs), column + 1)
+    n_rows, n_cols = (2 if with_bifurcation else 1), len(runs)
+    owned = ax is None
+    if ax is None:
+        row_height = 3.4 if n_cols > 1 else 4.2
+        fig: Figure = _new_figure(max(8.0, 5.6 * n_cols) + 1.0, row_height * n_rows + 0.8)
+        grid = fig.subplots(n_rows, n_cols, squeeze=False, sharex="col")
+        axes = list(grid.ravel())
+    else:
+        axes = _axes_list(ax, n_rows * n_cols, "lyapunov")
+        fig = _root(axes[0])
+    tops = axes[:n_cols] if with_bifurcation else []
+    bottoms = axes[(n_rows - 1) * n_cols:]
+    shown = max(min(k, s.exponents.shape[1]) for s in sweeps)  # type: ignore[union-attr]
+    cmap, norm = _index_colours(shown)
+    for column, (run, sweep) in enumerate(zip(runs, sweeps)):
+        title = _title(run, skip=sweep.parameter)
+        if tops:
+            top = tops[column]
             _bifurcation_points(top, sweep, 1)
-            top.set_ylabel("$x_1$")
-            top.tick_params(labelbottom=False)
-            top.set_title(_title(run, skip=sweep.parameter), fontsize="small")
-        ax = fig.add_subplot(n_rows, len(runs), (n_rows - 1) * len(runs) + column + 1,
-                             sharex=top)
-        _exponent_lines(ax, sweep, k)
-        ax.set_xlabel(_parameter_label(sweep.parameter))
-        ax.set_ylabel(_with_unit("Lyapunov exponents", run.unit("sweep/exponents",
-                                                                 "bits/cycle")))
-        if top is None:
-            ax.set_title(_title(run, skip=sweep.parameter), fontsize="small")
+            top.set_ylabel(_label("displacement", _unit(run, "sweep/x"), "x_1"))
+            if owned:
+                top.tick_params(labelbottom=False)
+            top.set_title(title, fontsize="small")
+        bottom = bottoms[column]
+        _exponent_lines(bottom, sweep, k, cmap, norm)
+        bottom.set_xlabel(_parameter_label(sweep.parameter))
+        bottom.set_ylabel(_label("Lyapunov exponents", _unit(run, "sweep/exponents"),
+                                 r"\lambda_j"))
+        if not tops:
+            bottom.set_title(title, fontsize="small")
+    if tops:
+        _same_limits(tops, [s.x[:, :, 0] for s in sweeps])
+    _same_limits(bottoms, [_exponent_range(s, k) for s in sweeps])
+    if shown > 1:
+        bar = _parent(bottoms[0]).colorbar(
+            ScalarMappable(norm=norm, cmap=cmap), ax=bottoms, ticks=_index_ticks(shown),
+            label=_label("exponent index", "1", "j"), pad=0.02, fraction=0.04, aspect=25)
+        bar.ax.set_gid("colorbar-index")
+        bar.minorticks_off()
+    if owned:
+        total = max(s.exponents.shape[1] for s in sweeps)  # type: ignore[union-attr]
+        which = f"all {shown}" if shown == total else f"the largest {shown}"
+        errors = [s.stderr[:, :shown] for s in sweeps if s.stderr is not None]
+        note = ""
+        if errors:
+            finite = np.concatenate([e[np.isfinite(e)] for e in errors])
+            largest = float(finite.max()) if finite.size else 0.0
+            note = (f", bands of $\\pm$1 standard error (at most {largest:.2g} "
+                    f"{_unit(runs[0], 'sweep/stderr')})")
+        fig.suptitle(f"{which} Lyapunov exponents{note}", fontsize="medium")
+    _record_sources(fig, runs)
     return fig
 
 
-def _exponent_lines(ax: Axes, sweep: Sweep, k: int) -> None:
+def _exponent_lines(ax: Axes, sweep: Sweep, k: int, cmap: ListedColormap,
+                    norm: BoundaryNorm) -> None:
     assert sweep.exponents is not None
     shown = min(k, sweep.exponents.shape[1])
     style = _sweep_style(sweep.values)
-    colours = _ramp(shown)
+    monotonic = "linestyle" not in style
     for j in range(shown):
-        ax.plot(sweep.values, sweep.exponents[:, j], color=colours[j], linewidth=0.8,
+        colour = cmap(norm(j + 1)) if cmap.N > 1 else "k"
+        exponent = sweep.exponents[:, j]
+        if sweep.stderr is not None:
+            error = sweep.stderr[:, j]
+            if monotonic:
+                ax.fill_between(sweep.values, exponent - error, exponent + error,
+                                color=colour, alpha=BAND_ALPHA, linewidth=0,
+                                gid=f"stderr-{j + 1}")
+            else:
+                bars = ax.errorbar(sweep.values, exponent, yerr=error, fmt="none",
+                                   ecolor=colour, elinewidth=0.6, alpha=0.6)
+                for collection in bars.lines[2]:
+                    collection.set_gid(f"stderr-{j + 1}")
+        ax.plot(sweep.values, exponent, color=colour, linewidth=0.7,
                 gid=f"exponent-{j + 1}", **style)
     ax.axhline(0.0, color="0.3", linewidth=0.8, linestyle="--", gid="zero")
-    ax.text(0.01, 0.98, f"largest {shown} exponents", transform=ax.transAxes,
-            ha="left", va="top", fontsize="x-small")
+
+
+def _exponent_range(sweep: Sweep, k: int) -> np.ndarray:
+    assert sweep.exponents is not None
+    shown = min(k, sweep.exponents.shape[1])
+    values = sweep.exponents[:, :shown]
+    if sweep.stderr is not None:
+        error = sweep.stderr[:, :shown]
+        values = np.concatenate((values - error, values + error))
+    return np.append(values[np.isfinite(values)], 0.0)
+
+
+def _index_colours(count: int) -> tuple[ListedColormap, BoundaryNorm]:
+    """A discrete colour map for exponent indices 1..count, and its norm."""
+    cmap = ListedColormap(_ramp(count), name="exponent-index")
+    norm = BoundaryNorm(np.arange(0.5, count + 1.0), cmap.N)
+    return cmap, norm
+
+
+def _index_ticks(count: int) -> list[int]:
+    if count <= 12:
+        return list(range(1, count + 1))
+    step = math.ceil(count / 8)
+    ticks = list(range(1, count + 1, step))
+    if ticks[-1] != count:
+        ticks.append(count)
+    return ticks
 
 
 # --------------------------------------------------------------------------- ky-dimension
 
 
-def ky_dimension(runs: Sequence[Run]) -> Figure:
+def ky_dimension(runs: RunLike | Sequence[RunLike], labels: Sequence[str] | None = None,
+                 ax: Axes | None = None, ylim: tuple[float, float] | None = None) -> Figure:
     """Kaplan-Yorke dimension against the swept parameter, one line per sweep file.
 
     Draws ``/sweep/ky_dimension``, the simulator's value at each point (docs/model.md
-    section 7.5). A 2-D sweep is drawn as a scatter coloured by the dimension.
+    section 7.5; the file stores no standard error for it). Several files get a legend:
+    ``labels``, or by default :func:`run_labels` (the parameter that differs). A 2-D
+    sweep is drawn as a scatter coloured by the dimension, with a colour bar. ``ax``: one
+    Axes. ``ylim``: a range shared with other figures (1-D sweeps; the title says how many
+    values fall outside it).
     """
+    runs = _as_runs(runs, ("sweep", "sweep/ky_dimension"), "ky-dimension")
     if not runs:
         raise FigureError("ky-dimension needs at least one sweep file")
-    fig = Figure(figsize=(7.0, 4.5), layout="constrained")
-    ax = fig.add_subplot()
+    if labels is not None and len(labels) != len(runs):
+        raise FigureError(f"{len(labels)} labels for {len(runs)} runs")
+    if ax is None:
+        fig: Figure = _new_figure(7.0, 4.5)
+        ax = fig.add_subplot()
+    else:
+        (ax,) = _axes_list(ax, 1, "ky-dimension")
+        fig = _root(ax)
     colours = _overlay_colours(len(runs))
-    differing = _differing_parameters(runs)
-    for run, colour in zip(runs, colours):
+    swept = {name for run in runs if run.sweep is not None
+             for name in (run.sweep.parameter, run.sweep.parameter2) if name}
+    names = list(labels) if labels is not None else run_labels(runs, skip=swept)
+    dimension_label = _label("Kaplan-Yorke dimension", "1", "D_{KY}")
+    for run, colour, name in zip(runs, colours, names):
         sweep = _sweep(run)
         dimension = _sweep_ky(run, sweep)
-        label = ", ".join(f"${_SYMBOLS[name][1]}$ = {getattr(run.params, name):g}"
-                          for name in differing) or run.name
         if sweep.is_2d:
             if len(runs) > 1:
                 raise FigureError("ky-dimension overlays only 1-D sweeps")
             points = ax.scatter(sweep.values[:, 0], sweep.values[:, 1], c=dimension,
                                 cmap="magma", s=16, linewidths=0, gid="ky")
-            fig.colorbar(points, ax=ax, label="Kaplan-Yorke dimension $D_{KY}$")
+            _parent(ax).colorbar(points, ax=ax, label=dimension_label)
             ax.set_xlabel(_parameter_label(sweep.parameter))
             ax.set_ylabel(_parameter_label(sweep.parameter2))
         else:
-            ax.plot(sweep.values, dimension, color=colour, linewidth=0.9, label=label,
+            ax.plot(sweep.values, dimension, color=colour, linewidth=0.9, label=name,
                     gid="ky", **_sweep_style(sweep.values, marker="."))
             ax.set_xlabel(_parameter_label(sweep.parameter))
-            ax.set_ylabel("Kaplan-Yorke dimension $D_{KY}$")
-    if len(runs) > 1:
+            ax.set_ylabel(dimension_label)
+            ax.set_ylim(bottom=0.0)
+    if len(runs) > 1 or labels is not None:
         ax.legend(fontsize="small")
-    first = runs[0].sweep
-    skip = (first.parameter, first.parameter2) if first is not None else ()
-    ax.set_title(_title(runs[0], skip=(*skip, *differing)), fontsize="medium")
+    differing = _differing_parameters(runs)
+    note = ""
+    if not any(_sweep(run).is_2d for run in runs):
+        note = _outside(ax, ylim, [_sweep_ky(run, _sweep(run)) for run in runs])
+    ax.set_title(_title(runs[0], skip=(*swept, *differing)) + note, fontsize="medium")
+    _record_sources(fig, runs)
     return fig
 
 
@@ -413,43 +913,76 @@ def _sweep_ky(run: Run, sweep: Sweep) -> np.ndarray:
 # ------------------------------------------------------------------------------- spectrum
 
 
-def spectrum(run: Run) -> Figure:
-    """Lyapunov spectrum of one run with error bars, and convergence of the estimates."""
+def spectrum(run: RunLike, ax: Axes | Sequence[Axes] | None = None) -> Figure:
+    """Lyapunov spectrum of one run with error bars (+-1 stored standard error), and the
+    convergence of the running estimates coloured by index j (with a colour bar), on the
+    same y range. A run without running estimates (``post.api.lyapunov``) gets the
+    spectrum alone. ``ax``: one Axes (the spectrum) or two (spectrum, convergence).
+    """
+    run = as_run(run, ("lyapunov",), "spectrum")
     lyap = run.lyapunov
     if lyap is None:
         raise FigureError(f"{run.path}: no Lyapunov exponents in this run")
-    unit = run.unit("lyapunov/exponents", "bits/cycle")
-    fig = Figure(figsize=(11.0, 4.6), layout="constrained")
-    left, right = fig.subplots(1, 2)
+    unit = _unit(run, "lyapunov/exponents")
+    has_running = lyap.running.shape[0] > 0
+    owned = ax is None
+    if ax is None:
+        fig: Figure = _new_figure(11.0 if has_running else 6.0, 4.6)
+        axes = list(np.ravel(fig.subplots(1, 2 if has_running else 1, squeeze=False)))
+    else:
+        count = 1 if isinstance(ax, Axes) else len(np.ravel(np.asarray(ax, dtype=object)))
+        axes = _axes_list(ax, 2 if count == 2 else 1, "spectrum")
+        fig = _root(axes[0])
+    left = axes[0]
     index = np.arange(1, lyap.exponents.size + 1)
     left.errorbar(index, lyap.exponents, yerr=lyap.stderr, fmt="o", markersize=3,
                   capsize=2, color="k", gid="spectrum")
     left.axhline(0.0, color="0.3", linewidth=0.8, linestyle="--", gid="zero")
-    left.set_xlabel("index $j$")
-    left.set_ylabel(_with_unit(r"$\lambda_j$", unit))
-    left.set_title(f"$D_{{KY}}$ = {lyap.ky_dimension:.3f}, sum of positive = "
-                   f"{lyap.positive_sum:.3g} {unit}", fontsize="small")
-    steps, step_label = _running_axis(run)
-    colours = _ramp(lyap.exponents.size)
-    for j in range(lyap.exponents.size):
-        right.plot(steps, lyap.running[:, j], color=colours[j], linewidth=0.7,
-                   gid=f"running-{j + 1}")
-    right.axhline(0.0, color="0.3", linewidth=0.8, linestyle="--", gid="zero")
-    right.set_xlabel(step_label)
-    right.set_ylabel(_with_unit("running estimate", unit))
-    right.set_title("convergence of the running estimates", fontsize="small")
-    fig.suptitle(_title(run), fontsize="medium")
+    left.set_xlabel(_label("exponent index", "1", "j"))
+    left.set_ylabel(_label("Lyapunov exponent", unit, r"\lambda_j"))
+    summary = f"$D_{{KY}}$ = {lyap.ky_dimension:.3f}"
+    if math.isfinite(lyap.positive_sum):
+        summary += f", sum of positive = {lyap.positive_sum:.3g} {unit}"
+    left.set_title(f"{summary}\nbars: $\\pm$1 standard error", fontsize="small")
+    ranges = [np.concatenate((lyap.exponents - lyap.stderr, lyap.exponents + lyap.stderr,
+                              [0.0]))]
+    if len(axes) == 2 and has_running:
+        right = axes[1]
+        steps, step_label = _running_axis(run)
+        count = lyap.exponents.size
+        cmap, norm = _index_colours(count)
+        for j in range(count):
+            right.plot(steps, lyap.running[:, j], color=cmap(norm(j + 1)), linewidth=0.7,
+                       gid=f"running-{j + 1}")
+        right.axhline(0.0, color="0.3", linewidth=0.8, linestyle="--", gid="zero")
+        right.set_xlabel(step_label)
+        right.set_ylabel(_label("running estimate", unit, r"\lambda_j"))
+        right.set_title("convergence of the running estimates", fontsize="small")
+        if count > 1:
+            bar = _parent(right).colorbar(ScalarMappable(norm=norm, cmap=cmap), ax=right,
+                                          ticks=_index_ticks(count),
+                                          label=_label("exponent index", "1", "j"))
+            bar.ax.set_gid("colorbar-index")
+            bar.minorticks_off()
+        ranges.append(lyap.running)
+        _same_limits(axes, ranges)
+    elif len(axes) == 2:
+        axes[1].text(0.5, 0.5, "no running estimates in this run", ha="center",
+                     va="center", transform=axes[1].transAxes, gid="no-running")
+    if owned:
+        fig.suptitle(_title(run), fontsize="medium")
+    _record_sources(fig, [run])
     return fig
 
 
 def _running_axis(run: Run) -> tuple[np.ndarray, str]:
     assert run.lyapunov is not None
     if run.lyapunov.running_cycle is not None:
-        return run.lyapunov.running_cycle, "cycle"
+        return run.lyapunov.running_cycle, _cycle_label(run)
     m = run.lyapunov.running.shape[0]
     if run.strobe is not None and run.strobe.cycle.size == m:
-        return run.strobe.cycle, "cycle"
-    return np.arange(1, m + 1), "recorded cycles"
+        return run.strobe.cycle, _cycle_label(run)
+    return np.arange(1, m + 1), _label("recorded cycles", _unit(run, "strobe/cycle"))
 
 
 # -------------------------------------------------------------------------------- helpers
@@ -507,9 +1040,32 @@ def _grid(count: int, max_cols: int = 2) -> tuple[int, int]:
 
 
 def _padded(values: np.ndarray, fraction: float = 0.05) -> tuple[float, float]:
-    low, high = float(np.nanmin(values)), float(np.nanmax(values))
+    finite = np.asarray(values)[np.isfinite(values)]
+    if finite.size == 0:
+        return -1.0, 1.0
+    low, high = float(finite.min()), float(finite.max())
     pad = fraction * (high - low) or 0.1 * max(1.0, abs(high))
     return low - pad, high + pad
+
+
+def _same_limits(axes: Sequence[Axes], values: Sequence[np.ndarray]) -> None:
+    """One y range for panels of the same quantity: that of all their values."""
+    low, high = _padded(np.concatenate([np.ravel(v) for v in values]))
+    for axis in axes:
+        axis.set_ylim(low, high)
+
+
+def _outside(ax: Axes, ylim: tuple[float, float] | None, values: Sequence[np.ndarray]) -> str:
+    """Set a given y range; a title note when some values fall outside it."""
+    if ylim is None:
+        return ""
+    low, high = (float(v) for v in ylim)
+    if not low < high:
+        raise FigureError(f"ylim = {ylim}: the lower limit must be below the upper one")
+    ax.set_ylim(low, high)
+    data = np.concatenate([np.ravel(v) for v in values])
+    count = int(np.count_nonzero((data < low) | (data > high)))
+    return f"\n{count} of {data.size} values outside the y range shown" if count else ""
 
 
 def _x_limits(runs: Sequence[Run]) -> tuple[float, float]:
@@ -536,24 +1092,13 @@ def _ramp(count: int) -> list[tuple[float, float, float, float]]:
     return [cmap(0.9 * j / max(1, count - 1)) for j in range(count)]
 
 
-def _sweep_style(values: np.ndarray, marker: str = "") -> dict[str, str]:
+def _sweep_style(values: np.ndarray, marker: str = "") -> dict[str, Any]:
     """Lines for a monotonic sweep, dots only when the parameter goes back and forth."""
     steps = np.diff(values)
     monotonic = bool(np.all(steps > 0) or np.all(steps < 0))
     if monotonic:
         return {"marker": marker, "markersize": 2.5} if marker else {}
     return {"linestyle": "none", "marker": marker or ".", "markersize": 2.5}
-
-
-def _parameter_label(name: str) -> str:
-    if name in _SYMBOLS:
-        words, symbol = _SYMBOLS[name]
-        return f"{words} ${symbol}$"
-    return name
-
-
-def _with_unit(label: str, unit: str) -> str:
-    return f"{label} [{unit}]" if unit and unit not in ("1", "-") else label
 
 
 def _title(run: Run, skip: str | Sequence[str] = ()) -> str:

@@ -32,6 +32,7 @@ from __future__ import annotations
 
 import math
 import os
+import re
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 from types import MappingProxyType
@@ -56,7 +57,10 @@ __all__ = [
     "Lyapunov",
     "Sweep",
     "Run",
+    "FILE_UNITS",
     "read_run",
+    "run_from_api",
+    "namelist_groups",
 ]
 
 SCHEMA_VERSION = 1
@@ -71,6 +75,30 @@ RELEASE = 2
 TOUCH = 3
 """``/events/kind``: a contact closing slower than its gap can resolve: no impulse (not a
 collision)."""
+
+FILE_UNITS: Mapping[str, str] = MappingProxyType({
+    "params/spacing": "length",
+    "initial/x": "length",
+    "initial/v": "length/time",
+    "strobe/x": "length",
+    "strobe/v": "length/time",
+    "strobe/cycle": "drive cycles",
+    "strobe/period": "drive cycles (0 = aperiodic)",
+    "events/time": "time",
+    "events/speed": "length/time",
+    "final/x": "length",
+    "final/v": "length/time",
+    "lyapunov/exponents": "bits per drive cycle",
+    "lyapunov/stderr": "bits per drive cycle",
+    "lyapunov/running": "bits per drive cycle",
+    "sweep/x": "length",
+    "sweep/exponents": "bits per drive cycle",
+    "sweep/stderr": "bits per drive cycle",
+    "sweep/ky_dimension": "1",
+})
+"""The ``units`` attribute the simulator writes on each dataset (src/chain_output.f90,
+src/chain_sweep.f90): the units of a run made in memory (:func:`run_from_api`) and the
+defaults of the figures' axis labels."""
 
 OPTIONAL_GROUPS = ("initial", "final", "strobe", "events", "stats", "lyapunov", "sweep")
 
@@ -246,6 +274,7 @@ class Run:
     lyapunov: Lyapunov | None = None
     sweep: Sweep | None = None
     units: Mapping[str, str] = field(default_factory=dict)
+    resolved_namelist: str = ""  # every key as used; '' for an older file
 
     @property
     def name(self) -> str:
@@ -256,6 +285,15 @@ class Run:
     def unit(self, dataset: str, default: str = "") -> str:
         """The ``units`` attribute of a dataset (e.g. ``'strobe/x'``), or ``default``."""
         return self.units.get(dataset.strip("/"), default)
+
+    def namelist(self) -> dict[str, dict[str, str]]:
+        """The input as ``{group: {key: value text}}``: the resolved namelist (every key as
+        used) when the file has one, else the input text (only the keys given)."""
+        return namelist_groups(self.resolved_namelist or self.input_namelist)
+
+    def to_run(self) -> Run:
+        """This run (the protocol the figure functions accept, see :func:`run_from_api`)."""
+        return self
 
 
 # ----------------------------------------------------------------------------- reading
@@ -360,6 +398,7 @@ def _read(f: h5py.File, path: str, wanted: set[str]) -> Run:
         complete=bool(_int(f.attrs.get("complete", 1), path, "complete")),
         params=params,
         units=MappingProxyType(_collect_units(f)),
+        resolved_namelist=_str(f.attrs.get("resolved_namelist", "")),
         **parts,
     )
 
@@ -493,6 +532,230 @@ def _read_sweep(g: h5py.Group, path: str, n: int) -> Sweep:
         ky_dimension=_dataset(g, path, "ky_dimension", (p,), float)
         if "ky_dimension" in g else None,
     )
+
+
+# ------------------------------------------------------------------------------- namelists
+
+
+def namelist_groups(text: str) -> dict[str, dict[str, str]]:
+    """``{group: {key: value text}}`` of a Fortran namelist text, lower-case names.
+
+    Enough of the namelist syntax for the simulator's input and resolved namelists:
+    ``!`` comments, quoted strings, ``key = value`` pairs separated by commas or
+    newlines, list values (``x0 = 0.1, 0.2``) kept as their text. A later group of the
+    same name adds to the earlier one.
+    """
+    groups: dict[str, dict[str, str]] = {}
+    for name, body in _namelist_bodies(_strip_comments(text)):
+        group = groups.setdefault(name, {})
+        keys = list(_KEY.finditer(_mask_strings(body)))
+        for key, following in zip(keys, [*keys[1:], None]):
+            end = following.start() if following is not None else len(body)
+            value = body[key.end():end].strip().rstrip(",").strip()
+            group[key.group(1).lower()] = value
+    return groups
+
+
+_KEY = re.compile(r"(?:^|(?<=[,\s]))([A-Za-z]\w*)\s*=(?!=)")
+
+
+def _strip_comments(text: str) -> str:
+    lines = []
+    for line in text.splitlines():
+        quote = ""
+        for i, char in enumerate(line):
+            if quote:
+                if char == quote:
+                    quote = ""
+            elif char in "'\"":
+                quote = char
+            elif char == "!":
+                line = line[:i]
+                break
+        lines.append(line)
+    return "\n".join(lines)
+
+
+def _namelist_bodies(text: str) -> Iterable[tuple[str, str]]:
+    """(group name, body) of every ``&group ... /`` (a ``/`` inside quotes is text)."""
+    i = 0
+    while (start := text.find("&", i)) >= 0:
+        match = re.match(r"&([A-Za-z]\w*)", text[start:])
+        if match is None:
+            i = start + 1
+            continue
+        j, quote = start + match.end(), ""
+        while j < len(text):
+            char = text[j]
+            if quote:
+                if char == quote:
+                    quote = ""
+            elif char in "'\"":
+                quote = char
+            elif char == "/":
+                break
+            j += 1
+        yield match.group(1).lower(), text[start + match.end():j]
+        i = j + 1
+
+
+def _mask_strings(body: str) -> str:
+    """``body`` with the inside of quoted strings replaced by ``#`` (same length), so that
+    the key search finds no ``key =`` inside a string value."""
+    out, quote = [], ""
+    for char in body:
+        if quote:
+            if char == quote:
+                quote = ""
+                out.append(char)
+            else:
+                out.append("#")
+        else:
+            if char in "'\"":
+                quote = char
+            out.append(char)
+    return "".join(out)
+
+
+# ------------------------------------------------------------------------ in-memory runs
+
+IN_MEMORY = "(in memory, post.api)"
+"""``Run.path`` of a run made by :func:`run_from_api`."""
+
+
+def run_from_api(simulation: Any = None, lyapunov: Any = None) -> Run:
+    """A :class:`Run` from the in-memory results of :mod:`post.api`, for the figures.
+
+    ``simulation``: a ``post.api.Simulation`` (strobe records, events, statistics, final
+    state); ``lyapunov``: a ``post.api.Lyapunov`` (exponents and their standard errors;
+    no running estimates). Either or both; with both they must come from the same
+    parameters. Their ``params`` (the arguments as used) give ``Run.params``, and the
+    equivalent namelist becomes ``Run.input_namelist``; units are the simulator's
+    (:data:`FILE_UNITS`). ``api.Simulation.to_run()`` and ``api.Lyapunov.to_run()`` call
+    this.
+    """
+    if simulation is None and lyapunov is None:
+        raise ValueError("run_from_api needs a simulation, a Lyapunov result or both")
+    sources = [r for r in (simulation, lyapunov) if r is not None]
+    settings = [dict(getattr(r, "params", None) or {}) for r in sources]
+    if not settings[0]:
+        raise ValueError(f"{type(sources[0]).__name__} has no params: not a post.api result")
+    config = settings[0]
+    if len(settings) == 2:
+        model = ("n", "amplitude", "omega", "damping", "restitution", "boundary", "phase")
+        differ = [k for k in model if settings[0].get(k) != settings[1].get(k)]
+        if differ:
+            raise ValueError("the simulation and the Lyapunov result differ in "
+                             + ", ".join(differ))
+    n = int(config["n"])
+    spacing = np.broadcast_to(np.asarray(config["spacing"], dtype=float), (n + 1,))
+    omega = float(config["omega"])
+    params = Params(
+        n=n, damping=float(config["damping"]), restitution=float(config["restitution"]),
+        amplitude=float(config["amplitude"]), omega=omega, boundary=str(config["boundary"]),
+        drive_period=2 * math.pi / omega, phase=float(config["phase"]),
+        transient=int(config["transient"]), cycles=int(config["cycles"]),
+        spacing=_frozen(spacing),
+    )
+    parts: dict[str, Any] = {}
+    x0, v0 = config.get("x0"), config.get("v0")
+    if x0 is not None and v0 is not None:
+        parts["initial"] = State(x=_frozen(x0), v=_frozen(v0))
+    if simulation is not None:
+        parts.update(_simulation_parts(simulation, params, bool(config.get("events", True))))
+    if lyapunov is not None:
+        exponents = _frozen(lyapunov.exponents)
+        parts["lyapunov"] = Lyapunov(
+            exponents=exponents,
+            exponents_per_time=_frozen(lyapunov.exponents_per_time),
+            stderr=_frozen(lyapunov.stderr),
+            running=_frozen(np.empty((0, exponents.size))),
+            ky_dimension=float(lyapunov.ky_dimension),
+            positive_sum=math.nan,  # not returned by post.api
+            collisions_per_cycle=float(lyapunov.collisions_per_cycle),
+        )
+        if "final" not in parts:
+            parts["final"] = FinalState(
+                x=_frozen(lyapunov.final_x), v=_frozen(lyapunov.final_v),
+                cycle=params.transient + params.cycles, phase=params.phase)
+    merged = {**settings[-1], **config}
+    return Run(
+        path=IN_MEMORY,
+        schema_version=SCHEMA_VERSION,
+        code_version=str(config.get("code_version", "")),
+        input_namelist=_equivalent_namelist(merged, lyapunov is not None),
+        complete=True,
+        params=params,
+        units=FILE_UNITS,
+        **parts,
+    )
+
+
+def _simulation_parts(sim: Any, params: Params, events: bool) -> dict[str, Any]:
+    parts: dict[str, Any] = {
+        "strobe": Strobe(x=_frozen(sim.x), v=_frozen(sim.v),
+                         cycle=_frozen(np.asarray(sim.cycle, dtype=np.int64)),
+                         period=_frozen(np.asarray(sim.periods, dtype=np.int64))),
+        "stats": Stats(collisions_per_cycle=float(sim.collisions_per_cycle),
+                       impacts=int(sim.impacts), sticks=int(sim.sticks),
+                       releases=int(sim.releases),
+                       site_counts=_frozen(np.asarray(sim.site_counts, dtype=np.int64)),
+                       cycles_done=int(sim.x.shape[0]), touches=int(sim.touches)),
+        "final": FinalState(x=_frozen(sim.final_x), v=_frozen(sim.final_v),
+                            cycle=params.transient + params.cycles, phase=params.phase),
+    }
+    if events:
+        parts["events"] = Events(
+            time=_frozen(sim.event_time),
+            site=_frozen(np.asarray(sim.event_site, dtype=np.int64)),
+            speed=_frozen(sim.event_speed),
+            kind=_frozen(np.asarray(sim.event_kind, dtype=np.int64)))
+    return parts
+
+
+_LISTED_START = 1000
+"""The equivalent namelist of an in-memory run lists x0 and v0 up to this many values."""
+
+
+def _equivalent_namelist(config: Mapping[str, Any], lyapunov: bool) -> str:
+    """The input namelist of a command-line run equal to this in-memory one."""
+
+    def real(value: Any) -> str:
+        return repr(float(value))
+
+    spacing = np.atleast_1d(np.asarray(config["spacing"], dtype=float))
+    lines = [
+        "! made in memory by post.api; the equivalent command-line input:",
+        f"&chain n = {int(config['n'])}, amplitude = {real(config['amplitude'])}, "
+        f"omega = {real(config['omega'])}, damping = {real(config['damping'])}, "
+        f"restitution = {real(config['restitution'])}, "
+        f"spacing = {', '.join(real(a) for a in spacing)}, "
+        f"boundary = '{config['boundary']}' /",
+    ]
+    x0, v0 = config.get("x0"), config.get("v0")
+    if x0 is None or v0 is None:
+        lines.append("&initial kind = 'rest' /")
+    elif len(x0) > _LISTED_START:
+        lines.append(f"&initial kind = 'explicit' /  ! x0 and v0: {len(x0)} values each, "
+                     "not listed")
+    else:
+        lines.append(f"&initial kind = 'explicit', x0 = {', '.join(map(real, x0))}, "
+                     f"v0 = {', '.join(map(real, v0))} /")
+    record = ".true." if config.get("events", False) else ".false."
+    lines.append(f"&run transient = {int(config['transient'])}, cycles = "
+                 f"{int(config['cycles'])}, phase = {real(config['phase'])}, "
+                 f"stick_speed = {real(config['stick_speed'])}, record_events = {record} /")
+    if lyapunov:
+        lines.append(f"&lyapunov enabled = .true., vectors = {int(config.get('vectors', 0))}, "
+                     f"qr_every = {int(config.get('qr_every', 1))} /")
+    return "\n".join(lines) + "\n"
+
+
+def _frozen(values: Any) -> np.ndarray:
+    out = np.array(values, dtype=np.float64 if np.asarray(values).dtype.kind == "f"
+                   else np.asarray(values).dtype)
+    out.setflags(write=False)
+    return out
 
 
 # ----------------------------------------------------------------------------- helpers

@@ -102,6 +102,7 @@ def write_run(
     complete: int = 1,
     omega: float = 1.5,
     transpose_strobe: bool = False,
+    seed: int | None = None,
 ) -> Path:
     """Write a synthetic run file and return its path.
 
@@ -109,7 +110,9 @@ def write_run(
     optionally ``speed``, ``kind`` for a given stream, False/None for no /events group.
     ``sweep``: True or a mapping overriding :data:`DEFAULT_SWEEP`. ``periods``: True
     stores /strobe/period as the record's own (:data:`PERIODS`), a sequence stores those
-    values instead, False stores none.
+    values instead, False stores none. ``seed``: a random start with this seed, written
+    into the input namelist and a ``resolved_namelist`` as the simulator writes them
+    (without it: a start at rest, and no resolved namelist, as in an older file).
     """
     path = Path(path)
     period = 2 * math.pi / omega
@@ -120,6 +123,15 @@ def write_run(
             f.attrs["schema_version"] = _one(schema_version, np.int32)
         f.attrs["code_version"] = _fixed("0.1.0")
         f.attrs["input_namelist"] = "&chain\n n = %d\n/\n" % n
+        if seed is not None:
+            f.attrs["input_namelist"] += (
+                f"! a random start\n&initial kind = 'random', seed = {seed}, x_amp = 0.3,\n"
+                "   v_amp = 1.0 /\n&output file = 'ignored.h5' /\n")
+            f.attrs["resolved_namelist"] = (
+                f"&chain n = {n}, spacing = 1.00000000000000, boundary = '{boundary}' /\n"
+                f"&initial kind = 'random', seed = {seed}, x_amp = 0.300000000000000, "
+                "v_amp = 1.00000000000000 /\n"
+                f"&run transient = {first_cycle}, cycles = {records} /\n")
         f.attrs["complete"] = _one(complete, np.int32)
         _write_params(f, n, spacing, boundary, omega, period, phase, first_cycle, records)
         for name, x in (("initial", np.zeros(n)), ("final", np.full(n, 0.1))):

@@ -532,12 +532,33 @@ def test_example_reproduces_the_fig1c_recipe(cli: Path, tmp_path: Path) -> None:
         np.testing.assert_array_equal(sim.v, f["strobe/v"][:], strict=True)
 
 
+def test_example_draws_with_the_figure_function() -> None:
+    """The example draws the in-memory result with post.figures.space_amplitude: the lines
+    are the simulation's strobe rows."""
+    example = _example()
+    sim = example.compute(transient=20, cycles=15)
+    (ax,) = example.draw(sim, seed=1).axes
+    lines = [ln for ln in ax.get_lines() if ln.get_gid() == "strobe-0"]
+    assert len(lines) == 15
+    np.testing.assert_array_equal(lines[3].get_ydata(), sim.x[3])
+    assert [t.get_text() for t in ax.get_legend().get_texts()] == ["random start, seed 1"]
+
+
 def test_example_writes_a_png(tmp_path: Path) -> None:
     out = tmp_path / "fig1c.png"
     result = subprocess.run([sys.executable, str(EXAMPLE), str(out), "--transient", "100",
                              "--cycles", "50"], capture_output=True, text=True, timeout=120)
     assert result.returncode == 0, result.stderr
     assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    from PIL import Image
+
+    with Image.open(out) as image:  # drawn by post.figures: resolution and provenance
+        assert image.info["dpi"] == pytest.approx((150, 150), abs=0.05)
+        text = dict(image.text)
+    assert text["Software"].startswith("impactchain post.api ")
+    assert text["Source"] == "(in memory, post.api)"
+    assert "&chain n = 16, amplitude = 1.7, omega = 1.5" in text["Description"]
+    assert "&run transient = 100, cycles = 50" in text["Description"]
     bad = subprocess.run([sys.executable, str(EXAMPLE), str(out), "--amplitude", "-1"],
                          capture_output=True, text=True, timeout=120)
     assert bad.returncode == 2 and "&chain: amplitude = -1.0000000 is outside" in bad.stderr

@@ -104,7 +104,7 @@ def _captured(monkeypatch: pytest.MonkeyPatch) -> dict[str, Figure]:
     """Figures the CLI would write, by output name, instead of writing them."""
     figures: dict[str, Figure] = {}
 
-    def keep(figure: Figure, out: Path, dpi: int = 150) -> None:
+    def keep(figure: Figure, out: Path, dpi: float = 150) -> None:
         del dpi
         figures[Path(out).name] = figure
 
@@ -258,3 +258,60 @@ def test_single_file_figures_take_one_file(run_file: Path, tmp_path: Path) -> No
     with pytest.raises(SystemExit) as exit_info:
         main(["poincare", str(run_file), str(run_file), "-o", str(tmp_path / "o.png")])
     assert exit_info.value.code == 2
+
+
+# ------------------------------------------------------------------ resolution, formats
+
+
+def test_png_has_the_resolution_and_the_metadata(make_run: MakeRun, tmp_path: Path) -> None:
+    from PIL import Image
+
+    path = make_run(n=4, seed=4)
+    default, sharp = tmp_path / "default.png", tmp_path / "sharp.png"
+    assert main(["poincare", str(path), "-o", str(default)]) == 0
+    assert main(["poincare", str(path), "-o", str(sharp), "--dpi", "300"]) == 0
+    with Image.open(default) as image:
+        assert image.info["dpi"] == pytest.approx((150, 150), abs=0.05)
+        assert image.size == (6 * 150, 5 * 150)
+        text = dict(image.text)
+    with Image.open(sharp) as image:
+        assert image.info["dpi"] == pytest.approx((300, 300), abs=0.05)
+    assert text["Software"].startswith("impactchain 0.1.0; post ")
+    assert text["Source"] == str(path)
+    assert text["Description"].startswith(f"! source: {path}\n&chain")
+    assert "seed = 4" in text["Description"]
+    assert not list(tmp_path.glob(".*partial"))
+
+
+def test_format_option_writes_pdf(run_file: Path, tmp_path: Path) -> None:
+    assert main(["spectrum", str(run_file), "-o", str(tmp_path / "spec"), "--format",
+                 "pdf"]) == 0
+    pdf = (tmp_path / "spec.pdf").read_bytes()
+    assert pdf.startswith(b"%PDF-") and b"/Creator (impactchain 0.1.0" in pdf
+    assert main(["poincare", str(run_file), "-o", str(tmp_path / "p.pdf"), "--format",
+                 "pdf"]) == 0
+    assert (tmp_path / "p.pdf").read_bytes().startswith(b"%PDF-")
+    assert main(["all", str(run_file), "-o", str(tmp_path / "all" / "r"), "--format",
+                 "pdf"]) == 0
+    assert sorted(p.suffix for p in (tmp_path / "all").iterdir()) == [".pdf"] * 5
+
+
+def test_format_and_extension_must_agree(run_file: Path, tmp_path: Path,
+                                         capsys: pytest.CaptureFixture[str]) -> None:
+    _expect_error(["poincare", str(run_file), "--format", "pdf"],
+                  "does not end in .pdf (--format pdf)", tmp_path / "o.png", capsys)
+    with pytest.raises(SystemExit):
+        main(["poincare", str(run_file), "-o", str(tmp_path / "o.png"), "--dpi", "0"])
+
+
+def test_ylim_option(run_file: Path, sweep_file: Path, tmp_path: Path,
+                     monkeypatch: pytest.MonkeyPatch) -> None:
+    made = _captured(monkeypatch)
+    assert main(["space-amplitude", str(run_file), "-o", str(tmp_path / "sa.png"),
+                 "--ylim=-2.5,1.5"]) == 0
+    assert main(["ky-dimension", str(sweep_file), "-o", str(tmp_path / "ky.png"),
+                 "--ylim", "0,11"]) == 0
+    assert made["sa.png"].axes[0].get_ylim() == (-2.5, 1.5)
+    assert made["ky.png"].axes[0].get_ylim() == (0.0, 11.0)
+    with pytest.raises(SystemExit):
+        main(["ky-dimension", str(sweep_file), "-o", str(tmp_path / "x.png"), "--ylim", "3,1"])

@@ -2,18 +2,23 @@
 
 from __future__ import annotations
 
+import re
 from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
+import h5py
 import numpy as np
 import pytest
 from matplotlib.axes import Axes
 from matplotlib.collections import LineCollection, PathCollection
+from matplotlib.colors import to_rgba
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 
 from post import figures
-from post.io import Run, read_run
+from post.analysis import period_label
+from post.io import Run, SchemaError, read_run
 from post.shockwave import build_shock_waves
 
 MakeRun = Callable[..., Path]
@@ -30,6 +35,15 @@ def _walls(ax: Axes) -> list[float]:
 def _scatter(ax: Axes, gid: str) -> PathCollection:
     (points,) = [c for c in ax.collections if isinstance(c, PathCollection) and c.get_gid() == gid]
     return points
+
+
+def _plots(fig: Figure) -> list[Axes]:
+    """The axes of a figure that hold data (not its colour bars)."""
+    return [a for a in fig.axes if a.get_label() != "<colorbar>"]
+
+
+def _colorbars(fig: Figure) -> list[Axes]:
+    return [a for a in fig.axes if a.get_label() == "<colorbar>"]
 
 
 def _axes(fig: Figure, label: str) -> Axes:
@@ -104,7 +118,9 @@ def test_space_amplitude_overlays_runs_in_colours(make_run: MakeRun) -> None:
     assert (len(first), len(second)) == (30, 8)
     assert first[0].get_color() != second[0].get_color()
     legend = ax.get_legend()
-    assert legend is not None and [t.get_text() for t in legend.get_texts()] == ["a", "b"]
+    # the two files differ in nothing but their length: numbered, never named by file
+    assert legend is not None and [t.get_text() for t in legend.get_texts()] == ["run 1",
+                                                                                 "run 2"]
 
 
 # ---------------------------------------------------------------- space-time-amplitude
@@ -227,7 +243,8 @@ def test_bifurcation_rejects_two_parameter_sweep(make_run: MakeRun) -> None:
 
 def test_lyapunov_lines_are_the_largest_exponents(sweep_file: Path) -> None:
     run = read_run(sweep_file)
-    (ax,) = figures.lyapunov([run], k=4).axes
+    fig = figures.lyapunov([run], k=4)
+    (ax,) = _plots(fig)
     assert run.sweep is not None and run.sweep.exponents is not None
     lines = _lines(ax, "exponent-")
     assert len(lines) == 4
@@ -241,7 +258,7 @@ def test_lyapunov_lines_are_the_largest_exponents(sweep_file: Path) -> None:
 
 def test_lyapunov_with_bifurcation_panel(sweep_file: Path) -> None:
     run = read_run(sweep_file)
-    top, bottom = figures.lyapunov([run], k=20, with_bifurcation=True).axes
+    top, bottom = _plots(figures.lyapunov([run], k=20, with_bifurcation=True))
     assert len(_lines(top, "bifurcation-1")) == 1
     assert len(_lines(bottom, "exponent-")) == 6  # only 6 stored
     assert top.get_position().y0 > bottom.get_position().y0
@@ -274,7 +291,7 @@ def test_ky_dimension_is_never_computed_from_the_exponents(make_run: MakeRun) ->
 
 def test_spectrum_shows_exponents_with_error_bars(run_file: Path) -> None:
     run = read_run(run_file)
-    left, right = figures.spectrum(run).axes
+    left, right = _plots(figures.spectrum(run))
     assert run.lyapunov is not None and run.strobe is not None
     (bars,) = left.containers
     points, _, (vertical,) = bars.lines
@@ -302,7 +319,7 @@ def test_spectrum_plots_decimated_running_estimates_at_their_cycles(run_file: Pa
         f["lyapunov/running_cycle"] = f["strobe/cycle"][1::2]
     run = read_run(run_file)
     assert run.lyapunov is not None and run.lyapunov.running_cycle is not None
-    running = _lines(figures.spectrum(run).axes[1], "running-")
+    running = _lines(_plots(figures.spectrum(run))[1], "running-")
     np.testing.assert_array_equal(running[0].get_xdata(), run.lyapunov.running_cycle)
     np.testing.assert_array_equal(running[0].get_ydata(), run.lyapunov.running[:, 0])
 
@@ -363,3 +380,315 @@ def test_ky_dimension_overlay_labels_the_differing_parameter(make_run: MakeRun) 
     labels = [text.get_text() for text in ax.get_legend().get_texts()]
     assert labels == ["$\\omega$ = 1.5", "$\\omega$ = 1.9"]
     assert "omega" not in ax.get_title() and "\\omega" not in ax.get_title()
+
+
+# ------------------------------------------------------------- what a referee checks
+
+
+def _colorbar_of(cax: Axes) -> Any:
+    return cax._colorbar  # type: ignore[attr-defined]  # set by matplotlib's Colorbar
+
+
+def _all_labels(fig: Figure) -> list[str]:
+    """Every axis label of a figure, colour bars included (3-D: the z label too)."""
+    labels = []
+    for ax in fig.axes:
+        texts = [ax.get_xlabel(), ax.get_ylabel()]
+        if hasattr(ax, "get_zlabel"):
+            texts.append(ax.get_zlabel())
+        labels.extend(t for t in texts if t)
+    return labels
+
+
+def _every_figure(run_file: Path, sweep_file: Path) -> dict[str, Figure]:
+    run, sweep = read_run(run_file), read_run(sweep_file)
+    return {
+        "space-amplitude": figures.space_amplitude([run]),
+        "space-time-amplitude": figures.space_time_amplitude(run, panel_cycles=10),
+        "shock-wave": figures.shock_wave(run, panel_cycles=10),
+        "poincare": figures.poincare(run),
+        "bifurcation": figures.bifurcation(sweep),
+        "lyapunov": figures.lyapunov([sweep], with_bifurcation=True),
+        "ky-dimension": figures.ky_dimension([sweep]),
+        "spectrum": figures.spectrum(run),
+    }
+
+
+def test_every_axis_label_ends_in_a_unit(run_file: Path, sweep_file: Path) -> None:
+    """The one notation: ``name $symbol$ [unit]``, ``[1]`` when dimensionless."""
+    for name, fig in _every_figure(run_file, sweep_file).items():
+        labels = _all_labels(fig)
+        assert labels, name
+        for label in labels:
+            assert re.fullmatch(r"[^\[\]]+ \[[^\[\]]+\]", label), (name, label)
+
+
+def test_units_are_those_of_the_file(run_file: Path, sweep_file: Path) -> None:
+    """The fixture's units ('a', 'a/time', 'bits/cycle', 'cycles') are not the simulator's:
+    labels that show them come from the file, not from a table."""
+    made = _every_figure(run_file, sweep_file)
+    (ax,) = made["space-amplitude"].axes
+    assert ax.get_ylabel() == "displacement at the section $x_i$ [a]"
+    assert ax.get_xlabel() == "equilibrium position [a]"
+    poincare_ax, bar = made["poincare"].axes
+    assert poincare_ax.get_ylabel() == "velocity $v_{1}$ [a/time]"
+    assert bar.get_ylabel() == "cycle $c$ [cycles]"
+    exponents = _plots(made["lyapunov"])[1]
+    assert exponents.get_ylabel() == "Lyapunov exponents $\\lambda_j$ [bits/cycle]"
+    assert exponents.get_xlabel() == "drive amplitude $A$ [length]"
+    assert _plots(made["ky-dimension"])[0].get_ylabel() == \
+        "Kaplan-Yorke dimension $D_{KY}$ [1]"
+
+
+def test_colour_bars_wherever_colour_encodes_a_number(run_file: Path, sweep_file: Path,
+                                                     make_run: MakeRun) -> None:
+    made = _every_figure(run_file, sweep_file)
+    # colour by exponent index: one bar, ticks 1..k, the lines' colours are the bar's
+    for name, axis in (("lyapunov", 1), ("spectrum", 1)):
+        fig = made[name]
+        (cax,) = _colorbars(fig)
+        assert cax.get_ylabel() == "exponent index $j$ [1]"
+        bar = _colorbar_of(cax)
+        lines = _lines(_plots(fig)[axis], "exponent-" if name == "lyapunov" else "running-")
+        assert len(lines) == 6 if name == "lyapunov" else 8
+        assert list(cax.get_yticks()) == list(range(1, len(lines) + 1))
+        for j, line in enumerate(lines, start=1):
+            np.testing.assert_allclose(to_rgba(line.get_color()), bar.mappable.to_rgba(j))
+        assert len({to_rgba(line.get_color()) for line in lines}) == len(lines)
+    # colour by cycle, and by dimension over a 2-D sweep
+    (cax,) = _colorbars(made["poincare"])
+    assert "cycle" in cax.get_ylabel()
+    two_d = figures.ky_dimension([read_run(make_run("2d.h5", sweep={"parameter2": "omega"}))])
+    (cax,) = _colorbars(two_d)
+    assert cax.get_ylabel() == "Kaplan-Yorke dimension $D_{KY}$ [1]"
+    # colour that only tells runs or sides apart: no colour bar
+    for name in ("space-amplitude", "space-time-amplitude", "shock-wave", "bifurcation",
+                 "ky-dimension"):
+        assert _colorbars(made[name]) == [], name
+
+
+def test_lyapunov_draws_the_stored_standard_errors_as_bands(sweep_file: Path) -> None:
+    run = read_run(sweep_file)
+    assert run.sweep is not None and run.sweep.stderr is not None
+    ax = _plots(figures.lyapunov([run], k=3))[0]
+    sweep = run.sweep
+    assert sweep.exponents is not None and sweep.stderr is not None
+    for j in range(3):
+        (band,) = [c for c in ax.collections if c.get_gid() == f"stderr-{j + 1}"]
+        vertices = band.get_paths()[0].vertices
+        for value, exponent, error in zip(sweep.values, sweep.exponents[:, j],
+                                          sweep.stderr[:, j]):
+            at = vertices[np.isclose(vertices[:, 0], value), 1]
+            assert at.min() == pytest.approx(exponent - error)
+            assert at.max() == pytest.approx(exponent + error)
+    assert not [c for c in ax.collections if c.get_gid() == "stderr-4"]
+
+
+def test_lyapunov_bars_for_a_sweep_back_and_forth(make_run: MakeRun) -> None:
+    path = make_run(strobe=False, events=False, sweep=True)
+    with h5py.File(path, "r+") as f:
+        values = f["sweep/values"][:]
+        f["sweep/values"][...] = np.concatenate((values[::2], values[1::2]))  # not monotonic
+        f["sweep/stderr"][...] = np.linspace(0.01, 0.07, values.size)[:, None]
+    run = read_run(path)
+    assert run.sweep is not None and run.sweep.stderr is not None
+    ax = _plots(figures.lyapunov([run], k=2))[0]
+    (bars,) = [c for c in ax.collections if c.get_gid() == "stderr-1"]
+    spans = [seg[1, 1] - seg[0, 1] for seg in bars.get_segments()]
+    np.testing.assert_allclose(sorted(spans), sorted(2 * run.sweep.stderr[:, 0]))
+
+
+def test_spectrum_panels_share_their_range(run_file: Path) -> None:
+    left, right = _plots(figures.spectrum(read_run(run_file)))
+    assert left.get_ylim() == right.get_ylim()
+
+
+def test_compared_panels_share_their_scales(make_run: MakeRun) -> None:
+    """Two sweeps of different exponent ranges: one y range for all exponent panels, one
+    for all bifurcation panels; bifurcation panels of several oscillators share theirs."""
+    paths = [make_run(f"s{j}.h5", strobe=False, events=False, sweep=True, omega=w)
+             for j, w in enumerate((1.5, 1.9))]
+    with h5py.File(paths[1], "r+") as f:
+        f["sweep/exponents"][...] = 3.0 * f["sweep/exponents"][:]
+        f["sweep/x"][...] = -2.0 * f["sweep/x"][:]
+    runs = [read_run(p) for p in paths]
+    tops_and_bottoms = _plots(figures.lyapunov(runs, k=6, with_bifurcation=True))
+    tops, bottoms = tops_and_bottoms[:2], tops_and_bottoms[2:]
+    assert tops[0].get_ylim() == tops[1].get_ylim()
+    assert bottoms[0].get_ylim() == bottoms[1].get_ylim()
+    low, high = bottoms[0].get_ylim()
+    assert runs[1].sweep is not None and runs[1].sweep.exponents is not None
+    assert low <= runs[1].sweep.exponents.min() - 0.01 and high >= 0.5 + 0.01
+    panels = _plots(figures.bifurcation(runs[1]))
+    assert len({ax.get_ylim() for ax in panels}) == 1
+    run = read_run(make_run("long.h5", records=30, events=False))
+    assert len({ax.get_zlim() for ax in figures.space_time_amplitude(run, 10).axes}) == 1
+
+
+def test_legends_name_seeds_not_files(make_run: MakeRun) -> None:
+    red = read_run(make_run("fig3_red.h5", seed=1))
+    green = read_run(make_run("fig3_green.h5", seed=4))
+    ax = figures.space_amplitude([red, green]).axes[0]
+    assert [t.get_text() for t in ax.get_legend().get_texts()] == ["seed 1", "seed 4"]
+    assert figures.run_labels([red, green]) == ["seed 1", "seed 4"]
+    # a parameter that differs names the runs before the seed does
+    other = read_run(make_run("fig3_blue.h5", seed=1, omega=1.9))
+    assert figures.run_labels([red, other]) == ["$\\omega$ = 1.5", "$\\omega$ = 1.9"]
+    # given labels win; nothing differs: numbered
+    mine = figures.space_amplitude([red, green], labels=["left", "right"]).axes[0]
+    assert [t.get_text() for t in mine.get_legend().get_texts()] == ["left", "right"]
+    twin = read_run(make_run("twin.h5", seed=1))
+    assert figures.run_labels([red, twin]) == ["run 1", "run 2"]
+    for labels in (figures.run_labels([red, green, other, twin]),):
+        assert not any("fig3" in label or ".h5" in label for label in labels)
+
+
+@pytest.mark.parametrize("name", ["space-amplitude", "space-time-amplitude", "shock-wave",
+                                  "poincare", "bifurcation", "lyapunov", "ky-dimension",
+                                  "spectrum"])
+def test_ax_draws_into_the_given_axes(name: str, run_file: Path, sweep_file: Path) -> None:
+    run, sweep = read_run(run_file), read_run(sweep_file)
+    fig = Figure()
+    if name == "space-time-amplitude":
+        axes = [fig.add_subplot(1, 3, i + 1, projection="3d") for i in range(3)]
+        made = figures.space_time_amplitude(run, panel_cycles=10, ax=axes)
+    elif name == "shock-wave":
+        axes = list(fig.subplots(2, 3).T.ravel())  # (upper, lower) of each of 3 panels
+        made = figures.shock_wave(run, panel_cycles=10, ax=axes)
+    elif name == "bifurcation":
+        axes = list(fig.subplots(2, 2).ravel())
+        made = figures.bifurcation(sweep, ax=axes)
+    elif name == "lyapunov":
+        axes = list(fig.subplots(2, 1))
+        made = figures.lyapunov(sweep, with_bifurcation=True, ax=axes)
+    elif name == "spectrum":
+        axes = list(fig.subplots(1, 2))
+        made = figures.spectrum(run, ax=axes)
+    else:
+        axes = [fig.add_subplot()]
+        draw = {"space-amplitude": figures.space_amplitude, "poincare": figures.poincare,
+                "ky-dimension": figures.ky_dimension}[name]
+        made = draw(sweep if name == "ky-dimension" else run, ax=axes[0])
+    assert made is fig
+    assert set(_plots(fig)) == set(axes)  # no new data axes, only colour bars
+    for ax in axes:
+        assert ax.has_data(), (name, ax)
+    assert fig.get_suptitle() == ""  # the caller's figure: its title is the caller's
+
+
+def test_ax_of_the_wrong_count_is_an_error(run_file: Path, sweep_file: Path) -> None:
+    fig = Figure()
+    with pytest.raises(figures.FigureError, match="draws into 4 axes, 2 given"):
+        figures.bifurcation(read_run(sweep_file), ax=fig.subplots(1, 2))
+    with pytest.raises(figures.FigureError, match="3-D axes"):
+        figures.space_time_amplitude(read_run(run_file), panel_cycles=30,
+                                     ax=[fig.add_subplot()])
+
+
+def test_paths_and_in_memory_results_are_accepted(run_file: Path, sweep_file: Path) -> None:
+    from_path = figures.poincare(str(run_file), site=2)
+    np.testing.assert_array_equal(
+        _scatter(from_path.axes[0], "section").get_offsets(),
+        _scatter(figures.poincare(read_run(run_file), site=2).axes[0], "section").get_offsets())
+    figures.lyapunov(sweep_file)  # a single path, not a list
+    with pytest.raises(SchemaError, match="no /sweep, needed by lyapunov"):
+        figures.lyapunov(run_file)
+
+    class InMemory:  # the protocol: anything with to_run()
+        def to_run(self) -> Run:
+            return read_run(run_file)
+
+    ax = figures.space_amplitude(InMemory()).axes[0]
+    assert len(_lines(ax, "strobe-0")) == 30
+    with pytest.raises(TypeError, match="cannot draw a int"):
+        figures.poincare(3)  # type: ignore[arg-type]
+
+
+def test_figures_draw_post_api_results() -> None:
+    """api.simulate and api.lyapunov results, in memory, through the same functions."""
+    from post import api
+
+    if not api.extension_available():
+        pytest.skip("the extension post._kernels is not built")
+    x0, v0 = api.random_start(6, seed=3, x_amp=0.3, v_amp=1.0)
+    sim = api.simulate(6, 1.7, 1.5, x0=x0, v0=v0, transient=50, cycles=40)
+    lyap = api.lyapunov(6, 1.7, 1.5, x0=x0, v0=v0, transient=50, cycles=40)
+    ax = figures.space_amplitude(sim).axes[0]
+    lines = _lines(ax, "strobe-0")
+    assert len(lines) == 40
+    np.testing.assert_array_equal(lines[-1].get_ydata(), sim.x[-1])
+    assert [t.get_text() for t in ax.texts if t.get_gid() == "period"] == [
+        period_label(int(p)) for p in sim.periods]
+    assert ax.get_ylabel() == "displacement at the section $x_i$ [length]"
+    figures.shock_wave(sim, panel_cycles=20)
+    figures.poincare(sim, site=2)
+    (left,) = _plots(figures.spectrum(lyap))  # no running estimates: the spectrum alone
+    (bars,) = left.containers
+    np.testing.assert_array_equal(bars.lines[0].get_ydata(), lyap.exponents)
+    both = sim.to_run(lyap)
+    assert both.lyapunov is not None and both.strobe is not None
+
+
+# ------------------------------------------------------------------- saved files
+
+
+def test_saved_png_has_the_resolution_and_the_provenance(make_run: MakeRun,
+                                                         tmp_path: Path) -> None:
+    from PIL import Image
+
+    runs = [read_run(make_run("red.h5", seed=1)), read_run(make_run("green.h5", seed=4))]
+    fig = figures.space_amplitude(runs)
+    out = tmp_path / "fig.png"
+    fig.savefig(out, dpi=160)  # a figure made here carries its metadata itself
+    with Image.open(out) as image:
+        assert image.info["dpi"] == pytest.approx((160, 160), abs=0.05)
+        assert image.size == (8 * 160, 5 * 160)
+        text = dict(image.text)
+    assert text["Software"].startswith("impactchain 0.1.0; post ")
+    assert text["Source"].splitlines() == [r.path for r in runs]
+    assert f"! source: {runs[1].path}\n&chain\n n = 4" in text["Description"]
+    assert "seed = 4" in text["Description"] and "seed = 1" in text["Description"]
+    assert "&initial kind = 'random', seed = 4" in text["Comment"]  # the resolved namelist
+    assert text["Title"].startswith("n = 4, $A$ = 1.7")
+
+
+def test_save_writes_provenance_into_a_callers_figure(run_file: Path, tmp_path: Path) -> None:
+    from PIL import Image
+
+    fig = Figure(figsize=(4, 3))
+    figures.poincare(run_file, ax=fig.add_subplot())
+    figures.save(fig, tmp_path / "mine.png", dpi=200)
+    with Image.open(tmp_path / "mine.png") as image:
+        assert image.info["dpi"] == pytest.approx((200, 200), abs=0.05)
+        assert image.text["Source"] == str(run_file)
+        assert image.text["Software"].startswith("impactchain 0.1.0")
+
+
+def test_saved_pdf_and_svg_have_the_provenance(run_file: Path, tmp_path: Path) -> None:
+    fig = figures.spectrum(read_run(run_file))
+    figures.save(fig, tmp_path / "s.pdf")
+    pdf = (tmp_path / "s.pdf").read_bytes()
+    assert pdf.startswith(b"%PDF-")
+    assert b"/Creator (impactchain 0.1.0; post " in pdf
+    assert f"/Keywords ({run_file})".encode() in pdf
+    assert b"/Subject (! source: " in pdf
+    fig.savefig(tmp_path / "s.svg")
+    svg = (tmp_path / "s.svg").read_text()
+    assert "impactchain 0.1.0" in svg and str(run_file) in svg
+
+
+def test_a_given_y_range_is_shared_and_what_it_cuts_is_counted(make_run: MakeRun,
+                                                               sweep_file: Path) -> None:
+    """Figures compared side by side (the gallery's 1a-1d, 2a-2f, 12) take one y range."""
+    run = read_run(make_run(n=4, records=10))
+    assert run.strobe is not None
+    ax = figures.space_amplitude(run, ylim=(-3.0, 3.0)).axes[0]
+    assert ax.get_ylim() == (-3.0, 3.0) and "outside" not in ax.get_title()
+    cut = figures.space_amplitude(run, ylim=(-0.1, 0.1)).axes[0]
+    outside = int(np.count_nonzero(np.abs(run.strobe.x) > 0.1))
+    assert f"{outside} of 40 values outside the y range shown" in cut.get_title()
+    ky = figures.ky_dimension(read_run(sweep_file), ylim=(0.0, 2.0)).axes[0]
+    assert ky.get_ylim() == (0.0, 2.0)
+    assert "2 of 7 values outside" in ky.get_title()  # the fixture's 2.5 and 3.0
+    with pytest.raises(figures.FigureError, match="lower limit must be below"):
+        figures.space_amplitude(run, ylim=(1.0, 1.0))

@@ -6,6 +6,7 @@ import dataclasses
 import math
 from collections.abc import Callable
 from pathlib import Path
+from types import SimpleNamespace
 
 import h5py
 import numpy as np
@@ -13,7 +14,8 @@ import pytest
 
 from conftest import PERIODS, cascade_events, lyapunov_spectrum, strobe_record, sweep_values
 from conftest import DEFAULT_SWEEP
-from post.io import SCHEMA_VERSION, SchemaError, read_run
+from post.io import (FILE_UNITS, IN_MEMORY, SCHEMA_VERSION, SchemaError, namelist_groups,
+                     read_run, run_from_api)
 
 MakeRun = Callable[..., Path]
 
@@ -178,3 +180,94 @@ def test_event_site_out_of_range(make_run: MakeRun) -> None:
     path = make_run(n=3, events={"time": [0.1, 0.2], "site": [0, 7]})
     with pytest.raises(SchemaError, match="outside 0..3"):
         read_run(path)
+
+
+# ------------------------------------------------------------------------- namelists
+
+
+def test_reads_the_resolved_namelist(make_run: MakeRun) -> None:
+    run = read_run(make_run(seed=4))
+    assert run.resolved_namelist.startswith("&chain n = 4")
+    assert run.namelist()["initial"] == {"kind": "'random'", "seed": "4",
+                                         "x_amp": "0.300000000000000",
+                                         "v_amp": "1.00000000000000"}
+    older = read_run(make_run("older.h5"))  # no resolved_namelist: the input text
+    assert older.resolved_namelist == "" and older.namelist() == {"chain": {"n": "4"}}
+
+
+def test_namelist_groups_reads_the_input_syntax() -> None:
+    text = """! a comment with &fake key = 1 /
+&chain n = 3, spacing = 1.0, 0.9, 1.1,
+       1.0   ! per bond
+       boundary = 'fixed' /
+&output file = 'a b=c/d!e.h5', overwrite = .true. /
+&initial kind = "random",
+  seed = 7
+/
+"""
+    groups = namelist_groups(text)
+    assert groups == {
+        "chain": {"n": "3", "spacing": "1.0, 0.9, 1.1,\n       1.0", "boundary": "'fixed'"},
+        "output": {"file": "'a b=c/d!e.h5'", "overwrite": ".true."},
+        "initial": {"kind": '"random"', "seed": "7"},
+    }
+
+
+# ---------------------------------------------------------------------- in-memory runs
+
+
+def _api_like(n: int = 3, cycles: int = 5) -> tuple[SimpleNamespace, SimpleNamespace]:
+    """Stand-ins with the fields of post.api.Simulation and post.api.Lyapunov."""
+    params = dict(n=n, amplitude=1.7, omega=1.5, damping=0.05, restitution=0.7,
+                  spacing=np.ones(n + 1), boundary="fixed", x0=np.full(n, 0.1),
+                  v0=np.zeros(n), transient=10, cycles=cycles, phase=0.0,
+                  stick_speed=1e-9, events=True, code_version="post.api 0.1.0")
+    sim = SimpleNamespace(
+        x=np.arange(cycles * n, dtype=float).reshape(cycles, n), v=np.zeros((cycles, n)),
+        cycle=np.arange(11, 11 + cycles), periods=np.array([1, 2, 0][:n] * (n // 3 + 1))[:n],
+        event_time=np.array([0.5, 0.7]), event_site=np.array([0, 1]),
+        event_speed=np.array([1.0, 2.0]), event_kind=np.array([0, 0]),
+        final_x=np.full(n, 0.2), final_v=np.zeros(n), site_counts=np.ones(n + 1),
+        impacts=2, sticks=0, releases=0, touches=0, collisions_per_cycle=0.4,
+        params=params)
+    lyap = SimpleNamespace(
+        exponents=np.linspace(0.1, -1.0, 2 * n), stderr=np.full(2 * n, 0.01),
+        exponents_per_time=np.linspace(0.1, -1.0, 2 * n) / 3, ky_dimension=2.5,
+        collisions_per_cycle=0.4, final_x=np.full(n, 0.2), final_v=np.zeros(n),
+        params={**params, "events": False, "vectors": 0, "qr_every": 1})
+    return sim, lyap
+
+
+def test_run_from_api_is_the_run_the_file_would_hold() -> None:
+    sim, lyap = _api_like()
+    run = run_from_api(sim, lyap)
+    assert run.path == IN_MEMORY and run.complete and run.units == FILE_UNITS
+    assert run.code_version == "post.api 0.1.0"
+    p = run.params
+    assert (p.n, p.amplitude, p.omega, p.boundary, p.transient, p.cycles) == (
+        3, 1.7, 1.5, "fixed", 10, 5)
+    assert p.drive_period == pytest.approx(2 * math.pi / 1.5)
+    assert run.strobe is not None and run.events is not None and run.lyapunov is not None
+    np.testing.assert_array_equal(run.strobe.x, sim.x)
+    np.testing.assert_array_equal(run.strobe.period, sim.periods)
+    np.testing.assert_array_equal(run.events.site, [0, 1])
+    np.testing.assert_array_equal(run.lyapunov.stderr, lyap.stderr)
+    assert run.lyapunov.running.shape == (0, 6) and math.isnan(run.lyapunov.positive_sum)
+    assert run.initial is not None and run.initial.x.tolist() == [0.1, 0.1, 0.1]
+    assert run.final is not None and run.final.cycle == 15
+    with pytest.raises(ValueError):
+        run.strobe.x[0, 0] = 1.0
+    groups = run.namelist()
+    assert groups["chain"]["amplitude"] == "1.7" and groups["initial"]["kind"] == "'explicit'"
+    assert groups["run"]["cycles"] == "5" and groups["lyapunov"]["enabled"] == ".true."
+
+
+def test_run_from_api_refuses_mismatched_or_foreign_results() -> None:
+    sim, lyap = _api_like()
+    lyap.params["omega"] = 1.6
+    with pytest.raises(ValueError, match="differ in omega"):
+        run_from_api(sim, lyap)
+    with pytest.raises(ValueError, match="not a post.api result"):
+        run_from_api(SimpleNamespace(x=np.zeros((1, 1))))
+    with pytest.raises(ValueError, match="needs a simulation"):
+        run_from_api()
