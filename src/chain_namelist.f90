@@ -269,7 +269,7 @@ contains
         type(group_t) :: group
         type(item_t) :: item
         integer :: first, last, token_line, next_first, next_last, next_line
-        logical :: in_item
+        logical :: in_item, key_follows
 
         first = pos + 1
         last = pos
@@ -293,8 +293,10 @@ contains
                 exit
             end if
             call next_token(text, pos, line, next_first, next_last, next_line)
-            if (next_first > 0 .and. text(next_first:next_last) == '=' .and. &
-                text(first:last) /= '=') then
+            key_follows = .false.
+            if (next_first > 0) key_follows = text(next_first:next_last) == '=' .and. &
+                                              text(first:last) /= '='
+            if (key_follows) then
                 if (in_item) parsed%items = [parsed%items, item]
                 call start_item(group%name, text(first:last), token_line, first, item)
                 in_item = .true.
@@ -453,9 +455,12 @@ contains
         character(len=*), intent(in) :: v
         integer :: start
 
+        is_integer = .false.
+        if (len(v) == 0) return
         start = 1
         if (scan(v(1:1), '+-') > 0) start = 2
-        is_integer = len(v) >= start .and. verify(v(start:), '0123456789') == 0
+        if (len(v) < start) return
+        is_integer = verify(v(start:), '0123456789') == 0
     end function is_integer
 
     !> A real literal: digits with at most one point, an optional exponent (e, E, d, D), or
