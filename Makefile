@@ -15,6 +15,13 @@ CHECKED := --flag "-g -O1 -fcheck=all -ffpe-trap=invalid,zero,overflow -fbacktra
 APT_PACKAGES := gfortran libhdf5-dev liblapack-dev libblas-dev \
                 pkg-config libopenmpi-dev openmpi-bin
 PY_STAMP := $(VENV)/.requirements-installed
+# The Python package impactchain (post/impactchain/ and its extension impactchain._kernels,
+# built by meson-python from meson.build): installed into the venv as `pip install .` installs
+# it anywhere, from a build directory kept between runs, so that a rebuild compiles only what
+# changed (nothing changed: a few seconds). meson and ninja come from the venv.
+PKG_BUILD := $(CURDIR)/build/meson-python
+INSTALL_PKG := PATH="$(abspath $(VENV))/bin:$$PATH" $(PY) -m pip install --quiet \
+               --no-build-isolation --no-deps -Cbuild-dir=$(PKG_BUILD) .
 DEFAULT_RUN := runs/default.h5
 
 .PHONY: all setup system-deps python-deps build run test fortran-test python-test mpi \
@@ -61,12 +68,12 @@ $(PY_STAMP): requirements.txt
 
 build: setup
 	$(FPM) build $(RELEASE)
-	$(PY) f2py/build.py
+	$(INSTALL_PKG)
 
 run: build
 	@mkdir -p runs
 	$(FPM) run $(RELEASE) -- --overwrite namelists/default.nml
-	$(PY) -m post all $(DEFAULT_RUN) -o runs/default
+	$(PY) -m impactchain all $(DEFAULT_RUN) -o runs/default
 	@echo "impactchain: figures written next to $(DEFAULT_RUN) (runs/default_*.png)"
 
 # the MPI sweep driver (optional for users; built and run by make test)
@@ -80,6 +87,8 @@ fortran-test: build mpi
 
 python-test: build
 	IMPACTCHAIN_REQUIRE_EXTENSION=1 $(PY) -m pytest
+	@echo "impactchain: pip install of the repository into a fresh venv (a full build)"
+	$(PY) -m pytest -m install -q -rA post/tests/test_install.py
 	@echo "impactchain: the simulator tests again against the runtime-checked build"
 	IMPACTCHAIN_FPM_FLAGS='-g -O1 -fcheck=all -ffpe-trap=invalid,zero,overflow -fbacktrace' \
 	    $(PY) -m pytest -q test/python
@@ -99,16 +108,16 @@ recipe-checksums: build
 api-docs: build
 	$(PY) -m pip install --quiet ford pdoc
 	$(VENV)/bin/ford --quiet docs/ford.md
-	PDOC_ALLOW_EXEC=1 $(VENV)/bin/pdoc post -o docs/api/python
+	PDOC_ALLOW_EXEC=1 $(VENV)/bin/pdoc impactchain -o docs/api/python
 	@echo "impactchain: API reference in docs/api/fortran/index.html and docs/api/python/index.html"
 
 clean:
-	rm -rf build runs/*.h5 runs/*.png post/_kernels*
+	rm -rf build runs/*.h5 runs/*.png
 
 # ---- every figure of the paper: `make figures` (runs in parallel on the machine's cores) ----
 RUNS := figures/runs
 SIM := $(FPM) run $(RELEASE) -- --quiet --overwrite
-POST := $(PY) -m post
+POST := $(PY) -m impactchain
 # 150 dpi PNG; every figure carries the code version, inputs and sources in its metadata
 GALLERY := --dpi 150
 # One y range for the figures compared side by side (1a-1d, 2a-2f, the two of 12); a value

@@ -5,10 +5,10 @@ walls): the displacement of every oscillator at the Poincare section, one line p
 cycle, for 200 cycles after a transient, from the seeded random start of
 ``namelists/fig1c.nml``. The numbers are bit-identical to ``fpm run --profile release --
 namelists/fig1c.nml`` (post/tests/test_api.py checks it). The figure is the gallery's own,
-``post.figures.space_amplitude``, which takes the in-memory result as it takes a file; the
-PNG's metadata hold the equivalent input namelist.
+``impactchain.figures.space_amplitude``, which takes the in-memory result as it takes a file;
+the PNG's metadata hold the equivalent input namelist.
 
-Usage::
+Usage, with the package installed (``pip install .`` or ``make``), from any directory::
 
     .venv/bin/python post/examples/fig1c_space_amplitude.py fig1c.png
     .venv/bin/python post/examples/fig1c_space_amplitude.py fig1c.png --amplitude 1.8
@@ -22,9 +22,7 @@ from pathlib import Path
 
 from matplotlib.figure import Figure
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[2]))  # run from anywhere
-
-from post import api, figures  # noqa: E402
+from impactchain import api, figures
 
 N = 16
 
@@ -39,7 +37,7 @@ def compute(amplitude: float = 1.7, omega: float = 1.5, transient: int = 2000,
 
 
 def draw(sim: api.Simulation, seed: int) -> Figure:
-    """The gallery's space-amplitude figure of the in-memory result (post.figures)."""
+    """The gallery's space-amplitude figure of the in-memory result (impactchain.figures)."""
     return figures.space_amplitude(sim, labels=[f"random start, seed {seed}"])
 
 

@@ -5,7 +5,7 @@ attributes as one-element arrays, space-padded fixed-length strings, and a ``uni
 attribute on every dataset.
 
 Periods, exponents and Kaplan-Yorke dimensions are stored, as the simulator stores them,
-and the figures must show the stored values (``post`` never computes them). So that a
+and the figures must show the stored values (``impactchain`` never computes them). So that a
 figure that did compute them would be caught, the stored Kaplan-Yorke dimensions are not
 those of the stored exponents, and ``write_run(periods=[...])`` stores periods other than
 those of the strobe record.

@@ -1,11 +1,11 @@
-"""post.analysis: period labels and panel ranges."""
+"""impactchain.analysis: period labels and panel ranges."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from post.analysis import panel_ranges, period_label
+from impactchain.analysis import panel_ranges, period_label
 
 
 @pytest.mark.parametrize(("period", "label"), [(0, "ap"), (1, "P1"), (12, "P12")])

@@ -1,17 +1,20 @@
-"""post.api, the Python interface to the Fortran kernels (the f2py extension post._kernels).
+"""impactchain.api, the Python interface to the Fortran kernels (the f2py extension
+impactchain._kernels).
 
 What these tests demonstrate:
 
 1. Python and the CLI (``fpm run --profile release`` on the equivalent namelist) give
    bit-identical strobe records, event streams, final states, statistics, periods, Lyapunov
    spectra and Floquet Jacobians (``test_bit_identical_to_cli``, ``test_example_...``);
-   every full spectrum obeys the sum rule (``post.testing.assert_sum_rule``).
+   every full spectrum obeys the sum rule (``impactchain.testing.assert_sum_rule``).
 2. Every validation error of the library surfaces as a Python ValueError with exactly the
    CLI's message (``test_errors_match_cli``); Python-only misuse raises TypeError /
    ValueError with a clear message (``test_python_side_errors``).
 3. No leaks: 10,000 short calls do not grow the process's resident memory (``test_no_leak``).
-4. The extension builds from the tracked sources alone, in a scratch copy of the tree
-   (``test_fresh_build``); ``make test`` builds it before running pytest.
+4. The example post/examples/fig1c_space_amplitude.py reproduces its recipe bit for bit
+   and draws with the gallery's figure function. (That ``pip install`` builds the extension
+   in a fresh environment is post/tests/test_install.py's; ``make test`` installs the package
+   before running pytest.)
 
 Tests that need the extension are skipped when it cannot be imported, unless the
 environment variable IMPACTCHAIN_REQUIRE_EXTENSION is set (``make test`` sets it), in which
@@ -24,7 +27,6 @@ import importlib.util
 import math
 import os
 import re
-import shutil
 import subprocess
 import sys
 from concurrent.futures import ThreadPoolExecutor
@@ -35,8 +37,8 @@ import h5py
 import numpy as np
 import pytest
 
-from post import api
-from post.testing import assert_sum_rule
+from impactchain import api
+from impactchain.testing import assert_sum_rule
 
 ROOT = Path(__file__).resolve().parents[2]
 FPM = ROOT / ".venv" / "bin" / "fpm"
@@ -44,9 +46,8 @@ EXAMPLE = ROOT / "post" / "examples" / "fig1c_space_amplitude.py"
 
 pytestmark = pytest.mark.skipif(
     not api.extension_available() and "IMPACTCHAIN_REQUIRE_EXTENSION" not in os.environ,
-    reason="the extension post._kernels is not built (run `make` or "
-           "`.venv/bin/python f2py/build.py`); set IMPACTCHAIN_REQUIRE_EXTENSION=1 to fail "
-           "instead of skipping",
+    reason="the extension impactchain._kernels is not installed (`make build` or "
+           "`pip install .`); set IMPACTCHAIN_REQUIRE_EXTENSION=1 to fail instead of skipping",
 )
 
 
@@ -74,7 +75,7 @@ def namelist(n: int, amplitude: float, omega: float, damping: float = 0.05,
              events: bool = True, phase: float = 0.0, stick_speed: float = 1.0e-9,
              max_size_mb: float = 4096.0, lyapunov: bool = False, vectors: int = 0,
              qr_every: int = 1, period: int | None = None, random: dict | None = None) -> str:
-    """The namelist equivalent to a call of post.api with these arguments."""
+    """The namelist equivalent to a call of impactchain.api with these arguments."""
     lines = [f"&chain n = {n}, amplitude = {_values(amplitude)}, omega = {_values(omega)}, "
              f"damping = {_values(damping)}, restitution = {_values(restitution)}, "
              f"spacing = {_values(spacing)}, boundary = '{boundary}' /"]
@@ -487,29 +488,7 @@ def test_no_leak() -> None:
     assert growth < 5 * 1024, f"resident memory grew by {growth} KiB over 10,000 calls"
 
 
-# -------------------------------------------------------- 4. the build, and the example
-
-
-def test_fresh_build(tmp_path: Path) -> None:
-    """f2py/build.py builds a working extension from the tracked sources alone."""
-    if shutil.which("gfortran") is None and "IMPACTCHAIN_REQUIRE_EXTENSION" not in os.environ:
-        pytest.skip("no gfortran")
-    for folder in ("src", "f2py"):
-        shutil.copytree(ROOT / folder, tmp_path / folder)
-    (tmp_path / "post").mkdir()
-    for name in ("__init__.py", "api.py"):
-        shutil.copy2(ROOT / "post" / name, tmp_path / "post" / name)
-    build = subprocess.run([sys.executable, "f2py/build.py", "--force", "--quiet"],
-                           cwd=tmp_path, capture_output=True, text=True, timeout=600)
-    assert build.returncode == 0, build.stdout + build.stderr
-    assert list((tmp_path / "post").glob("_kernels*.so"))
-    probe = ("from post import api; import sys; assert api.__file__.startswith(sys.argv[1]); "
-             "print(api.simulate(6, 1.7, 1.5, transient=10, cycles=20).x.tobytes().hex())")
-    out = subprocess.run([sys.executable, "-c", probe, str(tmp_path)], cwd=tmp_path,
-                         capture_output=True, text=True, timeout=120)
-    assert out.returncode == 0, out.stderr
-    here = api.simulate(6, 1.7, 1.5, transient=10, cycles=20).x.tobytes().hex()
-    assert out.stdout.strip() == here
+# ------------------------------------------------------------------------- 4. the example
 
 
 def _example() -> Any:
@@ -533,7 +512,7 @@ def test_example_reproduces_the_fig1c_recipe(cli: Path, tmp_path: Path) -> None:
 
 
 def test_example_draws_with_the_figure_function() -> None:
-    """The example draws the in-memory result with post.figures.space_amplitude: the lines
+    """The example draws the in-memory result with impactchain.figures.space_amplitude: the lines
     are the simulation's strobe rows."""
     example = _example()
     sim = example.compute(transient=20, cycles=15)
@@ -547,16 +526,17 @@ def test_example_draws_with_the_figure_function() -> None:
 def test_example_writes_a_png(tmp_path: Path) -> None:
     out = tmp_path / "fig1c.png"
     result = subprocess.run([sys.executable, str(EXAMPLE), str(out), "--transient", "100",
-                             "--cycles", "50"], capture_output=True, text=True, timeout=120)
+                             "--cycles", "50"], capture_output=True, text=True, timeout=120,
+                            cwd=tmp_path)  # the installed package, from any directory
     assert result.returncode == 0, result.stderr
     assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     from PIL import Image
 
-    with Image.open(out) as image:  # drawn by post.figures: resolution and provenance
+    with Image.open(out) as image:  # drawn by impactchain.figures: resolution and provenance
         assert image.info["dpi"] == pytest.approx((150, 150), abs=0.05)
         text = dict(image.text)
-    assert text["Software"].startswith("impactchain post.api ")
-    assert text["Source"] == "(in memory, post.api)"
+    assert text["Software"].startswith("impactchain.api 0.1.0; impactchain.figures ")
+    assert text["Source"] == "(in memory, impactchain.api)"
     assert "&chain n = 16, amplitude = 1.7, omega = 1.5" in text["Description"]
     assert "&run transient = 100, cycles = 50" in text["Description"]
     bad = subprocess.run([sys.executable, str(EXAMPLE), str(out), "--amplitude", "-1"],

@@ -1,4 +1,4 @@
-"""The command line: ``python -m post``, in-process and as a subprocess."""
+"""The command line: ``python -m impactchain``, in-process and as a subprocess."""
 
 from __future__ import annotations
 
@@ -12,25 +12,24 @@ import numpy as np
 import pytest
 from matplotlib.figure import Figure
 
-from post import cli
-from post.cli import COMMANDS, main
-from post.io import read_run
+from impactchain import cli
+from impactchain.cli import COMMANDS, main
+from impactchain.io import read_run
 
 MakeRun = Callable[..., Path]
-ROOT = Path(__file__).resolve().parents[2]
 
 
 def _run_module(*args: str | Path) -> subprocess.CompletedProcess[str]:
-    env = {**os.environ, "MPLBACKEND": "Agg",
-           "PYTHONPATH": os.pathsep.join(filter(None, (str(ROOT), os.environ.get("PYTHONPATH"))))}
-    return subprocess.run([sys.executable, "-m", "post", *map(str, args)], capture_output=True,
-                          text=True, env=env, timeout=60, check=False)
+    """``python -m impactchain ARGS``: the installed package, as a user runs it."""
+    env = {**os.environ, "MPLBACKEND": "Agg"}
+    return subprocess.run([sys.executable, "-m", "impactchain", *map(str, args)],
+                          capture_output=True, text=True, env=env, timeout=60, check=False)
 
 
 def _error_line(stderr: str) -> str:
     lines = stderr.strip().splitlines()
     assert len(lines) == 1, stderr
-    assert lines[0].startswith("post: error: ")
+    assert lines[0].startswith("impactchain: error: ")
     return lines[0]
 
 
@@ -276,7 +275,7 @@ def test_png_has_the_resolution_and_the_metadata(make_run: MakeRun, tmp_path: Pa
         text = dict(image.text)
     with Image.open(sharp) as image:
         assert image.info["dpi"] == pytest.approx((300, 300), abs=0.05)
-    assert text["Software"].startswith("impactchain 0.1.0; post ")
+    assert text["Software"].startswith("impactchain 0.1.0; impactchain.figures ")
     assert text["Source"] == str(path)
     assert text["Description"].startswith(f"! source: {path}\n&chain")
     assert "seed = 4" in text["Description"]

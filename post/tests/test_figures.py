@@ -1,4 +1,4 @@
-"""post.figures: the axes hold the data they claim to show."""
+"""impactchain.figures: the axes hold the data they claim to show."""
 
 from __future__ import annotations
 
@@ -16,10 +16,10 @@ from matplotlib.colors import to_rgba
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 
-from post import figures
-from post.analysis import period_label
-from post.io import Run, SchemaError, read_run
-from post.shockwave import build_shock_waves
+from impactchain import figures
+from impactchain.analysis import period_label
+from impactchain.io import Run, SchemaError, read_run
+from impactchain.shockwave import build_shock_waves
 
 MakeRun = Callable[..., Path]
 
@@ -606,10 +606,10 @@ def test_paths_and_in_memory_results_are_accepted(run_file: Path, sweep_file: Pa
 
 def test_figures_draw_post_api_results() -> None:
     """api.simulate and api.lyapunov results, in memory, through the same functions."""
-    from post import api
+    from impactchain import api
 
     if not api.extension_available():
-        pytest.skip("the extension post._kernels is not built")
+        pytest.skip("the extension impactchain._kernels is not built")
     x0, v0 = api.random_start(6, seed=3, x_amp=0.3, v_amp=1.0)
     sim = api.simulate(6, 1.7, 1.5, x0=x0, v0=v0, transient=50, cycles=40)
     lyap = api.lyapunov(6, 1.7, 1.5, x0=x0, v0=v0, transient=50, cycles=40)
@@ -644,7 +644,7 @@ def test_saved_png_has_the_resolution_and_the_provenance(make_run: MakeRun,
         assert image.info["dpi"] == pytest.approx((160, 160), abs=0.05)
         assert image.size == (8 * 160, 5 * 160)
         text = dict(image.text)
-    assert text["Software"].startswith("impactchain 0.1.0; post ")
+    assert text["Software"].startswith("impactchain 0.1.0; impactchain.figures ")
     assert text["Source"].splitlines() == [r.path for r in runs]
     assert f"! source: {runs[1].path}\n&chain\n n = 4" in text["Description"]
     assert "seed = 4" in text["Description"] and "seed = 1" in text["Description"]
@@ -669,7 +669,7 @@ def test_saved_pdf_and_svg_have_the_provenance(run_file: Path, tmp_path: Path) -
     figures.save(fig, tmp_path / "s.pdf")
     pdf = (tmp_path / "s.pdf").read_bytes()
     assert pdf.startswith(b"%PDF-")
-    assert b"/Creator (impactchain 0.1.0; post " in pdf
+    assert b"/Creator (impactchain 0.1.0; impactchain.figures " in pdf
     assert f"/Keywords ({run_file})".encode() in pdf
     assert b"/Subject (! source: " in pdf
     fig.savefig(tmp_path / "s.svg")

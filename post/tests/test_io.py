@@ -1,4 +1,4 @@
-"""post.io: reading the schema_version 1 layout and rejecting what is not."""
+"""impactchain.io: reading the schema_version 1 layout and rejecting what is not."""
 
 from __future__ import annotations
 
@@ -14,7 +14,7 @@ import pytest
 
 from conftest import PERIODS, cascade_events, lyapunov_spectrum, strobe_record, sweep_values
 from conftest import DEFAULT_SWEEP
-from post.io import (FILE_UNITS, IN_MEMORY, SCHEMA_VERSION, SchemaError, namelist_groups,
+from impactchain.io import (FILE_UNITS, IN_MEMORY, SCHEMA_VERSION, SchemaError, namelist_groups,
                      read_run, run_from_api)
 
 MakeRun = Callable[..., Path]
@@ -217,11 +217,11 @@ def test_namelist_groups_reads_the_input_syntax() -> None:
 
 
 def _api_like(n: int = 3, cycles: int = 5) -> tuple[SimpleNamespace, SimpleNamespace]:
-    """Stand-ins with the fields of post.api.Simulation and post.api.Lyapunov."""
+    """Stand-ins with the fields of impactchain.api.Simulation and impactchain.api.Lyapunov."""
     params = dict(n=n, amplitude=1.7, omega=1.5, damping=0.05, restitution=0.7,
                   spacing=np.ones(n + 1), boundary="fixed", x0=np.full(n, 0.1),
                   v0=np.zeros(n), transient=10, cycles=cycles, phase=0.0,
-                  stick_speed=1e-9, events=True, code_version="post.api 0.1.0")
+                  stick_speed=1e-9, events=True, code_version="impactchain.api 0.1.0")
     sim = SimpleNamespace(
         x=np.arange(cycles * n, dtype=float).reshape(cycles, n), v=np.zeros((cycles, n)),
         cycle=np.arange(11, 11 + cycles), periods=np.array([1, 2, 0][:n] * (n // 3 + 1))[:n],
@@ -242,7 +242,7 @@ def test_run_from_api_is_the_run_the_file_would_hold() -> None:
     sim, lyap = _api_like()
     run = run_from_api(sim, lyap)
     assert run.path == IN_MEMORY and run.complete and run.units == FILE_UNITS
-    assert run.code_version == "post.api 0.1.0"
+    assert run.code_version == "impactchain.api 0.1.0"
     p = run.params
     assert (p.n, p.amplitude, p.omega, p.boundary, p.transient, p.cycles) == (
         3, 1.7, 1.5, "fixed", 10, 5)
@@ -267,7 +267,7 @@ def test_run_from_api_refuses_mismatched_or_foreign_results() -> None:
     lyap.params["omega"] = 1.6
     with pytest.raises(ValueError, match="differ in omega"):
         run_from_api(sim, lyap)
-    with pytest.raises(ValueError, match="not a post.api result"):
+    with pytest.raises(ValueError, match="not an impactchain.api result"):
         run_from_api(SimpleNamespace(x=np.zeros((1, 1))))
     with pytest.raises(ValueError, match="needs a simulation"):
         run_from_api()

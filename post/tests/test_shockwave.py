@@ -1,11 +1,11 @@
-"""post.shockwave: the construction on hand-made event streams."""
+"""impactchain.shockwave: the construction on hand-made event streams."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from post.shockwave import Wave, build_shock_waves
+from impactchain.shockwave import Wave, build_shock_waves
 
 T = 2.0  # drive period of the hand-made streams
 

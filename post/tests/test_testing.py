@@ -1,5 +1,6 @@
-"""post.testing, the invariants the test suites assert: the sum rule's expected value and the
-check itself (it must pass on a spectrum that obeys the rule and fail on one that does not)."""
+"""impactchain.testing, the invariants the test suites assert: the sum rule's expected value
+and the check itself (it must pass on a spectrum that obeys the rule and fail on one that does
+not)."""
 from __future__ import annotations
 
 import math
@@ -7,7 +8,7 @@ import math
 import numpy as np
 import pytest
 
-from post.testing import assert_sum_rule, sum_rule_expected
+from impactchain.testing import assert_sum_rule, sum_rule_expected
 
 CASE = dict(n=3, damping=0.05, omega=1.5, restitution=0.7, collisions_per_cycle=4.0)
 

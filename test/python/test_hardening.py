@@ -15,7 +15,7 @@ import h5py
 import numpy as np
 import pytest
 
-from post.testing import assert_sum_rule
+from impactchain.testing import assert_sum_rule
 from simulator import impactchain_exe, run_namelist  # noqa: F401 (fixture)
 
 VALID = """&chain

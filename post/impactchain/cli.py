@@ -1,12 +1,12 @@
-"""Command line: ``python -m post <figure> FILE.h5 [FILE2.h5 ...] -o out.png``.
+"""Command line: ``python -m impactchain <figure> FILE.h5 [FILE2.h5 ...] -o out.png``.
 
 The format is the output's extension (``.png``, ``.pdf``, ``.svg``) or ``--format``
 (which adds the extension when the output has none); PNG at ``--dpi`` (default 150). Every
 file carries the code version, the input namelists and the source file names in its
-metadata (:func:`post.figures.metadata`).
+metadata (:func:`impactchain.figures.metadata`).
 
 Errors in the input (missing file, wrong schema, data the figure needs but the run did
-not record) and bad options print one line ``post: error: ...`` on stderr and exit
+not record) and bad options print one line ``impactchain: error: ...`` on stderr and exit
 with status 2 without writing anything.
 """
 
@@ -21,8 +21,8 @@ from pathlib import Path
 
 from matplotlib.figure import Figure
 
-from post import figures
-from post.io import Run, SchemaError, read_run
+from impactchain import figures
+from impactchain.io import Run, SchemaError, read_run
 
 __all__ = ["main", "COMMANDS"]
 
@@ -32,7 +32,7 @@ DEFAULT_DPI = 150
 
 
 class CliError(Exception):
-    """An error to report as ``post: error: ...`` with exit status 2."""
+    """An error to report as ``impactchain: error: ...`` with exit status 2."""
 
 
 @dataclass(frozen=True)
@@ -226,9 +226,9 @@ COMMANDS: dict[str, Command] = {
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser, one sub-command per figure plus ``all``."""
     parser = argparse.ArgumentParser(
-        prog="python -m post",
+        prog="python -m impactchain",
         description="Figures from impactchain HDF5 output files.",
-        epilog="example: python -m post space-amplitude run.h5 -o fig.png",
+        epilog="example: python -m impactchain space-amplitude run.h5 -o fig.png",
     )
     sub = parser.add_subparsers(dest="figure", metavar="<figure>", required=True,
                                 title="figures")
@@ -260,7 +260,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         else:
             _make_one(COMMANDS[args.figure], args)
     except (CliError, SchemaError, figures.FigureError) as exc:
-        print(f"post: error: {exc}", file=sys.stderr)
+        print(f"impactchain: error: {exc}", file=sys.stderr)
         return EXIT_ERROR
     return 0
 
@@ -320,7 +320,7 @@ def _read(path: str, require: tuple[str, ...], optional: tuple[str, ...] | None,
 
 
 def _note(message: str) -> None:
-    print(f"post: note: {message}", file=sys.stderr)
+    print(f"impactchain: note: {message}", file=sys.stderr)
 
 
 def _output_path(text: str, fmt: str | None = None) -> Path:

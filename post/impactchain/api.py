@@ -2,10 +2,11 @@
 
 The functions here run the very same Fortran code as the command line
 (``fpm run --profile release -- input.nml``), through the f2py extension
-``post._kernels`` (built by ``make`` / ``.venv/bin/python f2py/build.py``). Results are
-bit-identical to the CLI's on the equivalent namelist, and every bad argument raises a
-:class:`ValueError` carrying the CLI's own message (``"&chain: damping = 1.2000000 is
-outside [0, 1)"``): the checks are the library's ``validate_config``, not a copy of them.
+``impactchain._kernels`` (built when the package is installed: ``pip install .``, which
+``make`` runs). Results are bit-identical to the CLI's on the equivalent namelist, and every
+bad argument raises a :class:`ValueError` carrying the CLI's own message (``"&chain:
+damping = 1.2000000 is outside [0, 1)"``): the checks are the library's
+``validate_config``, not a copy of them.
 
 Python and the equivalent namelist / CLI output:
 
@@ -30,7 +31,7 @@ record j (j = 1..cycles) is taken at t = (transient + j) T + phase/omega.
 
 Example::
 
-    from post import api
+    from impactchain import api
     sim = api.simulate(16, amplitude=1.7, omega=1.5, transient=500, cycles=200)
     sim.x.shape                           # (200, 16)
     lyap = api.lyapunov(16, 1.7, 1.5, transient=100, cycles=300)
@@ -50,7 +51,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 try:
-    from post import _kernels
+    from impactchain import _kernels
 except ImportError as _exc:  # not built yet: say how to build it when a function is called
     _kernels = None
     _IMPORT_ERROR: ImportError | None = _exc
@@ -58,7 +59,7 @@ else:
     _IMPORT_ERROR = None
 
 if TYPE_CHECKING:
-    from post.io import Run
+    from impactchain.io import Run
 
 __all__ = [
     "Simulation",
@@ -103,7 +104,7 @@ RUN_OUTPUTS = (
 
 
 def extension_available() -> bool:
-    """Whether the compiled extension ``post._kernels`` could be imported."""
+    """Whether the compiled extension ``impactchain._kernels`` could be imported."""
     return _kernels is not None
 
 
@@ -170,10 +171,10 @@ class Simulation:
         return self.cycle * self.drive_period + self.phase / (2 * np.pi) * self.drive_period
 
     def to_run(self, lyapunov: Lyapunov | None = None) -> Run:
-        """This result as a :class:`post.io.Run`, as if read from the CLI's file, so that
-        the figure functions of :mod:`post.figures` draw it (they call this themselves when
+        """This result as a :class:`impactchain.io.Run`, as if read from the CLI's file, so that
+        the figure functions of :mod:`impactchain.figures` draw it (they call this themselves when
         given a Simulation). ``lyapunov``: a spectrum of the same parameters to add."""
-        from post.io import run_from_api
+        from impactchain.io import run_from_api
 
         return run_from_api(self, lyapunov)
 
@@ -201,9 +202,9 @@ class Lyapunov:
     ``qr_every``)."""
 
     def to_run(self) -> Run:
-        """This spectrum as a :class:`post.io.Run` (``Run.lyapunov``, without running
-        estimates), for :func:`post.figures.spectrum`."""
-        from post.io import run_from_api
+        """This spectrum as a :class:`impactchain.io.Run` (``Run.lyapunov``, without running
+        estimates), for :func:`impactchain.figures.spectrum`."""
+        from impactchain.io import run_from_api
 
         return run_from_api(None, self)
 
@@ -479,8 +480,9 @@ def random_start(
 def _extension() -> Any:
     if _kernels is None:
         raise ImportError(
-            "the impactchain extension post._kernels is not built; run `make` or "
-            f"`.venv/bin/python f2py/build.py` ({_IMPORT_ERROR})")
+            "the compiled extension impactchain._kernels is missing: install the package "
+            "with `pip install .` (or `make`) from the repository; an import of "
+            f"impactchain from the source tree has no extension ({_IMPORT_ERROR})")
     return _kernels
 
 
@@ -534,9 +536,9 @@ def _used(cfg: dict[str, Any], boundary: str, **extra: Any) -> Mapping[str, Any]
 
 
 def _code_version() -> str:
-    from post import __version__
+    from impactchain import __version__
 
-    return f"post.api {__version__}"
+    return f"impactchain.api {__version__}"
 
 
 def _run(cfg: dict[str, Any], strobe: bool, events: bool) -> dict[str, Any]:

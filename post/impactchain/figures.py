@@ -1,7 +1,7 @@
-"""Figures of the paper, built from :mod:`post.io` runs.
+"""Figures of the paper, built from :mod:`impactchain.io` runs.
 
-Every figure function takes its data as a :class:`post.io.Run`, a path to an impactchain
-HDF5 file, or an in-memory result of :mod:`post.api` (anything with a ``to_run()`` method
+Every figure function takes its data as a :class:`impactchain.io.Run`, a path to an impactchain
+HDF5 file, or an in-memory result of :mod:`impactchain.api` (anything with a ``to_run()`` method
 returning a Run: ``api.Simulation``, ``api.Lyapunov``), and returns a
 :class:`matplotlib.figure.Figure`, without pyplot or global state. With ``ax=None`` the
 function makes its own figure (a :class:`ProvenanceFigure`); with ``ax=`` (one Axes, or a
@@ -12,7 +12,7 @@ Conventions, the same in every figure:
 
 - Axis labels read ``name $symbol$ [unit]``: a short name, the symbol where the quantity has
   one, and the unit in brackets, ``[1]`` for a dimensionless quantity. Units are the
-  ``units`` attributes of the datasets shown (:data:`post.io.FILE_UNITS` for a run made in
+  ``units`` attributes of the datasets shown (:data:`impactchain.io.FILE_UNITS` for a run made in
   memory); the model parameters, which the file stores without units, are in the model's
   reduced units (docs/model.md section 1.5): ``A`` and the spacing ``a`` in [length], ``w``
   in [1/time], ``b`` and ``K`` in [1].
@@ -31,7 +31,7 @@ for the same options.
 
 Shock-wave layout: each panel is a pair of stacked axes with the same time range on the
 y axis and the same x axis (equilibrium position of the colliding site, see
-:attr:`post.io.Params.site_positions`): waves started at the right wall in the upper
+:attr:`impactchain.io.Params.site_positions`): waves started at the right wall in the upper
 axes, waves started at the left wall in the lower axes. Each wave is drawn as a thin line
 through its collisions, with a dot at every collision.
 """
@@ -55,10 +55,10 @@ from matplotlib.colors import BoundaryNorm, ListedColormap
 from matplotlib.figure import Figure, SubFigure
 from matplotlib.lines import Line2D
 
-from post import __version__
-from post.analysis import panel_ranges, period_label
-from post.io import FILE_UNITS, Run, Strobe, Sweep, read_run
-from post.shockwave import Wave, build_shock_waves
+from impactchain import __version__
+from impactchain.analysis import panel_ranges, period_label
+from impactchain.io import FILE_UNITS, Run, Strobe, Sweep, read_run
+from impactchain.shockwave import Wave, build_shock_waves
 
 __all__ = [
     "FigureError",
@@ -121,7 +121,8 @@ RunLike = Union[Run, str, "os.PathLike[str]", SupportsRun]
 
 def as_run(data: RunLike, require: Iterable[str] = (), purpose: str | None = None) -> Run:
     """The :class:`Run` of ``data``: a Run, a file path (read with ``require``, see
-    :func:`post.io.read_run`), or an object with ``to_run()`` (``post.api`` results)."""
+    :func:`impactchain.io.read_run`), or an object with ``to_run()`` (``impactchain.api``
+    results)."""
     if isinstance(data, Run):
         return data
     if isinstance(data, (str, os.PathLike)):
@@ -130,10 +131,10 @@ def as_run(data: RunLike, require: Iterable[str] = (), purpose: str | None = Non
         run = data.to_run()
         if not isinstance(run, Run):
             raise TypeError(f"{type(data).__name__}.to_run() returned "
-                            f"{type(run).__name__}, not a post.io.Run")
+                            f"{type(run).__name__}, not an impactchain.io.Run")
         return run
-    raise TypeError(f"cannot draw a {type(data).__name__}: give a post.io.Run, a path to an "
-                    "impactchain file or a post.api result")
+    raise TypeError(f"cannot draw a {type(data).__name__}: give an impactchain.io.Run, a path "
+                    "to an impactchain file or an impactchain.api result")
 
 
 def _as_runs(data: RunLike | Sequence[RunLike], require: Iterable[str] = (),
@@ -209,18 +210,20 @@ def _record_sources(fig: Figure, runs: Sequence[Run]) -> None:
 def metadata(fig: Figure, fmt: str = "png") -> dict[str, str]:
     """File metadata of a figure drawn here, for ``savefig(metadata=...)`` in ``fmt``.
 
-    PNG: ``Software`` (impactchain code version of every file shown, post and matplotlib
-    versions), ``Title``, ``Source`` (the files, one a line), ``Description`` (their
-    input namelists, each after a ``! source:`` line) and ``Comment`` (the resolved
-    namelists: every key as used). PDF: ``Creator``, ``Title``, ``Subject`` (the inputs),
-    ``Keywords`` (the files). SVG: ``Creator``, ``Title``, ``Description``, ``Source``.
+    PNG: ``Software`` (impactchain code version of every file shown, the version of
+    ``impactchain.figures`` and of matplotlib), ``Title``, ``Source`` (the files, one a
+    line), ``Description`` (their input namelists, each after a ``! source:`` line) and
+    ``Comment`` (the resolved namelists: every key as used). PDF: ``Creator``, ``Title``,
+    ``Subject`` (the inputs), ``Keywords`` (the files). SVG: ``Creator``, ``Title``,
+    ``Description``, ``Source``.
     Other formats: none. A figure that shows no run gets only the software versions.
     """
     fmt = fmt.lower().lstrip(".")
     sources: list[_Source] = getattr(fig, _PROVENANCE, None) or []
     versions = list(dict.fromkeys(s.code_version for s in sources if s.code_version))
-    code = [f"impactchain {v}" for v in versions] or ["impactchain"]
-    software = "; ".join([*code, f"post {__version__}", f"Matplotlib {matplotlib.__version__}"])
+    code = [v if v.startswith("impactchain") else f"impactchain {v}" for v in versions]
+    software = "; ".join([*(code or ["impactchain"]), f"impactchain.figures {__version__}",
+                          f"Matplotlib {matplotlib.__version__}"])
     files = "\n".join(s.path for s in sources)
     inputs = "\n".join(f"! source: {s.path}\n{s.input_namelist.rstrip()}" for s in sources
                        if s.input_namelist)
@@ -916,7 +919,7 @@ def _sweep_ky(run: Run, sweep: Sweep) -> np.ndarray:
 def spectrum(run: RunLike, ax: Axes | Sequence[Axes] | None = None) -> Figure:
     """Lyapunov spectrum of one run with error bars (+-1 stored standard error), and the
     convergence of the running estimates coloured by index j (with a colour bar), on the
-    same y range. A run without running estimates (``post.api.lyapunov``) gets the
+    same y range. A run without running estimates (``impactchain.api.lyapunov``) gets the
     spectrum alone. ``ax``: one Axes (the spectrum) or two (spectrum, convergence).
     """
     run = as_run(run, ("lyapunov",), "spectrum")

@@ -1,7 +1,7 @@
 """Read impactchain HDF5 output (schema_version 1).
 
 This is the only module that knows the file layout and its axis order. Everything
-else in ``post`` works on the frozen dataclasses returned by :func:`read_run`, whose
+else in ``impactchain`` works on the frozen dataclasses returned by :func:`read_run`, whose
 arrays are read-only numpy arrays with the record axis first:
 
 ========================  ======================  ===================================
@@ -25,7 +25,7 @@ Every group except ``/params`` is optional; a figure states what it needs throug
 piece when the file lacks it. The Fortran writer stores arrays as ``(n, n_record)``
 so that they appear here as ``(n_record, n)``; a file with the other order is rejected
 rather than silently transposed. Periods, exponents and Kaplan-Yorke dimensions are the
-simulator's, as stored; nothing in ``post`` computes them again.
+simulator's, as stored; nothing in ``impactchain`` computes them again.
 """
 
 from __future__ import annotations
@@ -344,7 +344,7 @@ def _check_schema(f: h5py.File, path: str) -> None:
     version = _int(f.attrs["schema_version"], path, "schema_version")
     if version != SCHEMA_VERSION:
         raise SchemaError(
-            f"{path}: schema_version {version} is not supported (this post/ reads "
+            f"{path}: schema_version {version} is not supported (this impactchain package reads "
             f"schema_version {SCHEMA_VERSION})"
         )
     if "params" not in f:
@@ -619,15 +619,15 @@ def _mask_strings(body: str) -> str:
 
 # ------------------------------------------------------------------------ in-memory runs
 
-IN_MEMORY = "(in memory, post.api)"
+IN_MEMORY = "(in memory, impactchain.api)"
 """``Run.path`` of a run made by :func:`run_from_api`."""
 
 
 def run_from_api(simulation: Any = None, lyapunov: Any = None) -> Run:
-    """A :class:`Run` from the in-memory results of :mod:`post.api`, for the figures.
+    """A :class:`Run` from the in-memory results of :mod:`impactchain.api`, for the figures.
 
-    ``simulation``: a ``post.api.Simulation`` (strobe records, events, statistics, final
-    state); ``lyapunov``: a ``post.api.Lyapunov`` (exponents and their standard errors;
+    ``simulation``: a ``impactchain.api.Simulation`` (strobe records, events, statistics, final
+    state); ``lyapunov``: a ``impactchain.api.Lyapunov`` (exponents and their standard errors;
     no running estimates). Either or both; with both they must come from the same
     parameters. Their ``params`` (the arguments as used) give ``Run.params``, and the
     equivalent namelist becomes ``Run.input_namelist``; units are the simulator's
@@ -639,7 +639,8 @@ def run_from_api(simulation: Any = None, lyapunov: Any = None) -> Run:
     sources = [r for r in (simulation, lyapunov) if r is not None]
     settings = [dict(getattr(r, "params", None) or {}) for r in sources]
     if not settings[0]:
-        raise ValueError(f"{type(sources[0]).__name__} has no params: not a post.api result")
+        raise ValueError(f"{type(sources[0]).__name__} has no params: "
+                         "not an impactchain.api result")
     config = settings[0]
     if len(settings) == 2:
         model = ("n", "amplitude", "omega", "damping", "restitution", "boundary", "phase")
@@ -671,7 +672,7 @@ def run_from_api(simulation: Any = None, lyapunov: Any = None) -> Run:
             stderr=_frozen(lyapunov.stderr),
             running=_frozen(np.empty((0, exponents.size))),
             ky_dimension=float(lyapunov.ky_dimension),
-            positive_sum=math.nan,  # not returned by post.api
+            positive_sum=math.nan,  # not returned by impactchain.api
             collisions_per_cycle=float(lyapunov.collisions_per_cycle),
         )
         if "final" not in parts:
@@ -725,7 +726,7 @@ def _equivalent_namelist(config: Mapping[str, Any], lyapunov: bool) -> str:
 
     spacing = np.atleast_1d(np.asarray(config["spacing"], dtype=float))
     lines = [
-        "! made in memory by post.api; the equivalent command-line input:",
+        "! made in memory by impactchain.api; the equivalent command-line input:",
         f"&chain n = {int(config['n'])}, amplitude = {real(config['amplitude'])}, "
         f"omega = {real(config['omega'])}, damping = {real(config['damping'])}, "
         f"restitution = {real(config['restitution'])}, "

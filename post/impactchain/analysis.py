@@ -1,7 +1,7 @@
 """Small analysis helpers: period labels and panel ranges.
 
 All functions are pure and work on plain numpy arrays. Periods, Lyapunov exponents and
-Kaplan-Yorke dimensions are not computed anywhere in ``post``: each has one definition, the
+Kaplan-Yorke dimensions are not computed anywhere in ``impactchain``: each has one definition, the
 simulator's (docs/model.md sections 6.3 and 7.5), and the figures read them from its files
 (``/strobe/period``, ``/lyapunov``, ``/sweep/period``, ``/sweep/exponents``,
 ``/sweep/ky_dimension``).
