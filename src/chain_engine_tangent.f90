@@ -62,11 +62,13 @@ contains
     !> jumps) is added, directions removed by singular jumps are dropped (chain_lyapunov's
     !> lyapunov_step), and the engine's bookkeeping starts afresh.
     module procedure chain_qr_step
-        integer :: info
+        integer :: info, i
 
         call lyapunov_step(acc, chain%tangent, info, chain%tangent_scale_bits, &
                            chain%tangent_log, chain%rank_losses > 0)
+        ! (the step may have dropped collapsed directions)
         chain%n_vectors = size(chain%tangent, 1)
+        chain%tangent_log = [(0.0_wp, i=1, chain%n_vectors)]
         call restart_bookkeeping(chain)
         if (info /= 0) call set_error(err, "lyapunov: QR factorisation failed (LAPACK info "// &
                                       fmt_int(info)//")")
@@ -91,18 +93,17 @@ contains
         end if
         chain%tangent = transpose(frame)
         call forget_resting_rows(chain)
+        chain%tangent_log = 0
         call restart_bookkeeping(chain)
     end procedure chain_reorthonormalise
 
-    !> The frame has just been orthonormalised: no scaling, no growth kept, no singular jump
-    !> since.
+    !> The frame has just been orthonormalised (and tangent_log cleared): no scaling, no
+    !> singular jump since, no shrinking of its volume.
     pure subroutine restart_bookkeeping(chain)
         type(chain_t), intent(inout) :: chain
-        integer :: i
 
         chain%tangent_scale_bits = 0
         chain%rank_losses = 0
-        chain%tangent_log = [(0.0_wp, i=1, chain%n_vectors)]
         chain%jumps_volume = 0
     end subroutine restart_bookkeeping
 
