@@ -13,11 +13,10 @@
 program bench
     use, intrinsic :: iso_fortran_env, only: int64, output_unit, error_unit
     use impactchain, only: wp, i8, error_t, run_config_t, validate_config, chain_t, &
-                           event_log_t, memory_sink_t, run_result_t, record_run, start_chain
-    ! the strobe-snapshot and sweep-loop cases time the engine's own steps, beneath the API
-    use chain_engine, only: chain_init, chain_advance, chain_sync, chain_new_cycle
-    use chain_events, only: event_log_init
-    use chain_flow, only: make_flow
+                           event_log_t, memory_sink_t, run_result_t, record_run, start_chain, &
+                           restart_chain, advance_to_point, event_counts_t, chain_cycle, &
+                           chain_start, chain_period, chain_positions, chain_velocities, &
+                           chain_copy_state, chain_contacts, chain_counts
     use bench_kit, only: row_t, wall_seconds, peak_memory_kib, print_machine, &
                          print_table_head, print_row_markdown, print_row_tsv
     implicit none
@@ -141,10 +140,12 @@ contains
         type(run_result_t), intent(out) :: res
         type(memory_sink_t) :: sink
         type(error_t), allocatable :: err
-        real(wp) :: t0
+        real(wp) :: t0, start_s
+        integer(i8) :: start_cycle
 
         sink%keep_strobe = .false.
-        cfg%transient = chain%cycle - chain%start_cycle
+        call chain_start(chain, start_cycle, start_s)
+        cfg%transient = chain_cycle(chain) - start_cycle
         cfg%cycles = cycles
         t0 = wall_seconds()
         call record_run(cfg, chain, sink, res, err)
@@ -279,7 +280,7 @@ contains
         integer, intent(in) :: points
         integer(int64), intent(out) :: cycles, impacts
         type(run_config_t) :: cfg
-        type(chain_t) :: chain, next
+        type(chain_t) :: chain
         type(memory_sink_t) :: sink
         type(run_result_t) :: res
         type(error_t), allocatable :: err
@@ -294,13 +295,9 @@ contains
         do p = 1, points
             cfg%model%amplitude = 6 - 0.01_wp*(p - 1)
             if (p > 1) then
-                call chain_init(next, make_flow(cfg%model%damping, cfg%model%amplitude, &
-                    cfg%model%omega), &
-                                cfg%model%restitution, cfg%model%spacing, .true., &
-                                    cfg%model%stick_speed, &
-                                chain%x, chain%v, 0_i8, 0.0_wp, err, chain%contact)
+                ! from the previous point's final state, every bond searched afresh
+                call restart_chain(cfg, chain, err)
                 if (allocated(err)) call fail(err%message)
-                chain = next
             end if
             call record_run(cfg, chain, sink, res, err)
             if (allocated(err)) call fail(err%message)
@@ -375,27 +372,29 @@ contains
         end do
     end subroutine fig13_pass
 
-    !> A strobe snapshot on its own: bring every oscillator to one time (`chain_sync`) and copy
-    !> x and v out, for n = 100000 with a drive too weak for any impact. Snapshots are taken at
-    !> 16 times within each cycle so every one of them finds every oscillator out of date.
+    !> A strobe snapshot on its own: bring every oscillator to one time (`advance_to_point`,
+    !> which ends in the engine's sync) and copy x and v out, for n = 100000 with a drive too
+    !> weak for any impact. Snapshots are taken at 16 times within each cycle so every one of
+    !> them finds every oscillator out of date.
     subroutine case_strobe(row)
         type(row_t), intent(inout) :: row
         integer, parameter :: n = 100000, per_cycle = 16
         type(run_config_t) :: cfg
         type(chain_t) :: chain
-        type(event_log_t) :: log
+        type(event_log_t) :: log  ! (disabled: no event is logged)
+        type(event_counts_t) :: counts
         type(error_t), allocatable :: err
         real(wp), allocatable :: xs(:), vs(:)
-        real(wp) :: elapsed, t0, best, checksum
+        real(wp) :: elapsed, t0, best, checksum, period
         integer(int64) :: snaps
         integer :: r, k
 
-        row%label = 'strobe snapshot: chain_sync + copy x, v (A=1e-3, no impacts)'
+        row%label = 'strobe snapshot: sync + copy x, v (A=1e-3, no impacts)'
         row%n = n
         row%unit_name = 'oscillator snapshot'
         cfg = make_config(n, 1.0e-3_wp, 1.5_wp, 0.05_wp, 0.7_wp, 0.0_wp, 0.0_wp)
         chain = new_chain(cfg)
-        call event_log_init(log, .false., 0)
+        period = chain_period(chain)
         allocate (xs(n), vs(n))
         checksum = 0
         best = huge(1.0_wp)
@@ -405,24 +404,23 @@ contains
             do while (elapsed < merge(0.2_wp, 1.0_wp, r == 0)*min_time)
                 do k = 1, per_cycle
                     t0 = wall_seconds()
-                    call chain_advance(chain, k*chain%flow%period/(per_cycle + 1), log, err)
-                    call chain_sync(chain)
-                    xs = chain%x
-                    vs = chain%v
+                    call advance_to_point(chain, chain_cycle(chain), &
+                                          k*period/(per_cycle + 1), log, err)
+                    call chain_copy_state(chain, xs, vs)
                     elapsed = elapsed + (wall_seconds() - t0)
                     if (allocated(err)) call fail(err%message)
                     checksum = checksum + xs(n/2) + vs(1)
                 end do
                 snaps = snaps + per_cycle
-                call chain_advance(chain, chain%flow%period, log, err)
+                call advance_to_point(chain, chain_cycle(chain) + 1, 0.0_wp, log, err)
                 if (allocated(err)) call fail(err%message)
-                call chain_new_cycle(chain)
             end do
             if (r > 0 .and. elapsed < best) then
                 best = elapsed
                 row%units = snaps*n
                 row%cycles = 0
-                row%collisions = chain%impacts
+                counts = chain_counts(chain)
+                row%collisions = counts%impacts
             end if
         end do
         row%seconds = best
@@ -456,16 +454,14 @@ contains
         integer :: i
         character(len=32) :: buf
         character(len=:), allocatable :: line
+        real(wp), allocatable :: z(:)
 
-        if (any(chain%contact /= 0)) call fail('default case: an oscillator rests on a wall '// &
-                                               'at the baseline start')
+        if (any(chain_contacts(chain) /= 0)) call fail('default case: an oscillator rests on '// &
+                                                       'a wall at the baseline start')
+        z = [chain_positions(chain), chain_velocities(chain)]
         line = 'state'
-        do i = 1, chain%n
-            write (buf, '(es24.16)') chain%x(i)
-            line = line//achar(9)//trim(adjustl(buf))
-        end do
-        do i = 1, chain%n
-            write (buf, '(es24.16)') chain%v(i)
+        do i = 1, size(z)
+            write (buf, '(es24.16)') z(i)
             line = line//achar(9)//trim(adjustl(buf))
         end do
         write (output_unit, '(a)') line

@@ -9,7 +9,7 @@ module chain_bridge
     use, intrinsic :: iso_c_binding, only: c_int, c_int64_t, c_double
     use impactchain, only: wp, i8, error_t, set_error, run_config_t, fmt_real, fmt_int, &
                            lyapunov_vectors, event_log_t, chain_t, record_sink_t, run_result_t, &
-                           set_boundary
+                           set_boundary, chain_copy_state
     implicit none
     private
     public :: array_sink_t, make_config, put_message, run_sizes_ok, put_run_results
@@ -146,8 +146,7 @@ contains
         mult_re = 0
         mult_im = 0
         if (.not. (present(res) .and. present(chain))) return
-        final_x = chain%x
-        final_v = chain%v
+        call chain_copy_state(chain, final_x, final_v)
         periods = res%periods
         site_counts = res%site_counts
         counts = [res%impacts, res%sticks, res%releases, res%touches]

@@ -1,6 +1,7 @@
-!> The thin layer wrapped by f2py into `post._kernels` (SHTOOLS' PythonWrapper pattern): plain
-!> external subroutines with explicit-shape c_double / c_int / c_int64_t arrays. Only these
-!> three routines cross into Python; `post/api.py` is the interface people use.
+!> The thin layer wrapped by f2py into `impactchain._kernels` (SHTOOLS' PythonWrapper
+!> pattern): plain external subroutines with explicit-shape c_double / c_int / c_int64_t
+!> arrays. Only these three routines cross into Python; `impactchain.api`
+!> (post/impactchain/api.py) is the interface people use.
 !>
 !> Each routine builds the `run_config_t` a namelist with the same values would give, checks
 !> it with the library's `validate_config` (so errors carry the CLI's messages), and calls the
@@ -177,7 +178,8 @@ end subroutine ic_jacobian
 subroutine ic_random_start(n, nsp, spacing, seed, x_amp, v_amp, dry_run, nf, x, v, status, &
                            msg_len, message)
     use, intrinsic :: iso_c_binding, only: c_int, c_double
-    use impactchain, only: wp, i8, error_t, run_config_t, validate_config, initial_state
+    use impactchain, only: wp, i8, error_t, run_config_t, validate_config, initial_state, &
+                           chain_state_t
     use chain_bridge, only: make_config, put_message, status_ok, status_invalid, &
                             status_internal
     implicit none
@@ -189,10 +191,8 @@ subroutine ic_random_start(n, nsp, spacing, seed, x_amp, v_amp, dry_run, nf, x, 
     integer(c_int), intent(out) :: message(1024)
     type(run_config_t) :: cfg
     type(error_t), allocatable :: err
-    real(wp), allocatable :: xs(:), vs(:), queue_time(:), no_list(:)
-    integer, allocatable :: contact(:), queue_action(:)
-    integer(i8) :: cycle
-    real(wp) :: s
+    type(chain_state_t) :: start
+    real(wp), allocatable :: no_list(:)
 
     call put_message('', status_ok, status, msg_len, message)
     x = 0
@@ -208,8 +208,7 @@ subroutine ic_random_start(n, nsp, spacing, seed, x_amp, v_amp, dry_run, nf, x, 
     cfg%x_amp = x_amp
     cfg%v_amp = v_amp
     if (.not. allocated(err)) call validate_config(cfg, err)
-    if (.not. allocated(err)) call initial_state(cfg, xs, vs, cycle, s, contact, queue_time, &
-                                                 queue_action, err)
+    if (.not. allocated(err)) call initial_state(cfg, start, err)
     if (allocated(err)) then
         call put_message(err%message, status_invalid, status, msg_len, message)
         return
@@ -220,6 +219,6 @@ subroutine ic_random_start(n, nsp, spacing, seed, x_amp, v_amp, dry_run, nf, x, 
                          status_internal, status, msg_len, message)
         return
     end if
-    x = xs
-    v = vs
+    x = start%x
+    v = start%v
 end subroutine ic_random_start

@@ -11,8 +11,11 @@ module chain_run
     use chain_kinds, only: wp, i8
     use chain_error, only: error_t, set_error
     use chain_engine, only: chain_t, chain_advance, chain_sync, chain_new_cycle, &
-                            chain_set_tangent, contact_free
-    use chain_lapack, only: qr_orthonormalise, qr_workspace_t
+                            chain_set_tangent, chain_size, chain_cycle, chain_time, chain_start, &
+                            chain_period, chain_section_time, chain_copy_state, chain_counts, &
+                            chain_reset_counts, chain_vectors, chain_tangent_frame, &
+                            chain_qr_step, chain_reorthonormalise
+    use chain_state, only: event_counts_t
     use chain_events, only: event_log_t, event_log_init, event_log_clear, event_log_append
     use chain_lyapunov, only: lyapunov_acc_t, lyapunov_start, lyapunov_step, &
                               lyapunov_result_t, lyapunov_result, floquet_multipliers, &
@@ -23,7 +26,7 @@ module chain_run
     private
     public :: record_sink_t, memory_sink_t, run_result_t, record_run, progress_callback
     public :: section_target, advance_to_point, poincare_jacobian, check_size
-    public :: period_window, tangent_qr_step, run_state_t, set_window
+    public :: period_window, run_state_t, set_window
 
     integer, parameter :: event_flush = 65536
 
@@ -101,15 +104,17 @@ contains
         real(wp), intent(in) :: phase
         integer(i8), intent(out) :: cycle
         real(wp), intent(out) :: s
-        real(wp) :: s_section
+        real(wp) :: s_section, start_s
+        integer(i8) :: start_cycle
 
-        s_section = phase/chain%flow%omega
-        cycle = chain%start_cycle + transient + j
+        s_section = chain_section_time(chain, phase)
+        call chain_start(chain, start_cycle, start_s)
+        cycle = start_cycle + transient + j
         s = s_section
         ! the start is already on the section (a continued run): keep its exact time
-        if (abs(s_section - chain%start_s) <= 1.0e-12_wp*chain%flow%period) then
-            s = chain%start_s
-        else if (s_section < chain%start_s) then
+        if (abs(s_section - start_s) <= 1.0e-12_wp*chain_period(chain)) then
+            s = start_s
+        else if (s_section < start_s) then
             cycle = cycle + 1
         end if
     end subroutine section_target
@@ -117,7 +122,7 @@ contains
     !> Run the chain to (cycle, s) and bring every oscillator there.
     subroutine advance_to_point(chain, cycle, s, log, err)
         type(chain_t), intent(inout) :: chain
-        ! by value: a caller may pass the chain's own clock (chain%s), which moves meanwhile
+        ! by value: a caller may pass the chain's own clock (chain_time), which moves meanwhile
         integer(i8), value :: cycle
         real(wp), value :: s
         type(event_log_t), intent(inout) :: log
@@ -141,14 +146,14 @@ contains
         integer(i8) :: done
 
         done = 0
-        do while (chain%cycle < cycle)
-            call chain_advance(chain, chain%flow%period, log, err)
+        do while (chain_cycle(chain) < cycle)
+            call chain_advance(chain, chain_period(chain), log, err)
             if (allocated(err)) return
             call chain_new_cycle(chain)
             done = done + 1
             if (present(tangent_qr_every)) then
                 if (modulo(done, int(tangent_qr_every, i8)) == 0) then
-                    call orthonormalise_unaveraged(chain, err)
+                    call chain_reorthonormalise(chain, err)
                     if (allocated(err)) return
                 end if
             end if
@@ -168,7 +173,7 @@ contains
         integer :: i, m
 
         copy = chain
-        m = 2*chain%n
+        m = 2*chain_size(chain)
         allocate (frame(m, m))
         frame = 0
         do i = 1, m
@@ -176,18 +181,10 @@ contains
         end do
         call chain_set_tangent(copy, frame)
         call event_log_init(log, .false., 0)
-        call advance_to_point(copy, copy%cycle + cycles, copy%s, log, err)
+        call advance_to_point(copy, chain_cycle(copy) + cycles, chain_time(copy), log, err)
         if (allocated(err)) return
-        jacobian = transpose(copy%tangent)
-        ! undo the engine's power-of-two scaling, saturating at huge (such a map is singular)
-        if (copy%tangent_scale_bits > 0) then
-            where (jacobian /= 0 .and. exponent(jacobian) + copy%tangent_scale_bits < &
-                   maxexponent(1.0_wp))
-                jacobian = scale(jacobian, copy%tangent_scale_bits)
-            elsewhere (jacobian /= 0)
-                jacobian = sign(huge(1.0_wp), jacobian)
-            end where
-        end if
+        ! (the engine's power-of-two scaling undone, saturating at huge: such a map is singular)
+        jacobian = chain_tangent_frame(copy)
     end subroutine poincare_jacobian
 
     !> Transient, then `cfg%cycles` recorded cycles sent to `sink`; the chain ends in the final
@@ -231,14 +228,13 @@ contains
             call advance_to_point(chain, target_cycle, target_s, log, err)
             if (allocated(err)) return
             i = int(j - first) + 1
-            xbuf(:, i) = chain%x
-            vbuf(:, i) = chain%v
-            cbuf(i) = chain%cycle
+            call chain_copy_state(chain, xbuf(:, i), vbuf(:, i))
+            cbuf(i) = chain_cycle(chain)
             w = int(modulo(j - 1, int(size(st%xwin, 2), i8))) + 1
-            st%xwin(:, w) = chain%x
-            st%vwin(:, w) = chain%v
+            st%xwin(:, w) = xbuf(:, i)
+            st%vwin(:, w) = vbuf(:, i)
             if (cfg%lyapunov .and. modulo(j, int(cfg%qr_every, i8)) == 0) then
-                call tangent_qr_step(chain, st%acc, err)
+                call chain_qr_step(chain, st%acc, err)
                 if (allocated(err)) return
             end if
             res%cycles_done = j
@@ -271,12 +267,8 @@ contains
 
         call transient_part(cfg, chain, log, err)
         if (allocated(err)) return
-        chain%impacts = 0
-        chain%sticks = 0
-        chain%releases = 0
-        chain%touches = 0
-        chain%site_counts = 0
-        if (cfg%lyapunov) call lyapunov_start(st%acc, chain%n_vectors, &
+        call chain_reset_counts(chain)
+        if (cfg%lyapunov) call lyapunov_start(st%acc, chain_vectors(chain), &
                                               int(cfg%cycles/cfg%qr_every))
         nwin = int(min(cfg%cycles, int(period_window(cfg%max_period), i8)))
         allocate (st%xwin(cfg%model%n, nwin), st%vwin(cfg%model%n, nwin))
@@ -289,16 +281,18 @@ contains
         type(chain_t), intent(in) :: chain
         type(run_state_t), intent(in) :: st
         type(run_result_t), intent(inout) :: res
+        type(event_counts_t) :: counts
         real(wp) :: target_s
         integer :: i, nwin
 
         res%complete = res%cycles_done == cfg%cycles
-        res%impacts = chain%impacts
-        res%sticks = chain%sticks
-        res%releases = chain%releases
-        res%touches = chain%touches
-        res%site_counts = chain%site_counts
-        res%collisions_per_cycle = real(chain%impacts, wp)/max(1_i8, res%cycles_done)
+        counts = chain_counts(chain)
+        res%impacts = counts%impacts
+        res%sticks = counts%sticks
+        res%releases = counts%releases
+        res%touches = counts%touches
+        res%site_counts = counts%site_counts
+        res%collisions_per_cycle = real(counts%impacts, wp)/max(1_i8, res%cycles_done)
         nwin = int(min(res%cycles_done, int(size(st%xwin, 2), i8)))
         allocate (res%periods(cfg%model%n))
         res%periods = 0
@@ -311,7 +305,7 @@ contains
         end if
         if (cfg%lyapunov .and. st%acc%steps > 0) then
             res%has_lyapunov = .true.
-            res%lyapunov = lyapunov_result(st%acc, cfg%qr_every, chain%flow%period)
+            res%lyapunov = lyapunov_result(st%acc, cfg%qr_every, chain_period(chain))
             allocate (res%running_cycle(size(res%lyapunov%running_steps)))
             do i = 1, size(res%running_cycle)
                 call section_target(chain, cfg%transient, cfg%phase, &
@@ -332,31 +326,11 @@ contains
 
         call poincare_jacobian(chain, cycles, res%jacobian, err)
         if (allocated(err)) return
-        allocate (res%multipliers_re(2*chain%n), res%multipliers_im(2*chain%n))
+        allocate (res%multipliers_re(2*chain_size(chain)), res%multipliers_im(2*chain_size(chain)))
         call floquet_multipliers(res%jacobian, res%multipliers_re, res%multipliers_im, info)
         if (info /= 0) call set_error(err, "floquet: the eigenvalue solver (LAPACK dgeev) "// &
                                       "failed")
     end subroutine floquet_result
-
-    !> One QR step of the chain's tangent frame into `acc`: the growth the engine kept
-    !> (power-of-two scaling, re-orthonormalisations after large jumps) is added, directions
-    !> removed by singular jumps are dropped, and the engine's bookkeeping starts afresh.
-    subroutine tangent_qr_step(chain, acc, err)
-        type(chain_t), intent(inout) :: chain
-        type(lyapunov_acc_t), intent(inout) :: acc
-        type(error_t), allocatable, intent(out) :: err
-        integer :: info, i
-
-        call lyapunov_step(acc, chain%tangent, info, chain%tangent_scale_bits, &
-                           chain%tangent_log, chain%rank_losses > 0)
-        chain%tangent_scale_bits = 0
-        chain%rank_losses = 0
-        chain%n_vectors = size(chain%tangent, 1)
-        chain%tangent_log = [(0.0_wp, i=1, chain%n_vectors)]
-        chain%jumps_volume = 0
-        if (info /= 0) call set_error(err, "lyapunov: QR factorisation failed (LAPACK info "// &
-                                      fmt_real(real(info, wp))//")")
-    end subroutine tangent_qr_step
 
     !> The transient: the chain runs to the first record. With exponents, the tangent frame
     !> starts `align` whole cycles before its end, at the end of a cycle (where the state is
@@ -374,8 +348,9 @@ contains
         call section_target(chain, cfg%transient, cfg%phase, 0_i8, target_cycle, target_s)
         align_start = target_cycle - min(cfg%transient, int(cfg%align, i8))
         ! (a fresh start at t = 0 is the start of a cycle too)
-        if (cfg%lyapunov .and. (align_start > chain%cycle .or. &
-                                (align_start == chain%cycle .and. chain%s == 0))) then
+        if (cfg%lyapunov .and. (align_start > chain_cycle(chain) .or. &
+                                (align_start == chain_cycle(chain) .and. &
+                                 chain_time(chain) == 0))) then
             call advance_cycles(chain, align_start, log, err)
             if (allocated(err)) return
             call start_tangent(chain, cfg, err)
@@ -383,42 +358,12 @@ contains
             call advance_cycles(chain, target_cycle, log, err, cfg%qr_every)
             if (.not. allocated(err)) call advance_to_point(chain, target_cycle, target_s, &
                                                             log, err)
-            if (.not. allocated(err)) call orthonormalise_unaveraged(chain, err)
+            if (.not. allocated(err)) call chain_reorthonormalise(chain, err)
         else
             call advance_to_point(chain, target_cycle, target_s, log, err)
             if (.not. allocated(err) .and. cfg%lyapunov) call start_tangent(chain, cfg, err)
         end if
     end subroutine transient_part
-
-    !> Re-orthonormalise the tangent frame without averaging (while it aligns): a frame that
-    !> starts in generic directions meets the shears of slow impacts (|S| ~ 1/u) across all
-    !> its columns, and the smallest diagonals of R lose digits; once it has turned towards
-    !> the leading directions they meet mostly the first. Rows of resting oscillators stay
-    !> zero. A change of columns needs no sync: the state is not touched.
-    subroutine orthonormalise_unaveraged(chain, err)
-        type(chain_t), intent(inout) :: chain
-        type(error_t), allocatable, intent(out) :: err
-        type(qr_workspace_t) :: ws
-        real(wp), allocatable :: frame(:, :)
-        real(wp) :: r_diag(chain%n_vectors)
-        integer :: info, i
-
-        frame = transpose(chain%tangent)
-        call qr_orthonormalise(frame, r_diag, ws, info)
-        if (info /= 0) then
-            call set_error(err, "lyapunov: QR factorisation failed while aligning the "// &
-                           "frame (LAPACK info "//fmt_real(real(info, wp))//")")
-            return
-        end if
-        chain%tangent = transpose(frame)
-        do i = 1, chain%n
-            if (chain%contact(i) /= contact_free) chain%tangent(:, 2*i - 1:2*i) = 0
-        end do
-        chain%tangent_scale_bits = 0
-        chain%rank_losses = 0
-        chain%tangent_log = 0
-        chain%jumps_volume = 0
-    end subroutine orthonormalise_unaveraged
 
     !> Carry a tangent frame from now: &lyapunov vectors generic orthonormal vectors.
     subroutine start_tangent(chain, cfg, err)

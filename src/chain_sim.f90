@@ -12,11 +12,13 @@
 module chain_sim
     use chain_kinds, only: wp, i8
     use chain_error, only: error_t, set_error
-    use chain_flow, only: flow_t, make_flow
-    use chain_engine, only: chain_t, chain_init, contact_free, chain_set_tangent
+    use chain_engine, only: chain_t, chain_init, chain_snapshot, chain_model, chain_positions, &
+                            chain_velocities, chain_contacts, chain_cycle, chain_time, &
+                            chain_period
+    use chain_state, only: chain_state_t, event_counts_t, tangent_state_t, moving_state
     use chain_events, only: event_log_t
     use chain_config, only: run_config_t, config_summary
-    use chain_model, only: model_walls
+    use chain_model, only: model_t, model_walls
     use chain_lyapunov, only: lyapunov_pack, lyapunov_unpack
     use chain_run, only: record_sink_t, run_result_t, record_run, progress_callback, check_size, &
                          run_state_t, set_window, period_window
@@ -29,7 +31,7 @@ module chain_sim
     implicit none
     private
     public :: run_simulation, initial_state, start_chain, write_run_header, chain_on_section
-    public :: uniform
+    public :: restart_chain, uniform
 
     !> Sends records to the HDF5 file as they come.
     type, extends(record_sink_t) :: file_sink_t
@@ -42,72 +44,88 @@ module chain_sim
 contains
 
     !> The initial state of a configuration (rest, seeded random, explicit, or an earlier run).
-    subroutine initial_state(cfg, x, v, cycle, s, contact, queue_time, queue_action, err)
+    subroutine initial_state(cfg, state, err)
         type(run_config_t), intent(in) :: cfg
-        real(wp), allocatable, intent(out) :: x(:), v(:), queue_time(:)
-        integer(i8), intent(out) :: cycle
-        real(wp), intent(out) :: s
-        integer, allocatable, intent(out) :: contact(:), queue_action(:)
+        type(chain_state_t), intent(out) :: state
         type(error_t), allocatable, intent(out) :: err
-        integer(i8) :: state
+        real(wp), allocatable :: x(:), v(:)
+        integer(i8) :: seed
         integer :: i
-        real(wp) :: phase, model(4)
-        real(wp), allocatable :: spacing(:)
-        character(len=8) :: boundary
 
-        cycle = 0
-        s = 0
-        allocate (x(cfg%model%n), v(cfg%model%n), contact(cfg%model%n))
+        allocate (x(cfg%model%n), v(cfg%model%n))
         x = 0
         v = 0
-        contact = contact_free
         select case (cfg%initial_kind)
         case ('random')
-            state = seed_state(cfg%seed)
+            seed = seed_state(cfg%seed)
             do i = 1, cfg%model%n
-                x(i) = cfg%x_amp*(2*uniform(state) - 1)
-                v(i) = cfg%v_amp*(2*uniform(state) - 1)
+                x(i) = cfg%x_amp*(2*uniform(seed) - 1)
+                v(i) = cfg%v_amp*(2*uniform(seed) - 1)
             end do
         case ('explicit')
             x = cfg%x0
             if (size(cfg%v0) == cfg%model%n) v = cfg%v0
         case ('file')
-            call read_final_state(cfg%initial_file, cfg%model%n, x, v, cycle, phase, contact, &
-                                  queue_time, queue_action, s, model, spacing, boundary, err)
-            if (allocated(err)) return
-            ! the stored event schedule belongs to the file's model: with other parameters
-            ! (a continuation step of a sweep) every bond is searched again
-            if (any(model /= [cfg%model%damping, cfg%model%restitution, cfg%model%amplitude, &
-                cfg%model%omega]) .or. &
-                any(spacing /= cfg%model%spacing) .or. trim(boundary) /= model_walls(cfg%model)) &
-                deallocate (queue_time, queue_action)
+            call file_state(cfg, state, err)
+            return
         end select
+        state = moving_state(x, v, 0_i8, 0.0_wp)
     end subroutine initial_state
+
+    !> The final state of the run in cfg%initial_file. Its event schedule belongs to the
+    !> file's model: with other parameters (a continuation step of a sweep) every bond is
+    !> searched again.
+    subroutine file_state(cfg, state, err)
+        type(run_config_t), intent(in) :: cfg
+        type(chain_state_t), intent(out) :: state
+        type(error_t), allocatable, intent(out) :: err
+        logical :: same_model
+
+        call read_final_chain_state(cfg%initial_file, cfg, state, same_model, err)
+        if (allocated(err) .or. same_model) return
+        state%has_schedule = .false.
+        deallocate (state%event_time, state%event_action)
+    end subroutine file_state
+
+    !> The final state (/final) of the run in the file at `path`, with its event schedule;
+    !> `same_model`: that run had the model of cfg.
+    subroutine read_final_chain_state(path, cfg, state, same_model, err)
+        character(len=*), intent(in) :: path
+        type(run_config_t), intent(in) :: cfg
+        type(chain_state_t), intent(out) :: state
+        logical, intent(out) :: same_model
+        type(error_t), allocatable, intent(out) :: err
+        real(wp), allocatable :: x(:), v(:), queue_time(:), spacing(:)
+        integer, allocatable :: contact(:), queue_action(:)
+        integer(i8) :: cycle
+        real(wp) :: phase, s, model(4)
+        character(len=8) :: boundary
+
+        same_model = .false.
+        call read_final_state(path, cfg%model%n, x, v, cycle, phase, contact, queue_time, &
+                              queue_action, s, model, spacing, boundary, err)
+        if (allocated(err)) return
+        state = moving_state(x, v, cycle, s)
+        state%contact = contact
+        state%has_schedule = .true.
+        state%event_time = queue_time
+        state%event_action = queue_action
+        same_model = .not. (any(model /= [cfg%model%damping, cfg%model%restitution, &
+                                          cfg%model%amplitude, cfg%model%omega]) .or. &
+                            any(spacing /= cfg%model%spacing) .or. &
+                            trim(boundary) /= model_walls(cfg%model))
+    end subroutine read_final_chain_state
 
     !> A chain ready to run from the configuration's initial state.
     subroutine start_chain(cfg, chain, err)
         type(run_config_t), intent(in) :: cfg
         type(chain_t), intent(out) :: chain
         type(error_t), allocatable, intent(out) :: err
-        real(wp), allocatable :: x(:), v(:), queue_time(:)
-        integer, allocatable :: contact(:), queue_action(:)
-        integer(i8) :: cycle
-        real(wp) :: s
-        type(flow_t) :: flow
+        type(chain_state_t) :: state
 
-        call initial_state(cfg, x, v, cycle, s, contact, queue_time, queue_action, err)
+        call initial_state(cfg, state, err)
         if (allocated(err)) return
-        flow = make_flow(cfg%model%damping, cfg%model%amplitude, cfg%model%omega)
-        if (allocated(queue_time)) then
-            call chain_init(chain, flow, cfg%model%restitution, cfg%model%spacing, &
-                cfg%model%walls, &
-                            cfg%model%stick_speed, x, v, cycle, s, err, contact, queue_time, &
-                            queue_action)
-        else
-            call chain_init(chain, flow, cfg%model%restitution, cfg%model%spacing, &
-                cfg%model%walls, &
-                            cfg%model%stick_speed, x, v, cycle, s, err, contact)
-        end if
+        call chain_init(chain, cfg%model, state, err)
     end subroutine start_chain
 
     !> A fresh chain in state (x, v) on the section (drive phase cfg%phase of cycle 0), every
@@ -119,10 +137,24 @@ contains
         type(chain_t), intent(out) :: chain
         type(error_t), allocatable, intent(out) :: err
 
-        call chain_init(chain, make_flow(cfg%model%damping, cfg%model%amplitude, cfg%model%omega), &
-                        cfg%model%restitution, cfg%model%spacing, cfg%model%walls, &
-                        cfg%model%stick_speed, x, v, 0_i8, cfg%phase/cfg%model%omega, err)
+        call chain_init(chain, cfg%model, moving_state(x, v, 0_i8, cfg%phase/cfg%model%omega), &
+                        err)
     end subroutine chain_on_section
+
+    !> The chain goes on from where it stands (positions, velocities, rests, cycle and time)
+    !> under the model of `cfg`, as a new run: counters from zero, every bond searched afresh
+    !> (a continuation step of a sweep, kept in memory).
+    subroutine restart_chain(cfg, chain, err)
+        type(run_config_t), intent(in) :: cfg
+        type(chain_t), intent(inout) :: chain
+        type(error_t), allocatable, intent(out) :: err
+        type(chain_state_t) :: state
+
+        state = moving_state(chain_positions(chain), chain_velocities(chain), &
+                             chain_cycle(chain), chain_time(chain))
+        state%contact = chain_contacts(chain)
+        call chain_init(chain, cfg%model, state, err)
+    end subroutine restart_chain
 
     !> Root attributes, /params and /initial of the run described by cfg (for a sweep file: of
     !> its starting configuration).
@@ -146,8 +178,9 @@ contains
             cfg%model%spacing, &
                            cfg%model%damping, cfg%model%restitution, cfg%model%amplitude, &
                                cfg%model%omega, &
-                           model_walls(cfg%model), chain%flow%period, cfg%phase, cfg%transient, &
-                           cfg%cycles, chain%x, chain%v, err)
+                           model_walls(cfg%model), chain_period(chain), cfg%phase, &
+                           cfg%transient, cfg%cycles, chain_positions(chain), &
+                           chain_velocities(chain), err)
     end subroutine header_for
 
     !> The whole run described by `cfg`, written to cfg%output_file; or, when that file is a
@@ -208,18 +241,20 @@ contains
         type(run_state_t), intent(in) :: state
         type(error_t), allocatable, intent(out) :: err
         type(resume_data_t) :: data
+        type(chain_state_t) :: now
 
-        data%start_cycle = chain%start_cycle
-        data%start_s = chain%start_s
-        data%last_event = chain%last_event
-        data%same_instant = chain%same_instant
+        now = chain_snapshot(chain)
+        data%start_cycle = now%start_cycle
+        data%start_s = now%start_time
+        data%last_event = now%last_event
+        data%same_instant = now%same_instant
         data%has_tangent = cfg%lyapunov
         if (cfg%lyapunov) then
-            data%tangent = chain%tangent
-            data%tangent_scale_bits = chain%tangent_scale_bits
-            data%tangent_log = chain%tangent_log
-            data%rank_losses = chain%rank_losses
-            data%jumps_volume = chain%jumps_volume
+            data%tangent = now%tangent%frame
+            data%tangent_scale_bits = now%tangent%scale_bits
+            data%tangent_log = now%tangent%growth_log
+            data%rank_losses = now%tangent%rank_losses
+            data%jumps_volume = now%tangent%jumps_volume
             call lyapunov_pack(state%acc, data%lyapunov_int, data%lyapunov_real)
         end if
         call output_resume(out, data, err)
@@ -233,16 +268,37 @@ contains
         type(run_state_t), intent(out) :: state
         type(error_t), allocatable, intent(out) :: err
         type(resume_data_t) :: data
-        real(wp), allocatable :: x(:), v(:), queue_time(:), spacing(:)
-        integer, allocatable :: contact(:), queue_action(:)
-        integer(i8) :: cycle
-        real(wp) :: phase, s, model(4)
-        character(len=8) :: boundary
+        type(chain_state_t) :: stopped
         integer :: info
 
-        call read_final_state(cfg%output_file, cfg%model%n, x, v, cycle, phase, contact, &
-            queue_time, &
-                              queue_action, s, model, spacing, boundary, err)
+        call read_stopped_run(cfg, stopped, data, err)
+        if (allocated(err)) return
+        call chain_init(chain, cfg%model, stopped, err)
+        if (allocated(err)) return
+        if (cfg%lyapunov) then
+            call lyapunov_unpack(data%lyapunov_int, data%lyapunov_real, state%acc, info)
+            if (info /= 0) then
+                call set_error(err, "&output: cannot continue '"//cfg%output_file//"': "// &
+                               "/resume/lyapunov_int and lyapunov_real are not a Lyapunov "// &
+                               "accumulator of this version")
+                return
+            end if
+        end if
+        state%cycles_done = data%cycles_done
+        call set_window(cfg, state, data%x_last, data%v_last)
+    end subroutine continue_chain
+
+    !> The complete state of the chain where the run in cfg%output_file stopped (/final and
+    !> /resume), and the rest of /resume.
+    subroutine read_stopped_run(cfg, stopped, data, err)
+        type(run_config_t), intent(in) :: cfg
+        type(chain_state_t), intent(out) :: stopped
+        type(resume_data_t), intent(out) :: data
+        type(error_t), allocatable, intent(out) :: err
+        logical :: same_model
+
+        ! (the same input, so the same model: the schedule goes on)
+        call read_final_chain_state(cfg%output_file, cfg, stopped, same_model, err)
         if (allocated(err)) then
             err%message = "&output: cannot continue '"//cfg%output_file//"': "//err%message
             return
@@ -256,42 +312,23 @@ contains
                            "to run it again")
             return
         end if
-        call chain_init(chain, make_flow(cfg%model%damping, cfg%model%amplitude, cfg%model%omega), &
-                        cfg%model%restitution, cfg%model%spacing, cfg%model%walls, &
-                            cfg%model%stick_speed, &
-                        x, v, cycle, s, err, contact, queue_time, queue_action)
-        if (allocated(err)) return
-        chain%start_cycle = data%start_cycle
-        chain%start_s = data%start_s
-        chain%last_event = data%last_event
-        chain%same_instant = data%same_instant
-        chain%impacts = data%impacts
-        chain%sticks = data%sticks
-        chain%releases = data%releases
-        chain%touches = data%touches
-        chain%site_counts = data%site_counts
-        if (cfg%lyapunov) then
-            if (size(data%tangent, 2) /= 2*cfg%model%n) then
-                call set_error(err, "&output: cannot continue '"//cfg%output_file//"': "// &
-                               "/resume/tangent is not a frame of the chain's 2n coordinates")
-                return
-            end if
-            call chain_set_tangent(chain, transpose(data%tangent), orthonormalise_jumps=.true.)
-            chain%tangent_scale_bits = data%tangent_scale_bits
-            chain%tangent_log = data%tangent_log
-            chain%rank_losses = data%rank_losses
-            chain%jumps_volume = data%jumps_volume
-            call lyapunov_unpack(data%lyapunov_int, data%lyapunov_real, state%acc, info)
-            if (info /= 0) then
-                call set_error(err, "&output: cannot continue '"//cfg%output_file//"': "// &
-                               "/resume/lyapunov_int and lyapunov_real are not a Lyapunov "// &
-                               "accumulator of this version")
-                return
-            end if
+        stopped%start_cycle = data%start_cycle
+        stopped%start_time = data%start_s
+        stopped%last_event = data%last_event
+        stopped%same_instant = data%same_instant
+        stopped%counts = event_counts_t(data%impacts, data%sticks, data%releases, data%touches, &
+                                        data%site_counts)
+        if (.not. cfg%lyapunov) return
+        if (size(data%tangent, 2) /= 2*cfg%model%n) then
+            call set_error(err, "&output: cannot continue '"//cfg%output_file//"': "// &
+                           "/resume/tangent is not a frame of the chain's 2n coordinates")
+            return
         end if
-        state%cycles_done = data%cycles_done
-        call set_window(cfg, state, data%x_last, data%v_last)
-    end subroutine continue_chain
+        stopped%has_tangent = .true.
+        stopped%tangent = tangent_state_t(data%tangent, data%tangent_scale_bits, &
+                                          data%tangent_log, data%rank_losses, &
+                                          data%jumps_volume, orthonormalise_jumps=.true.)
+    end subroutine read_stopped_run
 
     subroutine write_results(out, chain, res, jacobian_cycles, err)
         type(output_t), intent(inout) :: out
@@ -299,9 +336,13 @@ contains
         type(run_result_t), intent(in) :: res
         integer, intent(in) :: jacobian_cycles
         type(error_t), allocatable, intent(out) :: err
+        type(chain_state_t) :: final
+        type(model_t) :: model
 
-        call output_final(out, chain%x, chain%v, chain%cycle, chain%s*chain%flow%omega, &
-                          chain%s, chain%contact, chain%queue%time, chain%action, err)
+        final = chain_snapshot(chain)
+        model = chain_model(chain)
+        call output_final(out, final%x, final%v, final%cycle, final%time*model%omega, &
+                          final%time, final%contact, final%event_time, final%event_action, err)
         if (allocated(err)) return
         call output_stats(out, res%collisions_per_cycle, res%impacts, res%sticks, &
                           res%releases, res%touches, res%site_counts, res%cycles_done, err)

@@ -30,6 +30,9 @@ module chain_state
         integer(i8) :: rank_losses = 0       !! singular tangent maps since the QR step
         real(wp) :: jumps_volume = 0         !! ln |det| of the jumps since the frame was
                                              !! orthonormal
+        !> Re-orthonormalised right after large jumps (a Lyapunov frame, section 7.6); false
+        !> for a Poincare-map Jacobian, which must be the plain product.
+        logical :: orthonormalise_jumps = .true.
     end type tangent_state_t
 
     type :: chain_state_t
@@ -37,7 +40,8 @@ module chain_state
         real(wp) :: time = 0                 !! time within the current drive cycle
         real(wp), allocatable :: x(:), v(:)  !! x(n), v(n)
         integer, allocatable :: contact(:)   !! contact(n): contact_free / left / right
-        !> The engine's schedule, bond 0 to n: next event time within the cycle and its kind.
+        !> The engine's schedule: next event time within the cycle and its kind, n+1 entries
+        !> for bonds 0 to n in order.
         logical :: has_schedule = .false.
         real(wp), allocatable :: event_time(:)
         integer, allocatable :: event_action(:)

@@ -23,8 +23,9 @@
 module chain_sweep
     use chain_kinds, only: wp, i8
     use chain_error, only: error_t, set_error, fmt_real, fmt_int
-    use chain_flow, only: make_flow
-    use chain_engine, only: chain_t, chain_init
+    use chain_engine, only: chain_t, chain_init, chain_positions, chain_velocities, &
+                            chain_contacts, chain_cycle, chain_time
+    use chain_state, only: chain_state_t, moving_state
     use chain_config, only: run_config_t, validate_config, lyapunov_vectors
     use chain_run, only: memory_sink_t, run_result_t, record_run, check_size
     use chain_sim, only: start_chain, write_run_header
@@ -234,6 +235,7 @@ contains
         type(chain_t) :: chain
         type(memory_sink_t) :: sink
         type(run_result_t) :: out
+        type(chain_state_t) :: start
         integer :: q, p
         logical :: stopping
 
@@ -246,12 +248,9 @@ contains
             call sweep_point_config(cfg, plan, p, point, err)
             if (allocated(err)) return
             if (starts(b)%resume) then
-                call chain_init(chain, make_flow(point%model%damping, point%model%amplitude, &
-                    point%model%omega), &
-                                point%model%restitution, point%model%spacing, point%model%walls, &
-                                point%model%stick_speed, starts(b)%x, starts(b)%v, &
-                                    starts(b)%cycle, &
-                                starts(b)%s, err, starts(b)%contact)
+                start = moving_state(starts(b)%x, starts(b)%v, starts(b)%cycle, starts(b)%s)
+                start%contact = starts(b)%contact
+                call chain_init(chain, point%model, start, err)
             else
                 ! a start from a file reads HDF5, which is not thread-safe
                 !$omp critical (sweep_hdf5)
@@ -273,11 +272,11 @@ contains
             res%done(p) = .true.
             if (cfg%sweep_mode == 'continuation') then
                 starts(b)%resume = .true.
-                starts(b)%x = chain%x
-                starts(b)%v = chain%v
-                starts(b)%contact = chain%contact
-                starts(b)%cycle = chain%cycle
-                starts(b)%s = chain%s
+                starts(b)%x = chain_positions(chain)
+                starts(b)%v = chain_velocities(chain)
+                starts(b)%contact = chain_contacts(chain)
+                starts(b)%cycle = chain_cycle(chain)
+                starts(b)%s = chain_time(chain)
             end if
             if (present(hook)) then
                 if (.not. hook(res, starts)) then

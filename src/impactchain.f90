@@ -1,21 +1,28 @@
 !> The public API of impactchain in one module: what the command line (app/), the MPI sweep
 !> driver (mpi/), the Python layer (f2py/) and the benchmark (bench/) use. Configuration,
 !> runs and their results, sweeps (including the pieces a distributed driver needs), the
-!> Poincare-map Jacobian of a state, the shared command line and interrupt flag. The engine's
-!> own procedures (flow, gap searches, impact laws, the event loop) stay behind it; the tests
-!> reach them through their own modules. It implements nothing itself: each module it
-!> re-exports names its section of docs/model.md.
+!> Poincare-map Jacobian of a state, the shared command line and interrupt flag. A chain is
+!> an opaque `chain_t`: it is started from a configuration, run to a point or through
+!> recorded cycles, restarted under other parameters, and read (its clock, state, contacts
+!> and counters); its state travels as a `chain_state_t`. The engine's own procedures (flow,
+!> gap searches, impact laws, the event loop, the schedule) stay behind it; the tests reach
+!> them through their own modules. It implements nothing itself: each module it re-exports
+!> names its section of docs/model.md.
 module impactchain
     use chain_kinds, only: wp, i8, pi, two_pi
     use chain_error, only: error_t, set_error
     use chain_model, only: model_t
     use chain_config, only: run_config_t, read_config, validate_config, fmt_real, fmt_int, &
                             lyapunov_vectors, set_boundary, config_summary
-    use chain_engine, only: chain_t
+    use chain_state, only: chain_state_t, event_counts_t
+    use chain_engine, only: chain_t, chain_size, chain_cycle, chain_time, chain_start, &
+                            chain_period, chain_positions, chain_velocities, chain_copy_state, &
+                            chain_contacts, chain_counts
     use chain_events, only: event_log_t
     use chain_run, only: record_sink_t, memory_sink_t, run_result_t, record_run, &
-                         progress_callback, poincare_jacobian, check_size
-    use chain_sim, only: run_simulation, start_chain, initial_state, chain_on_section
+                         progress_callback, poincare_jacobian, check_size, advance_to_point
+    use chain_sim, only: run_simulation, start_chain, initial_state, chain_on_section, &
+                         restart_chain
     use chain_sweep, only: run_sweep, sweep_summary_t, plan_sweep, sweep_plan_t, &
                            sweep_result_t, branch_start_state_t, sweep_result_init, &
                            sweep_point_config, run_sweep_branches, write_sweep_file, &
@@ -32,9 +39,12 @@ module impactchain
     public :: wp, i8, pi, two_pi, error_t, set_error
     public :: run_config_t, read_config, validate_config, fmt_real, fmt_int, check_size
     public :: lyapunov_vectors, model_t, set_boundary, config_summary
-    public :: chain_t, event_log_t
+    public :: chain_t, chain_state_t, event_counts_t, event_log_t
+    public :: chain_size, chain_cycle, chain_time, chain_start, chain_period, chain_positions
+    public :: chain_velocities, chain_copy_state, chain_contacts, chain_counts
     public :: record_sink_t, memory_sink_t, run_result_t, record_run, progress_callback
-    public :: poincare_jacobian, run_simulation, start_chain, initial_state, chain_on_section
+    public :: advance_to_point, poincare_jacobian, run_simulation, start_chain, initial_state
+    public :: chain_on_section, restart_chain
     public :: run_sweep, sweep_summary_t, plan_sweep, sweep_plan_t, sweep_result_t
     public :: branch_start_state_t, sweep_result_init, sweep_point_config, run_sweep_branches
     public :: write_sweep_file, save_checkpoint, load_checkpoint, remove_file, checkpoint_every

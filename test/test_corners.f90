@@ -7,7 +7,9 @@ module test_corners
     use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
     use chain_error, only: error_t
     use chain_flow, only: make_flow
-    use chain_engine, only: chain_t, chain_init, chain_gaps_now, contact_free
+    use chain_state, only: contact_free, moving_state
+    use chain_engine, only: chain_t, chain_init, chain_gaps_now, chain_model, chain_cycle, &
+                            chain_time, chain_positions, chain_velocities, chain_contacts
     use chain_events, only: event_log_t, event_log_init, event_impact, event_stick, &
                             event_release, event_touch
     use chain_config, only: run_config_t
@@ -15,6 +17,7 @@ module test_corners
                          poincare_jacobian
     use chain_lyapunov, only: floquet_multipliers
     use testing, only: tally_t, check, check_close
+    use test_chains, only: init_chain
     implicit none
     private
     public :: run_corner_tests
@@ -39,7 +42,7 @@ contains
         logical, intent(in) :: walls
         type(error_t), allocatable, intent(out) :: err
 
-        call chain_init(chain, make_flow(damping, amplitude, omega), restitution, spacing, &
+        call init_chain(chain, make_flow(damping, amplitude, omega), restitution, spacing, &
                         walls, 1.0e-9_wp, x, v, 0_i8, 0.0_wp, err)
     end subroutine new_chain
 
@@ -185,8 +188,8 @@ contains
         call poincare_jacobian(chain, 1, jac, err)
         call check(t, .not. allocated(err), 'cascade Jacobian')
         if (allocated(err)) return
-        z(1::2) = chain%x
-        z(2::2) = chain%v
+        z(1::2) = chain_positions(chain)
+        z(2::2) = chain_velocities(chain)
         do j = 1, 6
             fd(:, j) = central_difference(chain, z, j, 1.0e-6_wp)
             fd_wide(:, j) = central_difference(chain, z, j, 1.0e-5_wp)
@@ -219,12 +222,12 @@ contains
 
         moved = z
         moved(j) = moved(j) + h
-        call chain_init(copy, chain%flow, chain%restitution, chain%spacing, chain%walls, &
-                        chain%stick_speed, moved(1::2), moved(2::2), chain%cycle, chain%s, err)
+        call chain_init(copy, chain_model(chain), moving_state(moved(1::2), moved(2::2), &
+                        chain_cycle(chain), chain_time(chain)), err)
         call event_log_init(events, .false., 0)
-        call advance_to_point(copy, chain%cycle + 1, chain%s, events, err)
-        image(1::2) = copy%x
-        image(2::2) = copy%v
+        call advance_to_point(copy, chain_cycle(chain) + 1, chain_time(chain), events, err)
+        image(1::2) = chain_positions(copy)
+        image(2::2) = chain_velocities(copy)
     end function mapped
 
     !> A period-1 orbit with one rest per period: oscillator 1 chatters into the near left
@@ -243,6 +246,7 @@ contains
         real(wp), allocatable :: jac(:, :)
         real(wp) :: re(4), im(4), product_at(2), section
         integer :: info, p, collapsed
+        integer, allocatable :: contact(:)
         logical :: zero_rows
 
         do p = 1, 2
@@ -258,7 +262,8 @@ contains
             product_at(p) = product(hypot(re, im), mask=hypot(re, im) > 1.0e-12_wp)
             if (p == 2) then
                 zero_rows = all(jac(1:2, :) == 0)
-                call check(t, chain%contact(1) /= contact_free .and. zero_rows, &
+                contact = chain_contacts(chain)
+                call check(t, contact(1) /= contact_free .and. zero_rows, &
                            'rest orbit: the Jacobian from a section during the rest has the '// &
                            'zero rows of the resting oscillator')
             end if

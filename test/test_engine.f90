@@ -6,11 +6,14 @@ module test_engine
     use chain_kinds, only: wp, i8
     use chain_error, only: error_t
     use chain_flow, only: flow_t, make_flow, forced_response, propagator, advance_state
-    use chain_engine, only: chain_t, chain_init, chain_advance, chain_sync, chain_new_cycle, &
-                            chain_gaps_now, contact_free, action_impact
+    use chain_engine, only: chain_t, chain_advance, chain_sync, chain_new_cycle, &
+                            chain_gaps_now, chain_next_event, chain_size, chain_period, &
+                            chain_time, chain_positions, chain_velocities, chain_contacts, &
+                            chain_counts, chain_reset_counts
+    use chain_state, only: contact_free, event_counts_t
     use chain_events, only: event_log_t, event_log_init, event_log_clear
-    use chain_queue, only: queue_top
     use chain_run, only: advance_to_point
+    use test_chains, only: init_chain, flow_of
     use test_invariants, only: walk_t, walk_events
     use testing, only: tally_t, check, check_close
     implicit none
@@ -49,7 +52,7 @@ contains
             x(i) = x_amp*sin(1.7_wp*i + 0.3_wp)
             v(i) = v_amp*cos(2.3_wp*i)
         end do
-        call chain_init(chain, make_flow(damping, amplitude, omega), restitution, &
+        call init_chain(chain, make_flow(damping, amplitude, omega), restitution, &
                         [(a, i=0, n)], walls, 1.0e-9_wp, x, v, 0_i8, 0.0_wp, err)
     end subroutine make_chain
 
@@ -61,49 +64,50 @@ contains
         type(chain_t) :: chain
         type(error_t), allocatable :: err
         type(event_log_t) :: log
-        integer :: bond, ev, l, r, checked, bad_momentum, bad_restitution, bad_gap
-        real(wp) :: tq, xl, vl, xr, vr, k, gaps(0:16)
+        integer :: bond, ev, l, r, n, checked, bad_momentum, bad_restitution, bad_gap
+        real(wp) :: tq, xl, vl, xr, vr, k, period, gaps(0:16), v(16)
 
-        call make_chain(chain, 16, 1.7_wp, 1.5_wp, 0.05_wp, 0.7_wp, walls, 0.3_wp, 1.5_wp, err)
+        k = 0.7_wp
+        call make_chain(chain, 16, 1.7_wp, 1.5_wp, 0.05_wp, k, walls, 0.3_wp, 1.5_wp, err)
         call check(t, .not. allocated(err), 'chain set-up')
         if (allocated(err)) return
         call event_log_init(log, .true., 16)
-        k = chain%restitution
+        n = chain_size(chain)
+        period = chain_period(chain)
         checked = 0
         bad_momentum = 0
         bad_restitution = 0
         bad_gap = 0
         do ev = 1, 3000
-            call queue_top(chain%queue, bond, tq)
-            if (tq > chain%flow%period) then
-                call chain_advance(chain, chain%flow%period, log, err)
+            call chain_next_event(chain, bond, tq)
+            if (tq > period) then
+                call chain_advance(chain, period, log, err)
                 call chain_new_cycle(chain)
                 call event_log_clear(log)
                 cycle
             end if
             l = max(bond, 1)
-            r = min(bond + 1, chain%n)
+            r = min(bond + 1, n)
             call chain_sync(chain)
             call pre_state(chain, l, tq, xl, vl)
             call pre_state(chain, r, tq, xr, vr)
             call event_log_clear(log)
             call chain_advance(chain, tq, log, err)
             if (allocated(err)) exit
-            if (log%count /= 1 .or. chain%action(bond) == -1) cycle
+            if (log%count /= 1) cycle
             call chain_sync(chain)
             gaps = chain_gaps_now(chain)
             if (minval(gaps) < -1.0e-12_wp) bad_gap = bad_gap + 1
             if (log%kind(1) /= 0) cycle
             checked = checked + 1
+            v = chain_velocities(chain)
             if (bond == 0) then
-                if (abs(chain%v(1) + k*vl) > 1.0e-12_wp) bad_restitution = bad_restitution + 1
-            else if (bond == chain%n) then
-                if (abs(chain%v(chain%n) + k*vr) > 1.0e-12_wp) &
-                    bad_restitution = bad_restitution + 1
+                if (abs(v(1) + k*vl) > 1.0e-12_wp) bad_restitution = bad_restitution + 1
+            else if (bond == n) then
+                if (abs(v(n) + k*vr) > 1.0e-12_wp) bad_restitution = bad_restitution + 1
             else
-                if (abs(chain%v(l) + chain%v(r) - vl - vr) > 1.0e-12_wp) &
-                    bad_momentum = bad_momentum + 1
-                if (abs((chain%v(r) - chain%v(l)) - k*(vl - vr)) > 1.0e-12_wp) &
+                if (abs(v(l) + v(r) - vl - vr) > 1.0e-12_wp) bad_momentum = bad_momentum + 1
+                if (abs((v(r) - v(l)) - k*(vl - vr)) > 1.0e-12_wp) &
                     bad_restitution = bad_restitution + 1
             end if
         end do
@@ -120,11 +124,16 @@ contains
         integer, intent(in) :: i
         real(wp), intent(in) :: tq
         real(wp), intent(out) :: x, v
+        real(wp), allocatable :: xs(:), vs(:)
+        integer, allocatable :: contact(:)
 
-        x = chain%x(i)
-        v = chain%v(i)
-        if (chain%contact(i) == contact_free) &
-            call advance_state(chain%flow, chain%s, tq - chain%s, x, v)
+        xs = chain_positions(chain)
+        vs = chain_velocities(chain)
+        contact = chain_contacts(chain)
+        x = xs(i)
+        v = vs(i)
+        if (contact(i) == contact_free) &
+            call advance_state(flow_of(chain), chain_time(chain), tq - chain_time(chain), x, v)
     end subroutine pre_state
 
     !> Small drive, no impacts: every strobe record equals the closed-form linear response
@@ -134,25 +143,31 @@ contains
         type(chain_t) :: chain
         type(error_t), allocatable :: err
         type(event_log_t) :: log
-        real(wp) :: xp, vp, m(2, 2), worst, exact_x, exact_v, y0(3), vy0(3)
+        type(flow_t) :: flow
+        type(event_counts_t) :: counts
+        real(wp) :: xp, vp, m(2, 2), worst, exact_x, exact_v, y0(3), vy0(3), x(3), v(3)
         integer :: j, i
 
         call make_chain(chain, 3, 0.2_wp, 1.5_wp, 0.05_wp, 0.7_wp, .true., 0.2_wp, 0.1_wp, err)
-        call forced_response(chain%flow, 0.0_wp, xp, vp)
-        y0 = chain%x - xp
-        vy0 = chain%v - vp
+        flow = flow_of(chain)
+        call forced_response(flow, 0.0_wp, xp, vp)
+        y0 = chain_positions(chain) - xp
+        vy0 = chain_velocities(chain) - vp
         call event_log_init(log, .false., 0)
         worst = 0
         do j = 1, 60
             call advance_to_point(chain, int(j, i8), 0.0_wp, log, err)
-            m = propagator(chain%flow, j*chain%flow%period)
+            m = propagator(flow, j*flow%period)
+            x = chain_positions(chain)
+            v = chain_velocities(chain)
             do i = 1, 3
                 exact_x = xp + m(1, 1)*y0(i) + m(1, 2)*vy0(i)
                 exact_v = vp + m(2, 1)*y0(i) + m(2, 2)*vy0(i)
-                worst = max(worst, abs(chain%x(i) - exact_x), abs(chain%v(i) - exact_v))
+                worst = max(worst, abs(x(i) - exact_x), abs(v(i) - exact_v))
             end do
         end do
-        call check(t, .not. allocated(err) .and. chain%impacts == 0, &
+        counts = chain_counts(chain)
+        call check(t, .not. allocated(err) .and. counts%impacts == 0, &
                    'linear response case has no impacts')
         call check_close(t, worst, 0.0_wp, 'strobe equals the linear response', 1.0e-12_wp)
     end subroutine linear_response
@@ -164,17 +179,18 @@ contains
         type(chain_t) :: chain
         type(error_t), allocatable :: err
         type(event_log_t) :: log
-        integer(i8) :: early
+        type(event_counts_t) :: early, late
 
         call make_chain(chain, 8, 1.7_wp, 1.5_wp, 0.05_wp, 0.7_wp, .false., 0.3_wp, 1.5_wp, err)
         call event_log_init(log, .false., 0)
         call advance_to_point(chain, 20_i8, 0.0_wp, log, err)
-        early = chain%impacts
+        early = chain_counts(chain)
         call advance_to_point(chain, 1000_i8, 0.0_wp, log, err)
-        chain%impacts = 0
+        call chain_reset_counts(chain)
         call advance_to_point(chain, 1200_i8, 0.0_wp, log, err)
-        call check(t, .not. allocated(err) .and. early > 0, 'free chain collides at first')
-        call check(t, chain%impacts == 0, 'free chain: collisions have died out by cycle 1000')
+        late = chain_counts(chain)
+        call check(t, .not. allocated(err) .and. early%impacts > 0, 'free chain collides at first')
+        call check(t, late%impacts == 0, 'free chain: collisions have died out by cycle 1000')
     end subroutine free_boundaries_die_out
 
     !> One oscillator driven hard into both walls: chatter ends in sticking, sticking ends in
@@ -184,17 +200,19 @@ contains
         type(chain_t) :: chain
         type(error_t), allocatable :: err
         type(event_log_t) :: log
+        type(event_counts_t) :: counts
         real(wp) :: worst
         integer :: j
 
         call make_chain(chain, 1, 3.0_wp, 0.6_wp, 0.05_wp, 0.5_wp, .true., 0.0_wp, 0.0_wp, err)
         call run_watching_gaps(chain, 300, worst, err)
+        counts = chain_counts(chain)
         call check(t, .not. allocated(err), 'chatter run completes')
-        call check(t, chain%sticks > 100 .and. chain%releases > 100, &
+        call check(t, counts%sticks > 100 .and. counts%releases > 100, &
                    'chatter ends in sticking contacts that release')
         call check(t, worst >= -1, 'chatter run: no gap below its rounding level at any '// &
                    'event or record')
-        call check(t, chain%impacts < 300*200, 'chatter run: bounded number of impacts')
+        call check(t, counts%impacts < 300*200, 'chatter run: bounded number of impacts')
     end subroutine chatter_and_sticking
 
     !> The steady state touches both walls exactly with zero speed every cycle.
@@ -204,6 +222,7 @@ contains
         type(error_t), allocatable :: err
         type(event_log_t) :: log
         type(flow_t) :: flow
+        type(event_counts_t) :: counts
         real(wp) :: d2, amplitude, xp, vp, worst
         integer :: j
 
@@ -211,13 +230,14 @@ contains
         amplitude = sqrt(d2)
         flow = make_flow(0.05_wp, amplitude, 1.5_wp)
         call forced_response(flow, 0.0_wp, xp, vp)
-        call chain_init(chain, flow, 0.7_wp, [1.0_wp, 1.0_wp], .true., 1.0e-9_wp, [xp], [vp], &
+        call init_chain(chain, flow, 0.7_wp, [1.0_wp, 1.0_wp], .true., 1.0e-9_wp, [xp], [vp], &
                         0_i8, 0.0_wp, err)
         call run_watching_gaps(chain, 500, worst, err)
+        counts = chain_counts(chain)
         call check(t, .not. allocated(err), 'exact grazing run completes')
         call check(t, worst >= -1, 'exact grazing: no gap below its rounding level at any '// &
                    'event or record')
-        call check(t, chain%impacts <= 2*500*4, 'exact grazing: at most a few touches per cycle')
+        call check(t, counts%impacts <= 2*500*4, 'exact grazing: at most a few touches per cycle')
     end subroutine exact_grazing
 
     !> K = 0: perfectly plastic impacts in a crowded chain (multi-body contacts).

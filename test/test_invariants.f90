@@ -10,16 +10,22 @@ module test_invariants
     use chain_error, only: error_t, fmt_int
     use chain_sim, only: uniform
     use chain_flow, only: flow_t, make_flow, advance_state, propagator
+    use chain_model, only: model_t
+    use chain_state, only: chain_state_t, event_counts_t, contact_free, contact_left, &
+                           contact_right
     use chain_engine, only: chain_t, chain_init, chain_advance, chain_sync, chain_new_cycle, &
-                            chain_set_tangent, chain_gaps_now, contact_free, contact_left, &
-                            contact_right
+                            chain_set_tangent, chain_gaps_now, chain_next_event, chain_size, &
+                            chain_cycle, chain_time, chain_period, chain_model, &
+                            chain_positions, chain_velocities, chain_contacts, chain_counts, &
+                            chain_reset_counts, chain_vectors, chain_tangent_frame, &
+                            chain_qr_step, chain_snapshot
     use chain_events, only: event_log_t, event_log_init, event_log_clear, event_impact, &
                             event_stick, event_release, event_log_append
-    use chain_queue, only: queue_top
     use chain_lyapunov, only: lyapunov_acc_t, lyapunov_start, lyapunov_step, &
                               lyapunov_result_t, lyapunov_result, initial_frame, &
                               floquet_multipliers
-    use chain_run, only: advance_to_point, poincare_jacobian, tangent_qr_step
+    use chain_run, only: advance_to_point, poincare_jacobian
+    use test_chains, only: init_chain, flow_of
     use testing, only: tally_t, check, check_close
     implicit none
     private
@@ -71,9 +77,13 @@ contains
     pure function gap_rounding(chain) result(tol)
         type(chain_t), intent(in) :: chain
         real(wp) :: tol
+        type(model_t) :: model
+        type(flow_t) :: flow
 
-        tol = 64*eps*(maxval(chain%spacing) + maxval(abs(chain%x)) + &
-                      hypot(chain%flow%p_sin, chain%flow%q_cos))
+        model = chain_model(chain)
+        flow = flow_of(chain)
+        tol = 64*eps*(maxval(model%spacing) + maxval(abs(chain_positions(chain))) + &
+                      hypot(flow%p_sin, flow%q_cos))
     end function gap_rounding
 
     !> The sum rule: the sum of all 2n exponents in nats per cycle is -2 b n T + 2 ln(K) c,
@@ -152,86 +162,130 @@ contains
         type(event_log_t) :: log
         type(lyapunov_acc_t) :: acc
         type(lyapunov_result_t) :: res
-        type(chain_t) :: probe
+        type(event_counts_t) :: counts
+        type(flow_t) :: flow
         integer(i8) :: last_cycle
-        integer :: bond, info, i
-        real(wp) :: tq, before, x, v, rounding
-        logical :: spectrum
+        integer :: bond
+        real(wp) :: tq, before
+        logical :: spectrum, walls
 
         call event_log_init(log, .true., 64)
-        spectrum = chain%n_vectors == 2*chain%n
-        if (spectrum) call lyapunov_start(acc, chain%n_vectors, cycles)
-        chain%impacts = 0
-        chain%sticks = 0
-        last_cycle = chain%cycle + cycles
-        do while (chain%cycle < last_cycle)
-            call queue_top(chain%queue, bond, tq)
-            if (tq > chain%flow%period) then
+        spectrum = chain_vectors(chain) == 2*chain_size(chain)
+        if (spectrum) call lyapunov_start(acc, chain_vectors(chain), cycles)
+        call chain_reset_counts(chain)
+        flow = flow_of(chain)
+        walls = chain_walls(chain)
+        last_cycle = chain_cycle(chain) + cycles
+        do while (chain_cycle(chain) < last_cycle)
+            call chain_next_event(chain, bond, tq)
+            if (tq > flow%period) then
                 ! a record: the state at the end of the cycle
-                call chain_advance(chain, chain%flow%period, log, err)
+                call chain_advance(chain, flow%period, log, err)
                 if (allocated(err)) return
                 call chain_new_cycle(chain)
                 call look_at_gaps(chain, walk)
                 if (spectrum) then
-                    call tangent_qr_step(chain, acc, err)
+                    call chain_qr_step(chain, acc, err)
                     if (allocated(err)) return
                 end if
                 cycle
             end if
-            if (.not. chain%walls) then
-                ! momentum just before the instant, propagated exactly from a synced copy
-                probe = chain
-                call chain_sync(probe)
-                before = 0
-                do i = 1, chain%n
-                    x = probe%x(i)
-                    v = probe%v(i)
-                    call advance_state(chain%flow, probe%s, tq - probe%s, x, v)
-                    before = before + v
-                end do
-            end if
+            ! (free ends) momentum just before the instant
+            if (.not. walls) before = momentum_at(chain, flow, tq)
             call event_log_clear(log)
             call chain_advance(chain, tq, log, err)
             if (allocated(err)) return
-            walk%instants = walk%instants + 1
-            walk%collapses = walk%collapses + count(log%kind(:log%count) == event_impact .and. &
-                                                    log%speed(:log%count) == 0)
-            probe = chain
-            call look_at_gaps(probe, walk)
-            if (.not. chain%walls) then
-                ! free ends: only pair impacts and the cluster rule, both keep momentum
-                rounding = max(8*eps*max(1, log%count)*sum(abs(probe%v)), tiny(1.0_wp))
-                walk%worst_momentum = max(walk%worst_momentum, &
-                                          abs(sum(probe%v) - before)/rounding)
-                walk%momentum_instants = walk%momentum_instants + 1
-            end if
-            if (any(chain%contact /= contact_free)) walk%resting = walk%resting + 1
-            if (count(chain%contact == contact_left) >= 2) walk%stacks_left = walk%stacks_left + 1
-            if (count(chain%contact == contact_right) >= 2) &
-                walk%stacks_right = walk%stacks_right + 1
-            if (chain%n_vectors > 0) then
-                do i = 1, chain%n
-                    if (chain%contact(i) == contact_free) cycle
-                    if (any(chain%tangent(:, 2*i - 1:2*i) /= 0)) then
-                        walk%nonzero_rows = walk%nonzero_rows + 1
-                        exit
-                    end if
-                end do
-            end if
+            call look_at_instant(chain, log, walls, before, walk)
         end do
-        walk%impacts = chain%impacts
-        walk%sticks = chain%sticks
+        counts = chain_counts(chain)
+        walk%impacts = counts%impacts
+        walk%sticks = counts%sticks
         if (spectrum) then
-            res = lyapunov_result(acc, 1, chain%flow%period)
+            res = lyapunov_result(acc, 1, flow%period)
             walk%bits_per_cycle = res%bits_per_cycle
         end if
     end subroutine walk_events
+
+    logical function chain_walls(chain) result(walls)
+        type(chain_t), intent(in) :: chain
+        type(model_t) :: model
+
+        model = chain_model(chain)
+        walls = model%walls
+    end function chain_walls
+
+    !> Total momentum at time tq (before any event there), propagated exactly from a synced
+    !> copy of the chain.
+    function momentum_at(chain, flow, tq) result(total)
+        type(chain_t), intent(in) :: chain
+        type(flow_t), intent(in) :: flow
+        real(wp), intent(in) :: tq
+        real(wp) :: total, x, v
+        real(wp), allocatable :: xs(:), vs(:)
+        type(chain_t) :: probe
+        integer :: i
+
+        probe = chain
+        call chain_sync(probe)
+        xs = chain_positions(probe)
+        vs = chain_velocities(probe)
+        total = 0
+        do i = 1, size(xs)
+            x = xs(i)
+            v = vs(i)
+            call advance_state(flow, chain_time(probe), tq - chain_time(probe), x, v)
+            total = total + v
+        end do
+    end function momentum_at
+
+    !> What an instant just processed (its events in `log`) left: the gaps (of a synced copy),
+    !> for free ends the momentum against `before`, rests and stacks, and the tangent rows of
+    !> resting oscillators.
+    subroutine look_at_instant(chain, log, walls, before, walk)
+        type(chain_t), intent(in) :: chain
+        type(event_log_t), intent(in) :: log
+        logical, intent(in) :: walls
+        real(wp), intent(in) :: before
+        type(walk_t), intent(inout) :: walk
+        type(chain_t) :: probe
+        real(wp) :: rounding
+        real(wp), allocatable :: v(:), frame(:, :)
+        integer, allocatable :: contact(:)
+        integer :: i
+
+        walk%instants = walk%instants + 1
+        walk%collapses = walk%collapses + count(log%kind(:log%count) == event_impact .and. &
+                                                log%speed(:log%count) == 0)
+        probe = chain
+        call look_at_gaps(probe, walk)
+        if (.not. walls) then
+            ! free ends: only pair impacts and the cluster rule, both keep momentum
+            v = chain_velocities(probe)
+            rounding = max(8*eps*max(1, log%count)*sum(abs(v)), tiny(1.0_wp))
+            walk%worst_momentum = max(walk%worst_momentum, abs(sum(v) - before)/rounding)
+            walk%momentum_instants = walk%momentum_instants + 1
+        end if
+        contact = chain_contacts(chain)
+        if (any(contact /= contact_free)) walk%resting = walk%resting + 1
+        if (count(contact == contact_left) >= 2) walk%stacks_left = walk%stacks_left + 1
+        if (count(contact == contact_right) >= 2) walk%stacks_right = walk%stacks_right + 1
+        if (chain_vectors(chain) == 0) return
+        frame = chain_tangent_frame(chain)
+        do i = 1, size(contact)
+            if (contact(i) == contact_free) cycle
+            if (any(frame(2*i - 1:2*i, :) /= 0)) then
+                walk%nonzero_rows = walk%nonzero_rows + 1
+                exit
+            end if
+        end do
+    end subroutine look_at_instant
 
     !> Smallest gap of a (synced) copy of the chain, in units of its rounding level.
     subroutine look_at_gaps(probe, walk)
         type(chain_t), intent(inout) :: probe
         type(walk_t), intent(inout) :: walk
-        real(wp) :: gaps(0:probe%n), rounding, smallest
+        real(wp) :: rounding, smallest
+        real(wp), allocatable :: gaps(:)
 
         gaps = chain_gaps_now(probe)
         rounding = gap_rounding(probe)
@@ -295,6 +349,7 @@ contains
         real(wp) :: restitution, period, worst_state, tol_time, scale
         real(wp) :: diff_at(samples*cycles)
         integer :: seed, n, j, q, sticks_left, sticks_right, stacks_left, stacks_right
+        integer, allocatable :: contact(:)
         integer :: failing
         character(len=:), allocatable :: label, mismatch
         logical :: contacts_mirror
@@ -309,9 +364,9 @@ contains
             n = size(x)
             label = 'mirror seed '//fmt_int(seed)//' (n = '//fmt_int(n)//')'
             period = flow%period
-            call chain_init(run, flow, restitution, spacing, .true., 1.0e-9_wp, x, v, 0_i8, &
+            call init_chain(run, flow, restitution, spacing, .true., 1.0e-9_wp, x, v, 0_i8, &
                             0.0_wp, err)
-            call chain_init(mirror, flow, restitution, spacing(n:0:-1), .true., 1.0e-9_wp, &
+            call init_chain(mirror, flow, restitution, spacing(n:0:-1), .true., 1.0e-9_wp, &
                             -x(n:1:-1), -v(n:1:-1), 0_i8, 0.5_wp*period, err)
             call event_log_init(log, .true., 1024)
             call event_log_init(mirror_log, .true., 1024)
@@ -327,11 +382,10 @@ contains
                 call advance_to_point(mirror, int(q/samples, i8), &
                                       real(mod(q, samples), wp)*period/samples, mirror_log, err)
                 if (allocated(err)) exit
-                diff_at(j) = max(maxval(abs(run%x + mirror%x(n:1:-1))), &
-                                 maxval(abs(run%v + mirror%v(n:1:-1))))
-                if (any(run%contact /= -mirror%contact(n:1:-1))) diff_at(j) = huge(1.0_wp)
-                if (count(run%contact == contact_left) >= 2) stacks_left = stacks_left + 1
-                if (count(run%contact == contact_right) >= 2) stacks_right = stacks_right + 1
+                diff_at(j) = mirror_distance(run, mirror)
+                contact = chain_contacts(run)
+                if (count(contact == contact_left) >= 2) stacks_left = stacks_left + 1
+                if (count(contact == contact_right) >= 2) stacks_right = stacks_right + 1
             end do
             do j = 1, samples*cycles
                 if (diff_at(j) == huge(1.0_wp)) contacts_mirror = .false.
@@ -371,6 +425,26 @@ contains
         if (failing > 0) write (*, '(a,i0,a,i0,a)') '  mirror symmetry: ', failing, ' of ', &
             chains, ' random chains differ from their mirror image'
     end subroutine mirror_symmetry
+
+    !> The largest difference between the state of `run` and the mirror image of `mirror`'s;
+    !> huge if their contacts are not mirror images.
+    function mirror_distance(run, mirror) result(distance)
+        type(chain_t), intent(in) :: run, mirror
+        real(wp) :: distance
+        real(wp), allocatable :: x(:), v(:), x_mirror(:), v_mirror(:)
+        integer, allocatable :: contact(:), contact_mirror(:)
+        integer :: n
+
+        n = chain_size(run)
+        x = chain_positions(run)
+        v = chain_velocities(run)
+        contact = chain_contacts(run)
+        x_mirror = chain_positions(mirror)
+        v_mirror = chain_velocities(mirror)
+        contact_mirror = chain_contacts(mirror)
+        distance = max(maxval(abs(x + x_mirror(n:1:-1))), maxval(abs(v + v_mirror(n:1:-1))))
+        if (any(contact /= -contact_mirror(n:1:-1))) distance = huge(1.0_wp)
+    end function mirror_distance
 
     pure logical function resolved(log, i)
         type(event_log_t), intent(in) :: log
@@ -517,7 +591,7 @@ contains
         do seed = 1, 16
             call random_chain(seed, flow, restitution, spacing, x, v)
             label = 'random chain '//fmt_int(seed)
-            call chain_init(chain, flow, restitution, spacing, .true., 1.0e-9_wp, x, v, 0_i8, &
+            call init_chain(chain, flow, restitution, spacing, .true., 1.0e-9_wp, x, v, 0_i8, &
                             0.0_wp, err)
             call walk_with_frame(chain, 6, walk, err)
             call check(t, .not. allocated(err), label//' walks')
@@ -536,14 +610,14 @@ contains
         spacing = [(0.2_wp, seed=0, 6)]
         x = [(0.05_wp*sin(1.7_wp*seed + 0.3_wp), seed=1, 6)]
         v = [(2.0_wp*cos(2.3_wp*seed), seed=1, 6)]
-        call chain_init(chain, make_flow(0.05_wp, 2.0_wp, 1.2_wp), 0.0_wp, spacing, .true., &
+        call init_chain(chain, make_flow(0.05_wp, 2.0_wp, 1.2_wp), 0.0_wp, spacing, .true., &
                         1.0e-9_wp, x, v, 0_i8, 0.0_wp, err)
         call walk_with_frame(chain, 40, walk, err)
         call check(t, .not. allocated(err), 'plastic chain walks')
         call check(t, walk%collapses > 0 .and. walk%resting > 0, 'plastic chain: the '// &
                    'cluster rule fires ('//fmt_int(walk%collapses)//') and oscillators rest')
         call report_walk(t, 'plastic chain', walk)
-        call check_sum_rule(t, 'plastic chain', 6, chain%flow, 0.0_wp, &
+        call check_sum_rule(t, 'plastic chain', 6, flow_of(chain), 0.0_wp, &
                             real(walk%impacts, wp)/40, walk%bits_per_cycle, walk%sticks)
     end subroutine stress_walks
 
@@ -555,7 +629,7 @@ contains
         real(wp), allocatable :: frame(:, :)
         integer :: info
 
-        call initial_frame(2*chain%n, 2*chain%n, frame, info)
+        call initial_frame(2*chain_size(chain), 2*chain_size(chain), frame, info)
         ! as a Lyapunov run carries it (re-orthonormalised after large jumps)
         call chain_set_tangent(chain, frame, orthonormalise_jumps=.true.)
         call walk_events(chain, cycles, walk, err)
@@ -682,11 +756,12 @@ contains
         type(error_t), allocatable :: err
         type(event_log_t) :: log, rest_of
         real(wp) :: m(2, 2), centre(2), end_time
+        real(wp), allocatable :: v_after(:)
         character(len=16) :: kt
 
         write (kt, '(f6.3)') k
         flow = make_flow(0.0_wp, 0.0_wp, 1.5_wp)
-        call chain_init(chain, flow, k, [a, a, a, a], .false., 1.0e-9_wp, x0, v0, 0_i8, &
+        call init_chain(chain, flow, k, [a, a, a, a], .false., 1.0e-9_wp, x0, v0, 0_i8, &
                         0.0_wp, err)
         after = chain
         call event_log_init(log, .true., 64)
@@ -709,11 +784,12 @@ contains
         call event_log_init(rest_of, .false., 0)
         call chain_advance(after, end_time, rest_of, err)
         call chain_sync(after)
-        spread = max(abs(after%v(2) - after%v(1)), abs(after%v(3) - after%v(2)))
+        v_after = chain_velocities(after)
+        spread = max(abs(v_after(2) - v_after(1)), abs(v_after(3) - v_after(2)))
         ! the centre of mass is one free oscillator: impacts conserve momentum and positions
         m = propagator(flow, end_time)
         centre = matmul(m, [sum(x0), sum(v0)])/3
-        call check_close(t, sum(after%v)/3, centre(2), 'three particles, K = '// &
+        call check_close(t, sum(v_after)/3, centre(2), 'three particles, K = '// &
                          trim(adjustl(kt))//': momentum conserved through the cascade', &
                          abs_tol=8*eps*max(impacts, 1)*maxval(abs(v0)))
     end subroutine three_particles
@@ -738,7 +814,7 @@ contains
                 x(i) = 0.05_wp*sin(1.7_wp*i + 0.3_wp)
                 v(i) = 2.0_wp*cos(2.3_wp*i)
             end do
-            call chain_init(chain, make_flow(0.05_wp, 2.0_wp, 1.2_wp), ks(j), &
+            call init_chain(chain, make_flow(0.05_wp, 2.0_wp, 1.2_wp), ks(j), &
                             [(0.2_wp, i=0, 6)], .false., 1.0e-9_wp, x, v, 0_i8, 0.0_wp, err)
             call walk_with_frame(chain, 20, walk, err)
             ! (the cascades end by touches once the approach is too slow to resolve; the
@@ -748,7 +824,7 @@ contains
                        label//': momentum kept across every instant, collapses included '// &
                        '(worst '//real_text(walk%worst_momentum)//' roundings)')
             call report_walk(t, label, walk)
-            call check_sum_rule(t, label, 6, chain%flow, ks(j), real(walk%impacts, wp)/20, &
+            call check_sum_rule(t, label, 6, flow_of(chain), ks(j), real(walk%impacts, wp)/20, &
                                 walk%bits_per_cycle, walk%sticks)
         end do
     end subroutine momentum_at_collapse
@@ -768,7 +844,10 @@ contains
         type(chain_t) :: chain
         type(event_log_t) :: log
         type(error_t), allocatable :: err
+        type(chain_state_t) :: state
+        type(model_t) :: model
         real(wp) :: s0, gaps(0:4), momentum
+        real(wp), allocatable :: v(:)
         integer :: j, collapses
         character(len=:), allocatable :: label
 
@@ -783,24 +862,30 @@ contains
             gaps = chain_gaps_now(chain)
             call check(t, .not. allocated(err) .and. minval(gaps) >= -gap_rounding(chain), &
                        label//': runs, no negative gap')
-            call check_close(t, chain%v(3), 0.8_wp, label//': oscillator 3 separates '// &
+            v = chain_velocities(chain)
+            call check_close(t, v(3), 0.8_wp, label//': oscillator 3 separates '// &
                              'untouched', abs_tol=1.0e-10_wp)
             call check(t, all_resting_rows_zero(chain), label//': resting rows stay zero')
         end do
         label = 'cluster rule beside a rest'
         call resting_cluster(chain, 0.05_wp, s0, err)
-        chain%last_event = s0
-        chain%same_instant = collapse_after - 1
+        ! as after 999 impacts at this instant
+        state = chain_snapshot(chain)
+        state%last_event = s0
+        state%same_instant = collapse_after - 1
+        model = chain_model(chain)
+        call chain_init(chain, model, state, err)
         call event_log_init(log, .true., 64)
         call chain_advance(chain, s0, log, err)
         collapses = count(log%kind(:log%count) == event_impact .and. log%speed(:log%count) == 0)
         call check(t, .not. allocated(err) .and. collapses == 1, label//': the rule fires')
         call chain_sync(chain)
-        momentum = sum(chain%v(1:3))
-        call check(t, abs(momentum - 0.6_wp) <= 8*eps .or. all(chain%v(2:3) == 0), &
+        v = chain_velocities(chain)
+        momentum = sum(v(1:3))
+        call check(t, abs(momentum - 0.6_wp) <= 8*eps .or. all(v(2:3) == 0), &
                    label//': momentum 0.6 kept (or the cluster stopped against the wall), '// &
-                   'got '//real_text(momentum)//' with v = '//real_text(chain%v(1))//', '// &
-                   real_text(chain%v(2))//', '//real_text(chain%v(3)))
+                   'got '//real_text(momentum)//' with v = '//real_text(v(1))//', '// &
+                   real_text(v(2))//', '//real_text(v(3)))
         call check(t, all_resting_rows_zero(chain), label//': the resting oscillator''s '// &
                    'tangent rows stay zero')
     end subroutine collapse_next_to_rest
@@ -818,7 +903,7 @@ contains
 
         flow = make_flow(0.05_wp, 3.0_wp, 1.5_wp)
         s0 = 0.75_wp*flow%period
-        call chain_init(chain, flow, k, [(1.0_wp, i=0, 4)], .true., 1.0e-9_wp, &
+        call init_chain(chain, flow, k, [(1.0_wp, i=0, 4)], .true., 1.0e-9_wp, &
                         [-1.0_wp, -2.0_wp, -3.0_wp, 0.0_wp], [0.0_wp, -0.2_wp, 0.8_wp, 0.0_wp], &
                         0_i8, s0, err, contact=[contact_left, contact_free, contact_free, &
                                                 contact_free])
@@ -832,12 +917,15 @@ contains
 
     logical function all_resting_rows_zero(chain) result(zero)
         type(chain_t), intent(in) :: chain
+        integer, allocatable :: contact(:)
+        real(wp), allocatable :: frame(:, :)
         integer :: i
 
         zero = .true.
-        do i = 1, chain%n
-            if (chain%contact(i) /= contact_free) &
-                zero = zero .and. all(chain%tangent(:, 2*i - 1:2*i) == 0)
+        contact = chain_contacts(chain)
+        frame = chain_tangent_frame(chain)
+        do i = 1, size(contact)
+            if (contact(i) /= contact_free) zero = zero .and. all(frame(2*i - 1:2*i, :) == 0)
         end do
     end function all_resting_rows_zero
 
@@ -857,14 +945,14 @@ contains
             x(i) = 0.3_wp*sin(1.7_wp*i + 0.3_wp)
             v(i) = 1.5_wp*cos(2.3_wp*i)
         end do
-        call chain_init(chain, make_flow(0.05_wp, 1.7_wp, 1.5_wp), 0.7_wp, [(1.0_wp, i=0, 8)], &
+        call init_chain(chain, make_flow(0.05_wp, 1.7_wp, 1.5_wp), 0.7_wp, [(1.0_wp, i=0, 8)], &
                         .false., 1.0e-9_wp, x, v, 0_i8, 0.0_wp, err)
         call walk_with_frame(chain, 40, walk, err)
         call check(t, .not. allocated(err) .and. walk%impacts > 0, &
                    'free ends, n = 8: collisions in the first 40 cycles')
         call check(t, walk%worst_momentum <= 1, 'free ends, n = 8: momentum kept across '// &
                    'every instant (worst '//real_text(walk%worst_momentum)//' roundings)')
-        call check_sum_rule(t, 'free ends n = 8, dying collisions', 8, chain%flow, 0.7_wp, &
+        call check_sum_rule(t, 'free ends n = 8, dying collisions', 8, flow_of(chain), 0.7_wp, &
                             real(walk%impacts, wp)/40, walk%bits_per_cycle, walk%sticks)
     end subroutine sum_rule_free_ends
 
@@ -878,6 +966,8 @@ contains
         type(chain_t) :: chain, copy
         type(error_t), allocatable :: err
         type(event_log_t) :: events
+        type(event_counts_t) :: counts
+        type(flow_t) :: flow
         real(wp), allocatable :: jac(:, :)
         real(wp) :: x(4), v(4), s, re(8), im(8), expected
         integer :: i, j, info
@@ -887,25 +977,25 @@ contains
             x(i) = 0.3_wp*sin(1.7_wp*i + 0.3_wp)
             v(i) = 0.5_wp*cos(2.3_wp*i)
         end do
-        call chain_init(chain, make_flow(0.05_wp, 4.15_wp, 0.9_wp), 0.7_wp, [(1.0_wp, i=0, 4)], &
-                        .true., 1.0e-9_wp, x, v, 0_i8, 0.0_wp, err)
+        flow = make_flow(0.05_wp, 4.15_wp, 0.9_wp)
+        call init_chain(chain, flow, 0.7_wp, [(1.0_wp, i=0, 4)], .true., 1.0e-9_wp, x, v, 0_i8, &
+                        0.0_wp, err)
         call event_log_init(events, .false., 0)
         do j = 1, size(phases)
             label = 'one-cycle Jacobian at drive phase '//k_text(phases(j))
-            s = phases(j)/chain%flow%omega
+            s = phases(j)/flow%omega
             call advance_to_point(chain, 50_i8*j, s, events, err)
             call poincare_jacobian(chain, 1, jac, err)
             ! the impacts of the cycle it spans (s passed by value: the chain's own clock
             ! moves while it runs)
             copy = chain
-            copy%impacts = 0
-            copy%sticks = 0
-            call advance_to_point(copy, chain%cycle + 1, s, events, err)
-            call check(t, .not. allocated(err) .and. copy%impacts > 0 .and. copy%sticks == 0, &
-                       label//': a cycle with impacts and no rest')
+            call chain_reset_counts(copy)
+            call advance_to_point(copy, chain_cycle(chain) + 1, s, events, err)
+            counts = chain_counts(copy)
+            call check(t, .not. allocated(err) .and. counts%impacts > 0 .and. &
+                       counts%sticks == 0, label//': a cycle with impacts and no rest')
             call floquet_multipliers(jac, re, im, info)
-            expected = -2*chain%flow%damping*4*chain%flow%period + &
-                       2*copy%impacts*log(chain%restitution)
+            expected = -2*flow%damping*4*flow%period + 2*counts%impacts*log(0.7_wp)
             call check_close(t, sum(log(hypot(re, im))), expected, label// &
                              ': log det = -2 b n T + 2 c ln K', rel_tol=1.0e-8_wp)
         end do

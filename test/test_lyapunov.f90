@@ -7,7 +7,11 @@ module test_lyapunov
     use chain_kinds, only: wp, i8
     use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
     use chain_error, only: error_t
-    use chain_engine, only: chain_t, chain_init, chain_set_tangent
+    use chain_flow, only: flow_t
+    use chain_model, only: model_t
+    use chain_state, only: event_counts_t, moving_state
+    use chain_engine, only: chain_t, chain_init, chain_model, chain_cycle, chain_time, &
+                            chain_positions, chain_velocities, chain_counts, chain_reset_counts
     use chain_events, only: event_log_t, event_log_init
     use chain_config, only: run_config_t
     use chain_run, only: record_run, memory_sink_t, run_result_t, advance_to_point, &
@@ -19,6 +23,7 @@ module test_lyapunov
     use chain_lapack, only: qr_orthonormalise, qr_workspace_t
     use test_engine, only: make_chain
     use test_invariants, only: check_sum_rule
+    use test_chains, only: flow_of
     use testing, only: tally_t, check, check_close
     implicit none
     private
@@ -236,8 +241,8 @@ contains
         call check(t, res%collisions_per_cycle > 1, 'sum rule run n = '//trim(label)//' impacts')
         call check(t, res%lyapunov%bits_per_cycle(1) > 0, &
                    'sum rule run n = '//trim(label)//' is chaotic')
-        call check_sum_rule(t, 'n = '//trim(label)//', chaotic', n, chain%flow, &
-                            chain%restitution, res%collisions_per_cycle, &
+        call check_sum_rule(t, 'n = '//trim(label)//', chaotic', n, flow_of(chain), &
+                            0.7_wp, res%collisions_per_cycle, &
                             res%lyapunov%bits_per_cycle, res%sticks)
     end subroutine sum_rule
 
@@ -247,17 +252,19 @@ contains
         type(chain_t) :: chain
         type(error_t), allocatable :: err
         type(run_result_t) :: res
+        type(flow_t) :: flow
         real(wp) :: bt, nats(6)
 
         call make_chain(chain, 3, 0.2_wp, 1.5_wp, 0.05_wp, 0.7_wp, .true., 0.2_wp, 0.1_wp, err)
         call spectrum(chain, spectrum_config(3, 0_i8, 2000_i8, 0), res, err)
-        bt = chain%flow%damping*chain%flow%period
+        flow = flow_of(chain)
+        bt = flow%damping*flow%period
         nats = res%lyapunov%bits_per_cycle*log(2.0_wp)
         call check(t, res%impacts == 0, 'no-impact spectrum run has no impacts')
         call check_close(t, sum(nats)/6, -bt, 'no impacts: mean exponent is -b T', 1.0e-12_wp)
         call check(t, maxval(abs(nats + bt)) < 1.0e-4_wp, &
                    'no impacts: every exponent within 1e-4 of -b T after 2000 cycles')
-        call check_sum_rule(t, 'no impacts', 3, chain%flow, chain%restitution, &
+        call check_sum_rule(t, 'no impacts', 3, flow, 0.7_wp, &
                             res%collisions_per_cycle, res%lyapunov%bits_per_cycle, res%sticks)
     end subroutine no_impacts
 
@@ -317,10 +324,13 @@ contains
 
     function state_of(chain) result(state)
         type(chain_t), intent(in) :: chain
-        real(wp) :: state(2*chain%n)
+        real(wp), allocatable :: state(:)
+        real(wp), allocatable :: x(:)
 
-        state(1::2) = chain%x
-        state(2::2) = chain%v
+        x = chain_positions(chain)
+        allocate (state(2*size(x)))
+        state(1::2) = x
+        state(2::2) = chain_velocities(chain)
     end function state_of
 
     !> The one-cycle map from the chain's state with coordinate j moved by h (a fresh chain,
@@ -333,24 +343,28 @@ contains
         logical, intent(inout) :: same
         type(error_t), allocatable :: err
         type(event_log_t) :: events, base_log
-        real(wp) :: x(chain%n), v(chain%n)
+        real(wp), allocatable :: x(:), v(:)
         type(chain_t) :: base
+        type(model_t) :: model
+        integer(i8) :: cycle
+        real(wp) :: s
 
-        x = chain%x
-        v = chain%v
+        model = chain_model(chain)
+        cycle = chain_cycle(chain)
+        s = chain_time(chain)
+        x = chain_positions(chain)
+        v = chain_velocities(chain)
+        call chain_init(base, model, moving_state(x, v, cycle, s), err)
         if (modulo(j, 2) == 1) then
             x((j + 1)/2) = x((j + 1)/2) + h
         else
             v(j/2) = v(j/2) + h
         end if
-        call chain_init(moved, chain%flow, chain%restitution, chain%spacing, chain%walls, &
-                        chain%stick_speed, x, v, chain%cycle, chain%s, err)
-        call chain_init(base, chain%flow, chain%restitution, chain%spacing, chain%walls, &
-                        chain%stick_speed, chain%x, chain%v, chain%cycle, chain%s, err)
+        call chain_init(moved, model, moving_state(x, v, cycle, s), err)
         call event_log_init(events, .true., 64)
         call event_log_init(base_log, .true., 64)
-        call advance_to_point(moved, chain%cycle + 1, chain%s, events, err)
-        call advance_to_point(base, chain%cycle + 1, chain%s, base_log, err)
+        call advance_to_point(moved, cycle + 1, s, events, err)
+        call advance_to_point(base, cycle + 1, s, base_log, err)
         if (events%count /= base_log%count) then
             same = .false.
         else if (any(events%site(:events%count) /= base_log%site(:events%count))) then
@@ -363,12 +377,14 @@ contains
         type(chain_t) :: copy
         type(error_t), allocatable :: err
         type(event_log_t) :: events
+        type(event_counts_t) :: counts
 
         copy = chain
-        copy%impacts = 0
+        call chain_reset_counts(copy)
         call event_log_init(events, .false., 0)
-        call advance_to_point(copy, chain%cycle + 1, chain%s, events, err)
-        chain_impacts_one_cycle = int(copy%impacts)
+        call advance_to_point(copy, chain_cycle(chain) + 1, chain_time(chain), events, err)
+        counts = chain_counts(copy)
+        chain_impacts_one_cycle = int(counts%impacts)
     end function chain_impacts_one_cycle
 
     !> The k leading exponents from a frame of k vectors equal the first k of the spectrum.
@@ -395,7 +411,7 @@ contains
         call check_close(t, worst, 0.0_wp, &
                          'k leading exponents are k of the full spectrum', 1.0e-10_wp)
         call check_sum_rule(t, 'n = 16, full spectrum beside the leading vectors', 16, &
-                            chain%flow, chain%restitution, full%collisions_per_cycle, &
+                            flow_of(chain), 0.7_wp, full%collisions_per_cycle, &
                             full%lyapunov%bits_per_cycle, full%sticks)
     end subroutine leading_vectors
 
@@ -409,24 +425,29 @@ contains
         type(event_log_t) :: events
         real(wp), allocatable :: jac(:, :), re(:), im(:), before(:)
         real(wp) :: log_det, expected
+        type(flow_t) :: flow
+        type(event_counts_t) :: counts
         integer :: info, c
 
         call make_chain(chain, 8, 3.0_wp, 1.9_wp, 0.05_wp, 0.5_wp, .true., 0.0_wp, 0.0_wp, err)
         call event_log_init(events, .false., 0)
         call advance_to_point(chain, 1000_i8, 0.0_wp, events, err)
-        before = [chain%x, chain%v]
+        before = [chain_positions(chain), chain_velocities(chain)]
         c = chain_impacts_one_cycle(chain)
         call poincare_jacobian(chain, 1, jac, err)
         call advance_to_point(chain, 1001_i8, 0.0_wp, events, err)
-        call check(t, maxval(abs([chain%x, chain%v] - before)) < 1.0e-9_wp .and. &
-                   chain%sticks == 0 .and. c == 8, 'fig. 10 chain at A = 3 settles on a '// &
+        counts = chain_counts(chain)
+        call check(t, maxval(abs([chain_positions(chain), chain_velocities(chain)] - before)) &
+                   < 1.0e-9_wp .and. counts%sticks == 0 .and. c == 8, &
+                   'fig. 10 chain at A = 3 settles on a '// &
                    'period-1 state with 8 impacts per cycle')
         allocate (re(16), im(16))
         call floquet_multipliers(jac, re, im, info)
         call check(t, info == 0 .and. maxval(hypot(re, im)) < 1, &
                    'period-1 multipliers lie inside the unit circle')
         log_det = sum(log(hypot(re, im)))
-        expected = -2*chain%flow%damping*8*chain%flow%period + 2*c*log(chain%restitution)
+        flow = flow_of(chain)
+        expected = -2*flow%damping*8*flow%period + 2*c*log(0.5_wp)
         call check_close(t, log_det, expected, 'product of multipliers is exp(-2bnT) K**(2c)', &
                          rel_tol=1.0e-8_wp)
     end subroutine floquet_period_one

@@ -1,0 +1,346 @@
+!> The tangent frame the engine carries (docs/model.md sections 4.7 and 7): its start, the
+!> jumps of its rows at impacts (saltation matrices), rows moved between the coordinates of the
+!> epoch and of now, the frame kept finite, its re-orthonormalisation after large jumps, while
+!> it aligns, and at every QR step of a Lyapunov spectrum, and the frame as a Jacobian.
+!>
+!> The frame is stored transposed, tangent(n_vectors, 2n), so the rows of one oscillator are
+!> adjacent columns and a jump runs over contiguous memory. Rows of moving oscillators are
+!> referred back to the epoch, like their free parts; rows hit at the current instant are kept
+!> in the coordinates of now until the instant ends.
+submodule(chain_engine) chain_engine_tangent
+    use chain_error, only: set_error, fmt_int
+    use chain_lapack, only: qr_orthonormalise
+    use chain_lyapunov, only: lyapunov_step
+    use chain_state, only: contact_free
+    implicit none
+
+    !> A saltation matrix with an entry above this re-orthonormalises a Lyapunov frame at once.
+    real(wp), parameter :: large_jump = 64
+    !> ... and so does a run of jumps that shrank the frame's volume by more than e**(-18).
+    real(wp), parameter :: small_volume = -18
+    !> ... and so does a frame entry above this (the frame was orthonormal: entries <= 1).
+    real(wp), parameter :: large_growth = 1024
+
+contains
+
+    !> With `orthonormalise_jumps`, re-orthonormalised after every large jump (Lyapunov
+    !> spectra).
+    module procedure chain_set_tangent
+        integer :: i
+
+        chain%orthonormalise_jumps = .false.
+        if (present(orthonormalise_jumps)) chain%orthonormalise_jumps = orthonormalise_jumps
+        chain%tangent_log = [(0.0_wp, i=1, size(frame, 2))]
+        chain%jumps_volume = 0
+        chain%n_vectors = 0
+        call chain_sync(chain)
+        chain%n_vectors = size(frame, 2)
+        chain%rank_losses = 0
+        chain%n_touched = 0
+        chain%row_stamp = -1
+        chain%tangent = transpose(frame)
+        call forget_resting_rows(chain)
+    end procedure chain_set_tangent
+
+    module procedure chain_vectors
+        chain_vectors = chain%n_vectors
+    end procedure chain_vectors
+
+    module procedure chain_tangent_frame
+        frame = transpose(chain%tangent)
+        if (chain%tangent_scale_bits > 0) then
+            where (frame /= 0 .and. exponent(frame) + chain%tangent_scale_bits < &
+                   maxexponent(1.0_wp))
+                frame = scale(frame, chain%tangent_scale_bits)
+            elsewhere (frame /= 0)
+                frame = sign(huge(1.0_wp), frame)
+            end where
+        end if
+    end procedure chain_tangent_frame
+
+    !> The growth the engine kept (power-of-two scaling, re-orthonormalisations after large
+    !> jumps) is added, directions removed by singular jumps are dropped (chain_lyapunov's
+    !> lyapunov_step), and the engine's bookkeeping starts afresh.
+    module procedure chain_qr_step
+        integer :: info, i
+
+        call lyapunov_step(acc, chain%tangent, info, chain%tangent_scale_bits, &
+                           chain%tangent_log, chain%rank_losses > 0)
+        ! (the step may have dropped collapsed directions)
+        chain%n_vectors = size(chain%tangent, 1)
+        chain%tangent_log = [(0.0_wp, i=1, chain%n_vectors)]
+        call restart_bookkeeping(chain)
+        if (info /= 0) call set_error(err, "lyapunov: QR factorisation failed (LAPACK info "// &
+                                      fmt_int(info)//")")
+    end procedure chain_qr_step
+
+    !> A frame that starts in generic directions meets the shears of slow impacts (|S| ~ 1/u)
+    !> across all its columns, and the smallest diagonals of R lose digits; once it has turned
+    !> towards the leading directions they meet mostly the first. Rows of resting oscillators
+    !> stay zero. A change of columns needs no sync: the state is not touched.
+    module procedure chain_reorthonormalise
+        type(qr_workspace_t) :: ws
+        real(wp), allocatable :: frame(:, :)
+        real(wp) :: r_diag(chain%n_vectors)
+        integer :: info
+
+        frame = transpose(chain%tangent)
+        call qr_orthonormalise(frame, r_diag, ws, info)
+        if (info /= 0) then
+            call set_error(err, "lyapunov: QR factorisation failed while aligning the "// &
+                           "frame (LAPACK info "//fmt_int(info)//")")
+            return
+        end if
+        chain%tangent = transpose(frame)
+        call forget_resting_rows(chain)
+        chain%tangent_log = 0
+        call restart_bookkeeping(chain)
+    end procedure chain_reorthonormalise
+
+    !> The frame has just been orthonormalised (and tangent_log cleared): no scaling, no
+    !> singular jump since, no shrinking of its volume.
+    pure subroutine restart_bookkeeping(chain)
+        type(chain_t), intent(inout) :: chain
+
+        chain%tangent_scale_bits = 0
+        chain%rank_losses = 0
+        chain%jumps_volume = 0
+    end subroutine restart_bookkeeping
+
+    !> The first impact of an instant takes M^-1 S M on rows still in the coordinates of the
+    !> epoch: one pass over them instead of three (to now, S, back when the instant ends), if
+    !> S is moderate: forming M^-1 S M spreads rounding of size eps |S| into every entry,
+    !> while S applied in the coordinates of now keeps it in the direction S amplifies (a slow
+    !> impact before a rest has |S| ~ 1/u). Those, and any later impact of the same instant (a
+    !> triple contact, a collapse cascade), move their rows to now.
+    module procedure jump_rows
+        real(wp), parameter :: moderate_jump = 16
+        real(wp) :: in_epoch(4, 4), largest  ! (fixed size: automatic arrays are allocated)
+        real(wp) :: s_max
+        integer :: last, j, p, ns
+
+        ns = size(s, 1)
+        last = i + ns/2 - 1
+        s_max = maxval(abs(s))
+        if (chain%same_instant == 0 .and. s_max <= moderate_jump .and. &
+            all(chain%row_stamp(i:last) /= chain%instant)) then
+            if (ns == 2) then
+                call apply_jump(chain, 2*i - 1, conjugated(s, chain%m, chain%m_inv), largest)
+            else
+                do p = 1, ns, 2
+                    do j = 1, ns, 2
+                        in_epoch(j:j + 1, p:p + 1) = conjugated(s(j:j + 1, p:p + 1), chain%m, &
+                                                                chain%m_inv)
+                    end do
+                end do
+                call apply_jump(chain, 2*i - 1, in_epoch, largest)
+            end if
+        else
+            do j = i, last
+                call rows_to_now(chain, j)
+            end do
+            call apply_jump(chain, 2*i - 1, s, largest)
+        end if
+        call keep_tangent_finite(chain, largest)
+        ! (not while a direction removed by a rest waits for the QR step to find it: a
+        ! factorisation here would turn it into a unit vector)
+        ! (nor after many strongly inelastic impacts: each shrinks the frame's volume by K**2,
+        ! and a frame shrunk by 1e-8 within one interval keeps its smallest directions poorly)
+        chain%jumps_volume = chain%jumps_volume + 2*log(max(chain%restitution, tiny(1.0_wp)))
+        ! (nor while the frame grows fast: once an entry passes large_growth, its leading
+        ! direction outgrows the others by about as much, and their digits go)
+        if (chain%orthonormalise_jumps .and. chain%rank_losses == 0 .and. &
+            (s_max > large_jump .or. chain%jumps_volume < small_volume .or. &
+             largest > large_growth)) call orthonormalise_tangent(chain)
+    contains
+        ! (internal, so that it is inlined: no procedure of a submodule is)
+        !> M^-1 B M for 2x2 blocks (written out: a section of s passed to fixed-shape dummies
+        !> would be copied into an allocated temporary).
+        pure function conjugated(b, m, m_inv) result(c)
+            real(wp), intent(in) :: b(:, :), m(2, 2), m_inv(2, 2)
+            real(wp) :: c(2, 2), bm(2, 2)
+            integer :: j
+
+            do j = 1, 2
+                bm(:, j) = b(:, 1)*m(1, j) + b(:, 2)*m(2, j)
+            end do
+            do j = 1, 2
+                c(:, j) = m_inv(:, 1)*bm(1, j) + m_inv(:, 2)*bm(2, j)
+            end do
+        end function conjugated
+    end procedure jump_rows
+
+    !> (After frame_now.) Rows already moved to now at this instant stay. Afterwards every row
+    !> is in the coordinates of now.
+    module procedure move_tangent_epoch
+        real(wp) :: largest
+        integer :: i
+
+        if (chain%n_vectors > 0) then
+            do i = 1, chain%n
+                if (chain%row_stamp(i) == chain%instant) cycle
+                if (chain%contact(i) == contact_free) &
+                    call jump_two_rows(chain%tangent(:, 2*i - 1:2*i), chain%m, largest)
+            end do
+        end if
+        chain%n_touched = 0
+    end procedure move_tangent_epoch
+
+    !> (M^-1 of that instant.)
+    module procedure rows_back_to_epoch
+        real(wp) :: largest
+        integer :: j, i
+
+        do j = 1, chain%n_touched
+            i = chain%touched(j)
+            call jump_two_rows(chain%tangent(:, 2*i - 1:2*i), chain%m_inv, largest)
+        end do
+        chain%n_touched = 0
+    end procedure rows_back_to_epoch
+
+    !> (The tangent map of a rest is singular: the QR step looks for the lost direction.)
+    module procedure forget_rows
+        chain%tangent(:, 2*i - 1:2*i) = 0
+        chain%rank_losses = chain%rank_losses + 1
+    end procedure forget_rows
+
+    !> A resting oscillator's state does not depend on where it came from: its rows are zero.
+    pure subroutine forget_resting_rows(chain)
+        type(chain_t), intent(inout) :: chain
+        integer :: i
+
+        do i = 1, chain%n
+            if (chain%contact(i) /= contact_free) call forget_rows(chain, i)
+        end do
+    end subroutine forget_resting_rows
+
+    !> The velocity rows of the cluster are replaced by their mean (zero if it stopped), with
+    !> no saltation term: a singular map.
+    module procedure average_rows
+        real(wp), allocatable :: rows(:)
+        integer :: i, m
+
+        m = last - first + 1
+        if (m > 1 .or. stopped) chain%rank_losses = chain%rank_losses + 1
+        allocate (rows(chain%n_vectors))
+        rows = 0
+        do i = first, last
+            rows = rows + chain%tangent(:, 2*i)
+        end do
+        ! a cluster stopped by a wall has v = 0 whatever the perturbation
+        if (stopped) rows = 0
+        do i = first, last
+            chain%tangent(:, 2*i) = rows/m
+        end do
+    end procedure average_rows
+
+    !> The tangent rows of oscillator i in the coordinates of now, for an impact (after
+    !> frame_now); they go back to the epoch when the instant ends.
+    pure subroutine rows_to_now(chain, i)
+        type(chain_t), intent(inout) :: chain
+        integer, intent(in) :: i
+        real(wp) :: largest
+
+        if (chain%row_stamp(i) == chain%instant) return
+        call jump_two_rows(chain%tangent(:, 2*i - 1:2*i), chain%m, largest)
+        chain%row_stamp(i) = chain%instant
+        chain%n_touched = chain%n_touched + 1
+        chain%touched(chain%n_touched) = i
+    end subroutine rows_to_now
+
+    !> Re-orthonormalise the frame now, keeping ln |R(j,j)| in tangent_log. Any upper
+    !> triangular change of the columns commutes with the rows' own coordinates (epoch or
+    !> now), so the frame need not be synced first.
+    subroutine orthonormalise_tangent(chain)
+        type(chain_t), intent(inout) :: chain
+        integer :: info, j
+
+        chain%frame_work = transpose(chain%tangent)
+        if (.not. allocated(chain%r_diag)) allocate (chain%r_diag(chain%n_vectors))
+        if (size(chain%r_diag) /= chain%n_vectors) then
+            deallocate (chain%r_diag)
+            allocate (chain%r_diag(chain%n_vectors))
+        end if
+        call qr_orthonormalise(chain%frame_work, chain%r_diag, chain%qr, info)
+        ! a zero diagonal (a direction lost exactly) is left to the QR step to report
+        if (info /= 0 .or. any(chain%r_diag == 0)) return
+        chain%tangent = transpose(chain%frame_work)
+        chain%jumps_volume = 0
+        do j = 1, chain%n_vectors
+            chain%tangent_log(j) = chain%tangent_log(j) + log(abs(chain%r_diag(j)))
+        end do
+    end subroutine orthonormalise_tangent
+
+    !> Impacts at nearly zero approach speed (the last steps of an inelastic collapse) have
+    !> saltation matrices of size 1/u, and a cascade of them can overflow the frame within one
+    !> QR interval. The whole frame is then scaled by a power of two (exact), and the factor is
+    !> kept in tangent_scale_bits for the next QR step to add back. The threshold leaves room
+    !> for rows checked in the coordinates of now to be moved back to the epoch (|M^-1| up to
+    !> about 2**93 before the epoch is moved) and then hit once more.
+    pure subroutine keep_tangent_finite(chain, largest)
+        type(chain_t), intent(inout) :: chain
+        real(wp), intent(in) :: largest  !! of the rows just changed
+        integer, parameter :: bits = 512
+
+        if (largest < 2.0_wp**800) return
+        chain%tangent = scale(chain%tangent, -bits)
+        chain%tangent_scale_bits = chain%tangent_scale_bits + bits
+    end subroutine keep_tangent_finite
+
+    !> Replace the tangent rows first, first + 1, ... (one oscillator, s 2x2, or a neighbour
+    !> pair, s 4x4) by S times them; `largest` is the largest magnitude written. The frame
+    !> is stored transposed, so these rows are adjacent columns of chain%tangent and the
+    !> loops run over contiguous memory (jump_two_rows, jump_four_rows: the rows of one
+    !> oscillator, or of two).
+    pure subroutine apply_jump(chain, first, s, largest)
+        type(chain_t), intent(inout) :: chain
+        integer, intent(in) :: first
+        real(wp), intent(in) :: s(:, :)
+        real(wp), intent(out) :: largest
+
+        if (size(s, 1) == 2) then
+            call jump_two_rows(chain%tangent(:, first:first + 1), s, largest)
+        else
+            call jump_four_rows(chain%tangent(:, first:first + 3), s, largest)
+        end if
+    end subroutine apply_jump
+
+    pure subroutine jump_two_rows(t, s, largest)
+        real(wp), contiguous, intent(inout) :: t(:, :)
+        real(wp), intent(in) :: s(2, 2)
+        real(wp), intent(out) :: largest
+        real(wp) :: a, b
+        integer :: j
+
+        largest = 0
+        do j = 1, size(t, 1)
+            a = t(j, 1)
+            b = t(j, 2)
+            t(j, 1) = s(1, 1)*a + s(1, 2)*b
+            t(j, 2) = s(2, 1)*a + s(2, 2)*b
+            largest = max(largest, abs(t(j, 1)), abs(t(j, 2)))
+        end do
+    end subroutine jump_two_rows
+
+    pure subroutine jump_four_rows(t, s, largest)
+        real(wp), contiguous, intent(inout) :: t(:, :)
+        real(wp), intent(in) :: s(4, 4)
+        real(wp), intent(out) :: largest
+        real(wp) :: a, b, c, d
+        integer :: j
+
+        largest = 0
+        do j = 1, size(t, 1)
+            a = t(j, 1)
+            b = t(j, 2)
+            c = t(j, 3)
+            d = t(j, 4)
+            t(j, 1) = s(1, 1)*a + s(1, 2)*b + s(1, 3)*c + s(1, 4)*d
+            t(j, 2) = s(2, 1)*a + s(2, 2)*b + s(2, 3)*c + s(2, 4)*d
+            t(j, 3) = s(3, 1)*a + s(3, 2)*b + s(3, 3)*c + s(3, 4)*d
+            t(j, 4) = s(4, 1)*a + s(4, 2)*b + s(4, 3)*c + s(4, 4)*d
+            largest = max(largest, abs(t(j, 1)), abs(t(j, 2)), abs(t(j, 3)), abs(t(j, 4)))
+        end do
+    end subroutine jump_four_rows
+
+end submodule chain_engine_tangent
