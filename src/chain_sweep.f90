@@ -35,7 +35,7 @@ module chain_sweep
     implicit none
     private
     public :: sweep_plan_t, sweep_result_t, plan_sweep, sweep_point_config, run_branch
-    public :: run_sweep_branches, sweep_result_init, branch_start_state_t, point_hook
+    public :: run_sweep_branches, sweep_result_init, point_hook
     public :: run_sweep, write_sweep_file, sweep_summary_t, validate_sweep_points
     public :: checkpoint_path
     public :: save_checkpoint, load_checkpoint, checkpoint_every
@@ -78,15 +78,6 @@ module chain_sweep
         logical, allocatable :: done(:)              !! done(n_points)
     end type sweep_result_t
 
-    !> Where a continuation branch resumes: the final state of its last finished point.
-    type :: branch_start_state_t
-        logical :: resume = .false.
-        real(wp), allocatable :: x(:), v(:)
-        integer, allocatable :: contact(:)
-        integer(i8) :: cycle = 0
-        real(wp) :: s = 0
-    end type branch_start_state_t
-
     abstract interface
         !> Progress of a sweep in points; .false. stops it (the checkpoint keeps the points).
         function progress_i(done, total) result(keep_going)
@@ -96,9 +87,9 @@ module chain_sweep
         end function progress_i
         !> Called after every finished point with the whole sweep; .false. stops the sweep.
         function point_hook(res, starts) result(keep_going)
-            import :: sweep_result_t, branch_start_state_t
+            import :: sweep_result_t, chain_state_t
             type(sweep_result_t), intent(in) :: res
-            type(branch_start_state_t), intent(in) :: starts(:)
+            type(chain_state_t), intent(in) :: starts(:)
             logical :: keep_going
         end function point_hook
     end interface
@@ -126,6 +117,18 @@ contains
         end if
         plan%k = lyapunov_vectors(cfg)
     end function plan_sweep
+
+    !> Where the next point of a continuation starts: the chain's positions, velocities and
+    !> contacts, at its cycle and time; its schedule is searched afresh (other parameters) and
+    !> its clock and counters start there.
+    function continuation_start(chain) result(state)
+        type(chain_t), intent(in) :: chain
+        type(chain_state_t) :: state
+
+        state = moving_state(chain_positions(chain), chain_velocities(chain), chain_cycle(chain), &
+                             chain_time(chain))
+        state%contact = chain_contacts(chain)
+    end function continuation_start
 
     !> Number of points from start to stop in steps of step (rounding-safe).
     pure integer function axis_points(start, stop, step)
@@ -227,7 +230,7 @@ contains
         type(sweep_plan_t), intent(in) :: plan
         integer, intent(in) :: b
         type(sweep_result_t), intent(inout) :: res
-        type(branch_start_state_t), intent(inout) :: starts(:)
+        type(chain_state_t), intent(inout) :: starts(:)
         logical, intent(inout) :: stop_now
         type(error_t), allocatable, intent(out) :: err
         procedure(point_hook), optional :: hook
@@ -235,7 +238,6 @@ contains
         type(chain_t) :: chain
         type(memory_sink_t) :: sink
         type(run_result_t) :: out
-        type(chain_state_t) :: start
         integer :: q, p
         logical :: stopping
 
@@ -247,10 +249,8 @@ contains
             if (stopping) return
             call sweep_point_config(cfg, plan, p, point, err)
             if (allocated(err)) return
-            if (starts(b)%resume) then
-                start = moving_state(starts(b)%x, starts(b)%v, starts(b)%cycle, starts(b)%s)
-                start%contact = starts(b)%contact
-                call chain_init(chain, point%model, start, err)
+            if (allocated(starts(b)%x)) then
+                call chain_init(chain, point%model, starts(b), err)
             else
                 ! a start from a file reads HDF5, which is not thread-safe
                 !$omp critical (sweep_hdf5)
@@ -271,12 +271,7 @@ contains
             end if
             res%done(p) = .true.
             if (cfg%sweep_mode == 'continuation') then
-                starts(b)%resume = .true.
-                starts(b)%x = chain_positions(chain)
-                starts(b)%v = chain_velocities(chain)
-                starts(b)%contact = chain_contacts(chain)
-                starts(b)%cycle = chain_cycle(chain)
-                starts(b)%s = chain_time(chain)
+                starts(b) = continuation_start(chain)
             end if
             if (present(hook)) then
                 if (.not. hook(res, starts)) then
@@ -295,7 +290,7 @@ contains
         type(run_config_t), intent(in) :: cfg
         type(sweep_plan_t), intent(in) :: plan
         type(sweep_result_t), intent(inout) :: res
-        type(branch_start_state_t), intent(inout) :: starts(:)
+        type(chain_state_t), intent(inout) :: starts(:)
         type(error_t), allocatable, intent(out) :: err
         logical, intent(in), optional :: mine(:)
         procedure(point_hook), optional :: hook
@@ -335,7 +330,7 @@ contains
         procedure(progress_i), optional :: progress
         type(sweep_plan_t) :: plan
         type(sweep_result_t) :: res
-        type(branch_start_state_t), allocatable :: starts(:)
+        type(chain_state_t), allocatable :: starts(:)
         type(output_t) :: out
         type(error_t), allocatable :: err2, ckpt_err
         character(len=:), allocatable :: checkpoint
@@ -386,7 +381,7 @@ contains
         !> the sweep with that error: going on would risk hours of points on a full disk.
         logical function after_point(res, starts) result(keep_going)
             type(sweep_result_t), intent(in) :: res
-            type(branch_start_state_t), intent(in) :: starts(:)
+            type(chain_state_t), intent(in) :: starts(:)
 
             keep_going = .true.
             if (present(progress)) keep_going = progress(int(count(res%done), i8), &
@@ -469,7 +464,7 @@ contains
         type(run_config_t), intent(in) :: cfg
         type(sweep_plan_t), intent(in) :: plan
         type(sweep_result_t), intent(in) :: res
-        type(branch_start_state_t), intent(in) :: starts(:)
+        type(chain_state_t), intent(in) :: starts(:)
         type(error_t), allocatable, intent(out) :: err
         character(len=256) :: msg
         integer :: u, ios, b, nr, ni
@@ -511,7 +506,7 @@ contains
         type(run_config_t), intent(in) :: cfg
         type(sweep_plan_t), intent(in) :: plan
         type(sweep_result_t), intent(inout) :: res
-        type(branch_start_state_t), intent(inout) :: starts(:)
+        type(chain_state_t), intent(inout) :: starts(:)
         type(error_t), allocatable, intent(out) :: err
         character(len=8) :: magic
         character(len=:), allocatable :: text
@@ -587,7 +582,7 @@ contains
         type(run_config_t), intent(in) :: cfg
         type(sweep_plan_t), intent(in) :: plan
         type(sweep_result_t), intent(in) :: res
-        type(branch_start_state_t), intent(in) :: starts(:)
+        type(chain_state_t), intent(in) :: starts(:)
         integer, intent(in) :: b
         real(wp), intent(out) :: reals(:)
         integer(i8), intent(out) :: ints(:)
@@ -605,8 +600,8 @@ contains
         end do
         reals(plan%points_per_branch*nr + 1:) = 0
         ints(plan%points_per_branch*ni + 1:) = 0
-        if (.not. starts(b)%resume) return
-        reals(plan%points_per_branch*nr + 1:) = [starts(b)%x, starts(b)%v, starts(b)%s]
+        if (.not. allocated(starts(b)%x)) return
+        reals(plan%points_per_branch*nr + 1:) = [starts(b)%x, starts(b)%v, starts(b)%time]
         ints(plan%points_per_branch*ni + 1:) = [1_i8, int(starts(b)%contact, i8), &
                                                 starts(b)%cycle]
     end subroutine pack_branch
@@ -619,7 +614,7 @@ contains
         real(wp), intent(in) :: reals(:)
         integer(i8), intent(in) :: ints(:)
         type(sweep_result_t), intent(inout) :: res
-        type(branch_start_state_t), intent(inout) :: starts(:)
+        type(chain_state_t), intent(inout) :: starts(:)
         integer :: q, p, n, m, k, j, i
 
         n = cfg%model%n
@@ -639,13 +634,13 @@ contains
         end do
         j = plan%points_per_branch*point_reals(cfg, plan)
         i = plan%points_per_branch*point_ints(cfg)
-        starts(b)%resume = ints(i + 1) == 1
-        if (.not. starts(b)%resume) return
-        starts(b)%x = reals(j + 1:j + n)
-        starts(b)%v = reals(j + n + 1:j + 2*n)
-        starts(b)%s = reals(j + 2*n + 1)
+        if (ints(i + 1) /= 1) then
+            starts(b) = chain_state_t()
+            return
+        end if
+        starts(b) = moving_state(reals(j + 1:j + n), reals(j + n + 1:j + 2*n), ints(i + 2 + n), &
+                                 reals(j + 2*n + 1))
         starts(b)%contact = int(ints(i + 2:i + 1 + n))
-        starts(b)%cycle = ints(i + 2 + n)
     end subroutine unpack_branch
 
 

@@ -24,7 +24,7 @@ module impactchain
     use chain_sim, only: run_simulation, start_chain, initial_state, chain_on_section, &
                          restart_chain
     use chain_sweep, only: run_sweep, sweep_summary_t, plan_sweep, sweep_plan_t, &
-                           sweep_result_t, branch_start_state_t, sweep_result_init, &
+                           sweep_result_t, sweep_result_init, &
                            sweep_point_config, run_sweep_branches, write_sweep_file, &
                            save_checkpoint, load_checkpoint, remove_file, checkpoint_every, &
                            validate_sweep_points, checkpoint_path, branch_record_sizes, &
@@ -46,7 +46,7 @@ module impactchain
     public :: advance_to_point, poincare_jacobian, run_simulation, start_chain, initial_state
     public :: chain_on_section, restart_chain
     public :: run_sweep, sweep_summary_t, plan_sweep, sweep_plan_t, sweep_result_t
-    public :: branch_start_state_t, sweep_result_init, sweep_point_config, run_sweep_branches
+    public :: sweep_result_init, sweep_point_config, run_sweep_branches
     public :: write_sweep_file, save_checkpoint, load_checkpoint, remove_file, checkpoint_every
     public :: validate_sweep_points, checkpoint_path, branch_record_sizes, pack_branch
     public :: unpack_branch

@@ -13,7 +13,8 @@ module test_sweep
     use chain_sim, only: run_simulation
     use chain_run, only: run_result_t
     use chain_output, only: read_final_state
-    use chain_sweep, only: sweep_plan_t, sweep_result_t, branch_start_state_t, plan_sweep, &
+    use chain_state, only: chain_state_t
+    use chain_sweep, only: sweep_plan_t, sweep_result_t, plan_sweep, &
                            sweep_result_init, sweep_point_config, run_sweep_branches, &
                            save_checkpoint, load_checkpoint, remove_file
     use testing, only: tally_t, check, check_close
@@ -147,7 +148,7 @@ contains
         type(run_config_t) :: cfg, step
         type(sweep_plan_t) :: plan
         type(sweep_result_t) :: res
-        type(branch_start_state_t), allocatable :: starts(:)
+        type(chain_state_t), allocatable :: starts(:)
         type(run_result_t) :: summary
         type(error_t), allocatable :: err
         real(wp), allocatable :: x(:), v(:), qt(:), spacing(:)
@@ -193,7 +194,7 @@ contains
         call check(t, .not. allocated(err), 'final state of the last step')
         if (allocated(err)) return
         call check(t, all(x == starts(1)%x) .and. all(v == starts(1)%v) .and. &
-                   cycle == starts(1)%cycle .and. s == starts(1)%s .and. &
+                   cycle == starts(1)%cycle .and. s == starts(1)%time .and. &
                    all(contact == starts(1)%contact), &
                    'continuation = steps from files, bit for bit')
         call check(t, all(x == res%x(:, 10, 3)), 'the last record of the sweep is the final x')
@@ -207,7 +208,7 @@ contains
         type(run_config_t) :: cfg, other
         type(sweep_plan_t) :: plan
         type(sweep_result_t) :: whole, part, loaded
-        type(branch_start_state_t), allocatable :: starts(:), loaded_starts(:)
+        type(chain_state_t), allocatable :: starts(:), loaded_starts(:)
         type(error_t), allocatable :: err
         character(len=:), allocatable :: path, tmp
         integer :: b
@@ -236,14 +237,14 @@ contains
         call check(t, same(part, loaded) .and. all(part%done .eqv. loaded%done), &
                    'checkpoint round trip keeps the finished points bit for bit')
         do b = 1, plan%n_branches
-            call check(t, loaded_starts(b)%resume .eqv. starts(b)%resume, &
+            call check(t, allocated(loaded_starts(b)%x) .eqv. allocated(starts(b)%x), &
                        'checkpoint round trip keeps which branches resume')
-            if (starts(b)%resume .and. loaded_starts(b)%resume) &
+            if (allocated(starts(b)%x) .and. allocated(loaded_starts(b)%x)) &
                 call check(t, all(loaded_starts(b)%x == starts(b)%x) .and. &
                            all(loaded_starts(b)%v == starts(b)%v) .and. &
                            all(loaded_starts(b)%contact == starts(b)%contact) .and. &
                            loaded_starts(b)%cycle == starts(b)%cycle .and. &
-                           loaded_starts(b)%s == starts(b)%s, &
+                           loaded_starts(b)%time == starts(b)%time, &
                            'checkpoint round trip keeps the resume state bit for bit')
         end do
         call run_sweep_branches(cfg, plan, loaded, loaded_starts, err)
@@ -266,7 +267,7 @@ contains
         type(run_config_t) :: cfg
         type(sweep_plan_t) :: plan
         type(sweep_result_t) :: res, loaded
-        type(branch_start_state_t), allocatable :: starts(:)
+        type(chain_state_t), allocatable :: starts(:)
         type(error_t), allocatable :: err
         character(len=:), allocatable :: path, tmp
         integer :: status
@@ -299,7 +300,7 @@ contains
 
     logical function stop_after_five(res, starts) result(keep_going)
         type(sweep_result_t), intent(in) :: res
-        type(branch_start_state_t), intent(in) :: starts(:)
+        type(chain_state_t), intent(in) :: starts(:)
 
         keep_going = count(res%done) < 5 .or. size(starts) < 0
     end function stop_after_five
@@ -309,7 +310,7 @@ contains
         type(run_config_t), intent(in) :: cfg
         type(sweep_result_t), intent(out) :: res
         type(sweep_plan_t) :: plan
-        type(branch_start_state_t), allocatable :: starts(:)
+        type(chain_state_t), allocatable :: starts(:)
         type(error_t), allocatable :: err
 
         plan = plan_sweep(cfg)

@@ -20,7 +20,7 @@ program impactchain_mpi
                        MPI_DOUBLE_PRECISION, MPI_INTEGER, MPI_INTEGER8, MPI_IN_PLACE, &
                        MPI_THREAD_FUNNELED
     use impactchain, only: wp, i8, error_t, run_config_t, read_config, sweep_plan_t, &
-                           sweep_result_t, branch_start_state_t, plan_sweep, sweep_result_init, &
+                           sweep_result_t, chain_state_t, plan_sweep, sweep_result_init, &
                            validate_sweep_points, checkpoint_path, run_sweep_branches, &
                            write_sweep_file, save_checkpoint, load_checkpoint, remove_file, &
                            checkpoint_every, branch_record_sizes, pack_branch, unpack_branch, &
@@ -30,7 +30,7 @@ program impactchain_mpi
     type(run_config_t) :: cfg
     type(sweep_plan_t) :: plan
     type(sweep_result_t) :: res
-    type(branch_start_state_t), allocatable :: starts(:)
+    type(chain_state_t), allocatable :: starts(:)
     type(output_t) :: out
     type(error_t), allocatable :: err
     integer :: rank, ranks, provided, failed, left, stopping, resumed
@@ -159,7 +159,7 @@ contains
     !> at once on a signal.
     logical function round_hook(res, starts) result(keep_going)
         type(sweep_result_t), intent(in) :: res
-        type(branch_start_state_t), intent(in) :: starts(:)
+        type(chain_state_t), intent(in) :: starts(:)
         integer(int64) :: now
 
         call system_clock(now)
