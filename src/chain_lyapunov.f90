@@ -1,5 +1,5 @@
-!> Lyapunov spectra by QR re-orthonormalisation of a tangent frame (docs/model.md section 7), the
-!> Kaplan-Yorke dimension, and Floquet multipliers from a Poincare-map Jacobian.
+!> Lyapunov spectra by QR re-orthonormalisation of a tangent frame (docs/model.md section 7) and
+!> the Kaplan-Yorke dimension. (Floquet multipliers: chain_floquet.)
 !>
 !> The frame itself is carried by the engine (exact propagators between impacts, saltation
 !> matrices at impacts); this module only turns frames into numbers. Block averages of the
@@ -17,7 +17,7 @@ module chain_lyapunov
     implicit none
     private
     public :: lyapunov_acc_t, lyapunov_start, lyapunov_step, lyapunov_result_t
-    public :: lyapunov_result, ky_dimension, floquet_multipliers, initial_frame
+    public :: lyapunov_result, ky_dimension, initial_frame
     public :: running_capacity, running_rows, lyapunov_pack, lyapunov_unpack
 
     integer, parameter :: max_blocks = 20
@@ -317,17 +317,6 @@ contains
         end do
         dim = size(exponents)
     end function ky_dimension
-
-    !> Eigenvalues of a Poincare-map Jacobian (Floquet multipliers), by LAPACK dgeev.
-    subroutine floquet_multipliers(jacobian, re, im, info)
-        real(wp), intent(in) :: jacobian(:, :)
-        real(wp), intent(out) :: re(:), im(:)
-        integer, intent(out) :: info
-        real(wp), allocatable :: a(:, :)
-
-        a = jacobian
-        call general_eigenvalues(a, re, im, info)
-    end subroutine floquet_multipliers
 
     !> Indices that sort `values` descending (insertion sort: spectra are short).
     pure function descending_order(values) result(order)

@@ -3,10 +3,7 @@
 !> Poincare-map Jacobian. The CLI sends records to an HDF5 file, sweeps and the Python
 !> extension keep them in memory; all go through `record_run`, so their numbers agree bit for
 !> bit.
-!>
-!> Strobe record j (j = 1..cycles) is the state at elapsed time (transient + j) T + delta, with
-!> delta the offset from the initial drive phase to the section phase (0 for a fresh run with
-!> phase = 0).
+!> Where the records are taken: chain_section; the Jacobian and multipliers: chain_floquet.
 module chain_run
     use chain_kinds, only: wp, i8
     use chain_error, only: error_t, set_error
@@ -18,14 +15,16 @@ module chain_run
     use chain_state, only: event_counts_t
     use chain_events, only: event_log_t, event_log_init, event_log_clear, event_log_append
     use chain_lyapunov, only: lyapunov_acc_t, lyapunov_start, lyapunov_step, &
-                              lyapunov_result_t, lyapunov_result, floquet_multipliers, &
+                              lyapunov_result_t, lyapunov_result, &
                               initial_frame, running_rows
     use chain_period, only: detect_period
+    use chain_section, only: section_target, advance_to_point, advance_cycles
+    use chain_floquet, only: floquet_result
     use chain_config, only: run_config_t, fmt_real, lyapunov_vectors
     implicit none
     private
     public :: record_sink_t, memory_sink_t, run_result_t, record_run, progress_callback
-    public :: section_target, advance_to_point, poincare_jacobian, check_size
+    public :: check_size
     public :: period_window, run_state_t, set_window
 
     integer, parameter :: event_flush = 65536
@@ -97,96 +96,6 @@ module chain_run
 
 contains
 
-    !> Cycle and in-cycle time of strobe point j (j = 0: the end of the transient).
-    pure subroutine section_target(chain, transient, phase, j, cycle, s)
-        type(chain_t), intent(in) :: chain
-        integer(i8), intent(in) :: transient, j
-        real(wp), intent(in) :: phase
-        integer(i8), intent(out) :: cycle
-        real(wp), intent(out) :: s
-        real(wp) :: s_section, start_s
-        integer(i8) :: start_cycle
-
-        s_section = chain_section_time(chain, phase)
-        call chain_start(chain, start_cycle, start_s)
-        cycle = start_cycle + transient + j
-        s = s_section
-        ! the start is already on the section (a continued run): keep its exact time
-        if (abs(s_section - start_s) <= 1.0e-12_wp*chain_period(chain)) then
-            s = start_s
-        else if (s_section < start_s) then
-            cycle = cycle + 1
-        end if
-    end subroutine section_target
-
-    !> Run the chain to (cycle, s) and bring every oscillator there.
-    subroutine advance_to_point(chain, cycle, s, log, err)
-        type(chain_t), intent(inout) :: chain
-        ! by value: a caller may pass the chain's own clock (chain_time), which moves meanwhile
-        integer(i8), value :: cycle
-        real(wp), value :: s
-        type(event_log_t), intent(inout) :: log
-        type(error_t), allocatable, intent(out) :: err
-
-        call advance_cycles(chain, cycle, log, err)
-        if (allocated(err)) return
-        call chain_advance(chain, s, log, err)
-        if (allocated(err)) return
-        call chain_sync(chain)
-    end subroutine advance_to_point
-
-    !> Run the chain through the ends of drive cycles up to the start of `cycle`.
-    subroutine advance_cycles(chain, cycle, log, err, tangent_qr_every)
-        type(chain_t), intent(inout) :: chain
-        integer(i8), intent(in) :: cycle
-        type(event_log_t), intent(inout) :: log
-        type(error_t), allocatable, intent(out) :: err
-        !> re-orthonormalise the tangent frame, unaveraged, at every this many cycle ends
-        integer, intent(in), optional :: tangent_qr_every
-        integer(i8) :: done
-
-        done = 0
-        do while (chain_cycle(chain) < cycle)
-            call chain_advance(chain, chain_period(chain), log, err)
-            if (allocated(err)) return
-            call chain_new_cycle(chain)
-            done = done + 1
-            if (present(tangent_qr_every)) then
-                if (modulo(done, int(tangent_qr_every, i8)) == 0) then
-                    call chain_reorthonormalise(chain, err)
-                    if (allocated(err)) return
-                end if
-            end if
-        end do
-    end subroutine advance_cycles
-
-    !> Jacobian (2n x 2n) of the p-cycle Poincare map at the chain's current (synced) state;
-    !> the chain itself is not moved.
-    subroutine poincare_jacobian(chain, cycles, jacobian, err)
-        type(chain_t), intent(in) :: chain
-        integer, intent(in) :: cycles
-        real(wp), allocatable, intent(out) :: jacobian(:, :)
-        type(error_t), allocatable, intent(out) :: err
-        type(chain_t) :: copy
-        type(event_log_t) :: log
-        real(wp), allocatable :: frame(:, :)
-        integer :: i, m
-
-        copy = chain
-        m = 2*chain_size(chain)
-        allocate (frame(m, m))
-        frame = 0
-        do i = 1, m
-            frame(i, i) = 1
-        end do
-        call chain_set_tangent(copy, frame)
-        call event_log_init(log, .false., 0)
-        call advance_to_point(copy, chain_cycle(copy) + cycles, chain_time(copy), log, err)
-        if (allocated(err)) return
-        ! (the engine's power-of-two scaling undone, saturating at huge: such a map is singular)
-        jacobian = chain_tangent_frame(copy)
-    end subroutine poincare_jacobian
-
     !> Transient, then `cfg%cycles` recorded cycles sent to `sink`; the chain ends in the final
     !> state. Summary numbers, periods, spectrum and Jacobian come back in `res`.
     !>
@@ -252,7 +161,8 @@ contains
         end do
         call summarise_run(cfg, chain, st, res)
         if (present(state)) call move_state(st, state)
-        if (cfg%jacobian) call floquet_result(chain, cfg%jacobian_cycles, res, err)
+        if (cfg%jacobian) call floquet_result(chain, cfg%jacobian_cycles, res%jacobian, &
+                                              res%multipliers_re, res%multipliers_im, err)
     end subroutine record_run
 
     !> A fresh run up to its first record: the transient, counters from zero, an empty
@@ -314,23 +224,6 @@ contains
             end do
         end if
     end subroutine summarise_run
-
-    !> The Jacobian of the p-cycle Poincare map at the chain's final state and its
-    !> eigenvalues, the Floquet multipliers.
-    subroutine floquet_result(chain, cycles, res, err)
-        type(chain_t), intent(in) :: chain
-        integer, intent(in) :: cycles
-        type(run_result_t), intent(inout) :: res
-        type(error_t), allocatable, intent(out) :: err
-        integer :: info
-
-        call poincare_jacobian(chain, cycles, res%jacobian, err)
-        if (allocated(err)) return
-        allocate (res%multipliers_re(2*chain_size(chain)), res%multipliers_im(2*chain_size(chain)))
-        call floquet_multipliers(res%jacobian, res%multipliers_re, res%multipliers_im, info)
-        if (info /= 0) call set_error(err, "floquet: the eigenvalue solver (LAPACK dgeev) "// &
-                                      "failed")
-    end subroutine floquet_result
 
     !> The transient: the chain runs to the first record. With exponents, the tangent frame
     !> starts `align` whole cycles before its end, at the end of a cycle (where the state is

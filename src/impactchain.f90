@@ -20,7 +20,9 @@ module impactchain
                             chain_contacts, chain_counts
     use chain_events, only: event_log_t
     use chain_run, only: record_sink_t, memory_sink_t, run_result_t, record_run, &
-                         progress_callback, poincare_jacobian, check_size, advance_to_point
+                         progress_callback, check_size
+    use chain_section, only: advance_to_point
+    use chain_floquet, only: poincare_jacobian
     use chain_sim, only: run_simulation, start_chain, initial_state, chain_on_section, &
                          restart_chain
     use chain_sweep, only: run_sweep, sweep_summary_t, plan_sweep, sweep_plan_t, &

@@ -13,9 +13,9 @@ module test_corners
     use chain_events, only: event_log_t, event_log_init, event_impact, event_stick, &
                             event_release, event_touch
     use chain_config, only: run_config_t
-    use chain_run, only: record_run, memory_sink_t, run_result_t, advance_to_point, &
-                         poincare_jacobian
-    use chain_lyapunov, only: floquet_multipliers
+    use chain_run, only: record_run, memory_sink_t, run_result_t
+    use chain_section, only: advance_to_point
+    use chain_floquet, only: poincare_jacobian, floquet_multipliers
     use testing, only: tally_t, check, check_close
     use test_chains, only: init_chain
     implicit none

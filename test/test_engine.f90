@@ -12,7 +12,7 @@ module test_engine
                             chain_counts, chain_reset_counts
     use chain_state, only: contact_free, event_counts_t
     use chain_events, only: event_log_t, event_log_init, event_log_clear
-    use chain_run, only: advance_to_point
+    use chain_section, only: advance_to_point
     use test_chains, only: init_chain, flow_of
     use test_invariants, only: walk_t, walk_events
     use testing, only: tally_t, check, check_close

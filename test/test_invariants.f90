@@ -22,9 +22,9 @@ module test_invariants
     use chain_events, only: event_log_t, event_log_init, event_log_clear, event_impact, &
                             event_stick, event_release, event_log_append
     use chain_lyapunov, only: lyapunov_acc_t, lyapunov_start, lyapunov_step, &
-                              lyapunov_result_t, lyapunov_result, initial_frame, &
-                              floquet_multipliers
-    use chain_run, only: advance_to_point, poincare_jacobian
+                              lyapunov_result_t, lyapunov_result, initial_frame
+    use chain_section, only: advance_to_point
+    use chain_floquet, only: poincare_jacobian, floquet_multipliers
     use test_chains, only: init_chain, flow_of
     use testing, only: tally_t, check, check_close
     implicit none

@@ -14,9 +14,10 @@ module test_lyapunov
                             chain_positions, chain_velocities, chain_counts, chain_reset_counts
     use chain_events, only: event_log_t, event_log_init
     use chain_config, only: run_config_t
-    use chain_run, only: record_run, memory_sink_t, run_result_t, advance_to_point, &
-                         poincare_jacobian, check_size
-    use chain_lyapunov, only: ky_dimension, floquet_multipliers, lyapunov_acc_t, &
+    use chain_run, only: record_run, memory_sink_t, run_result_t, check_size
+    use chain_section, only: advance_to_point
+    use chain_floquet, only: poincare_jacobian, floquet_multipliers
+    use chain_lyapunov, only: ky_dimension, lyapunov_acc_t, &
                               lyapunov_start, lyapunov_step, lyapunov_result_t, &
                               lyapunov_result, running_capacity, running_rows, &
                               lyapunov_pack, lyapunov_unpack

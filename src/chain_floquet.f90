@@ -1,0 +1,75 @@
+!> The Poincare-map Jacobian and the Floquet multipliers (docs/model.md section 7.9): the
+!> tangent map of p drive cycles at a chain's state, the plain product of the exact flow's
+!> propagators and the impacts' saltation matrices (no re-orthonormalisation), and its
+!> eigenvalues.
+module chain_floquet
+    use chain_kinds, only: wp, i8
+    use chain_error, only: error_t, set_error
+    use chain_engine, only: chain_t, chain_set_tangent, chain_size, chain_cycle, chain_time, &
+                            chain_tangent_frame
+    use chain_events, only: event_log_t, event_log_init
+    use chain_lapack, only: general_eigenvalues
+    use chain_section, only: advance_to_point
+    implicit none
+    private
+    public :: poincare_jacobian, floquet_multipliers, floquet_result
+
+contains
+
+    !> Jacobian (2n x 2n) of the p-cycle Poincare map at the chain's current (synced) state;
+    !> the chain itself is not moved.
+    subroutine poincare_jacobian(chain, cycles, jacobian, err)
+        type(chain_t), intent(in) :: chain
+        integer, intent(in) :: cycles
+        real(wp), allocatable, intent(out) :: jacobian(:, :)
+        type(error_t), allocatable, intent(out) :: err
+        type(chain_t) :: copy
+        type(event_log_t) :: log
+        real(wp), allocatable :: frame(:, :)
+        integer :: i, m
+
+        copy = chain
+        m = 2*chain_size(chain)
+        allocate (frame(m, m))
+        frame = 0
+        do i = 1, m
+            frame(i, i) = 1
+        end do
+        call chain_set_tangent(copy, frame)
+        call event_log_init(log, .false., 0)
+        call advance_to_point(copy, chain_cycle(copy) + cycles, chain_time(copy), log, err)
+        if (allocated(err)) return
+        ! (the engine's power-of-two scaling undone, saturating at huge: such a map is singular)
+        jacobian = chain_tangent_frame(copy)
+    end subroutine poincare_jacobian
+
+    !> The Jacobian of the p-cycle Poincare map at the chain's final state and its
+    !> eigenvalues, the Floquet multipliers.
+    subroutine floquet_result(chain, cycles, jacobian, multipliers_re, multipliers_im, err)
+        type(chain_t), intent(in) :: chain
+        integer, intent(in) :: cycles
+        real(wp), allocatable, intent(out) :: jacobian(:, :)
+        real(wp), allocatable, intent(out) :: multipliers_re(:), multipliers_im(:)
+        type(error_t), allocatable, intent(out) :: err
+        integer :: info
+
+        call poincare_jacobian(chain, cycles, jacobian, err)
+        if (allocated(err)) return
+        allocate (multipliers_re(2*chain_size(chain)), multipliers_im(2*chain_size(chain)))
+        call floquet_multipliers(jacobian, multipliers_re, multipliers_im, info)
+        if (info /= 0) call set_error(err, "floquet: the eigenvalue solver (LAPACK dgeev) "// &
+                                      "failed")
+    end subroutine floquet_result
+
+    !> Eigenvalues of a Poincare-map Jacobian (Floquet multipliers), by LAPACK dgeev.
+    subroutine floquet_multipliers(jacobian, re, im, info)
+        real(wp), intent(in) :: jacobian(:, :)
+        real(wp), intent(out) :: re(:), im(:)
+        integer, intent(out) :: info
+        real(wp), allocatable :: a(:, :)
+
+        a = jacobian
+        call general_eigenvalues(a, re, im, info)
+    end subroutine floquet_multipliers
+
+end module chain_floquet
