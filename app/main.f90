@@ -5,15 +5,15 @@
 !> the file is then closed cleanly and marked complete = 0, and the same command continues it.
 program main
     use, intrinsic :: iso_fortran_env, only: error_unit, output_unit, int64
-    use impactchain, only: wp, i8, error_t, run_config_t, read_config, run_simulation, &
-                           run_result_t, run_sweep, sweep_summary_t, checkpoint_path, &
+    use impactchain, only: wp, i8, error_t, config_t, read_config, simulate_to_file, &
+                           record_result_t, run_sweep, sweep_summary_t, checkpoint_path, &
                            catch_interrupts, interrupted, cli_t, parse_command_line, cli_run, &
                            cli_help, cli_version, cli_usage, code_version, config_summary, &
                            plan_sweep, validate_sweep_points, progress_t, &
                            progress_start, progress_update, stderr_is_terminal
     implicit none
-    type(run_config_t) :: cfg
-    type(run_result_t) :: summary
+    type(config_t) :: cfg
+    type(record_result_t) :: summary
     type(sweep_summary_t) :: sweep_summary
     type(error_t), allocatable :: err
     type(cli_t) :: cli
@@ -54,7 +54,7 @@ program main
         if (.not. sweep_summary%complete) stop 3, quiet=.true.
     else
         shown = progress_start('cycle', stderr_is_terminal(), seconds())
-        call run_simulation(cfg, summary, err, progress)
+        call simulate_to_file(cfg, summary, err, progress)
         call close_progress()
         if (allocated(err)) call fail(err%message)
         call report(summary, cfg%output_file)
@@ -109,7 +109,7 @@ contains
     end subroutine close_progress
 
     subroutine report(summary, output_file)
-        type(run_result_t), intent(in) :: summary
+        type(record_result_t), intent(in) :: summary
         character(len=*), intent(in) :: output_file
 
         write (output_unit, '(a)') 'impactchain: wrote '//output_file

@@ -1,7 +1,7 @@
 !> impactchain benchmark: `impactchain-bench [--case NAME] [--tsv] [--quick] [--list]`.
 !>
 !> Times the event engine through the same entry points as a real run (`start_chain`,
-!> `record_run` with an in-memory sink) and prints one Markdown table: collisions per cycle,
+!> `record_cycles` with an in-memory sink) and prints one Markdown table: collisions per cycle,
 !> microseconds per drive cycle, collisions per second, nanoseconds per collision and peak
 !> memory. Each case is warmed up, then run long enough (>= 0.5 s) three times; the best
 !> repetition is reported. `bench/run_bench.py` runs every case in its own process (so the
@@ -12,8 +12,9 @@
 !> kept in memory only where a sweep would keep them.
 program bench
     use, intrinsic :: iso_fortran_env, only: int64, output_unit, error_unit
-    use impactchain, only: wp, i8, error_t, run_config_t, validate_config, chain_t, &
-                           event_log_t, memory_sink_t, run_result_t, record_run, start_chain, &
+    use impactchain, only: wp, i8, error_t, config_t, validate_config, chain_t, &
+                           event_log_t, memory_sink_t, record_result_t, record_cycles, &
+                           start_chain, &
                            restart_chain, advance_to_point, event_counts_t, chain_cycle, &
                            chain_start, chain_period, chain_positions, chain_velocities, &
                            chain_copy_state, chain_contacts, chain_counts
@@ -92,7 +93,7 @@ contains
     function make_config(n, amplitude, omega, damping, restitution, x_amp, v_amp) result(cfg)
         integer, intent(in) :: n
         real(wp), intent(in) :: amplitude, omega, damping, restitution, x_amp, v_amp
-        type(run_config_t) :: cfg
+        type(config_t) :: cfg
         type(error_t), allocatable :: err
         integer :: k
 
@@ -123,7 +124,7 @@ contains
     end function make_config
 
     function new_chain(cfg) result(chain)
-        type(run_config_t), intent(in) :: cfg
+        type(config_t), intent(in) :: cfg
         type(chain_t) :: chain
         type(error_t), allocatable :: err
 
@@ -133,11 +134,11 @@ contains
 
     !> `cycles` recorded cycles from where the chain stands (on the section), timed.
     subroutine run_block(cfg, chain, cycles, seconds, res)
-        type(run_config_t), intent(inout) :: cfg
+        type(config_t), intent(inout) :: cfg
         type(chain_t), intent(inout) :: chain
         integer(int64), intent(in) :: cycles
         real(wp), intent(out) :: seconds
-        type(run_result_t), intent(out) :: res
+        type(record_result_t), intent(out) :: res
         type(memory_sink_t) :: sink
         type(error_t), allocatable :: err
         real(wp) :: t0, start_s
@@ -148,7 +149,7 @@ contains
         cfg%transient = chain_cycle(chain) - start_cycle
         cfg%cycles = cycles
         t0 = wall_seconds()
-        call record_run(cfg, chain, sink, res, err)
+        call record_cycles(cfg, chain, sink, res, err)
         seconds = wall_seconds() - t0
         if (allocated(err)) call fail(err%message)
     end subroutine run_block
@@ -156,10 +157,10 @@ contains
     !> Warm-up and calibration (doubling until a block takes a fifth of min_time), then the
     !> best of `reps` blocks of >= min_time.
     subroutine time_cycles(cfg, chain, row)
-        type(run_config_t), intent(inout) :: cfg
+        type(config_t), intent(inout) :: cfg
         type(chain_t), intent(inout) :: chain
         type(row_t), intent(inout) :: row
-        type(run_result_t) :: res
+        type(record_result_t) :: res
         integer(int64) :: cycles
         real(wp) :: seconds
         integer :: r
@@ -185,7 +186,7 @@ contains
         end do
     end subroutine time_cycles
 
-    !> Cases 1, 2 and 4: one chain, a transient, then timed record_run blocks.
+    !> Cases 1, 2 and 4: one chain, a transient, then timed record_cycles blocks.
     subroutine case_chain(row, label, n, amplitude, omega, damping, restitution, x_amp, &
                           v_amp, transient, vectors, emit_state)
         type(row_t), intent(inout) :: row
@@ -194,9 +195,9 @@ contains
         real(wp), intent(in) :: amplitude, omega, damping, restitution, x_amp, v_amp
         integer(int64), intent(in) :: transient
         logical, intent(in), optional :: emit_state
-        type(run_config_t) :: cfg
+        type(config_t) :: cfg
         type(chain_t) :: chain
-        type(run_result_t) :: res
+        type(record_result_t) :: res
         real(wp) :: seconds
 
         row%label = label
@@ -279,10 +280,10 @@ contains
     subroutine fig10_pass(points, cycles, impacts)
         integer, intent(in) :: points
         integer(int64), intent(out) :: cycles, impacts
-        type(run_config_t) :: cfg
+        type(config_t) :: cfg
         type(chain_t) :: chain
         type(memory_sink_t) :: sink
-        type(run_result_t) :: res
+        type(record_result_t) :: res
         type(error_t), allocatable :: err
         integer :: p
 
@@ -299,7 +300,7 @@ contains
                 call restart_chain(cfg, chain, err)
                 if (allocated(err)) call fail(err%message)
             end if
-            call record_run(cfg, chain, sink, res, err)
+            call record_cycles(cfg, chain, sink, res, err)
             if (allocated(err)) call fail(err%message)
             cycles = cycles + cfg%transient + cfg%cycles
             impacts = impacts + res%impacts
@@ -346,10 +347,10 @@ contains
     subroutine fig13_pass(points, cycles, impacts)
         integer, intent(in) :: points
         integer(int64), intent(out) :: cycles, impacts
-        type(run_config_t) :: cfg
+        type(config_t) :: cfg
         type(chain_t) :: chain
         type(memory_sink_t) :: sink
-        type(run_result_t) :: res
+        type(record_result_t) :: res
         type(error_t), allocatable :: err
         integer :: p
 
@@ -365,7 +366,7 @@ contains
         do p = 1, points
             cfg%model%amplitude = 1 + 0.05_wp*(p - 1)
             chain = new_chain(cfg)
-            call record_run(cfg, chain, sink, res, err)
+            call record_cycles(cfg, chain, sink, res, err)
             if (allocated(err)) call fail(err%message)
             cycles = cycles + cfg%transient + cfg%cycles
             impacts = impacts + res%impacts
@@ -379,7 +380,7 @@ contains
     subroutine case_strobe(row)
         type(row_t), intent(inout) :: row
         integer, parameter :: n = 100000, per_cycle = 16
-        type(run_config_t) :: cfg
+        type(config_t) :: cfg
         type(chain_t) :: chain
         type(event_log_t) :: log  ! (disabled: no event is logged)
         type(event_counts_t) :: counts
@@ -427,18 +428,18 @@ contains
         if (.not. (abs(checksum) < huge(1.0_wp))) call fail('strobe: state is not finite')
     end subroutine case_strobe
 
-    !> What one strobe record costs inside `record_run` for the same n = 100000 chain: the
+    !> What one strobe record costs inside `record_cycles` for the same n = 100000 chain: the
     !> sync at the end of each cycle plus the copies into the record buffer and the
     !> period-detection window.
     subroutine case_strobe_record(row)
         type(row_t), intent(inout) :: row
         integer, parameter :: n = 100000
-        type(run_config_t) :: cfg
+        type(config_t) :: cfg
         type(chain_t) :: chain
-        type(run_result_t) :: res
+        type(record_result_t) :: res
         real(wp) :: seconds
 
-        row%label = 'strobe record inside record_run (same chain, one record per cycle)'
+        row%label = 'strobe record inside record_cycles (same chain, one record per cycle)'
         row%n = n
         row%unit_name = 'oscillator record'
         cfg = make_config(n, 1.0e-3_wp, 1.5_wp, 0.05_wp, 0.7_wp, 0.0_wp, 0.0_wp)

@@ -277,11 +277,11 @@ def main(argv=None) -> int:
     md += table(rows, baselines)
     md += ["",
            "Peak memory is the process's VmHWM (whole process: code, libraries, buffers). "
-           "Timed through `start_chain` + `record_run` with an in-memory sink; no HDF5 "
+           "Timed through `start_chain` + `record_cycles` with an in-memory sink; no HDF5 "
            "output and no event log (`record_events = .false.`). The collision-heavy case is "
            "the conservative chain (A = 0, b = 0, K = 1: nothing drains the motion), so its "
            "collision rate is stationary and the same per bond at every n. The sweep rows time "
-           "the equivalent loop of `record_run` calls, one per point (figure 10: each point "
+           "the equivalent loop of `record_cycles` calls, one per point (figure 10: each point "
            "continues from the previous one's final state; figure 13: each point from the "
            "same seeded start), not a sweep driver."]
     if baselines and "default" in by_name:

@@ -1,14 +1,14 @@
 !> Support for the f2py layer (`impactchain_f2py.f90`); f2py never sees this module.
 !>
-!> It turns plain arguments into the same `run_config_t` the namelist reader builds, so that
+!> It turns plain arguments into the same `config_t` the namelist reader builds, so that
 !> `validate_config` and `check_size` give the CLI's own messages; it provides a record sink
 !> that writes strobe records and events straight into arrays owned by the caller (numpy); and
 !> it copies error messages into a buffer of byte values. There is no physics here: every
-!> number comes from `chain_run` / `chain_sim`, exactly as for the CLI.
+!> number comes from `chain_record` / `chain_sim`, exactly as for the CLI.
 module chain_bridge
     use, intrinsic :: iso_c_binding, only: c_int, c_int64_t, c_double
-    use impactchain, only: wp, i8, error_t, set_error, run_config_t, fmt_real, fmt_int, &
-                           lyapunov_vectors, event_log_t, chain_t, record_sink_t, run_result_t, &
+    use impactchain, only: wp, i8, error_t, set_error, config_t, fmt_real, fmt_int, &
+                           lyapunov_vectors, event_log_t, chain_t, record_sink_t, record_result_t, &
                            set_boundary, chain_copy_state
     implicit none
     private
@@ -49,7 +49,7 @@ contains
                            explicit, x0, v0, transient, cycles, phase, stick_speed, &
                            max_size_mb, record_events, lyapunov, vectors, qr_every, jacobian, &
                            jacobian_cycles, err)
-        type(run_config_t), intent(out) :: cfg
+        type(config_t), intent(out) :: cfg
         integer, intent(in) :: n, vectors, qr_every, jacobian_cycles
         real(wp), intent(in) :: spacing(:), damping, restitution, amplitude, omega
         real(wp), intent(in) :: x0(:), v0(:), phase, stick_speed, max_size_mb
@@ -107,7 +107,7 @@ contains
     !> strobe records, when kept (nc > 0), are (n, cycles); kcap exponents with &lyapunov;
     !> a 2n x 2n Jacobian when asked.
     pure logical function run_sizes_ok(cfg, nr, nc, nf, kcap, mj)
-        type(run_config_t), intent(in) :: cfg
+        type(config_t), intent(in) :: cfg
         integer, intent(in) :: nr, nf, kcap, mj
         integer(i8), intent(in) :: nc
 
@@ -128,7 +128,7 @@ contains
         integer(c_int64_t), intent(out) :: site_counts(:), counts(:)
         real(c_double), intent(out) :: exponents(:), stderr_bits(:), per_time(:)
         real(c_double), intent(out) :: jac(:, :), mult_re(:), mult_im(:)
-        type(run_result_t), intent(in), optional :: res
+        type(record_result_t), intent(in), optional :: res
         type(chain_t), intent(in), optional :: chain
 
         final_x = 0

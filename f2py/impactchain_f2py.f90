@@ -3,9 +3,9 @@
 !> arrays. Only these three routines cross into Python; `impactchain.api`
 !> (post/impactchain/api.py) is the interface people use.
 !>
-!> Each routine builds the `run_config_t` a namelist with the same values would give, checks
+!> Each routine builds the `config_t` a namelist with the same values would give, checks
 !> it with the library's `validate_config` (so errors carry the CLI's messages), and calls the
-!> same kernels as the CLI: `start_chain` and `record_run` (what `run_simulation` runs, with a
+!> same kernels as the CLI: `start_chain` and `record_cycles` (what `simulate_to_file` runs, with a
 !> sink writing into the caller's arrays instead of an HDF5 file) or `poincare_jacobian`.
 !>
 !> Protocol (every routine):
@@ -38,8 +38,8 @@ subroutine ic_run(n, nsp, spacing, damping, restitution, amplitude, omega, nb, b
                   ev_site, ev_speed, ev_kind, k, exponents, stderr_bits, per_time, ky, jac, &
                   mult_re, mult_im, status, msg_len, message)
     use, intrinsic :: iso_c_binding, only: c_int, c_int64_t, c_double
-    use impactchain, only: i8, error_t, run_config_t, validate_config, chain_t, run_result_t, &
-                           record_run, check_size, start_chain
+    use impactchain, only: i8, error_t, config_t, validate_config, chain_t, record_result_t, &
+                           record_cycles, check_size, start_chain
     use chain_bridge, only: array_sink_t, make_config, put_message, run_sizes_ok, &
                             put_run_results, status_ok, status_invalid, status_failed, &
                             status_capacity, status_internal
@@ -65,10 +65,10 @@ subroutine ic_run(n, nsp, spacing, damping, restitution, amplitude, omega, nb, b
     real(c_double), intent(out) :: jac(mj, mj), mult_re(mj), mult_im(mj)
     integer(c_int), intent(out) :: status, msg_len
     integer(c_int), intent(out) :: message(1024)
-    type(run_config_t) :: cfg
+    type(config_t) :: cfg
     type(chain_t) :: chain
     type(array_sink_t) :: sink
-    type(run_result_t) :: res
+    type(record_result_t) :: res
     type(error_t), allocatable :: err
 
     call put_message('', status_ok, status, msg_len, message)
@@ -104,7 +104,7 @@ subroutine ic_run(n, nsp, spacing, damping, restitution, amplitude, omega, nb, b
         sink%site => ev_site
         sink%kind => ev_kind
     end if
-    call record_run(cfg, chain, sink, res, err)
+    call record_cycles(cfg, chain, sink, res, err)
     if (allocated(err)) then
         call put_message(err%message, status_failed, status, msg_len, message)
         return
@@ -125,7 +125,7 @@ subroutine ic_jacobian(nsp, spacing, damping, restitution, amplitude, omega, nb,
                        nx0, x0, nv0, v0, phase, stick_speed, max_size_mb, jacobian_cycles, &
                        dry_run, mj, jac, status, msg_len, message)
     use, intrinsic :: iso_c_binding, only: c_int, c_double
-    use impactchain, only: wp, i8, error_t, run_config_t, validate_config, chain_t, &
+    use impactchain, only: wp, i8, error_t, config_t, validate_config, chain_t, &
                            chain_on_section, poincare_jacobian, check_size
     use chain_bridge, only: make_config, put_message, status_ok, &
                             status_invalid, status_failed, status_internal
@@ -138,7 +138,7 @@ subroutine ic_jacobian(nsp, spacing, damping, restitution, amplitude, omega, nb,
     real(c_double), intent(out) :: jac(mj, mj)
     integer(c_int), intent(out) :: status, msg_len
     integer(c_int), intent(out) :: message(1024)
-    type(run_config_t) :: cfg
+    type(config_t) :: cfg
     type(chain_t) :: chain
     type(error_t), allocatable :: err
     real(wp), allocatable :: j_out(:, :), v_start(:)
@@ -178,7 +178,7 @@ end subroutine ic_jacobian
 subroutine ic_random_start(n, nsp, spacing, seed, x_amp, v_amp, dry_run, nf, x, v, status, &
                            msg_len, message)
     use, intrinsic :: iso_c_binding, only: c_int, c_double
-    use impactchain, only: wp, i8, error_t, run_config_t, validate_config, initial_state, &
+    use impactchain, only: wp, i8, error_t, config_t, validate_config, initial_state, &
                            chain_state_t
     use chain_bridge, only: make_config, put_message, status_ok, status_invalid, &
                             status_internal
@@ -189,7 +189,7 @@ subroutine ic_random_start(n, nsp, spacing, seed, x_amp, v_amp, dry_run, nf, x, 
     real(c_double), intent(out) :: x(nf), v(nf)
     integer(c_int), intent(out) :: status, msg_len
     integer(c_int), intent(out) :: message(1024)
-    type(run_config_t) :: cfg
+    type(config_t) :: cfg
     type(error_t), allocatable :: err
     type(chain_state_t) :: start
     real(wp), allocatable :: no_list(:)

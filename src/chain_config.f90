@@ -16,7 +16,7 @@ module chain_config
                               check_namelist, apply_override, groups_in, lower
     implicit none
     private
-    public :: run_config_t, read_config, validate_config, config_summary, lyapunov_vectors
+    public :: config_t, read_config, validate_config, config_summary, lyapunov_vectors
     public :: max_list, fmt_real, fmt_int, sweep_parameters, set_boundary
 
     !> Longest explicit list in a namelist (spacing, x0, v0); longer chains use a file start.
@@ -70,7 +70,7 @@ module chain_config
     character(len=*), parameter :: sweep_parameters(5) = &
         [character(len=11) :: 'amplitude', 'omega', 'damping', 'restitution', 'spacing']
 
-    type :: run_config_t
+    type :: config_t
         !> &chain, and &run stick_speed: everything the dynamics depends on
         type(model_t) :: model
         ! &initial
@@ -107,7 +107,7 @@ module chain_config
         real(wp) :: sweep_start2 = 0, sweep_stop2 = 0, sweep_step2 = 0
         ! the input as read
         character(len=:), allocatable :: input_text
-    end type run_config_t
+    end type config_t
 
 contains
 
@@ -115,7 +115,7 @@ contains
     !> in order) applied to its text first.
     subroutine read_config(path, cfg, err, overrides)
         character(len=*), intent(in) :: path
-        type(run_config_t), intent(out) :: cfg
+        type(config_t), intent(out) :: cfg
         type(error_t), allocatable, intent(out) :: err
         character(len=*), intent(in), optional :: overrides(:)
         integer :: u, ios, j
@@ -296,7 +296,7 @@ contains
 
     subroutine read_chain(u, cfg, err)
         integer, intent(in) :: u
-        type(run_config_t), intent(inout) :: cfg
+        type(config_t), intent(inout) :: cfg
         type(error_t), allocatable, intent(out) :: err
         integer :: n, ios, m
         real(wp) :: damping, restitution, amplitude, omega
@@ -360,7 +360,7 @@ contains
 
     subroutine read_initial(u, cfg, err)
         integer, intent(in) :: u
-        type(run_config_t), intent(inout) :: cfg
+        type(config_t), intent(inout) :: cfg
         type(error_t), allocatable, intent(out) :: err
         integer :: seed, ios, mx, mv
         real(wp) :: x_amp, v_amp
@@ -402,7 +402,7 @@ contains
 
     subroutine read_run(u, cfg, err)
         integer, intent(in) :: u
-        type(run_config_t), intent(inout) :: cfg
+        type(config_t), intent(inout) :: cfg
         type(error_t), allocatable, intent(out) :: err
         integer(i8) :: transient, cycles
         real(wp) :: phase, stick_speed, period_tol
@@ -436,7 +436,7 @@ contains
 
     subroutine read_lyapunov(u, cfg, err)
         integer, intent(in) :: u
-        type(run_config_t), intent(inout) :: cfg
+        type(config_t), intent(inout) :: cfg
         type(error_t), allocatable, intent(out) :: err
         logical :: enabled, jacobian
         integer :: vectors, qr_every, align, jacobian_cycles, ios
@@ -465,7 +465,7 @@ contains
 
     subroutine read_output(u, cfg, err)
         integer, intent(in) :: u
-        type(run_config_t), intent(inout) :: cfg
+        type(config_t), intent(inout) :: cfg
         type(error_t), allocatable, intent(out) :: err
         character(len=4096) :: file
         logical :: overwrite
@@ -490,7 +490,7 @@ contains
 
     subroutine read_sweep(u, cfg, err)
         integer, intent(in) :: u
-        type(run_config_t), intent(inout) :: cfg
+        type(config_t), intent(inout) :: cfg
         type(error_t), allocatable, intent(out) :: err
         character(len=64) :: parameter, parameter2, mode
         real(wp) :: start, stop, step, start2, stop2, step2
@@ -539,7 +539,7 @@ contains
     !> Check every value against its allowed range (also used for values given from Python),
     !> group by group; the first value out of range is the error.
     subroutine validate_config(cfg, err)
-        type(run_config_t), intent(in) :: cfg
+        type(config_t), intent(in) :: cfg
         type(error_t), allocatable, intent(out) :: err
 
         call validate_chain(cfg, err)
@@ -551,7 +551,7 @@ contains
     end subroutine validate_config
 
     subroutine validate_chain(cfg, err)
-        type(run_config_t), intent(in) :: cfg
+        type(config_t), intent(in) :: cfg
         type(error_t), allocatable, intent(out) :: err
         integer :: j
 
@@ -585,7 +585,7 @@ contains
     end subroutine validate_chain
 
     subroutine validate_initial(cfg, err)
-        type(run_config_t), intent(in) :: cfg
+        type(config_t), intent(in) :: cfg
         type(error_t), allocatable, intent(out) :: err
         real(wp) :: smallest
 
@@ -628,7 +628,7 @@ contains
     end subroutine validate_initial
 
     subroutine validate_run(cfg, err)
-        type(run_config_t), intent(in) :: cfg
+        type(config_t), intent(in) :: cfg
         type(error_t), allocatable, intent(out) :: err
 
         if (cfg%transient < 0 .or. cfg%transient > 10_i8**12) then
@@ -656,7 +656,7 @@ contains
     end subroutine validate_run
 
     subroutine validate_lyapunov(cfg, err)
-        type(run_config_t), intent(in) :: cfg
+        type(config_t), intent(in) :: cfg
         type(error_t), allocatable, intent(out) :: err
 
         if (cfg%vectors < 0 .or. cfg%vectors > 2*cfg%model%n) then
@@ -681,7 +681,7 @@ contains
     end subroutine validate_lyapunov
 
     subroutine validate_output(cfg, err)
-        type(run_config_t), intent(in) :: cfg
+        type(config_t), intent(in) :: cfg
         type(error_t), allocatable, intent(out) :: err
 
         if (len_trim(cfg%output_file) == 0) then
@@ -712,7 +712,7 @@ contains
     end subroutine check_spacing_count
 
     subroutine validate_sweep(cfg, err)
-        type(run_config_t), intent(in) :: cfg
+        type(config_t), intent(in) :: cfg
         type(error_t), allocatable, intent(out) :: err
 
         if (.not. any(sweep_parameters == cfg%sweep_parameter)) then
@@ -777,7 +777,7 @@ contains
     !> reads back to the same configuration (reals to full precision, lists in full; &sweep
     !> only when there is one).
     function config_summary(cfg) result(text)
-        type(run_config_t), intent(in) :: cfg
+        type(config_t), intent(in) :: cfg
         character(len=:), allocatable :: text
 
         text = chain_group(cfg%model)//initial_group(cfg)//run_group(cfg)// &
@@ -802,7 +802,7 @@ contains
     end function chain_group
 
     function initial_group(cfg) result(text)
-        type(run_config_t), intent(in) :: cfg
+        type(config_t), intent(in) :: cfg
         character(len=:), allocatable :: text
 
         text = "&initial kind = '"//cfg%initial_kind//"'"
@@ -820,7 +820,7 @@ contains
     end function initial_group
 
     function run_group(cfg) result(text)
-        type(run_config_t), intent(in) :: cfg
+        type(config_t), intent(in) :: cfg
         character(len=:), allocatable :: text
 
         text = "&run transient = "//fmt_int8(cfg%transient)//", cycles = "// &
@@ -831,7 +831,7 @@ contains
     end function run_group
 
     function lyapunov_group(cfg) result(text)
-        type(run_config_t), intent(in) :: cfg
+        type(config_t), intent(in) :: cfg
         character(len=:), allocatable :: text
 
         text = "&lyapunov enabled = "//fmt_logical(cfg%lyapunov)//", vectors = "// &
@@ -841,7 +841,7 @@ contains
     end function lyapunov_group
 
     function output_group(cfg) result(text)
-        type(run_config_t), intent(in) :: cfg
+        type(config_t), intent(in) :: cfg
         character(len=:), allocatable :: text
 
         text = "&output file = '"//cfg%output_file//"', overwrite = "// &
@@ -850,7 +850,7 @@ contains
     end function output_group
 
     function sweep_group(cfg) result(text)
-        type(run_config_t), intent(in) :: cfg
+        type(config_t), intent(in) :: cfg
         character(len=:), allocatable :: text
 
         text = "&sweep parameter = '"//cfg%sweep_parameter//"', start = "// &
@@ -999,7 +999,7 @@ contains
     !> Lyapunov exponents (tangent vectors) a validated configuration computes: none without
     !> &lyapunov, else `vectors`, 0 meaning all 2n.
     pure integer function lyapunov_vectors(cfg)
-        type(run_config_t), intent(in) :: cfg
+        type(config_t), intent(in) :: cfg
 
         lyapunov_vectors = 0
         if (cfg%lyapunov) lyapunov_vectors = merge(2*cfg%model%n, cfg%vectors, cfg%vectors == 0)

@@ -43,7 +43,7 @@ module chain_engine
     use chain_queue, only: queue_t, queue_init, queue_set, queue_top, queue_shift, queue_ties
     use chain_lapack, only: qr_workspace_t
     use chain_lyapunov, only: lyapunov_acc_t
-    use chain_events, only: event_log_t, event_log_append, event_impact, event_release
+    use chain_event_log, only: event_log_t, event_log_append, event_impact, event_release
     implicit none
     private
     public :: chain_t, chain_init, chain_snapshot, chain_model
@@ -94,8 +94,8 @@ module chain_engine
         integer(i8), allocatable :: stamp(:) !! instant at which y_now, vy_now were set
         integer(i8) :: instant = 0           !! counts the distinct instants of the frame
         logical :: synced = .false.         !! x, v hold the state at time s = epoch
-        real(wp) :: frame_s = -huge(1.0_wp) !! time of the cached propagators below
-        real(wp) :: m(2, 2) = 0, m_inv(2, 2) = 0 !! M(frame_s - epoch) and its inverse
+        real(wp) :: propagator_time = -huge(1.0_wp) !! time of the cached propagators below
+        real(wp) :: m(2, 2) = 0, m_inv(2, 2) = 0 !! M(propagator_time - epoch) and its inverse
         real(wp) :: drive_s = -huge(1.0_wp) !! time of the cached drive below
         real(wp) :: drive_x = 0, drive_v = 0, drive_sin = 0 !! xp, vp, sin(w s) at drive_s
         integer, allocatable :: contact(:)  !! contact(n): contact_free / left / right
@@ -457,7 +457,7 @@ contains
         integer :: i
 
         if (chain%synced .and. chain%epoch == chain%s) return
-        call frame_now(chain)
+        call propagators_now(chain)
         call drive_now(chain)
         do i = 1, chain%n
             call state_now(chain, i, chain%x(i), chain%v(i))
@@ -478,7 +478,7 @@ contains
 
         call chain_sync(chain)
         chain%s = 0
-        chain%frame_s = -huge(1.0_wp)
+        chain%propagator_time = -huge(1.0_wp)
         chain%drive_s = -huge(1.0_wp)
         call start_epoch(chain)
         call queue_shift(chain%queue, chain%flow%period, never)
@@ -491,7 +491,7 @@ contains
         type(chain_t), intent(inout) :: chain
 
         chain%epoch = chain%s
-        call frame_now(chain)
+        call propagators_now(chain)
         call drive_now(chain)
         chain%y = chain%x - chain%drive_x
         chain%vy = chain%v - chain%drive_v
@@ -562,14 +562,14 @@ contains
     ! ------------------------------------------------------------------------------ clock
 
     !> The propagator from the epoch to the current time (and its inverse), once per event time.
-    pure subroutine frame_now(chain)
+    pure subroutine propagators_now(chain)
         type(chain_t), intent(inout) :: chain
         real(wp) :: tau
         integer :: i
 
-        if (chain%frame_s == chain%s) return
+        if (chain%propagator_time == chain%s) return
         if (chain%n_touched > 0) call rows_back_to_epoch(chain)
-        chain%frame_s = chain%s
+        chain%propagator_time = chain%s
         chain%instant = chain%instant + 1
         tau = chain%s - chain%epoch
         call propagator_pair(chain%flow, tau, chain%m, chain%m_inv)
@@ -582,7 +582,7 @@ contains
             call set_epoch_here(chain)
             chain%synced = .false.
         end if
-    end subroutine frame_now
+    end subroutine propagators_now
 
     !> The epoch is now: M = identity (after the free parts were moved here).
     pure subroutine set_epoch_here(chain)
@@ -606,7 +606,7 @@ contains
                                 chain%drive_x, chain%drive_v)
     end subroutine drive_now
 
-    !> Free part (x - xp, v - vp) of moving oscillator i now (after frame_now).
+    !> Free part (x - xp, v - vp) of moving oscillator i now (after propagators_now).
     pure subroutine free_part_now(chain, i, y, vy)
         type(chain_t), intent(in) :: chain
         integer, intent(in) :: i
@@ -621,7 +621,7 @@ contains
         end if
     end subroutine free_part_now
 
-    !> State of oscillator i now (after frame_now and drive_now): moving, or resting in a
+    !> State of oscillator i now (after propagators_now and drive_now): moving, or resting in a
     !> stack on a wall.
     pure subroutine state_now(chain, i, x, v)
         type(chain_t), intent(in) :: chain
@@ -638,7 +638,7 @@ contains
         end if
     end subroutine state_now
 
-    !> Oscillator i moves on from state (x, v) now (after frame_now and drive_now).
+    !> Oscillator i moves on from state (x, v) now (after propagators_now and drive_now).
     pure subroutine set_moving_state(chain, i, x, v)
         type(chain_t), intent(inout) :: chain
         integer, intent(in) :: i
@@ -662,7 +662,7 @@ contains
         chain%synced = .false.
     end subroutine set_free_part
 
-    !> Acceleration of a free oscillator in state (x, v) now (after `frame_now`).
+    !> Acceleration of a free oscillator in state (x, v) now (after `propagators_now`).
     pure function acceleration_now(chain, x, v) result(acc)
         type(chain_t), intent(in) :: chain
         real(wp), intent(in) :: x, v
@@ -797,7 +797,7 @@ contains
         end if
         call side_position(chain, l, moving_l, fixed_l)
         call side_position(chain, r, moving_r, fixed_r)
-        call frame_now(chain)
+        call propagators_now(chain)
         if (moving_l .and. moving_r) then
             ! the drive cancels in a pair gap: the difference of the free parts
             call free_part_now(chain, r, y, vy)
@@ -908,7 +908,7 @@ contains
         logical :: closes
         integer :: resting
 
-        call frame_now(chain)
+        call propagators_now(chain)
         call drive_now(chain)
         call state_now(chain, i, x, v_minus)
         sgn = merge(-1.0_wp, 1.0_wp, side == contact_left)
@@ -973,7 +973,7 @@ contains
 
         l = bond
         r = bond + 1
-        call frame_now(chain)
+        call propagators_now(chain)
         both_moving = chain%contact(l) == contact_free .and. chain%contact(r) == contact_free
         ! the impact law is Galilean invariant: it acts on the free parts (x - xp, v - vp)
         ! alone, so two moving oscillators collide without the drive being evaluated
@@ -1063,7 +1063,7 @@ contains
         if (bond < chain%n) then
             if (chain%contact(bond + 1) == contact_left) i = bond + 1
         end if
-        call frame_now(chain)
+        call propagators_now(chain)
         call drive_now(chain)
         call set_moving_state(chain, i, rest_position(chain, i, chain%contact(i)), 0.0_wp)
         chain%releases = chain%releases + 1

@@ -14,7 +14,7 @@
 submodule(chain_engine) chain_engine_contact
     use chain_kinds, only: two_pi
     use chain_queue, only: queue_set
-    use chain_events, only: event_log_append, event_touch, event_stick
+    use chain_event_log, only: event_log_append, event_touch, event_stick
     use chain_state, only: contact_left
     implicit none
 

@@ -170,7 +170,7 @@ contains
         end function conjugated
     end procedure jump_rows
 
-    !> (After frame_now.) Rows already moved to now at this instant stay. Afterwards every row
+    !> (After propagators_now.) Rows already moved to now at this instant stay. Afterwards every row
     !> is in the coordinates of now.
     module procedure move_tangent_epoch
         real(wp) :: largest
@@ -235,7 +235,7 @@ contains
     end procedure average_rows
 
     !> The tangent rows of oscillator i in the coordinates of now, for an impact (after
-    !> frame_now); they go back to the epoch when the instant ends.
+    !> propagators_now); they go back to the epoch when the instant ends.
     pure subroutine rows_to_now(chain, i)
         type(chain_t), intent(inout) :: chain
         integer, intent(in) :: i

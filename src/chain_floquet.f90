@@ -7,7 +7,7 @@ module chain_floquet
     use chain_error, only: error_t, set_error
     use chain_engine, only: chain_t, chain_set_tangent, chain_size, chain_cycle, chain_time, &
                             chain_tangent_frame
-    use chain_events, only: event_log_t, event_log_init
+    use chain_event_log, only: event_log_t, event_log_init
     use chain_lapack, only: general_eigenvalues
     use chain_section, only: advance_to_point
     implicit none

@@ -18,13 +18,13 @@ contains
     pure subroutine pair_impact(k, v_left, v_right)
         real(wp), intent(in) :: k
         real(wp), intent(inout) :: v_left, v_right
-        real(wp) :: s, vl, vr
+        real(wp) :: q, vl, vr
 
-        s = 0.5_wp*(1 + k)
+        q = 0.5_wp*(1 + k) ! the share of the approach speed each oscillator takes
         vl = v_left
         vr = v_right
-        v_left = (1 - s)*vl + s*vr
-        v_right = s*vl + (1 - s)*vr
+        v_left = (1 - q)*vl + q*vr
+        v_right = q*vl + (1 - q)*vr
     end subroutine pair_impact
 
     !> Velocity after hitting a wall: v+ = -k v-.
@@ -38,16 +38,16 @@ contains
     !> DR of the pair reset in the order (x(k), v(k), x(k+1), v(k+1)).
     pure function pair_reset_jacobian(k) result(dr)
         real(wp), intent(in) :: k
-        real(wp) :: dr(4, 4), s
+        real(wp) :: dr(4, 4), q
 
-        s = 0.5_wp*(1 + k)
+        q = 0.5_wp*(1 + k)
         dr = 0
         dr(1, 1) = 1
         dr(3, 3) = 1
-        dr(2, 2) = 1 - s
-        dr(2, 4) = s
-        dr(4, 2) = s
-        dr(4, 4) = 1 - s
+        dr(2, 2) = 1 - q
+        dr(2, 4) = q
+        dr(4, 2) = q
+        dr(4, 4) = 1 - q
     end function pair_reset_jacobian
 
     !> DR of the wall reset in the order (x, v).
@@ -61,9 +61,9 @@ contains
     !> The saltation matrix for reset Jacobian dr, vector fields f_minus / f_plus just before
     !> and after, and the gradient of the event surface. info = 1 when the flow is tangent to
     !> the surface (grazing), where S does not exist.
-    pure subroutine saltation_matrix(dr, f_minus, f_plus, grad_h, s, info)
+    pure subroutine saltation_matrix(dr, f_minus, f_plus, grad_h, salt, info)
         real(wp), intent(in) :: dr(:, :), f_minus(:), f_plus(:), grad_h(:)
-        real(wp), intent(out) :: s(size(dr, 1), size(dr, 2))
+        real(wp), intent(out) :: salt(size(dr, 1), size(dr, 2))
         integer, intent(out) :: info
         real(wp) :: rate, w(4)  ! (fixed size: an automatic array would be allocated)
         integer :: j, m
@@ -72,7 +72,7 @@ contains
         info = 0
         if (rate == 0) then
             info = 1
-            s = dr
+            salt = dr
             return
         end if
         ! f+ - DR f-, column by column (matmul of assumed-shape arrays would allocate)
@@ -83,31 +83,31 @@ contains
         end do
         w(1:m) = w(1:m)/rate
         do j = 1, size(grad_h)
-            s(:, j) = dr(:, j) + w(1:m)*grad_h(j)
+            salt(:, j) = dr(:, j) + w(1:m)*grad_h(j)
         end do
     end subroutine saltation_matrix
 
     !> docs/model.md section 4.4, pair on a bond of spacing a with approach speed u > 0.
-    pure function pair_saltation_closed_form(k, u, a) result(s)
+    pure function pair_saltation_closed_form(k, u, a) result(salt)
         real(wp), intent(in) :: k, u, a
-        real(wp) :: s(4, 4), col(4), row(4), half
+        real(wp) :: salt(4, 4), col(4), row(4), q
         integer :: j
 
-        half = 0.5_wp*(1 + k)
-        col = half*[-1.0_wp, -a/u, 1.0_wp, a/u]
+        q = 0.5_wp*(1 + k)
+        col = q*[-1.0_wp, -a/u, 1.0_wp, a/u]
         row = [1.0_wp, 0.0_wp, -1.0_wp, 0.0_wp]
-        s = pair_reset_jacobian(k)
+        salt = pair_reset_jacobian(k)
         do j = 1, 4
-            s(:, j) = s(:, j) + col*row(j)
+            salt(:, j) = salt(:, j) + col*row(j)
         end do
     end function pair_saltation_closed_form
 
     !> docs/model.md section 4.3, wall: [[-K, 0], [(K acc- + acc+)/v-, -K]].
-    pure function wall_saltation_closed_form(k, acc_minus, acc_plus, v_minus) result(s)
+    pure function wall_saltation_closed_form(k, acc_minus, acc_plus, v_minus) result(salt)
         real(wp), intent(in) :: k, acc_minus, acc_plus, v_minus
-        real(wp) :: s(2, 2)
+        real(wp) :: salt(2, 2)
 
-        s = reshape([-k, (k*acc_minus + acc_plus)/v_minus, 0.0_wp, -k], [2, 2])
+        salt = reshape([-k, (k*acc_minus + acc_plus)/v_minus, 0.0_wp, -k], [2, 2])
     end function wall_saltation_closed_form
 
 end module chain_impact

@@ -8,7 +8,7 @@ module chain_section
     use chain_error, only: error_t
     use chain_engine, only: chain_t, chain_advance, chain_sync, chain_new_cycle, chain_cycle, &
                             chain_start, chain_period, chain_section_time, chain_reorthonormalise
-    use chain_events, only: event_log_t
+    use chain_event_log, only: event_log_t
     implicit none
     private
     public :: section_target, advance_to_point, advance_cycles

@@ -1,12 +1,12 @@
 !> One run from a configuration to an HDF5 file: the initial state (rest, seeded random,
-!> explicit, or the final state of an earlier run), the records of `chain_run` streamed to
+!> explicit, or the final state of an earlier run), the records of `chain_record` streamed to
 !> disk, then the final state, statistics, periods, spectrum and Floquet multipliers.
 !> The library never prints: progress goes to an optional callback, which may also ask the run
 !> to stop (the file is then kept, marked complete = 0, with /resume).
 !>
 !> A run whose output file is such a stopped run of the same input text continues it into the
 !> same file, bit for bit as if it had never stopped: the engine from /final, the rest of
-!> record_run's state from /resume, /stats and the last strobe records (`continue_chain`,
+!> record_cycles's state from /resume, /stats and the last strobe records (`continue_chain`,
 !> `write_resume`: the one pair that saves and restores it).
 !> Implements docs/model.md section 10.2 (initial conditions); records as in sections 6-7.
 module chain_sim
@@ -16,12 +16,12 @@ module chain_sim
                             chain_velocities, chain_contacts, chain_cycle, chain_time, &
                             chain_period
     use chain_state, only: chain_state_t, event_counts_t, tangent_state_t, moving_state
-    use chain_events, only: event_log_t
-    use chain_config, only: run_config_t, config_summary
+    use chain_event_log, only: event_log_t
+    use chain_config, only: config_t, config_summary
     use chain_model, only: model_t, model_walls
     use chain_lyapunov, only: lyapunov_pack, lyapunov_unpack
-    use chain_run, only: record_sink_t, run_result_t, record_run, progress_callback, check_size, &
-                         run_state_t, set_window, period_window
+    use chain_record, only: record_sink_t, record_result_t, record_cycles, progress_callback, &
+                            check_size, record_state_t, set_window, period_window
     use chain_output, only: output_t, output_begin, output_header, output_strobe_write, &
                             output_events_append, output_final, output_stats, output_periods, &
                             output_lyapunov, output_jacobian, output_end, output_abort, &
@@ -30,7 +30,7 @@ module chain_sim
                             file_continuable, file_other_input
     implicit none
     private
-    public :: run_simulation, initial_state, start_chain, write_run_header, chain_on_section
+    public :: simulate_to_file, initial_state, start_chain, write_run_header, chain_on_section
     public :: restart_chain, uniform
 
     !> Sends records to the HDF5 file as they come.
@@ -45,7 +45,7 @@ contains
 
     !> The initial state of a configuration (rest, seeded random, explicit, or an earlier run).
     subroutine initial_state(cfg, state, err)
-        type(run_config_t), intent(in) :: cfg
+        type(config_t), intent(in) :: cfg
         type(chain_state_t), intent(out) :: state
         type(error_t), allocatable, intent(out) :: err
         real(wp), allocatable :: x(:), v(:)
@@ -76,7 +76,7 @@ contains
     !> file's model: with other parameters (a continuation step of a sweep) every bond is
     !> searched again.
     subroutine file_state(cfg, state, err)
-        type(run_config_t), intent(in) :: cfg
+        type(config_t), intent(in) :: cfg
         type(chain_state_t), intent(out) :: state
         type(error_t), allocatable, intent(out) :: err
         logical :: same_model
@@ -91,7 +91,7 @@ contains
     !> `same_model`: that run had the model of cfg.
     subroutine read_final_chain_state(path, cfg, state, same_model, err)
         character(len=*), intent(in) :: path
-        type(run_config_t), intent(in) :: cfg
+        type(config_t), intent(in) :: cfg
         type(chain_state_t), intent(out) :: state
         logical, intent(out) :: same_model
         type(error_t), allocatable, intent(out) :: err
@@ -118,7 +118,7 @@ contains
 
     !> A chain ready to run from the configuration's initial state.
     subroutine start_chain(cfg, chain, err)
-        type(run_config_t), intent(in) :: cfg
+        type(config_t), intent(in) :: cfg
         type(chain_t), intent(out) :: chain
         type(error_t), allocatable, intent(out) :: err
         type(chain_state_t) :: state
@@ -132,7 +132,7 @@ contains
     !> oscillator moving and every bond scheduled from scratch: where the Poincare-map Jacobian
     !> of an arbitrary state is taken.
     subroutine chain_on_section(cfg, x, v, chain, err)
-        type(run_config_t), intent(in) :: cfg
+        type(config_t), intent(in) :: cfg
         real(wp), intent(in) :: x(:), v(:)
         type(chain_t), intent(out) :: chain
         type(error_t), allocatable, intent(out) :: err
@@ -145,7 +145,7 @@ contains
     !> under the model of `cfg`, as a new run: counters from zero, every bond searched afresh
     !> (a continuation step of a sweep, kept in memory).
     subroutine restart_chain(cfg, chain, err)
-        type(run_config_t), intent(in) :: cfg
+        type(config_t), intent(in) :: cfg
         type(chain_t), intent(inout) :: chain
         type(error_t), allocatable, intent(out) :: err
         type(chain_state_t) :: state
@@ -160,7 +160,7 @@ contains
     !> its starting configuration).
     subroutine write_run_header(out, cfg, err)
         type(output_t), intent(inout) :: out
-        type(run_config_t), intent(in) :: cfg
+        type(config_t), intent(in) :: cfg
         type(error_t), allocatable, intent(out) :: err
         type(chain_t) :: chain
 
@@ -170,7 +170,7 @@ contains
 
     subroutine header_for(out, cfg, chain, err)
         type(output_t), intent(inout) :: out
-        type(run_config_t), intent(in) :: cfg
+        type(config_t), intent(in) :: cfg
         type(chain_t), intent(in) :: chain
         type(error_t), allocatable, intent(out) :: err
 
@@ -185,14 +185,14 @@ contains
 
     !> The whole run described by `cfg`, written to cfg%output_file; or, when that file is a
     !> run of the same input stopped early, the rest of it, continued into that file.
-    subroutine run_simulation(cfg, res, err, progress)
-        type(run_config_t), intent(in) :: cfg
-        type(run_result_t), intent(out) :: res
+    subroutine simulate_to_file(cfg, res, err, progress)
+        type(config_t), intent(in) :: cfg
+        type(record_result_t), intent(out) :: res
         type(error_t), allocatable, intent(out) :: err
         procedure(progress_callback), optional :: progress
         type(chain_t) :: chain
         type(file_sink_t) :: sink
-        type(run_state_t) :: state
+        type(record_state_t) :: state
         type(error_t), allocatable :: err2
         integer :: found
 
@@ -218,7 +218,7 @@ contains
             if (allocated(err)) return
             call header_for(sink%out, cfg, chain, err)
         end if
-        if (.not. allocated(err)) call record_run(cfg, chain, sink, res, err, progress, state)
+        if (.not. allocated(err)) call record_cycles(cfg, chain, sink, res, err, progress, state)
         if (.not. allocated(err)) call write_results(sink%out, chain, res, cfg%jacobian_cycles, err)
         if (.not. allocated(err) .and. .not. res%complete) then
             call output_truncate_strobe(sink%out, res%cycles_done, err)
@@ -230,15 +230,15 @@ contains
         end if
         call output_end(sink%out, res%complete, err2)
         if (allocated(err2)) call move_alloc(err2, err)
-    end subroutine run_simulation
+    end subroutine simulate_to_file
 
     !> /resume of a run stopped at a record: what the engine holds beyond /final, the tangent
     !> frame and the Lyapunov accumulator (undone by continue_chain).
     subroutine write_resume(out, cfg, chain, state, err)
         type(output_t), intent(inout) :: out
-        type(run_config_t), intent(in) :: cfg
+        type(config_t), intent(in) :: cfg
         type(chain_t), intent(in) :: chain
-        type(run_state_t), intent(in) :: state
+        type(record_state_t), intent(in) :: state
         type(error_t), allocatable, intent(out) :: err
         type(resume_data_t) :: data
         type(chain_state_t) :: now
@@ -260,12 +260,12 @@ contains
         call output_resume(out, data, err)
     end subroutine write_resume
 
-    !> The chain and record_run's state where the run stopped early in cfg%output_file left
+    !> The chain and record_cycles's state where the run stopped early in cfg%output_file left
     !> them (written by write_results and write_resume).
     subroutine continue_chain(cfg, chain, state, err)
-        type(run_config_t), intent(in) :: cfg
+        type(config_t), intent(in) :: cfg
         type(chain_t), intent(out) :: chain
-        type(run_state_t), intent(out) :: state
+        type(record_state_t), intent(out) :: state
         type(error_t), allocatable, intent(out) :: err
         type(resume_data_t) :: data
         type(chain_state_t) :: stopped
@@ -291,7 +291,7 @@ contains
     !> The complete state of the chain where the run in cfg%output_file stopped (/final and
     !> /resume), and the rest of /resume.
     subroutine read_stopped_run(cfg, stopped, data, err)
-        type(run_config_t), intent(in) :: cfg
+        type(config_t), intent(in) :: cfg
         type(chain_state_t), intent(out) :: stopped
         type(resume_data_t), intent(out) :: data
         type(error_t), allocatable, intent(out) :: err
@@ -333,7 +333,7 @@ contains
     subroutine write_results(out, chain, res, jacobian_cycles, err)
         type(output_t), intent(inout) :: out
         type(chain_t), intent(in) :: chain
-        type(run_result_t), intent(in) :: res
+        type(record_result_t), intent(in) :: res
         integer, intent(in) :: jacobian_cycles
         type(error_t), allocatable, intent(out) :: err
         type(chain_state_t) :: final

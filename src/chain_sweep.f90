@@ -26,8 +26,8 @@ module chain_sweep
     use chain_engine, only: chain_t, chain_init, chain_positions, chain_velocities, &
                             chain_contacts, chain_cycle, chain_time
     use chain_state, only: chain_state_t, moving_state
-    use chain_config, only: run_config_t, validate_config, lyapunov_vectors
-    use chain_run, only: memory_sink_t, run_result_t, record_run, check_size
+    use chain_config, only: config_t, validate_config, lyapunov_vectors
+    use chain_record, only: memory_sink_t, record_result_t, record_cycles, check_size
     use chain_sim, only: start_chain, write_run_header
     use chain_output, only: output_t, output_begin, output_group, output_end, output_abort
     use chain_hdf5, only: h5_write, h5_write_attr
@@ -98,7 +98,7 @@ contains
 
     !> Sizes of the sweep described by cfg (validated: &sweep present).
     pure function plan_sweep(cfg) result(plan)
-        type(run_config_t), intent(in) :: cfg
+        type(config_t), intent(in) :: cfg
         type(sweep_plan_t) :: plan
 
         plan%n_axis1 = axis_points(cfg%sweep_start, cfg%sweep_stop, cfg%sweep_step)
@@ -142,7 +142,7 @@ contains
 
     pure subroutine sweep_result_init(res, cfg, plan)
         type(sweep_result_t), intent(out) :: res
-        type(run_config_t), intent(in) :: cfg
+        type(config_t), intent(in) :: cfg
         type(sweep_plan_t), intent(in) :: plan
         integer :: p
 
@@ -166,7 +166,7 @@ contains
     !> Parameter values of point p: index i along `parameter`, j along `parameter2`, computed
     !> from the indices (never by accumulating steps).
     pure function point_values(cfg, plan, p) result(values)
-        type(run_config_t), intent(in) :: cfg
+        type(config_t), intent(in) :: cfg
         type(sweep_plan_t), intent(in) :: plan
         integer, intent(in) :: p
         real(wp) :: values(plan%n_axes)
@@ -182,10 +182,10 @@ contains
     !> naming the parameter and the point). A sweep stores neither events nor the Poincare-map
     !> Jacobian, so neither is collected (neither changes the motion).
     subroutine sweep_point_config(cfg, plan, p, point, err)
-        type(run_config_t), intent(in) :: cfg
+        type(config_t), intent(in) :: cfg
         type(sweep_plan_t), intent(in) :: plan
         integer, intent(in) :: p
-        type(run_config_t), intent(out) :: point
+        type(config_t), intent(out) :: point
         type(error_t), allocatable, intent(out) :: err
         real(wp) :: values(plan%n_axes)
 
@@ -203,7 +203,7 @@ contains
     end subroutine sweep_point_config
 
     pure subroutine set_parameter(cfg, name, value)
-        type(run_config_t), intent(inout) :: cfg
+        type(config_t), intent(inout) :: cfg
         character(len=*), intent(in) :: name
         real(wp), intent(in) :: value
 
@@ -226,7 +226,7 @@ contains
     !> resume state are written in one critical section, where `hook` then sees a consistent
     !> snapshot of the whole sweep (for progress and checkpoints); it may ask to stop.
     subroutine run_branch(cfg, plan, b, res, starts, stop_now, err, hook)
-        type(run_config_t), intent(in) :: cfg
+        type(config_t), intent(in) :: cfg
         type(sweep_plan_t), intent(in) :: plan
         integer, intent(in) :: b
         type(sweep_result_t), intent(inout) :: res
@@ -234,10 +234,10 @@ contains
         logical, intent(inout) :: stop_now
         type(error_t), allocatable, intent(out) :: err
         procedure(point_hook), optional :: hook
-        type(run_config_t) :: point
+        type(config_t) :: point
         type(chain_t) :: chain
         type(memory_sink_t) :: sink
-        type(run_result_t) :: out
+        type(record_result_t) :: out
         integer :: q, p
         logical :: stopping
 
@@ -258,7 +258,7 @@ contains
                 !$omp end critical (sweep_hdf5)
             end if
             if (allocated(err)) return
-            call record_run(point, chain, sink, out, err)
+            call record_cycles(point, chain, sink, out, err)
             if (allocated(err)) return
             !$omp critical (sweep_results)
             res%x(:, :, p) = sink%x
@@ -287,7 +287,7 @@ contains
     !> Run the branches selected by `mine` (all when absent) with OpenMP threads; the first
     !> error met, if any, is returned after all threads stop.
     subroutine run_sweep_branches(cfg, plan, res, starts, err, mine, hook)
-        type(run_config_t), intent(in) :: cfg
+        type(config_t), intent(in) :: cfg
         type(sweep_plan_t), intent(in) :: plan
         type(sweep_result_t), intent(inout) :: res
         type(chain_state_t), intent(inout) :: starts(:)
@@ -324,7 +324,7 @@ contains
     !> input, checkpoints every few seconds, and writes the HDF5 file when every point is done.
     !> `progress(done, total)` may ask to stop: the checkpoint then keeps the finished points.
     subroutine run_sweep(cfg, summary, err, progress)
-        type(run_config_t), intent(in) :: cfg
+        type(config_t), intent(in) :: cfg
         type(sweep_summary_t), intent(out) :: summary
         type(error_t), allocatable, intent(out) :: err
         procedure(progress_i), optional :: progress
@@ -399,10 +399,10 @@ contains
 
     !> Validate every point before any work (an out-of-range point is an error up front).
     subroutine validate_sweep_points(cfg, plan, err)
-        type(run_config_t), intent(in) :: cfg
+        type(config_t), intent(in) :: cfg
         type(sweep_plan_t), intent(in) :: plan
         type(error_t), allocatable, intent(out) :: err
-        type(run_config_t) :: point
+        type(config_t) :: point
         integer :: p
 
         do p = 1, plan%n_points
@@ -414,7 +414,7 @@ contains
     !> The checkpoint of the sweep writing cfg%output_file (the same for every driver, so that
     !> any of them resumes any other's).
     pure function checkpoint_path(cfg) result(path)
-        type(run_config_t), intent(in) :: cfg
+        type(config_t), intent(in) :: cfg
         character(len=:), allocatable :: path
 
         path = cfg%output_file//'.ckpt'
@@ -425,7 +425,7 @@ contains
     !> index first) the parameter values, the records, the periods and any exponents.
     subroutine write_sweep_file(out, cfg, plan, res, err)
         type(output_t), intent(inout) :: out
-        type(run_config_t), intent(in) :: cfg
+        type(config_t), intent(in) :: cfg
         type(sweep_plan_t), intent(in) :: plan
         type(sweep_result_t), intent(in) :: res
         type(error_t), allocatable, intent(out) :: err
@@ -461,7 +461,7 @@ contains
     !> replaces the previous one.
     subroutine save_checkpoint(path, cfg, plan, res, starts, err)
         character(len=*), intent(in) :: path
-        type(run_config_t), intent(in) :: cfg
+        type(config_t), intent(in) :: cfg
         type(sweep_plan_t), intent(in) :: plan
         type(sweep_result_t), intent(in) :: res
         type(chain_state_t), intent(in) :: starts(:)
@@ -503,7 +503,7 @@ contains
     !> Resume from a checkpoint of the same input, if there is one.
     subroutine load_checkpoint(path, cfg, plan, res, starts, err)
         character(len=*), intent(in) :: path
-        type(run_config_t), intent(in) :: cfg
+        type(config_t), intent(in) :: cfg
         type(sweep_plan_t), intent(in) :: plan
         type(sweep_result_t), intent(inout) :: res
         type(chain_state_t), intent(inout) :: starts(:)
@@ -550,7 +550,7 @@ contains
 
     !> Lengths of one branch in pack_branch's layout: nr reals and ni integers.
     pure subroutine branch_record_sizes(cfg, plan, nr, ni)
-        type(run_config_t), intent(in) :: cfg
+        type(config_t), intent(in) :: cfg
         type(sweep_plan_t), intent(in) :: plan
         integer, intent(out) :: nr, ni
 
@@ -560,7 +560,7 @@ contains
 
     !> Reals per point: collisions, x (n x cycles), exponents, stderr, Kaplan-Yorke dimension.
     pure integer function point_reals(cfg, plan)
-        type(run_config_t), intent(in) :: cfg
+        type(config_t), intent(in) :: cfg
         type(sweep_plan_t), intent(in) :: plan
 
         point_reals = 2 + cfg%model%n*int(cfg%cycles) + 2*plan%k
@@ -568,7 +568,7 @@ contains
 
     !> Integers per point: done, periods (n).
     pure integer function point_ints(cfg)
-        type(run_config_t), intent(in) :: cfg
+        type(config_t), intent(in) :: cfg
 
         point_ints = 1 + cfg%model%n
     end function point_ints
@@ -579,7 +579,7 @@ contains
     !> by point, the reals of point_reals and the integers of point_ints; then the resume
     !> state, reals x, v, s and integers resume, contact, cycle (zeros when not resuming).
     pure subroutine pack_branch(cfg, plan, res, starts, b, reals, ints)
-        type(run_config_t), intent(in) :: cfg
+        type(config_t), intent(in) :: cfg
         type(sweep_plan_t), intent(in) :: plan
         type(sweep_result_t), intent(in) :: res
         type(chain_state_t), intent(in) :: starts(:)
@@ -608,7 +608,7 @@ contains
 
     !> Branch b of a sweep back from pack_branch's arrays into `res` and `starts`.
     pure subroutine unpack_branch(cfg, plan, b, reals, ints, res, starts)
-        type(run_config_t), intent(in) :: cfg
+        type(config_t), intent(in) :: cfg
         type(sweep_plan_t), intent(in) :: plan
         integer, intent(in) :: b
         real(wp), intent(in) :: reals(:)

@@ -12,18 +12,18 @@ module impactchain
     use chain_kinds, only: wp, i8, pi, two_pi
     use chain_error, only: error_t, set_error
     use chain_model, only: model_t
-    use chain_config, only: run_config_t, read_config, validate_config, fmt_real, fmt_int, &
+    use chain_config, only: config_t, read_config, validate_config, fmt_real, fmt_int, &
                             lyapunov_vectors, set_boundary, config_summary
     use chain_state, only: chain_state_t, event_counts_t
     use chain_engine, only: chain_t, chain_size, chain_cycle, chain_time, chain_start, &
                             chain_period, chain_positions, chain_velocities, chain_copy_state, &
                             chain_contacts, chain_counts
-    use chain_events, only: event_log_t
-    use chain_run, only: record_sink_t, memory_sink_t, run_result_t, record_run, &
+    use chain_event_log, only: event_log_t
+    use chain_record, only: record_sink_t, memory_sink_t, record_result_t, record_cycles, &
                          progress_callback, check_size
     use chain_section, only: advance_to_point
     use chain_floquet, only: poincare_jacobian
-    use chain_sim, only: run_simulation, start_chain, initial_state, chain_on_section, &
+    use chain_sim, only: simulate_to_file, start_chain, initial_state, chain_on_section, &
                          restart_chain
     use chain_sweep, only: run_sweep, sweep_summary_t, plan_sweep, sweep_plan_t, &
                            sweep_result_t, sweep_result_init, &
@@ -39,13 +39,13 @@ module impactchain
     implicit none
     private
     public :: wp, i8, pi, two_pi, error_t, set_error
-    public :: run_config_t, read_config, validate_config, fmt_real, fmt_int, check_size
+    public :: config_t, read_config, validate_config, fmt_real, fmt_int, check_size
     public :: lyapunov_vectors, model_t, set_boundary, config_summary
     public :: chain_t, chain_state_t, event_counts_t, event_log_t
     public :: chain_size, chain_cycle, chain_time, chain_start, chain_period, chain_positions
     public :: chain_velocities, chain_copy_state, chain_contacts, chain_counts
-    public :: record_sink_t, memory_sink_t, run_result_t, record_run, progress_callback
-    public :: advance_to_point, poincare_jacobian, run_simulation, start_chain, initial_state
+    public :: record_sink_t, memory_sink_t, record_result_t, record_cycles, progress_callback
+    public :: advance_to_point, poincare_jacobian, simulate_to_file, start_chain, initial_state
     public :: chain_on_section, restart_chain
     public :: run_sweep, sweep_summary_t, plan_sweep, sweep_plan_t, sweep_result_t
     public :: sweep_result_init, sweep_point_config, run_sweep_branches

@@ -10,10 +10,10 @@ module test_corners
     use chain_state, only: contact_free, moving_state
     use chain_engine, only: chain_t, chain_init, chain_gaps_now, chain_model, chain_cycle, &
                             chain_time, chain_positions, chain_velocities, chain_contacts
-    use chain_events, only: event_log_t, event_log_init, event_impact, event_stick, &
+    use chain_event_log, only: event_log_t, event_log_init, event_impact, event_stick, &
                             event_release, event_touch
-    use chain_config, only: run_config_t
-    use chain_run, only: record_run, memory_sink_t, run_result_t
+    use chain_config, only: config_t
+    use chain_record, only: record_cycles, memory_sink_t, record_result_t
     use chain_section, only: advance_to_point
     use chain_floquet, only: poincare_jacobian, floquet_multipliers
     use testing, only: tally_t, check, check_close
@@ -51,7 +51,7 @@ contains
         integer(i8), intent(in) :: transient, cycles
         logical, intent(in) :: lyapunov
         real(wp), intent(in), optional :: phase
-        type(run_config_t) :: cfg
+        type(config_t) :: cfg
 
         cfg%model%n = n
         cfg%transient = transient
@@ -73,13 +73,13 @@ contains
         type(chain_t) :: chain
         type(error_t), allocatable :: err
         type(memory_sink_t) :: sink
-        type(run_result_t) :: res
+        type(record_result_t) :: res
         real(wp) :: phase, worst_right, worst_left
         integer :: j, left, right
 
         call new_chain(chain, 0.1_wp, 0.5_wp, 1.0_wp, 0.5_wp, [0.5_wp, 0.5_wp], .true., &
                        [0.0_wp], [0.0_wp], err)
-        call record_run(run_config(1, 0_i8, 6_i8, .false.), chain, sink, res, err)
+        call record_cycles(run_config(1, 0_i8, 6_i8, .false.), chain, sink, res, err)
         call check(t, .not. allocated(err), 'right-wall release run completes')
         if (allocated(err)) return
         call check_close(t, sink%x(1, 1), -0.42131_wp, 'right-wall release: first strobe', &
@@ -116,13 +116,13 @@ contains
         type(chain_t) :: chain
         type(error_t), allocatable :: err
         type(memory_sink_t) :: sink
-        type(run_result_t) :: res
+        type(record_result_t) :: res
         real(wp) :: worst, gaps(0:2)
         integer :: j
 
         call new_chain(chain, 0.1_wp, 0.5_wp, 2.0_wp, 0.6_wp, [0.5_wp, 0.5_wp, 0.5_wp], .true., &
                        [0.1_wp, -0.1_wp], [0.3_wp, -0.2_wp], err)
-        call record_run(run_config(2, 0_i8, 40_i8, .false., 3.6_wp), chain, sink, res, err)
+        call record_cycles(run_config(2, 0_i8, 40_i8, .false., 3.6_wp), chain, sink, res, err)
         call check(t, .not. allocated(err), 'right-wall stack run completes')
         if (allocated(err)) return
         worst = huge(1.0_wp)
@@ -144,7 +144,7 @@ contains
         type(chain_t) :: chain
         type(error_t), allocatable :: err
         type(memory_sink_t) :: sink
-        type(run_result_t) :: res
+        type(record_result_t) :: res
         real(wp) :: total, expected
         integer :: touches, slow
 
@@ -158,7 +158,7 @@ contains
                         0.54435773315862745_wp, -0.56736870932367256_wp, &
                         0.35212304681746931_wp, -0.6209995412417999_wp, &
                         0.34491556076987984_wp], err)
-        call record_run(run_config(7, 200_i8, 1000_i8, .true.), chain, sink, res, err)
+        call record_cycles(run_config(7, 200_i8, 1000_i8, .true.), chain, sink, res, err)
         call check(t, .not. allocated(err), 'grazing free chain run completes')
         if (allocated(err)) return
         touches = count(sink%events%kind(:sink%events%count) == event_touch)
@@ -242,7 +242,7 @@ contains
         type(error_t), allocatable :: err
         type(event_log_t) :: events
         type(memory_sink_t) :: sink
-        type(run_result_t) :: res
+        type(record_result_t) :: res
         real(wp), allocatable :: jac(:, :)
         real(wp) :: re(4), im(4), product_at(2), section
         integer :: info, p, collapsed
@@ -274,7 +274,7 @@ contains
                          'rest orbit: nonzero multipliers the same from either section', &
                          rel_tol=1.0e-9_wp)
         call rest_chain(chain, err)
-        call record_run(run_config(2, 300_i8, 1000_i8, .true.), chain, sink, res, err)
+        call record_cycles(run_config(2, 300_i8, 1000_i8, .true.), chain, sink, res, err)
         call check(t, .not. allocated(err), 'rest orbit: spectrum')
         if (allocated(err)) return
         collapsed = count(.not. ieee_is_finite(res%lyapunov%bits_per_cycle))

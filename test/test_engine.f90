@@ -11,7 +11,7 @@ module test_engine
                             chain_time, chain_positions, chain_velocities, chain_contacts, &
                             chain_counts, chain_reset_counts
     use chain_state, only: contact_free, event_counts_t
-    use chain_events, only: event_log_t, event_log_init, event_log_clear
+    use chain_event_log, only: event_log_t, event_log_init, event_log_clear
     use chain_section, only: advance_to_point
     use test_chains, only: init_chain, flow_of
     use test_invariants, only: walk_t, walk_events

@@ -19,7 +19,7 @@ module test_invariants
                             chain_positions, chain_velocities, chain_contacts, chain_counts, &
                             chain_reset_counts, chain_vectors, chain_tangent_frame, &
                             chain_qr_step, chain_snapshot
-    use chain_events, only: event_log_t, event_log_init, event_log_clear, event_impact, &
+    use chain_event_log, only: event_log_t, event_log_init, event_log_clear, event_impact, &
                             event_stick, event_release, event_log_append
     use chain_lyapunov, only: lyapunov_acc_t, lyapunov_start, lyapunov_step, &
                               lyapunov_result_t, lyapunov_result, initial_frame
@@ -148,7 +148,7 @@ contains
     end function k_text
 
     !> Run `cycles` drive cycles one event time at a time, with records at every cycle end
-    !> (phase 0), as record_run does; after every event time and at every record look at the
+    !> (phase 0), as record_cycles does; after every event time and at every record look at the
     !> gaps, the tangent rows of resting oscillators and, for free ends, the momentum across the
     !> instant. A chain carrying a full tangent frame also gets its spectrum (QR every cycle).
     !> Stopping at each event time changes nothing: chain_advance to an event time processes

@@ -12,9 +12,9 @@ module test_lyapunov
     use chain_state, only: event_counts_t, moving_state
     use chain_engine, only: chain_t, chain_init, chain_model, chain_cycle, chain_time, &
                             chain_positions, chain_velocities, chain_counts, chain_reset_counts
-    use chain_events, only: event_log_t, event_log_init
-    use chain_config, only: run_config_t
-    use chain_run, only: record_run, memory_sink_t, run_result_t, check_size
+    use chain_event_log, only: event_log_t, event_log_init
+    use chain_config, only: config_t
+    use chain_record, only: record_cycles, memory_sink_t, record_result_t, check_size
     use chain_section, only: advance_to_point
     use chain_floquet, only: poincare_jacobian, floquet_multipliers
     use chain_lyapunov, only: ky_dimension, lyapunov_acc_t, &
@@ -180,7 +180,7 @@ contains
     !> running estimates (with their cycles), not one row per QR step.
     subroutine size_check_matches_storage(t)
         type(tally_t), intent(inout) :: t
-        type(run_config_t) :: cfg
+        type(config_t) :: cfg
         type(error_t), allocatable :: err
         real(wp) :: stored_mb
         integer :: k
@@ -197,11 +197,11 @@ contains
         call check(t, allocated(err), 'size check: a run just beyond the limit is refused')
     end subroutine size_check_matches_storage
 
-    !> A configuration for record_run: transient, recorded cycles, Lyapunov vectors (0 = all).
+    !> A configuration for record_cycles: transient, recorded cycles, Lyapunov vectors (0 = all).
     function spectrum_config(n, transient, cycles, vectors) result(cfg)
         integer, intent(in) :: n, vectors
         integer(i8), intent(in) :: transient, cycles
-        type(run_config_t) :: cfg
+        type(config_t) :: cfg
 
         cfg%model%n = n
         cfg%transient = transient
@@ -214,13 +214,13 @@ contains
 
     subroutine spectrum(chain, cfg, res, err)
         type(chain_t), intent(inout) :: chain
-        type(run_config_t), intent(in) :: cfg
-        type(run_result_t), intent(out) :: res
+        type(config_t), intent(in) :: cfg
+        type(record_result_t), intent(out) :: res
         type(error_t), allocatable, intent(out) :: err
         type(memory_sink_t) :: sink
 
         sink%keep_strobe = .false.
-        call record_run(cfg, chain, sink, res, err)
+        call record_cycles(cfg, chain, sink, res, err)
     end subroutine spectrum
 
     !> Sum of all 2n exponents (nats per cycle) = -2 b n T + 2 ln(K) c, c = impacts per cycle.
@@ -230,7 +230,7 @@ contains
         real(wp), intent(in) :: amplitude, omega
         type(chain_t) :: chain
         type(error_t), allocatable :: err
-        type(run_result_t) :: res
+        type(record_result_t) :: res
         character(len=8) :: label
 
         write (label, '(i0)') n
@@ -252,7 +252,7 @@ contains
         type(tally_t), intent(inout) :: t
         type(chain_t) :: chain
         type(error_t), allocatable :: err
-        type(run_result_t) :: res
+        type(record_result_t) :: res
         type(flow_t) :: flow
         real(wp) :: bt, nats(6)
 
@@ -393,7 +393,7 @@ contains
         type(tally_t), intent(inout) :: t
         type(chain_t) :: chain, copy
         type(error_t), allocatable :: err
-        type(run_result_t) :: full, lead
+        type(record_result_t) :: full, lead
         real(wp) :: worst
         integer :: j
 
@@ -459,7 +459,7 @@ contains
         type(tally_t), intent(inout) :: t
         type(chain_t) :: chain
         type(error_t), allocatable :: err
-        type(run_result_t) :: res
+        type(record_result_t) :: res
         real(wp) :: l1, s1
 
         call make_chain(chain, 16, 1.7_wp, 1.5_wp, 0.05_wp, 0.7_wp, .true., 0.3_wp, 0.5_wp, err)

@@ -9,9 +9,9 @@ module test_sweep
     !$ use omp_lib, only: omp_set_num_threads
     use chain_kinds, only: wp, i8
     use chain_error, only: error_t
-    use chain_config, only: run_config_t, read_config
-    use chain_sim, only: run_simulation
-    use chain_run, only: run_result_t
+    use chain_config, only: config_t, read_config
+    use chain_sim, only: simulate_to_file
+    use chain_record, only: record_result_t
     use chain_output, only: read_final_state
     use chain_state, only: chain_state_t
     use chain_sweep, only: sweep_plan_t, sweep_result_t, plan_sweep, &
@@ -43,7 +43,7 @@ contains
     !> Points per axis from the index (never accumulated), rounding-safe at both ends.
     subroutine test_axes(t)
         type(tally_t), intent(inout) :: t
-        type(run_config_t) :: cfg
+        type(config_t) :: cfg
         type(sweep_plan_t) :: plan
         type(sweep_result_t) :: res
 
@@ -87,7 +87,7 @@ contains
     !> One point: the parameter set (every bond for 'spacing'), checked like any input.
     subroutine test_point_config(t)
         type(tally_t), intent(inout) :: t
-        type(run_config_t) :: cfg, point
+        type(config_t) :: cfg, point
         type(sweep_plan_t) :: plan
         type(error_t), allocatable :: err
 
@@ -118,7 +118,7 @@ contains
         type(tally_t), intent(inout) :: t
         character(len=*), parameter :: modes(2) = [character(len=12) :: 'continuation', &
                                                    'independent']
-        type(run_config_t) :: cfg
+        type(config_t) :: cfg
         type(sweep_result_t) :: one, two
         integer :: m
 
@@ -145,11 +145,11 @@ contains
         character(len=*), parameter :: chain = "&chain n = 5, omega = 1.9, restitution = 0.5, "
         character(len=*), parameter :: run = "&run transient = 20, cycles = 10, "// &
                                              "record_events = .false. /"
-        type(run_config_t) :: cfg, step
+        type(config_t) :: cfg, step
         type(sweep_plan_t) :: plan
         type(sweep_result_t) :: res
         type(chain_state_t), allocatable :: starts(:)
-        type(run_result_t) :: summary
+        type(record_result_t) :: summary
         type(error_t), allocatable :: err
         real(wp), allocatable :: x(:), v(:), qt(:), spacing(:)
         integer, allocatable :: contact(:), qa(:)
@@ -181,7 +181,7 @@ contains
             path = tmp//'step'//char(iachar('0') + j)//'.h5'
             step%output_file = path
             step%overwrite = .true.
-            call run_simulation(step, summary, err)
+            call simulate_to_file(step, summary, err)
             call check(t, .not. allocated(err), 'step run from a file')
             if (allocated(err)) return
             if (j > 1) call remove_file(previous)
@@ -205,7 +205,7 @@ contains
     !> as an uninterrupted sweep. A checkpoint of another input is refused.
     subroutine test_checkpoint_resume(t)
         type(tally_t), intent(inout) :: t
-        type(run_config_t) :: cfg, other
+        type(config_t) :: cfg, other
         type(sweep_plan_t) :: plan
         type(sweep_result_t) :: whole, part, loaded
         type(chain_state_t), allocatable :: starts(:), loaded_starts(:)
@@ -264,7 +264,7 @@ contains
     !> it, and the previous checkpoint stays as it was.
     subroutine test_checkpoint_write_failure(t)
         type(tally_t), intent(inout) :: t
-        type(run_config_t) :: cfg
+        type(config_t) :: cfg
         type(sweep_plan_t) :: plan
         type(sweep_result_t) :: res, loaded
         type(chain_state_t), allocatable :: starts(:)
@@ -307,7 +307,7 @@ contains
 
     subroutine whole_sweep(t, cfg, res)
         type(tally_t), intent(inout) :: t
-        type(run_config_t), intent(in) :: cfg
+        type(config_t), intent(in) :: cfg
         type(sweep_result_t), intent(out) :: res
         type(sweep_plan_t) :: plan
         type(chain_state_t), allocatable :: starts(:)
@@ -331,7 +331,7 @@ contains
 
     !> A small chaotic-enough chain with the given &sweep (and other groups) appended.
     subroutine config_from(cfg, groups, name)
-        type(run_config_t), intent(out) :: cfg
+        type(config_t), intent(out) :: cfg
         character(len=*), intent(in) :: groups, name
 
         call config_text(cfg, "&chain n = 4, amplitude = 2.0, omega = 1.5, "// &
@@ -343,7 +343,7 @@ contains
 
     !> The configuration of a namelist text (written to a temporary file and read back).
     subroutine config_text(cfg, text, name)
-        type(run_config_t), intent(out) :: cfg
+        type(config_t), intent(out) :: cfg
         character(len=*), intent(in) :: text, name
         type(error_t), allocatable :: err
         character(len=:), allocatable :: tmp

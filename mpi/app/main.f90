@@ -19,7 +19,7 @@ program impactchain_mpi
                        MPI_Allreduce, MPI_Gatherv, MPI_COMM_WORLD, MPI_MAX, &
                        MPI_DOUBLE_PRECISION, MPI_INTEGER, MPI_INTEGER8, MPI_IN_PLACE, &
                        MPI_THREAD_FUNNELED
-    use impactchain, only: wp, i8, error_t, run_config_t, read_config, sweep_plan_t, &
+    use impactchain, only: wp, i8, error_t, config_t, read_config, sweep_plan_t, &
                            sweep_result_t, chain_state_t, plan_sweep, sweep_result_init, &
                            validate_sweep_points, checkpoint_path, run_sweep_branches, &
                            write_sweep_file, save_checkpoint, load_checkpoint, remove_file, &
@@ -27,7 +27,7 @@ program impactchain_mpi
                            output_t, output_begin, output_end, output_abort, catch_interrupts, &
                            interrupted, cli_t, parse_command_line, cli_run, config_summary
     implicit none
-    type(run_config_t) :: cfg
+    type(config_t) :: cfg
     type(sweep_plan_t) :: plan
     type(sweep_result_t) :: res
     type(chain_state_t), allocatable :: starts(:)

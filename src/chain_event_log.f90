@@ -1,7 +1,7 @@
 !> The collision event stream: a growable buffer of (time, site, speed, kind) that the run
 !> driver drains to the output file in chunks, so memory does not grow with the run length.
 !> The event kinds (impact, rest, release, touch) are those of docs/model.md section 5.8.
-module chain_events
+module chain_event_log
     use chain_kinds, only: wp
     implicit none
     private
@@ -89,4 +89,4 @@ contains
         call move_alloc(tmp, a)
     end subroutine grow_int
 
-end module chain_events
+end module chain_event_log

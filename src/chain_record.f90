@@ -1,10 +1,10 @@
 !> The recorded part of a run, independent of where the records go (docs/model.md sections 6-7):
 !> strobe records at the section, the event stream, the Lyapunov spectrum, periods, and the
 !> Poincare-map Jacobian. The CLI sends records to an HDF5 file, sweeps and the Python
-!> extension keep them in memory; all go through `record_run`, so their numbers agree bit for
+!> extension keep them in memory; all go through `record_cycles`, so their numbers agree bit for
 !> bit.
 !> Where the records are taken: chain_section; the Jacobian and multipliers: chain_floquet.
-module chain_run
+module chain_record
     use chain_kinds, only: wp, i8
     use chain_error, only: error_t, set_error
     use chain_engine, only: chain_t, chain_advance, chain_sync, chain_new_cycle, &
@@ -13,19 +13,19 @@ module chain_run
                             chain_reset_counts, chain_vectors, chain_tangent_frame, &
                             chain_qr_step, chain_reorthonormalise
     use chain_state, only: event_counts_t
-    use chain_events, only: event_log_t, event_log_init, event_log_clear, event_log_append
+    use chain_event_log, only: event_log_t, event_log_init, event_log_clear, event_log_append
     use chain_lyapunov, only: lyapunov_acc_t, lyapunov_start, lyapunov_step, &
                               lyapunov_result_t, lyapunov_result, &
                               initial_frame, running_rows
     use chain_period, only: detect_period
     use chain_section, only: section_target, advance_to_point, advance_cycles
     use chain_floquet, only: floquet_result
-    use chain_config, only: run_config_t, fmt_real, lyapunov_vectors
+    use chain_config, only: config_t, fmt_real, lyapunov_vectors
     implicit none
     private
-    public :: record_sink_t, memory_sink_t, run_result_t, record_run, progress_callback
+    public :: record_sink_t, memory_sink_t, record_result_t, record_cycles, progress_callback
     public :: check_size
-    public :: period_window, run_state_t, set_window
+    public :: period_window, record_state_t, set_window
 
     integer, parameter :: event_flush = 65536
 
@@ -70,16 +70,16 @@ module chain_run
         procedure :: put_events => memory_put_events
     end type memory_sink_t
 
-    !> Where record_run stands after a record, beyond the chain itself (which is then at that
+    !> Where record_cycles stands after a record, beyond the chain itself (which is then at that
     !> record, synced): with both, a stopped run continues bit for bit.
-    type :: run_state_t
+    type :: record_state_t
         integer(i8) :: cycles_done = 0            !! records done
         type(lyapunov_acc_t) :: acc               !! with &lyapunov
         real(wp), allocatable :: xwin(:, :), vwin(:, :) !! (n, window): the last records, a
                                                   !! ring (record j at modulo(j - 1, window) + 1)
-    end type run_state_t
+    end type record_state_t
 
-    type :: run_result_t
+    type :: record_result_t
         integer(i8) :: cycles_done = 0
         integer(i8) :: cycles_continued = 0      !! records done before (a continued run)
         logical :: complete = .false.
@@ -92,7 +92,7 @@ module chain_run
         integer(i8), allocatable :: running_cycle(:) !! drive cycle of each running estimate
         real(wp), allocatable :: jacobian(:, :)    !! jacobian(2n, 2n) of the Poincare map
         real(wp), allocatable :: multipliers_re(:), multipliers_im(:)
-    end type run_result_t
+    end type record_result_t
 
 contains
 
@@ -102,16 +102,16 @@ contains
     !> With `state` of a stopped run (cycles_done > 0, the chain at that record with its
     !> counters and tangent frame) the run continues after that record instead; `state` comes
     !> back as the run ends, for a later continuation.
-    subroutine record_run(cfg, chain, sink, res, err, progress, state)
-        type(run_config_t), intent(in) :: cfg
+    subroutine record_cycles(cfg, chain, sink, res, err, progress, state)
+        type(config_t), intent(in) :: cfg
         type(chain_t), intent(inout) :: chain
         class(record_sink_t), intent(inout) :: sink
-        type(run_result_t), intent(out) :: res
+        type(record_result_t), intent(out) :: res
         type(error_t), allocatable, intent(out) :: err
         procedure(progress_callback), optional :: progress
-        type(run_state_t), intent(inout), optional :: state
+        type(record_state_t), intent(inout), optional :: state
         type(event_log_t) :: log
-        type(run_state_t) :: st
+        type(record_state_t) :: st
         real(wp), allocatable :: xbuf(:, :), vbuf(:, :)
         integer(i8), allocatable :: cbuf(:)
         integer(i8) :: j, target_cycle, first
@@ -163,14 +163,14 @@ contains
         if (present(state)) call move_state(st, state)
         if (cfg%jacobian) call floquet_result(chain, cfg%jacobian_cycles, res%jacobian, &
                                               res%multipliers_re, res%multipliers_im, err)
-    end subroutine record_run
+    end subroutine record_cycles
 
     !> A fresh run up to its first record: the transient, counters from zero, an empty
     !> Lyapunov accumulator and period window.
     subroutine begin_records(cfg, chain, st, err)
-        type(run_config_t), intent(in) :: cfg
+        type(config_t), intent(in) :: cfg
         type(chain_t), intent(inout) :: chain
-        type(run_state_t), intent(inout) :: st
+        type(record_state_t), intent(inout) :: st
         type(error_t), allocatable, intent(out) :: err
         type(event_log_t) :: log
         integer :: nwin
@@ -187,10 +187,10 @@ contains
     !> The numbers of a run that has recorded res%cycles_done records: counters, collisions per
     !> cycle, periods of the last records, and the Lyapunov spectrum.
     subroutine summarise_run(cfg, chain, st, res)
-        type(run_config_t), intent(in) :: cfg
+        type(config_t), intent(in) :: cfg
         type(chain_t), intent(in) :: chain
-        type(run_state_t), intent(in) :: st
-        type(run_result_t), intent(inout) :: res
+        type(record_state_t), intent(in) :: st
+        type(record_result_t), intent(inout) :: res
         type(event_counts_t) :: counts
         real(wp) :: target_s
         integer :: i, nwin
@@ -230,7 +230,7 @@ contains
     !> synced anyway: the run's own numbers do not depend on whether exponents are
     !> computed), or at the end of the transient.
     subroutine transient_part(cfg, chain, log, err)
-        type(run_config_t), intent(in) :: cfg
+        type(config_t), intent(in) :: cfg
         type(chain_t), intent(inout) :: chain
         type(event_log_t), intent(inout) :: log
         type(error_t), allocatable, intent(out) :: err
@@ -261,7 +261,7 @@ contains
     !> Carry a tangent frame from now: &lyapunov vectors generic orthonormal vectors.
     subroutine start_tangent(chain, cfg, err)
         type(chain_t), intent(inout) :: chain
-        type(run_config_t), intent(in) :: cfg
+        type(config_t), intent(in) :: cfg
         type(error_t), allocatable, intent(out) :: err
         real(wp), allocatable :: frame(:, :)
         integer :: info
@@ -276,7 +276,7 @@ contains
 
     !> Hand a run state over (the windows moved, the accumulator, of bounded size, copied).
     subroutine move_state(from, to)
-        type(run_state_t), intent(inout) :: from, to
+        type(record_state_t), intent(inout) :: from, to
 
         to%cycles_done = from%cycles_done
         call move_alloc(from%xwin, to%xwin)
@@ -286,10 +286,10 @@ contains
 
     !> The period-detection ring of `state` from the last records before a continuation:
     !> x(:, i), v(:, i) are records cycles_done - size(x, 2) + i (the ring keeps the last
-    !> window of them, as record_run would have).
+    !> window of them, as record_cycles would have).
     subroutine set_window(cfg, state, x, v)
-        type(run_config_t), intent(in) :: cfg
-        type(run_state_t), intent(inout) :: state
+        type(config_t), intent(in) :: cfg
+        type(record_state_t), intent(inout) :: state
         real(wp), intent(in) :: x(:, :), v(:, :)
         integer(i8) :: j
         integer :: nwin, w, i
@@ -309,7 +309,7 @@ contains
 
     !> Refuse, before anything is written, records larger than &output max_size_mb.
     subroutine check_size(cfg, err)
-        type(run_config_t), intent(in) :: cfg
+        type(config_t), intent(in) :: cfg
         type(error_t), allocatable, intent(out) :: err
         real(wp) :: mb
         integer :: k
@@ -391,4 +391,4 @@ contains
         end do
     end function in_order
 
-end module chain_run
+end module chain_record
