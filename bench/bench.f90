@@ -116,9 +116,9 @@ contains
         cfg%sweep_parameter = ''
         cfg%sweep_parameter2 = ''
         cfg%input_text = ''
-        cfg%record_events = .false.
-        cfg%transient = 0
-        cfg%cycles = 1
+        cfg%record%record_events = .false.
+        cfg%record%transient = 0
+        cfg%record%cycles = 1
         call validate_config(cfg, err)
         if (allocated(err)) call fail(err%message)
     end function make_config
@@ -146,10 +146,10 @@ contains
 
         sink%keep_strobe = .false.
         call chain_start(chain, start_cycle, start_s)
-        cfg%transient = chain_cycle(chain) - start_cycle
-        cfg%cycles = cycles
+        cfg%record%transient = chain_cycle(chain) - start_cycle
+        cfg%record%cycles = cycles
         t0 = wall_seconds()
-        call record_cycles(cfg, chain, sink, res, err)
+        call record_cycles(cfg%record, chain, sink, res, err)
         seconds = wall_seconds() - t0
         if (allocated(err)) call fail(err%message)
     end subroutine run_block
@@ -209,9 +209,9 @@ contains
             if (emit_state) call print_state(chain)
         end if
         if (vectors > 0) then
-            cfg%lyapunov = .true.
-            cfg%vectors = vectors
-            cfg%qr_every = 1
+            cfg%record%lyapunov = .true.
+            cfg%record%vectors = vectors
+            cfg%record%qr_every = 1
         end if
         call time_cycles(cfg, chain, row)
     end subroutine case_chain
@@ -288,8 +288,8 @@ contains
         integer :: p
 
         cfg = make_config(8, 6.0_wp, 1.9_wp, 0.05_wp, 0.5_wp, 0.3_wp, 0.3_wp)
-        cfg%transient = 250
-        cfg%cycles = 50
+        cfg%record%transient = 250
+        cfg%record%cycles = 50
         cycles = 0
         impacts = 0
         chain = new_chain(cfg)
@@ -300,9 +300,9 @@ contains
                 call restart_chain(cfg, chain, err)
                 if (allocated(err)) call fail(err%message)
             end if
-            call record_cycles(cfg, chain, sink, res, err)
+            call record_cycles(cfg%record, chain, sink, res, err)
             if (allocated(err)) call fail(err%message)
-            cycles = cycles + cfg%transient + cfg%cycles
+            cycles = cycles + cfg%record%transient + cfg%record%cycles
             impacts = impacts + res%impacts
         end do
     end subroutine fig10_pass
@@ -355,20 +355,20 @@ contains
         integer :: p
 
         cfg = make_config(16, 1.0_wp, 1.9_wp, 0.05_wp, 0.7_wp, 0.3_wp, 0.3_wp)
-        cfg%transient = 100
-        cfg%cycles = 300
-        cfg%lyapunov = .true.
-        cfg%vectors = 0
-        cfg%qr_every = 1
+        cfg%record%transient = 100
+        cfg%record%cycles = 300
+        cfg%record%lyapunov = .true.
+        cfg%record%vectors = 0
+        cfg%record%qr_every = 1
         sink%keep_strobe = .false.
         cycles = 0
         impacts = 0
         do p = 1, points
             cfg%model%amplitude = 1 + 0.05_wp*(p - 1)
             chain = new_chain(cfg)
-            call record_cycles(cfg, chain, sink, res, err)
+            call record_cycles(cfg%record, chain, sink, res, err)
             if (allocated(err)) call fail(err%message)
-            cycles = cycles + cfg%transient + cfg%cycles
+            cycles = cycles + cfg%record%transient + cfg%record%cycles
             impacts = impacts + res%impacts
         end do
     end subroutine fig13_pass

@@ -84,16 +84,16 @@ contains
         cfg%initial_file = ''
         cfg%x0 = x0
         cfg%v0 = v0
-        cfg%transient = transient
-        cfg%cycles = cycles
-        cfg%phase = phase
+        cfg%record%transient = transient
+        cfg%record%cycles = cycles
+        cfg%record%phase = phase
         cfg%model%stick_speed = stick_speed
-        cfg%record_events = record_events
-        cfg%lyapunov = lyapunov
-        cfg%vectors = vectors
-        cfg%qr_every = qr_every
-        cfg%jacobian = jacobian
-        cfg%jacobian_cycles = jacobian_cycles
+        cfg%record%record_events = record_events
+        cfg%record%lyapunov = lyapunov
+        cfg%record%vectors = vectors
+        cfg%record%qr_every = qr_every
+        cfg%record%jacobian = jacobian
+        cfg%record%jacobian_cycles = jacobian_cycles
         cfg%output_file = '(python)'
         cfg%max_size_mb = max_size_mb
         cfg%sweep = .false.
@@ -112,9 +112,9 @@ contains
         integer(i8), intent(in) :: nc
 
         run_sizes_ok = nf == cfg%model%n .and. &
-                       (nc == 0 .or. (nr == cfg%model%n .and. nc == cfg%cycles))
-        if (cfg%lyapunov) run_sizes_ok = run_sizes_ok .and. kcap == lyapunov_vectors(cfg)
-        if (cfg%jacobian) run_sizes_ok = run_sizes_ok .and. mj == 2*cfg%model%n
+                       (nc == 0 .or. (nr == cfg%model%n .and. nc == cfg%record%cycles))
+        if (cfg%record%lyapunov) run_sizes_ok = run_sizes_ok .and. kcap == lyapunov_vectors(cfg)
+        if (cfg%record%jacobian) run_sizes_ok = run_sizes_ok .and. mj == 2*cfg%model%n
     end function run_sizes_ok
 
     !> ic_run's outputs besides the records and events: the final state, counters, periods,

@@ -98,13 +98,13 @@ subroutine ic_run(n, nsp, spacing, damping, restitution, amplitude, omega, nb, b
         sink%v => v
         sink%cycle => cycle
     end if
-    if (cfg%record_events) then
+    if (cfg%record%record_events) then
         sink%time => ev_time
         sink%speed => ev_speed
         sink%site => ev_site
         sink%kind => ev_kind
     end if
-    call record_cycles(cfg, chain, sink, res, err)
+    call record_cycles(cfg%record, chain, sink, res, err)
     if (allocated(err)) then
         call put_message(err%message, status_failed, status, msg_len, message)
         return
@@ -165,7 +165,7 @@ subroutine ic_jacobian(nsp, spacing, damping, restitution, amplitude, omega, nb,
                          status_internal, status, msg_len, message)
         return
     end if
-    call poincare_jacobian(chain, cfg%jacobian_cycles, j_out, err)
+    call poincare_jacobian(chain, cfg%record%jacobian_cycles, j_out, err)
     if (allocated(err)) then
         call put_message(err%message, status_failed, status, msg_len, message)
         return

@@ -12,12 +12,14 @@ module chain_config
     use chain_kinds, only: wp, i8, two_pi
     use chain_error, only: error_t, set_error, fmt_real, fmt_int, fmt_int8
     use chain_model, only: model_t, model_walls
+    use chain_record, only: record_spec_t, vector_count
+    use chain_lyapunov, only: running_rows
     use chain_namelist, only: key_spec_t, key_integer, key_real, key_logical, key_string, &
                               check_namelist, apply_override, groups_in, lower
     implicit none
     private
     public :: config_t, read_config, validate_config, config_summary, lyapunov_vectors
-    public :: max_list, fmt_real, fmt_int, sweep_parameters, set_boundary
+    public :: max_list, fmt_real, fmt_int, sweep_parameters, set_boundary, check_size
 
     !> Longest explicit list in a namelist (spacing, x0, v0); longer chains use a file start.
     integer, parameter :: max_list = 100001
@@ -79,23 +81,8 @@ module chain_config
         real(wp) :: x_amp = 0, v_amp = 0
         real(wp), allocatable :: x0(:), v0(:)
         character(len=:), allocatable :: initial_file
-        ! &run
-        integer(i8) :: transient = 0
-        integer(i8) :: cycles = 200
-        real(wp) :: phase = 0
-        logical :: record_events = .true.
-        integer :: max_period = 16
-        real(wp) :: period_tol = 1.0e-6_wp
-        ! &lyapunov
-        logical :: lyapunov = .false.
-        integer :: vectors = 0
-        integer :: qr_every = 1
-        !> cycles at the end of the transient over which the tangent frame is carried and
-        !> re-orthonormalised, but not averaged, so that it has turned towards the leading
-        !> directions when averaging starts (at most &run transient)
-        integer :: align = 100
-        logical :: jacobian = .false.
-        integer :: jacobian_cycles = 1
+        !> &run (but stick_speed, a parameter of the model) and &lyapunov
+        type(record_spec_t) :: record
         ! &output
         character(len=:), allocatable :: output_file
         logical :: overwrite = .false.
@@ -412,26 +399,26 @@ contains
         namelist /run/ transient, cycles, phase, record_events, stick_speed, max_period, &
             period_tol
 
-        transient = cfg%transient
-        cycles = cfg%cycles
-        phase = cfg%phase
-        record_events = cfg%record_events
+        transient = cfg%record%transient
+        cycles = cfg%record%cycles
+        phase = cfg%record%phase
+        record_events = cfg%record%record_events
         stick_speed = cfg%model%stick_speed
-        max_period = cfg%max_period
-        period_tol = cfg%period_tol
+        max_period = cfg%record%max_period
+        period_tol = cfg%record%period_tol
         rewind (u)
         read (u, nml=run, iostat=ios, iomsg=msg)
         if (ios /= 0) then
             call group_error(err, 'run', ios, msg)
             return
         end if
-        cfg%transient = transient
-        cfg%cycles = cycles
-        cfg%phase = phase
-        cfg%record_events = record_events
+        cfg%record%transient = transient
+        cfg%record%cycles = cycles
+        cfg%record%phase = phase
+        cfg%record%record_events = record_events
         cfg%model%stick_speed = stick_speed
-        cfg%max_period = max_period
-        cfg%period_tol = period_tol
+        cfg%record%max_period = max_period
+        cfg%record%period_tol = period_tol
     end subroutine read_run
 
     subroutine read_lyapunov(u, cfg, err)
@@ -444,23 +431,23 @@ contains
         namelist /lyapunov/ enabled, vectors, qr_every, align, jacobian, jacobian_cycles
 
         enabled = .true.
-        vectors = cfg%vectors
-        qr_every = cfg%qr_every
-        align = cfg%align
-        jacobian = cfg%jacobian
-        jacobian_cycles = cfg%jacobian_cycles
+        vectors = cfg%record%vectors
+        qr_every = cfg%record%qr_every
+        align = cfg%record%align
+        jacobian = cfg%record%jacobian
+        jacobian_cycles = cfg%record%jacobian_cycles
         rewind (u)
         read (u, nml=lyapunov, iostat=ios, iomsg=msg)
         if (ios /= 0) then
             call group_error(err, 'lyapunov', ios, msg)
             return
         end if
-        cfg%lyapunov = enabled
-        cfg%vectors = vectors
-        cfg%qr_every = qr_every
-        cfg%align = align
-        cfg%jacobian = jacobian
-        cfg%jacobian_cycles = jacobian_cycles
+        cfg%record%lyapunov = enabled
+        cfg%record%vectors = vectors
+        cfg%record%qr_every = qr_every
+        cfg%record%align = align
+        cfg%record%jacobian = jacobian
+        cfg%record%jacobian_cycles = jacobian_cycles
     end subroutine read_lyapunov
 
     subroutine read_output(u, cfg, err)
@@ -631,27 +618,28 @@ contains
         type(config_t), intent(in) :: cfg
         type(error_t), allocatable, intent(out) :: err
 
-        if (cfg%transient < 0 .or. cfg%transient > 10_i8**12) then
-            call set_error(err, "&run: transient = "//fmt_int8(cfg%transient)// &
+        if (cfg%record%transient < 0 .or. cfg%record%transient > 10_i8**12) then
+            call set_error(err, "&run: transient = "//fmt_int8(cfg%record%transient)// &
                            " is outside [0, 1e12]")
             return
         end if
-        if (cfg%cycles < 1 .or. cfg%cycles > 10_i8**12) then
-            call set_error(err, "&run: cycles = "//fmt_int8(cfg%cycles)//" is outside [1, 1e12]")
+        if (cfg%record%cycles < 1 .or. cfg%record%cycles > 10_i8**12) then
+            call set_error(err, &
+                "&run: cycles = "//fmt_int8(cfg%record%cycles)//" is outside [1, 1e12]")
             return
         end if
-        call check_range(err, 'run', 'phase', cfg%phase, 0.0_wp, two_pi, '[0, 2 pi)', &
+        call check_range(err, 'run', 'phase', cfg%record%phase, 0.0_wp, two_pi, '[0, 2 pi)', &
                          open_high=.true.)
         if (allocated(err)) return
         call check_range(err, 'run', 'stick_speed', cfg%model%stick_speed, tiny(1.0_wp), 1.0_wp, &
                          '(0, 1]')
         if (allocated(err)) return
-        if (cfg%max_period < 1 .or. cfg%max_period > 10000) then
-            call set_error(err, "&run: max_period = "//fmt_int(cfg%max_period)// &
+        if (cfg%record%max_period < 1 .or. cfg%record%max_period > 10000) then
+            call set_error(err, "&run: max_period = "//fmt_int(cfg%record%max_period)// &
                            " is outside [1, 10000]")
             return
         end if
-        call check_range(err, 'run', 'period_tol', cfg%period_tol, tiny(1.0_wp), 1.0_wp, &
+        call check_range(err, 'run', 'period_tol', cfg%record%period_tol, tiny(1.0_wp), 1.0_wp, &
                          '(0, 1)', open_high=.true.)
     end subroutine validate_run
 
@@ -659,24 +647,24 @@ contains
         type(config_t), intent(in) :: cfg
         type(error_t), allocatable, intent(out) :: err
 
-        if (cfg%vectors < 0 .or. cfg%vectors > 2*cfg%model%n) then
-            call set_error(err, "&lyapunov: vectors = "//fmt_int(cfg%vectors)// &
+        if (cfg%record%vectors < 0 .or. cfg%record%vectors > 2*cfg%model%n) then
+            call set_error(err, "&lyapunov: vectors = "//fmt_int(cfg%record%vectors)// &
                            " is outside [0, 2n = "//fmt_int(2*cfg%model%n)//"] (0 means all 2n)")
             return
         end if
-        if (cfg%qr_every < 1 .or. cfg%qr_every > cfg%cycles) then
-            call set_error(err, "&lyapunov: qr_every = "//fmt_int(cfg%qr_every)// &
-                           " is outside [1, cycles = "//fmt_int8(cfg%cycles)//"]")
+        if (cfg%record%qr_every < 1 .or. cfg%record%qr_every > cfg%record%cycles) then
+            call set_error(err, "&lyapunov: qr_every = "//fmt_int(cfg%record%qr_every)// &
+                           " is outside [1, cycles = "//fmt_int8(cfg%record%cycles)//"]")
             return
         end if
-        if (cfg%align < 0 .or. cfg%align > 100000) then
-            call set_error(err, "&lyapunov: align = "//fmt_int(cfg%align)// &
+        if (cfg%record%align < 0 .or. cfg%record%align > 100000) then
+            call set_error(err, "&lyapunov: align = "//fmt_int(cfg%record%align)// &
                            " is outside [0, 100000] (cycles, taken from the end of the transient)")
             return
         end if
-        if (cfg%jacobian_cycles < 1 .or. cfg%jacobian_cycles > 1000) then
-            call set_error(err, "&lyapunov: jacobian_cycles = "//fmt_int(cfg%jacobian_cycles) &
-                           //" is outside [1, 1000]")
+        if (cfg%record%jacobian_cycles < 1 .or. cfg%record%jacobian_cycles > 1000) then
+            call set_error(err, "&lyapunov: jacobian_cycles = "// &
+                           fmt_int(cfg%record%jacobian_cycles)//" is outside [1, 1000]")
         end if
     end subroutine validate_lyapunov
 
@@ -823,21 +811,25 @@ contains
         type(config_t), intent(in) :: cfg
         character(len=:), allocatable :: text
 
-        text = "&run transient = "//fmt_int8(cfg%transient)//", cycles = "// &
-               fmt_int8(cfg%cycles)//", phase = "//exact(cfg%phase)//", record_events = "// &
-               fmt_logical(cfg%record_events)//", stick_speed = "// &
-               exact(cfg%model%stick_speed)//", max_period = "//fmt_int(cfg%max_period)// &
-               ", period_tol = "//exact(cfg%period_tol)//" /"//new_line('a')
+        associate (r => cfg%record)
+            text = "&run transient = "//fmt_int8(r%transient)//", cycles = "// &
+                   fmt_int8(r%cycles)//", phase = "//exact(r%phase)//", record_events = "// &
+                   fmt_logical(r%record_events)//", stick_speed = "// &
+                   exact(cfg%model%stick_speed)//", max_period = "//fmt_int(r%max_period)// &
+                   ", period_tol = "//exact(r%period_tol)//" /"//new_line('a')
+        end associate
     end function run_group
 
     function lyapunov_group(cfg) result(text)
         type(config_t), intent(in) :: cfg
         character(len=:), allocatable :: text
 
-        text = "&lyapunov enabled = "//fmt_logical(cfg%lyapunov)//", vectors = "// &
-               fmt_int(cfg%vectors)//", qr_every = "//fmt_int(cfg%qr_every)//", align = "// &
-               fmt_int(cfg%align)//", jacobian = "//fmt_logical(cfg%jacobian)// &
-               ", jacobian_cycles = "//fmt_int(cfg%jacobian_cycles)//" /"//new_line('a')
+        associate (r => cfg%record)
+            text = "&lyapunov enabled = "//fmt_logical(r%lyapunov)//", vectors = "// &
+                   fmt_int(r%vectors)//", qr_every = "//fmt_int(r%qr_every)//", align = "// &
+                   fmt_int(r%align)//", jacobian = "//fmt_logical(r%jacobian)// &
+                   ", jacobian_cycles = "//fmt_int(r%jacobian_cycles)//" /"//new_line('a')
+        end associate
     end function lyapunov_group
 
     function output_group(cfg) result(text)
@@ -1001,9 +993,39 @@ contains
     pure integer function lyapunov_vectors(cfg)
         type(config_t), intent(in) :: cfg
 
-        lyapunov_vectors = 0
-        if (cfg%lyapunov) lyapunov_vectors = merge(2*cfg%model%n, cfg%vectors, cfg%vectors == 0)
+        lyapunov_vectors = vector_count(cfg%record, cfg%model%n)
     end function lyapunov_vectors
+
+    !> Refuse, before anything is written, records larger than &output max_size_mb.
+    subroutine check_size(cfg, err)
+        type(config_t), intent(in) :: cfg
+        type(error_t), allocatable, intent(out) :: err
+        real(wp) :: mb
+        integer :: k
+
+        k = lyapunov_vectors(cfg)
+        ! strobe x, v, cycle; running estimates (k values and a cycle per kept row)
+        mb = (16.0_wp*cfg%model%n + 8)*real(cfg%record%cycles, wp)/1.0e6_wp
+        if (cfg%record%lyapunov) mb = mb + (8.0_wp*k + 8)* &
+                                      running_rows(cfg%record%cycles/cfg%record%qr_every)/1.0e6_wp
+        if (mb > cfg%max_size_mb) then
+            call set_error(err, "&output: the strobe records of this run need about "// &
+                           fmt_real(mb)//" MB (n x cycles x 16 bytes, plus Lyapunov "// &
+                           "estimates), more than max_size_mb = "//fmt_real(cfg%max_size_mb)// &
+                           "; lower &run cycles or raise &output max_size_mb")
+            return
+        end if
+        ! tangent frames in memory: the frame, the engine's transposed copy, the QR's copy and
+        ! its workspace; for the Poincare-map Jacobian the same for a full 2n x 2n frame
+        mb = 32.0_wp*k*2*cfg%model%n/1.0e6_wp
+        if (cfg%record%jacobian) mb = max(mb, 32.0_wp*(2.0_wp*cfg%model%n)**2/1.0e6_wp)
+        if (mb > cfg%max_size_mb) then
+            call set_error(err, "&lyapunov: the tangent vectors of this run need about "// &
+                           fmt_real(mb)//" MB of memory, more than &output max_size_mb = "// &
+                           fmt_real(cfg%max_size_mb)//"; lower vectors, leave jacobian off, "// &
+                           "or raise max_size_mb")
+        end if
+    end subroutine check_size
 
     !> `run.nml` -> `run.h5` in the current directory.
     pure function default_output(path) result(out)

@@ -20,14 +20,32 @@ module chain_record
     use chain_period, only: detect_period
     use chain_section, only: section_target, advance_to_point, advance_cycles
     use chain_floquet, only: floquet_result
-    use chain_config, only: config_t, fmt_real, lyapunov_vectors
     implicit none
     private
     public :: record_sink_t, memory_sink_t, record_result_t, record_cycles, progress_callback
-    public :: check_size
+    public :: record_spec_t, vector_count
     public :: period_window, record_state_t, set_window
 
     integer, parameter :: event_flush = 65536
+
+    !> What a run records and how (&run and &lyapunov, docs/model.md sections 6-7).
+    type :: record_spec_t
+        integer(i8) :: transient = 0         !! cycles run before the first record
+        integer(i8) :: cycles = 200          !! strobe records
+        real(wp) :: phase = 0                !! drive phase of the section, [0, 2 pi)
+        logical :: record_events = .true.    !! keep every event
+        integer :: max_period = 16           !! longest period looked for
+        real(wp) :: period_tol = 1.0e-6_wp   !! relative tolerance of the period rule
+        logical :: lyapunov = .false.        !! carry a tangent frame, average its growth
+        integer :: vectors = 0               !! exponents (0: all 2n)
+        integer :: qr_every = 1              !! cycles per QR step
+        !> cycles at the end of the transient over which the tangent frame is carried and
+        !> re-orthonormalised, but not averaged, so that it has turned towards the leading
+        !> directions when averaging starts (at most the transient)
+        integer :: align = 100
+        logical :: jacobian = .false.        !! the Poincare-map Jacobian at the end
+        integer :: jacobian_cycles = 1       !! of this many drive cycles
+    end type record_spec_t
 
     !> Where strobe records and events go, chunk by chunk.
     type, abstract :: record_sink_t
@@ -96,14 +114,24 @@ module chain_record
 
 contains
 
-    !> Transient, then `cfg%cycles` recorded cycles sent to `sink`; the chain ends in the final
+    !> Exponents (tangent vectors) a run of n oscillators computes: none without &lyapunov,
+    !> else `vectors`, 0 meaning all 2n.
+    pure integer function vector_count(spec, n)
+        type(record_spec_t), intent(in) :: spec
+        integer, intent(in) :: n
+
+        vector_count = 0
+        if (spec%lyapunov) vector_count = merge(2*n, spec%vectors, spec%vectors == 0)
+    end function vector_count
+
+    !> Transient, then `spec%cycles` recorded cycles sent to `sink`; the chain ends in the final
     !> state. Summary numbers, periods, spectrum and Jacobian come back in `res`.
     !>
     !> With `state` of a stopped run (cycles_done > 0, the chain at that record with its
     !> counters and tangent frame) the run continues after that record instead; `state` comes
     !> back as the run ends, for a later continuation.
-    subroutine record_cycles(cfg, chain, sink, res, err, progress, state)
-        type(config_t), intent(in) :: cfg
+    subroutine record_cycles(spec, chain, sink, res, err, progress, state)
+        type(record_spec_t), intent(in) :: spec
         type(chain_t), intent(inout) :: chain
         class(record_sink_t), intent(inout) :: sink
         type(record_result_t), intent(out) :: res
@@ -123,17 +151,17 @@ contains
             if (state%cycles_done > 0) call move_state(state, st)
         end if
         if (st%cycles_done == 0) then
-            call begin_records(cfg, chain, st, err)
+            call begin_records(spec, chain, st, err)
             if (allocated(err)) return
         end if
-        call event_log_init(log, cfg%record_events, 1024)
+        call event_log_init(log, spec%record_events, 1024)
         res%cycles_continued = st%cycles_done
         res%cycles_done = st%cycles_done
-        m = int(max(1_i8, min(cfg%cycles - st%cycles_done, int(2**20/cfg%model%n, i8))))
-        allocate (xbuf(cfg%model%n, m), vbuf(cfg%model%n, m), cbuf(m))
+        m = int(max(1_i8, min(spec%cycles - st%cycles_done, int(2**20/chain_size(chain), i8))))
+        allocate (xbuf(chain_size(chain), m), vbuf(chain_size(chain), m), cbuf(m))
         first = st%cycles_done + 1
-        do j = st%cycles_done + 1, cfg%cycles
-            call section_target(chain, cfg%transient, cfg%phase, j, target_cycle, target_s)
+        do j = st%cycles_done + 1, spec%cycles
+            call section_target(chain, spec%transient, spec%phase, j, target_cycle, target_s)
             call advance_to_point(chain, target_cycle, target_s, log, err)
             if (allocated(err)) return
             i = int(j - first) + 1
@@ -142,16 +170,16 @@ contains
             w = int(modulo(j - 1, int(size(st%xwin, 2), i8))) + 1
             st%xwin(:, w) = xbuf(:, i)
             st%vwin(:, w) = vbuf(:, i)
-            if (cfg%lyapunov .and. modulo(j, int(cfg%qr_every, i8)) == 0) then
+            if (spec%lyapunov .and. modulo(j, int(spec%qr_every, i8)) == 0) then
                 call chain_qr_step(chain, st%acc, err)
                 if (allocated(err)) return
             end if
             res%cycles_done = j
             st%cycles_done = j
             stop_now = .false.
-            if (present(progress)) stop_now = .not. progress(j, cfg%cycles)
-            if (i == m .or. j == cfg%cycles .or. log%count >= event_flush .or. stop_now) then
-                call sink%put_strobe(cfg%cycles, first, xbuf(:, :i), vbuf(:, :i), cbuf(:i), err)
+            if (present(progress)) stop_now = .not. progress(j, spec%cycles)
+            if (i == m .or. j == spec%cycles .or. log%count >= event_flush .or. stop_now) then
+                call sink%put_strobe(spec%cycles, first, xbuf(:, :i), vbuf(:, :i), cbuf(:i), err)
                 if (.not. allocated(err) .and. log%enabled) call sink%put_events(log, err)
                 if (allocated(err)) return
                 call event_log_clear(log)
@@ -159,35 +187,35 @@ contains
             end if
             if (stop_now) exit
         end do
-        call summarise_run(cfg, chain, st, res)
+        call summarise_run(spec, chain, st, res)
         if (present(state)) call move_state(st, state)
-        if (cfg%jacobian) call floquet_result(chain, cfg%jacobian_cycles, res%jacobian, &
+        if (spec%jacobian) call floquet_result(chain, spec%jacobian_cycles, res%jacobian, &
                                               res%multipliers_re, res%multipliers_im, err)
     end subroutine record_cycles
 
     !> A fresh run up to its first record: the transient, counters from zero, an empty
     !> Lyapunov accumulator and period window.
-    subroutine begin_records(cfg, chain, st, err)
-        type(config_t), intent(in) :: cfg
+    subroutine begin_records(spec, chain, st, err)
+        type(record_spec_t), intent(in) :: spec
         type(chain_t), intent(inout) :: chain
         type(record_state_t), intent(inout) :: st
         type(error_t), allocatable, intent(out) :: err
         type(event_log_t) :: log
         integer :: nwin
 
-        call transient_part(cfg, chain, log, err)
+        call transient_part(spec, chain, log, err)
         if (allocated(err)) return
         call chain_reset_counts(chain)
-        if (cfg%lyapunov) call lyapunov_start(st%acc, chain_vectors(chain), &
-                                              int(cfg%cycles/cfg%qr_every))
-        nwin = int(min(cfg%cycles, int(period_window(cfg%max_period), i8)))
-        allocate (st%xwin(cfg%model%n, nwin), st%vwin(cfg%model%n, nwin))
+        if (spec%lyapunov) call lyapunov_start(st%acc, chain_vectors(chain), &
+                                              int(spec%cycles/spec%qr_every))
+        nwin = int(min(spec%cycles, int(period_window(spec%max_period), i8)))
+        allocate (st%xwin(chain_size(chain), nwin), st%vwin(chain_size(chain), nwin))
     end subroutine begin_records
 
     !> The numbers of a run that has recorded res%cycles_done records: counters, collisions per
     !> cycle, periods of the last records, and the Lyapunov spectrum.
-    subroutine summarise_run(cfg, chain, st, res)
-        type(config_t), intent(in) :: cfg
+    subroutine summarise_run(spec, chain, st, res)
+        type(record_spec_t), intent(in) :: spec
         type(chain_t), intent(in) :: chain
         type(record_state_t), intent(in) :: st
         type(record_result_t), intent(inout) :: res
@@ -195,7 +223,7 @@ contains
         real(wp) :: target_s
         integer :: i, nwin
 
-        res%complete = res%cycles_done == cfg%cycles
+        res%complete = res%cycles_done == spec%cycles
         counts = chain_counts(chain)
         res%impacts = counts%impacts
         res%sticks = counts%sticks
@@ -204,22 +232,22 @@ contains
         res%site_counts = counts%site_counts
         res%collisions_per_cycle = real(counts%impacts, wp)/max(1_i8, res%cycles_done)
         nwin = int(min(res%cycles_done, int(size(st%xwin, 2), i8)))
-        allocate (res%periods(cfg%model%n))
+        allocate (res%periods(chain_size(chain)))
         res%periods = 0
         if (nwin > 0) then
-            do i = 1, cfg%model%n
+            do i = 1, chain_size(chain)
                 res%periods(i) = detect_period(in_order(st%xwin(i, :), res%cycles_done, nwin), &
                                                in_order(st%vwin(i, :), res%cycles_done, nwin), &
-                                               cfg%max_period, cfg%period_tol)
+                                               spec%max_period, spec%period_tol)
             end do
         end if
-        if (cfg%lyapunov .and. st%acc%steps > 0) then
+        if (spec%lyapunov .and. st%acc%steps > 0) then
             res%has_lyapunov = .true.
-            res%lyapunov = lyapunov_result(st%acc, cfg%qr_every, chain_period(chain))
+            res%lyapunov = lyapunov_result(st%acc, spec%qr_every, chain_period(chain))
             allocate (res%running_cycle(size(res%lyapunov%running_steps)))
             do i = 1, size(res%running_cycle)
-                call section_target(chain, cfg%transient, cfg%phase, &
-                                    int(res%lyapunov%running_steps(i), i8)*cfg%qr_every, &
+                call section_target(chain, spec%transient, spec%phase, &
+                                    int(res%lyapunov%running_steps(i), i8)*spec%qr_every, &
                                     res%running_cycle(i), target_s)
             end do
         end if
@@ -229,8 +257,8 @@ contains
     !> starts `align` whole cycles before its end, at the end of a cycle (where the state is
     !> synced anyway: the run's own numbers do not depend on whether exponents are
     !> computed), or at the end of the transient.
-    subroutine transient_part(cfg, chain, log, err)
-        type(config_t), intent(in) :: cfg
+    subroutine transient_part(spec, chain, log, err)
+        type(record_spec_t), intent(in) :: spec
         type(chain_t), intent(inout) :: chain
         type(event_log_t), intent(inout) :: log
         type(error_t), allocatable, intent(out) :: err
@@ -238,35 +266,35 @@ contains
         real(wp) :: target_s
 
         call event_log_init(log, .false., 0)
-        call section_target(chain, cfg%transient, cfg%phase, 0_i8, target_cycle, target_s)
-        align_start = target_cycle - min(cfg%transient, int(cfg%align, i8))
+        call section_target(chain, spec%transient, spec%phase, 0_i8, target_cycle, target_s)
+        align_start = target_cycle - min(spec%transient, int(spec%align, i8))
         ! (a fresh start at t = 0 is the start of a cycle too)
-        if (cfg%lyapunov .and. (align_start > chain_cycle(chain) .or. &
+        if (spec%lyapunov .and. (align_start > chain_cycle(chain) .or. &
                                 (align_start == chain_cycle(chain) .and. &
                                  chain_time(chain) == 0))) then
             call advance_cycles(chain, align_start, log, err)
             if (allocated(err)) return
-            call start_tangent(chain, cfg, err)
+            call start_tangent(chain, spec, err)
             if (allocated(err)) return
-            call advance_cycles(chain, target_cycle, log, err, cfg%qr_every)
+            call advance_cycles(chain, target_cycle, log, err, spec%qr_every)
             if (.not. allocated(err)) call advance_to_point(chain, target_cycle, target_s, &
                                                             log, err)
             if (.not. allocated(err)) call chain_reorthonormalise(chain, err)
         else
             call advance_to_point(chain, target_cycle, target_s, log, err)
-            if (.not. allocated(err) .and. cfg%lyapunov) call start_tangent(chain, cfg, err)
+            if (.not. allocated(err) .and. spec%lyapunov) call start_tangent(chain, spec, err)
         end if
     end subroutine transient_part
 
     !> Carry a tangent frame from now: &lyapunov vectors generic orthonormal vectors.
-    subroutine start_tangent(chain, cfg, err)
+    subroutine start_tangent(chain, spec, err)
         type(chain_t), intent(inout) :: chain
-        type(config_t), intent(in) :: cfg
+        type(record_spec_t), intent(in) :: spec
         type(error_t), allocatable, intent(out) :: err
         real(wp), allocatable :: frame(:, :)
         integer :: info
 
-        call initial_frame(2*cfg%model%n, lyapunov_vectors(cfg), frame, info)
+        call initial_frame(2*chain_size(chain), vector_count(spec, chain_size(chain)), frame, info)
         if (info /= 0) then
             call set_error(err, "lyapunov: cannot build the initial tangent frame")
             return
@@ -287,16 +315,16 @@ contains
     !> The period-detection ring of `state` from the last records before a continuation:
     !> x(:, i), v(:, i) are records cycles_done - size(x, 2) + i (the ring keeps the last
     !> window of them, as record_cycles would have).
-    subroutine set_window(cfg, state, x, v)
-        type(config_t), intent(in) :: cfg
+    subroutine set_window(spec, state, x, v)
+        type(record_spec_t), intent(in) :: spec
         type(record_state_t), intent(inout) :: state
         real(wp), intent(in) :: x(:, :), v(:, :)
         integer(i8) :: j
         integer :: nwin, w, i
 
-        nwin = int(min(cfg%cycles, int(period_window(cfg%max_period), i8)))
+        nwin = int(min(spec%cycles, int(period_window(spec%max_period), i8)))
         if (allocated(state%xwin)) deallocate (state%xwin, state%vwin)
-        allocate (state%xwin(cfg%model%n, nwin), state%vwin(cfg%model%n, nwin))
+        allocate (state%xwin(size(x, 1), nwin), state%vwin(size(x, 1), nwin))
         state%xwin = 0
         state%vwin = 0
         do i = max(1, size(x, 2) - nwin + 1), size(x, 2)
@@ -306,36 +334,6 @@ contains
             state%vwin(:, w) = v(:, i)
         end do
     end subroutine set_window
-
-    !> Refuse, before anything is written, records larger than &output max_size_mb.
-    subroutine check_size(cfg, err)
-        type(config_t), intent(in) :: cfg
-        type(error_t), allocatable, intent(out) :: err
-        real(wp) :: mb
-        integer :: k
-
-        k = lyapunov_vectors(cfg)
-        ! strobe x, v, cycle; running estimates (k values and a cycle per kept row)
-        mb = (16.0_wp*cfg%model%n + 8)*real(cfg%cycles, wp)/1.0e6_wp
-        if (cfg%lyapunov) mb = mb + (8.0_wp*k + 8)*running_rows(cfg%cycles/cfg%qr_every)/1.0e6_wp
-        if (mb > cfg%max_size_mb) then
-            call set_error(err, "&output: the strobe records of this run need about "// &
-                           fmt_real(mb)//" MB (n x cycles x 16 bytes, plus Lyapunov "// &
-                           "estimates), more than max_size_mb = "//fmt_real(cfg%max_size_mb)// &
-                           "; lower &run cycles or raise &output max_size_mb")
-            return
-        end if
-        ! tangent frames in memory: the frame, the engine's transposed copy, the QR's copy and
-        ! its workspace; for the Poincare-map Jacobian the same for a full 2n x 2n frame
-        mb = 32.0_wp*k*2*cfg%model%n/1.0e6_wp
-        if (cfg%jacobian) mb = max(mb, 32.0_wp*(2.0_wp*cfg%model%n)**2/1.0e6_wp)
-        if (mb > cfg%max_size_mb) then
-            call set_error(err, "&lyapunov: the tangent vectors of this run need about "// &
-                           fmt_real(mb)//" MB of memory, more than &output max_size_mb = "// &
-                           fmt_real(cfg%max_size_mb)//"; lower vectors, leave jacobian off, "// &
-                           "or raise max_size_mb")
-        end if
-    end subroutine check_size
 
     subroutine memory_put_strobe(sink, n_records, first, x, v, cycle, err)
         class(memory_sink_t), intent(inout) :: sink

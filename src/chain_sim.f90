@@ -17,11 +17,11 @@ module chain_sim
                             chain_period
     use chain_state, only: chain_state_t, event_counts_t, tangent_state_t, moving_state
     use chain_event_log, only: event_log_t
-    use chain_config, only: config_t, config_summary
+    use chain_config, only: config_t, config_summary, check_size
     use chain_model, only: model_t, model_walls
     use chain_lyapunov, only: lyapunov_pack, lyapunov_unpack
     use chain_record, only: record_sink_t, record_result_t, record_cycles, progress_callback, &
-                            check_size, record_state_t, set_window, period_window
+                            record_state_t, set_window, period_window
     use chain_output, only: output_t, output_begin, output_header, output_strobe_write, &
                             output_events_append, output_final, output_stats, output_periods, &
                             output_lyapunov, output_jacobian, output_end, output_abort, &
@@ -128,7 +128,7 @@ contains
         call chain_init(chain, cfg%model, state, err)
     end subroutine start_chain
 
-    !> A fresh chain in state (x, v) on the section (drive phase cfg%phase of cycle 0), every
+    !> A fresh chain in state (x, v) on the section (drive phase cfg%record%phase of cycle 0), every
     !> oscillator moving and every bond scheduled from scratch: where the Poincare-map Jacobian
     !> of an arbitrary state is taken.
     subroutine chain_on_section(cfg, x, v, chain, err)
@@ -137,8 +137,8 @@ contains
         type(chain_t), intent(out) :: chain
         type(error_t), allocatable, intent(out) :: err
 
-        call chain_init(chain, cfg%model, moving_state(x, v, 0_i8, cfg%phase/cfg%model%omega), &
-                        err)
+        call chain_init(chain, cfg%model, &
+                        moving_state(x, v, 0_i8, cfg%record%phase/cfg%model%omega), err)
     end subroutine chain_on_section
 
     !> The chain goes on from where it stands (positions, velocities, rests, cycle and time)
@@ -178,8 +178,8 @@ contains
             cfg%model%spacing, &
                            cfg%model%damping, cfg%model%restitution, cfg%model%amplitude, &
                                cfg%model%omega, &
-                           model_walls(cfg%model), chain_period(chain), cfg%phase, &
-                           cfg%transient, cfg%cycles, chain_positions(chain), &
+                           model_walls(cfg%model), chain_period(chain), cfg%record%phase, &
+                           cfg%record%transient, cfg%record%cycles, chain_positions(chain), &
                            chain_velocities(chain), err)
     end subroutine header_for
 
@@ -209,7 +209,7 @@ contains
         if (found == file_continuable) then
             call continue_chain(cfg, chain, state, err)
             if (allocated(err)) return
-            call output_continue(sink%out, cfg%output_file, cfg%model%n, cfg%cycles, err)
+            call output_continue(sink%out, cfg%output_file, cfg%model%n, cfg%record%cycles, err)
             if (allocated(err)) return
         else
             call start_chain(cfg, chain, err)
@@ -218,8 +218,10 @@ contains
             if (allocated(err)) return
             call header_for(sink%out, cfg, chain, err)
         end if
-        if (.not. allocated(err)) call record_cycles(cfg, chain, sink, res, err, progress, state)
-        if (.not. allocated(err)) call write_results(sink%out, chain, res, cfg%jacobian_cycles, err)
+        if (.not. allocated(err)) &
+            call record_cycles(cfg%record, chain, sink, res, err, progress, state)
+        if (.not. allocated(err)) &
+            call write_results(sink%out, chain, res, cfg%record%jacobian_cycles, err)
         if (.not. allocated(err) .and. .not. res%complete) then
             call output_truncate_strobe(sink%out, res%cycles_done, err)
             if (.not. allocated(err)) call write_resume(sink%out, cfg, chain, state, err)
@@ -248,8 +250,8 @@ contains
         data%start_s = now%start_time
         data%last_event = now%last_event
         data%same_instant = now%same_instant
-        data%has_tangent = cfg%lyapunov
-        if (cfg%lyapunov) then
+        data%has_tangent = cfg%record%lyapunov
+        if (cfg%record%lyapunov) then
             data%tangent = now%tangent%frame
             data%tangent_scale_bits = now%tangent%scale_bits
             data%tangent_log = now%tangent%growth_log
@@ -275,7 +277,7 @@ contains
         if (allocated(err)) return
         call chain_init(chain, cfg%model, stopped, err)
         if (allocated(err)) return
-        if (cfg%lyapunov) then
+        if (cfg%record%lyapunov) then
             call lyapunov_unpack(data%lyapunov_int, data%lyapunov_real, state%acc, info)
             if (info /= 0) then
                 call set_error(err, "&output: cannot continue '"//cfg%output_file//"': "// &
@@ -285,7 +287,7 @@ contains
             end if
         end if
         state%cycles_done = data%cycles_done
-        call set_window(cfg, state, data%x_last, data%v_last)
+        call set_window(cfg%record, state, data%x_last, data%v_last)
     end subroutine continue_chain
 
     !> The complete state of the chain where the run in cfg%output_file stopped (/final and
@@ -303,10 +305,11 @@ contains
             err%message = "&output: cannot continue '"//cfg%output_file//"': "//err%message
             return
         end if
-        call read_resume(cfg%output_file, cfg%model%n, cfg%lyapunov, &
-                         int(min(cfg%cycles, int(period_window(cfg%max_period), i8))), data, err)
+        call read_resume(cfg%output_file, cfg%model%n, cfg%record%lyapunov, &
+                         int(min(cfg%record%cycles, int(period_window(cfg%record%max_period), &
+                             i8))), data, err)
         if (allocated(err)) return
-        if (data%cycles_done >= cfg%cycles) then
+        if (data%cycles_done >= cfg%record%cycles) then
             call set_error(err, "&output: file = '"//cfg%output_file//"' holds all "// &
                            "its records but is marked complete = 0; set overwrite = .true. "// &
                            "to run it again")
@@ -318,7 +321,7 @@ contains
         stopped%same_instant = data%same_instant
         stopped%counts = event_counts_t(data%impacts, data%sticks, data%releases, data%touches, &
                                         data%site_counts)
-        if (.not. cfg%lyapunov) return
+        if (.not. cfg%record%lyapunov) return
         if (size(data%tangent, 2) /= 2*cfg%model%n) then
             call set_error(err, "&output: cannot continue '"//cfg%output_file//"': "// &
                            "/resume/tangent is not a frame of the chain's 2n coordinates")

@@ -26,8 +26,8 @@ module chain_sweep
     use chain_engine, only: chain_t, chain_init, chain_positions, chain_velocities, &
                             chain_contacts, chain_cycle, chain_time
     use chain_state, only: chain_state_t, moving_state
-    use chain_config, only: config_t, validate_config, lyapunov_vectors
-    use chain_record, only: memory_sink_t, record_result_t, record_cycles, check_size
+    use chain_config, only: config_t, validate_config, lyapunov_vectors, check_size
+    use chain_record, only: memory_sink_t, record_result_t, record_cycles
     use chain_sim, only: start_chain, write_run_header
     use chain_output, only: output_t, output_begin, output_group, output_end, output_abort
     use chain_hdf5, only: h5_write, h5_write_attr
@@ -150,7 +150,7 @@ contains
         do p = 1, plan%n_points
             res%values(:, p) = point_values(cfg, plan, p)
         end do
-        allocate (res%x(cfg%model%n, int(cfg%cycles), plan%n_points))
+        allocate (res%x(cfg%model%n, int(cfg%record%cycles), plan%n_points))
         allocate (res%collisions(plan%n_points), res%period(cfg%model%n, plan%n_points))
         allocate (res%exponents(plan%k, plan%n_points), res%stderr(plan%k, plan%n_points))
         allocate (res%ky(plan%n_points), res%done(plan%n_points))
@@ -191,8 +191,8 @@ contains
 
         point = cfg
         point%sweep = .false.
-        point%record_events = .false.
-        point%jacobian = .false.
+        point%record%record_events = .false.
+        point%record%jacobian = .false.
         values = point_values(cfg, plan, p)
         call set_parameter(point, cfg%sweep_parameter, values(1))
         if (plan%n_axes == 2) call set_parameter(point, cfg%sweep_parameter2, values(2))
@@ -258,7 +258,7 @@ contains
                 !$omp end critical (sweep_hdf5)
             end if
             if (allocated(err)) return
-            call record_cycles(point, chain, sink, out, err)
+            call record_cycles(point%record, chain, sink, out, err)
             if (allocated(err)) return
             !$omp critical (sweep_results)
             res%x(:, :, p) = sink%x
@@ -481,7 +481,7 @@ contains
             return
         end if
         write (u, iostat=ios, iomsg=msg) checkpoint_magic, len(cfg%input_text), &
-            cfg%input_text, plan%n_points, cfg%model%n, cfg%cycles, plan%k, plan%n_branches
+            cfg%input_text, plan%n_points, cfg%model%n, cfg%record%cycles, plan%k, plan%n_branches
         call branch_record_sizes(cfg, plan, nr, ni)
         allocate (reals(nr), ints(ni))
         do b = 1, plan%n_branches
@@ -527,7 +527,7 @@ contains
             allocate (character(len=length) :: text)
             read (u, iostat=ios) text, n_points, n, cycles, k, n_branches
             ours = ios == 0 .and. text == cfg%input_text .and. n_points == plan%n_points .and. &
-                   n == cfg%model%n .and. cycles == cfg%cycles .and. k == plan%k .and. &
+                   n == cfg%model%n .and. cycles == cfg%record%cycles .and. k == plan%k .and. &
                    n_branches == plan%n_branches
         end if
         if (.not. ours) then
@@ -563,7 +563,7 @@ contains
         type(config_t), intent(in) :: cfg
         type(sweep_plan_t), intent(in) :: plan
 
-        point_reals = 2 + cfg%model%n*int(cfg%cycles) + 2*plan%k
+        point_reals = 2 + cfg%model%n*int(cfg%record%cycles) + 2*plan%k
     end function point_reals
 
     !> Integers per point: done, periods (n).
@@ -593,7 +593,8 @@ contains
         do q = 1, plan%points_per_branch
             p = (b - 1)*plan%points_per_branch + q
             reals((q - 1)*nr + 1:q*nr) = [res%collisions(p), &
-                                          reshape(res%x(:, :, p), [cfg%model%n*int(cfg%cycles)]), &
+                                          reshape(res%x(:, :, p), &
+                                              [cfg%model%n*int(cfg%record%cycles)]), &
                                           res%exponents(:, p), res%stderr(:, p), res%ky(p)]
             ints((q - 1)*ni + 1:q*ni) = [merge(1_i8, 0_i8, res%done(p)), &
                                          int(res%period(:, p), i8)]
@@ -618,14 +619,14 @@ contains
         integer :: q, p, n, m, k, j, i
 
         n = cfg%model%n
-        m = n*int(cfg%cycles)
+        m = n*int(cfg%record%cycles)
         k = plan%k
         do q = 1, plan%points_per_branch
             p = (b - 1)*plan%points_per_branch + q
             j = (q - 1)*point_reals(cfg, plan)
             i = (q - 1)*point_ints(cfg)
             res%collisions(p) = reals(j + 1)
-            res%x(:, :, p) = reshape(reals(j + 2:j + 1 + m), [n, int(cfg%cycles)])
+            res%x(:, :, p) = reshape(reals(j + 2:j + 1 + m), [n, int(cfg%record%cycles)])
             res%exponents(:, p) = reals(j + 2 + m:j + 1 + m + k)
             res%stderr(:, p) = reals(j + 2 + m + k:j + 1 + m + 2*k)
             res%ky(p) = reals(j + 2 + m + 2*k)

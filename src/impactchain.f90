@@ -13,14 +13,14 @@ module impactchain
     use chain_error, only: error_t, set_error
     use chain_model, only: model_t
     use chain_config, only: config_t, read_config, validate_config, fmt_real, fmt_int, &
-                            lyapunov_vectors, set_boundary, config_summary
+                            lyapunov_vectors, set_boundary, config_summary, check_size
     use chain_state, only: chain_state_t, event_counts_t
     use chain_engine, only: chain_t, chain_size, chain_cycle, chain_time, chain_start, &
                             chain_period, chain_positions, chain_velocities, chain_copy_state, &
                             chain_contacts, chain_counts
     use chain_event_log, only: event_log_t
     use chain_record, only: record_sink_t, memory_sink_t, record_result_t, record_cycles, &
-                         progress_callback, check_size
+                            progress_callback, record_spec_t
     use chain_section, only: advance_to_point
     use chain_floquet, only: poincare_jacobian
     use chain_sim, only: simulate_to_file, start_chain, initial_state, chain_on_section, &
@@ -45,6 +45,7 @@ module impactchain
     public :: chain_size, chain_cycle, chain_time, chain_start, chain_period, chain_positions
     public :: chain_velocities, chain_copy_state, chain_contacts, chain_counts
     public :: record_sink_t, memory_sink_t, record_result_t, record_cycles, progress_callback
+    public :: record_spec_t
     public :: advance_to_point, poincare_jacobian, simulate_to_file, start_chain, initial_state
     public :: chain_on_section, restart_chain
     public :: run_sweep, sweep_summary_t, plan_sweep, sweep_plan_t, sweep_result_t

@@ -12,8 +12,7 @@ module test_corners
                             chain_time, chain_positions, chain_velocities, chain_contacts
     use chain_event_log, only: event_log_t, event_log_init, event_impact, event_stick, &
                             event_release, event_touch
-    use chain_config, only: config_t
-    use chain_record, only: record_cycles, memory_sink_t, record_result_t
+    use chain_record, only: record_cycles, memory_sink_t, record_result_t, record_spec_t
     use chain_section, only: advance_to_point
     use chain_floquet, only: poincare_jacobian, floquet_multipliers
     use testing, only: tally_t, check, check_close
@@ -46,22 +45,20 @@ contains
                         walls, 1.0e-9_wp, x, v, 0_i8, 0.0_wp, err)
     end subroutine new_chain
 
-    function run_config(n, transient, cycles, lyapunov, phase) result(cfg)
-        integer, intent(in) :: n
+    function record_spec(transient, cycles, lyapunov, phase) result(spec)
         integer(i8), intent(in) :: transient, cycles
         logical, intent(in) :: lyapunov
         real(wp), intent(in), optional :: phase
-        type(config_t) :: cfg
+        type(record_spec_t) :: spec
 
-        cfg%model%n = n
-        cfg%transient = transient
-        cfg%cycles = cycles
-        cfg%record_events = .true.
-        cfg%lyapunov = lyapunov
-        cfg%vectors = 0
-        cfg%qr_every = 1
-        if (present(phase)) cfg%phase = phase
-    end function run_config
+        spec%transient = transient
+        spec%cycles = cycles
+        spec%record_events = .true.
+        spec%lyapunov = lyapunov
+        spec%vectors = 0
+        spec%qr_every = 1
+        if (present(phase)) spec%phase = phase
+    end function record_spec
 
     !> One oscillator between walls 0.5 away, driven slowly (A = 1, w = 0.5) from rest: it
     !> comes to rest on the right wall. The force on it at rest on the right wall, A sin(w t) - a,
@@ -79,7 +76,7 @@ contains
 
         call new_chain(chain, 0.1_wp, 0.5_wp, 1.0_wp, 0.5_wp, [0.5_wp, 0.5_wp], .true., &
                        [0.0_wp], [0.0_wp], err)
-        call record_cycles(run_config(1, 0_i8, 6_i8, .false.), chain, sink, res, err)
+        call record_cycles(record_spec(0_i8, 6_i8, .false.), chain, sink, res, err)
         call check(t, .not. allocated(err), 'right-wall release run completes')
         if (allocated(err)) return
         call check_close(t, sink%x(1, 1), -0.42131_wp, 'right-wall release: first strobe', &
@@ -122,7 +119,7 @@ contains
 
         call new_chain(chain, 0.1_wp, 0.5_wp, 2.0_wp, 0.6_wp, [0.5_wp, 0.5_wp, 0.5_wp], .true., &
                        [0.1_wp, -0.1_wp], [0.3_wp, -0.2_wp], err)
-        call record_cycles(run_config(2, 0_i8, 40_i8, .false., 3.6_wp), chain, sink, res, err)
+        call record_cycles(record_spec(0_i8, 40_i8, .false., 3.6_wp), chain, sink, res, err)
         call check(t, .not. allocated(err), 'right-wall stack run completes')
         if (allocated(err)) return
         worst = huge(1.0_wp)
@@ -158,7 +155,7 @@ contains
                         0.54435773315862745_wp, -0.56736870932367256_wp, &
                         0.35212304681746931_wp, -0.6209995412417999_wp, &
                         0.34491556076987984_wp], err)
-        call record_cycles(run_config(7, 200_i8, 1000_i8, .true.), chain, sink, res, err)
+        call record_cycles(record_spec(200_i8, 1000_i8, .true.), chain, sink, res, err)
         call check(t, .not. allocated(err), 'grazing free chain run completes')
         if (allocated(err)) return
         touches = count(sink%events%kind(:sink%events%count) == event_touch)
@@ -274,7 +271,7 @@ contains
                          'rest orbit: nonzero multipliers the same from either section', &
                          rel_tol=1.0e-9_wp)
         call rest_chain(chain, err)
-        call record_cycles(run_config(2, 300_i8, 1000_i8, .true.), chain, sink, res, err)
+        call record_cycles(record_spec(300_i8, 1000_i8, .true.), chain, sink, res, err)
         call check(t, .not. allocated(err), 'rest orbit: spectrum')
         if (allocated(err)) return
         collapsed = count(.not. ieee_is_finite(res%lyapunov%bits_per_cycle))

@@ -13,8 +13,8 @@ module test_lyapunov
     use chain_engine, only: chain_t, chain_init, chain_model, chain_cycle, chain_time, &
                             chain_positions, chain_velocities, chain_counts, chain_reset_counts
     use chain_event_log, only: event_log_t, event_log_init
-    use chain_config, only: config_t
-    use chain_record, only: record_cycles, memory_sink_t, record_result_t, check_size
+    use chain_config, only: config_t, check_size
+    use chain_record, only: record_cycles, memory_sink_t, record_result_t
     use chain_section, only: advance_to_point
     use chain_floquet, only: poincare_jacobian, floquet_multipliers
     use chain_lyapunov, only: ky_dimension, lyapunov_acc_t, &
@@ -187,8 +187,8 @@ contains
 
         cfg = spectrum_config(16, 0_i8, 10000000_i8, 0)
         k = 32
-        stored_mb = ((16*16 + 8)*real(cfg%cycles, wp) + &
-                     (8*k + 8)*real(running_rows(cfg%cycles), wp))/1.0e6_wp
+        stored_mb = ((16*16 + 8)*real(cfg%record%cycles, wp) + &
+                     (8*k + 8)*real(running_rows(cfg%record%cycles), wp))/1.0e6_wp
         cfg%max_size_mb = stored_mb*(1 + 1.0e-9_wp)
         call check_size(cfg, err)
         call check(t, .not. allocated(err), 'size check: a run that fits is accepted')
@@ -204,12 +204,12 @@ contains
         type(config_t) :: cfg
 
         cfg%model%n = n
-        cfg%transient = transient
-        cfg%cycles = cycles
-        cfg%record_events = .false.
-        cfg%lyapunov = .true.
-        cfg%vectors = vectors
-        cfg%qr_every = 1
+        cfg%record%transient = transient
+        cfg%record%cycles = cycles
+        cfg%record%record_events = .false.
+        cfg%record%lyapunov = .true.
+        cfg%record%vectors = vectors
+        cfg%record%qr_every = 1
     end function spectrum_config
 
     subroutine spectrum(chain, cfg, res, err)
@@ -220,7 +220,7 @@ contains
         type(memory_sink_t) :: sink
 
         sink%keep_strobe = .false.
-        call record_cycles(cfg, chain, sink, res, err)
+        call record_cycles(cfg%record, chain, sink, res, err)
     end subroutine spectrum
 
     !> Sum of all 2n exponents (nats per cycle) = -2 b n T + 2 ln(K) c, c = impacts per cycle.

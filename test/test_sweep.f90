@@ -99,7 +99,7 @@ contains
         if (allocated(err)) return
         call check(t, size(point%model%spacing) == cfg%model%n + 1 .and. &
                    all(point%model%spacing == 1.0_wp + 2*0.1_wp), "'spacing' sets every bond")
-        call check(t, .not. point%sweep .and. .not. point%record_events, &
+        call check(t, .not. point%sweep .and. .not. point%record%record_events, &
                    'a point is a plain run that keeps no events')
         call config_from(cfg, "&sweep parameter = 'restitution', start = 0.9, stop = 1.1, "// &
                          "step = 0.1 /", 'point')
