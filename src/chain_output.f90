@@ -643,7 +643,7 @@ contains
         integer, intent(out) :: kind
         type(h5_file_t) :: src
         type(error_t), allocatable :: err
-        integer(i8) :: complete
+        integer(i8) :: complete, version
         character(len=:), allocatable :: text
         logical :: exists
 
@@ -652,10 +652,13 @@ contains
         if (.not. exists) return
         call open_for_reading(path, '&output', src, err)
         if (allocated(err)) return
+        call h5_read_attr(src, '/', 'schema_version', version, err)
         call h5_read_attr(src, '/', 'complete', complete, err)
         call h5_exists(src, 'resume', exists, err)
         call h5_read_attr(src, '/', 'input_namelist', text, err)
-        if (.not. allocated(err) .and. complete == 0 .and. exists) then
+        ! (a run stopped early by an older version is not continued into another layout)
+        if (.not. allocated(err) .and. complete == 0 .and. exists .and. &
+            version == schema_version) then
             ! (trailing blanks of the text are not stored)
             kind = merge(file_continuable, file_other_input, text == input_text)
         end if

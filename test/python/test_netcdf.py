@@ -158,3 +158,19 @@ def test_a_2d_sweep_is_netcdf(impactchain_exe, tmp_path):
     assert sweep["ky_dimension"].dims == ("point", "point2")
     assert sweep["drive_period"].dims == ("point",)
     assert not {"omega", "drive_period", "damping"} & set(groups["params"].attrs)
+
+
+def test_a_run_starts_from_the_final_state_of_either_version(impactchain_exe, tmp_path):
+    """&initial kind = 'file' reads /final and /params of schema version 1 (fixed-length
+    strings, one-element arrays) and of version 2 alike: the same state, the same run."""
+    data = Path(__file__).resolve().parents[2] / "post" / "tests" / "data"
+    records = {}
+    for version in (1, 2):
+        text = ("&chain n = 3, amplitude = 1.7, omega = 1.5 /\n"
+                f"&initial kind = 'file', file = '{data / f'v{version}_run.h5'}' /\n"
+                f"&run transient = 0, cycles = 8 /\n&output file = 'from{version}.h5' /\n")
+        run_namelist(impactchain_exe, text, tmp_path, f"from{version}.nml")
+        with h5py.File(tmp_path / f"from{version}.h5") as f:
+            records[version] = f["strobe/x"][()]
+    assert records[1].shape == (8, 3)
+    np.testing.assert_array_equal(records[1], records[2])
