@@ -221,7 +221,7 @@ contains
     subroutine flags(f, name, values, meanings, err)
         type(h5_file_t), intent(in) :: f
         character(len=*), intent(in) :: name, meanings
-        integer, intent(in) :: values(:)
+        integer, intent(in), contiguous :: values(:)
         type(error_t), allocatable, intent(inout) :: err
 
         call h5_write_attr(f, name, 'flag_values', values, err)
@@ -463,6 +463,7 @@ contains
         real(wp), intent(in), contiguous :: re(:), im(:)
         integer, intent(in) :: cycles
         type(error_t), allocatable, intent(out) :: err
+        real(wp), allocatable :: rows(:, :)
 
         associate (f => out%file)
             call h5_create_group(f, 'floquet', err)
@@ -471,7 +472,8 @@ contains
                                      err)
             call h5_create_dimension(f, 'floquet/multiplier', size(re, kind=i8), .false., err)
             ! rows of the Jacobian are rows in h5py
-            call h5_write(f, 'floquet/jacobian', transpose(jacobian), '1', err)
+            rows = transpose(jacobian)
+            call h5_write(f, 'floquet/jacobian', rows, '1', err)
             call describe(f, 'floquet/jacobian', 'Jacobian of the Poincare map over the '// &
                           'cycles; rows and columns ordered x(1), v(1), x(2), ...', '', &
                           'row column', err)

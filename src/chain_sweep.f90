@@ -554,6 +554,7 @@ contains
         real(wp), intent(in) :: values(:)
         type(error_t), allocatable, intent(inout) :: err
         character(len=:), allocatable :: unit
+        real(wp), allocatable :: coordinates(:) ! (values may be strided: a contiguous copy)
 
         if (allocated(err)) return
         select case (parameter)
@@ -564,7 +565,8 @@ contains
         case default
             unit = ''
         end select
-        call h5_write(out%file, name, values, '1', err)
+        coordinates = values
+        call h5_write(out%file, name, coordinates, '1', err)
         call h5_set_scale(out%file, name, err)
         if (.not. allocated(err)) call output_describe(out, name, parameter//' (the swept '// &
                                                        'parameter) at the point', unit, '', err)
