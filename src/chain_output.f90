@@ -8,6 +8,13 @@
 !> chunks as the run proceeds, so memory does not grow with its length. Fortran arrays x(n, m)
 !> appear in h5py as (m, n).
 !>
+!> Schema version 2 is netCDF-4 readable: every group holds the dimensions of its datasets
+!> (`oscillator`, `bond`, `cycle`, `event`, ...), as coordinate variables (an index or the
+!> record's drive cycle) or as bare dimensions; every dataset has `long_name`, `units` in
+!> UDUNITS' syntax (`1` for the model's reduced units, docs/model.md section 1.5) and, for
+!> those, `model_units` naming the reduced unit; coded integers have `flag_values` and
+!> `flag_meanings`.
+!>
 !> Errors come up from chain_hdf5 as "hdf5: <call> failed on <object> (file <path>)"; where a
 !> procedure here knows which input a file belongs to, it says so in front ("&output: ...",
 !> "&initial: ..."). The chain_hdf5 calls of a procedure follow one another untested: each
@@ -21,7 +28,8 @@ module chain_output
                           h5_close_file, h5_is_hdf5_file, h5_create_group, h5_exists, &
                           h5_delete, h5_write_attr, h5_read_attr, h5_write, h5_read, &
                           h5_read_alloc, h5_extent, h5_create_growing, h5_create_appendable, &
-                          h5_set_extent, h5_write_slab, h5_read_slab
+                          h5_set_extent, h5_write_slab, h5_read_slab, h5_create_dimension, &
+                          h5_set_scale, h5_dimensions, h5_detach_dimensions, h5_delete_attr
     implicit none
     private
     public :: output_t, output_begin, output_header, output_strobe_write, output_events_append
@@ -30,8 +38,11 @@ module chain_output
     public :: schema_version, code_version, output_truncate_strobe
     public :: resume_data_t, output_resume, read_resume, output_inspect, output_continue
     public :: file_absent, file_continuable, file_other_input, file_other
+    public :: output_describe, output_index, output_unset_param
 
-    integer, parameter :: schema_version = 1
+    integer, parameter :: schema_version = 2
+    !> The schema versions whose /final a run can start from (&initial kind = 'file').
+    integer, parameter :: readable_versions(2) = [1, 2]
     character(len=*), parameter :: code_version = '0.1.0'
     !> Events per chunk of the /events datasets.
     integer(i8), parameter :: event_chunk = 65536
@@ -133,12 +144,122 @@ contains
             ! cycle counts go up to 1e12: 64-bit in the file as in memory
             call h5_write_attr(f, 'params', 'transient', transient, err)
             call h5_write_attr(f, 'params', 'cycles', cycles, err)
-            call h5_write(f, 'params/spacing', spacing, 'length', err)
+            call bond_coordinate(f, 'params', n, err)
+            call h5_write(f, 'params/spacing', spacing, '1', err)
+            call describe(f, 'params/spacing', 'spacing of the bond (the gap at rest)', &
+                          'length', 'bond', err)
             call h5_create_group(f, 'initial', err)
-            call h5_write(f, 'initial/x', x0, 'length', err)
-            call h5_write(f, 'initial/v', v0, 'length/time', err)
+            call oscillator_coordinate(f, 'initial', n, err)
+            call h5_write(f, 'initial/x', x0, '1', err)
+            call describe(f, 'initial/x', 'displacement from equilibrium at t = 0', 'length', &
+                          'oscillator', err)
+            call h5_write(f, 'initial/v', v0, '1', err)
+            call describe(f, 'initial/v', 'velocity at t = 0', 'length/time', 'oscillator', &
+                          err)
         end associate
     end subroutine output_header
+
+    !> A sweep's file: /params without the parameter `name`, which differs from point to
+    !> point (the sweep's coordinates hold it); without drive_period when that is omega.
+    subroutine output_unset_param(out, name, err)
+        type(output_t), intent(inout) :: out
+        character(len=*), intent(in) :: name
+        type(error_t), allocatable, intent(out) :: err
+
+        associate (f => out%file)
+            select case (name)
+            case ('spacing')
+                ! the variable first: its dimension then has no dataset left to refer to
+                call h5_delete(f, 'params/spacing', err)
+                call h5_delete(f, 'params/bond', err)
+            case ('omega')
+                call h5_delete_attr(f, 'params', 'omega', err)
+                call h5_delete_attr(f, 'params', 'drive_period', err)
+            case default
+                call h5_delete_attr(f, 'params', name, err)
+            end select
+        end associate
+    end subroutine output_unset_param
+
+    !> Describe dataset `name` (for the sweep's writer: see describe).
+    subroutine output_describe(out, name, long_name, model_units, dims, err)
+        type(output_t), intent(inout) :: out
+        character(len=*), intent(in) :: name, long_name, model_units, dims
+        type(error_t), allocatable, intent(out) :: err
+
+        call describe(out%file, name, long_name, model_units, dims, err)
+    end subroutine output_describe
+
+    !> The coordinate variable `name` numbering its dimension first, first + 1, ... (for the
+    !> sweep's writer: `oscillator`, `exponent`).
+    subroutine output_index(out, name, first, count, long_name, err)
+        type(output_t), intent(inout) :: out
+        character(len=*), intent(in) :: name, long_name
+        integer, intent(in) :: first, count
+        type(error_t), allocatable, intent(out) :: err
+
+        call index_coordinate(out%file, name, first, count, long_name, err)
+    end subroutine output_index
+
+    ! ---- the description of a dataset ----------------------------------------------------
+
+    !> `long_name` of dataset `name`, its reduced unit (`model_units`, if any: its `units` are
+    !> then 1) and the dimensions of its axes (blank-separated, h5py's order; '' for a scalar
+    !> or a coordinate variable), which must exist in its group.
+    subroutine describe(f, name, long_name, model_units, dims, err)
+        type(h5_file_t), intent(in) :: f
+        character(len=*), intent(in) :: name, long_name, model_units, dims
+        type(error_t), allocatable, intent(inout) :: err
+
+        call h5_write_attr(f, name, 'long_name', long_name, err)
+        if (len(model_units) > 0) call h5_write_attr(f, name, 'model_units', model_units, err)
+        if (len_trim(dims) > 0) call h5_dimensions(f, name, dims, err)
+    end subroutine describe
+
+    !> Integer flags of dataset `name`: netCDF's flag_values and flag_meanings (words joined
+    !> by underscores, one per value).
+    subroutine flags(f, name, values, meanings, err)
+        type(h5_file_t), intent(in) :: f
+        character(len=*), intent(in) :: name, meanings
+        integer, intent(in), contiguous :: values(:)
+        type(error_t), allocatable, intent(inout) :: err
+
+        call h5_write_attr(f, name, 'flag_values', values, err)
+        call h5_write_attr(f, name, 'flag_meanings', meanings, err)
+    end subroutine flags
+
+    subroutine index_coordinate(f, name, first, count, long_name, err)
+        type(h5_file_t), intent(in) :: f
+        character(len=*), intent(in) :: name, long_name
+        integer, intent(in) :: first, count
+        type(error_t), allocatable, intent(inout) :: err
+        integer :: j
+
+        call h5_write(f, name, [(j, j=first, first + count - 1)], '1', err)
+        call h5_write_attr(f, name, 'long_name', long_name, err)
+        call h5_set_scale(f, name, err)
+    end subroutine index_coordinate
+
+    !> `group/oscillator`: oscillators 1..n.
+    subroutine oscillator_coordinate(f, group, n, err)
+        type(h5_file_t), intent(in) :: f
+        character(len=*), intent(in) :: group
+        integer, intent(in) :: n
+        type(error_t), allocatable, intent(inout) :: err
+
+        call index_coordinate(f, group//'/oscillator', 1, n, 'oscillator index', err)
+    end subroutine oscillator_coordinate
+
+    !> `group/bond`: bonds 0..n, bond k between oscillators k and k+1 (0 and n: the walls).
+    subroutine bond_coordinate(f, group, n, err)
+        type(h5_file_t), intent(in) :: f
+        character(len=*), intent(in) :: group
+        integer, intent(in) :: n
+        type(error_t), allocatable, intent(inout) :: err
+
+        call index_coordinate(f, group//'/bond', 0, n + 1, 'bond index: bond k joins '// &
+                              'oscillators k and k+1 (0: the left wall, n: the right wall)', err)
+    end subroutine bond_coordinate
 
     !> Create a group (once).
     subroutine output_group(out, name, err)
@@ -163,10 +284,17 @@ contains
         associate (f => out%file)
             if (first == 1) then
                 call h5_create_group(f, 'strobe', err)
-                call h5_create_growing(f, 'strobe/x', h5_real, dims, 'length', err)
-                call h5_create_growing(f, 'strobe/v', h5_real, dims, 'length/time', err)
-                call h5_create_growing(f, 'strobe/cycle', h5_int8, dims(2:2), 'drive cycles', &
-                                       err)
+                call oscillator_coordinate(f, 'strobe', out%n, err)
+                call h5_create_growing(f, 'strobe/cycle', h5_int8, dims(2:2), '1', err)
+                call h5_set_scale(f, 'strobe/cycle', err)
+                call describe(f, 'strobe/cycle', 'drive cycle of the record (from the '// &
+                              'start, transient included)', 'drive cycles', '', err)
+                call h5_create_growing(f, 'strobe/x', h5_real, dims, '1', err)
+                call describe(f, 'strobe/x', 'displacement from equilibrium at the section', &
+                              'length', 'cycle oscillator', err)
+                call h5_create_growing(f, 'strobe/v', h5_real, dims, '1', err)
+                call describe(f, 'strobe/v', 'velocity at the section', 'length/time', &
+                              'cycle oscillator', err)
             end if
             call h5_write_slab(f, 'strobe/x', offset, x, grow=.false., err=err)
             call h5_write_slab(f, 'strobe/v', offset, v, grow=.false., err=err)
@@ -185,19 +313,25 @@ contains
         associate (f => out%file)
             if (.not. out%events_created) then
                 call h5_create_group(f, 'events', err)
-                call h5_create_appendable(f, 'events/time', h5_real, event_chunk, 'time', err)
-                call h5_create_appendable(f, 'events/site', h5_int, event_chunk, &
-                                          'bond index (0 = left wall, n = right wall)', err)
-                call h5_create_appendable(f, 'events/speed', h5_real, event_chunk, &
-                                          'length/time', err)
-                call h5_create_appendable(f, 'events/kind', h5_int, event_chunk, &
-                                          '0 impact, 1 impact starting a sticking contact, '// &
-                                          '2 release, 3 touch (no impulse)', err)
+                call h5_create_dimension(f, 'events/event', 0_i8, .true., err)
+                call h5_create_appendable(f, 'events/time', h5_real, event_chunk, '1', err)
+                call describe(f, 'events/time', 'time of the event from the start of the run', &
+                              'time', 'event', err)
+                call h5_create_appendable(f, 'events/site', h5_int, event_chunk, '1', err)
+                call describe(f, 'events/site', 'bond of the event: bond k joins oscillators '// &
+                              'k and k+1 (0: the left wall, n: the right wall)', '', 'event', err)
+                call h5_create_appendable(f, 'events/speed', h5_real, event_chunk, '1', err)
+                call describe(f, 'events/speed', 'approach speed', 'length/time', 'event', err)
+                call h5_create_appendable(f, 'events/kind', h5_int, event_chunk, '1', err)
+                call describe(f, 'events/kind', 'kind of event', '', 'event', err)
+                call flags(f, 'events/kind', [0, 1, 2, 3], 'impact impact_starting_a_rest '// &
+                           'release touch_without_impulse', err)
                 if (allocated(err)) return
                 out%events_created = .true.
             end if
             if (size(time) == 0) return
             offset = [out%n_events]
+            call h5_set_extent(f, 'events/event', [out%n_events + size(time)], err)
             call h5_write_slab(f, 'events/time', offset, time, grow=.true., err=err)
             call h5_write_slab(f, 'events/site', offset, site, grow=.true., err=err)
             call h5_write_slab(f, 'events/speed', offset, speed, grow=.true., err=err)
@@ -218,16 +352,33 @@ contains
 
         associate (f => out%file)
             call h5_create_group(f, 'final', err)
-            call h5_write(f, 'final/x', x, 'length', err)
-            call h5_write(f, 'final/v', v, 'length/time', err)
-            call h5_write(f, 'final/phase', [phase], 'radians', err)
-            call h5_write(f, 'final/time_in_cycle', [time_in_cycle], 'time', err)
-            call h5_write(f, 'final/contact', contact, &
-                          '-1 resting on left wall, 1 right, 0 free', err)
-            call h5_write(f, 'final/event_time', queue_time, 'time within the drive cycle', err)
-            call h5_write(f, 'final/event_action', queue_action, &
-                          '0 none, 1 impact, 2 release, 3 recheck', err)
-            call h5_write(f, 'final/cycle', cycle, 'drive cycles', err)
+            call oscillator_coordinate(f, 'final', out%n, err)
+            call bond_coordinate(f, 'final', out%n, err)
+            call h5_write(f, 'final/x', x, '1', err)
+            call describe(f, 'final/x', 'displacement from equilibrium at the end', 'length', &
+                          'oscillator', err)
+            call h5_write(f, 'final/v', v, '1', err)
+            call describe(f, 'final/v', 'velocity at the end', 'length/time', 'oscillator', err)
+            call h5_write(f, 'final/phase', phase, 'radian', err)
+            call describe(f, 'final/phase', 'drive phase at the end', '', '', err)
+            call h5_write(f, 'final/time_in_cycle', time_in_cycle, '1', err)
+            call describe(f, 'final/time_in_cycle', 'time since the start of the drive '// &
+                          'cycle at the end', 'time', '', err)
+            call h5_write(f, 'final/contact', contact, '1', err)
+            call describe(f, 'final/contact', 'resting contact of the oscillator with a wall', &
+                          '', 'oscillator', err)
+            call flags(f, 'final/contact', [-1, 0, 1], 'resting_on_the_left_wall free '// &
+                       'resting_on_the_right_wall', err)
+            call h5_write(f, 'final/event_time', queue_time, '1', err)
+            call describe(f, 'final/event_time', 'time within the drive cycle of the '// &
+                          'next event scheduled at the bond', 'time', 'bond', err)
+            call h5_write(f, 'final/event_action', queue_action, '1', err)
+            call describe(f, 'final/event_action', 'next event scheduled at the bond', '', &
+                          'bond', err)
+            call flags(f, 'final/event_action', [0, 1, 2, 3], 'none impact release recheck', &
+                       err)
+            call h5_write(f, 'final/cycle', cycle, '1', err)
+            call describe(f, 'final/cycle', 'drive cycle at the end', 'drive cycles', '', err)
         end associate
     end subroutine output_final
 
@@ -246,9 +397,14 @@ contains
             call h5_write_attr(f, 'stats', 'sticks', sticks, err)
             call h5_write_attr(f, 'stats', 'releases', releases, err)
             call h5_write_attr(f, 'stats', 'touches', touches, err)
-            call h5_write(f, 'stats/site_counts', site_counts, 'impacts', err)
+            call bond_coordinate(f, 'stats', out%n, err)
+            call h5_write(f, 'stats/site_counts', site_counts, '1', err)
+            call describe(f, 'stats/site_counts', 'impacts at the bond in the recorded cycles', &
+                          'impacts', 'bond', err)
             ! /params/cycles is the number planned; a run stopped early did fewer
-            call h5_write(f, 'stats/cycles_done', cycles_done, 'drive cycles', err)
+            call h5_write(f, 'stats/cycles_done', cycles_done, '1', err)
+            call describe(f, 'stats/cycles_done', 'strobe records done', 'drive cycles', '', &
+                          err)
         end associate
     end subroutine output_stats
 
@@ -257,7 +413,9 @@ contains
         integer, intent(in), contiguous :: period(:)
         type(error_t), allocatable, intent(out) :: err
 
-        call h5_write(out%file, 'strobe/period', period, 'drive cycles (0 = aperiodic)', err)
+        call h5_write(out%file, 'strobe/period', period, '1', err)
+        call describe(out%file, 'strobe/period', "period of the oscillator's strobe record "// &
+                      "(0: none found, aperiodic)", 'drive cycles', 'oscillator', err)
     end subroutine output_periods
 
     !> /lyapunov; `running_bits(k, rows)` are the running estimates at drive cycles
@@ -273,11 +431,26 @@ contains
 
         associate (f => out%file)
             call h5_create_group(f, 'lyapunov', err)
-            call h5_write(f, 'lyapunov/exponents', bits, 'bits per drive cycle', err)
-            call h5_write(f, 'lyapunov/exponents_per_time', per_time, 'nats per unit time', err)
-            call h5_write(f, 'lyapunov/stderr', stderr_bits, 'bits per drive cycle', err)
-            call h5_write(f, 'lyapunov/running', running_bits, 'bits per drive cycle', err)
-            call h5_write(f, 'lyapunov/running_cycle', running_cycle, 'drive cycles', err)
+            call index_coordinate(f, 'lyapunov/exponent', 1, size(bits), 'exponent index '// &
+                                  '(descending order)', err)
+            call h5_create_dimension(f, 'lyapunov/qr_step', size(running_cycle, kind=i8), &
+                                     .false., err)
+            call h5_write(f, 'lyapunov/exponents', bits, 'bit', err)
+            call describe(f, 'lyapunov/exponents', 'Lyapunov exponent', &
+                          'bits per drive cycle', 'exponent', err)
+            call h5_write(f, 'lyapunov/exponents_per_time', per_time, '1', err)
+            call describe(f, 'lyapunov/exponents_per_time', 'Lyapunov exponent', &
+                          'nats per unit time', 'exponent', err)
+            call h5_write(f, 'lyapunov/stderr', stderr_bits, 'bit', err)
+            call describe(f, 'lyapunov/stderr', 'standard error of the Lyapunov exponent '// &
+                          '(20 block averages)', 'bits per drive cycle', 'exponent', err)
+            call h5_write(f, 'lyapunov/running_cycle', running_cycle, '1', err)
+            call describe(f, 'lyapunov/running_cycle', 'drive cycle of the running estimate', &
+                          'drive cycles', 'qr_step', err)
+            call h5_write(f, 'lyapunov/running', running_bits, 'bit', err)
+            call describe(f, 'lyapunov/running', 'running estimate of the Lyapunov exponent '// &
+                          'after a QR step', 'bits per drive cycle', 'qr_step exponent', err)
+            call h5_write_attr(f, 'lyapunov/running', 'coordinates', 'running_cycle', err)
             call h5_write_attr(f, 'lyapunov', 'ky_dimension', ky, err)
             call h5_write_attr(f, 'lyapunov', 'positive_sum', positive_sum, err)
             call h5_write_attr(f, 'lyapunov', 'collisions_per_cycle', collisions_per_cycle, err)
@@ -290,13 +463,26 @@ contains
         real(wp), intent(in), contiguous :: re(:), im(:)
         integer, intent(in) :: cycles
         type(error_t), allocatable, intent(out) :: err
+        real(wp), allocatable :: rows(:, :)
 
         associate (f => out%file)
             call h5_create_group(f, 'floquet', err)
+            call h5_create_dimension(f, 'floquet/row', size(jacobian, 1, kind=i8), .false., err)
+            call h5_create_dimension(f, 'floquet/column', size(jacobian, 2, kind=i8), .false., &
+                                     err)
+            call h5_create_dimension(f, 'floquet/multiplier', size(re, kind=i8), .false., err)
             ! rows of the Jacobian are rows in h5py
-            call h5_write(f, 'floquet/jacobian', transpose(jacobian), '1', err)
+            rows = transpose(jacobian)
+            call h5_write(f, 'floquet/jacobian', rows, '1', err)
+            call describe(f, 'floquet/jacobian', 'Jacobian of the Poincare map over the '// &
+                          'cycles; rows and columns ordered x(1), v(1), x(2), ...', '', &
+                          'row column', err)
             call h5_write(f, 'floquet/multipliers_re', re, '1', err)
+            call describe(f, 'floquet/multipliers_re', 'real part of the Floquet multiplier', &
+                          '', 'multiplier', err)
             call h5_write(f, 'floquet/multipliers_im', im, '1', err)
+            call describe(f, 'floquet/multipliers_im', 'imaginary part of the Floquet '// &
+                          'multiplier', '', 'multiplier', err)
             call h5_write_attr(f, 'floquet', 'cycles', cycles, err)
         end associate
     end subroutine output_jacobian
@@ -355,21 +541,48 @@ contains
 
         associate (f => out%file)
             call h5_create_group(f, 'resume', err)
-            call h5_write(f, 'resume/start_cycle', data%start_cycle, 'drive cycles', err)
-            call h5_write(f, 'resume/start_time_in_cycle', [data%start_s], 'time', err)
-            call h5_write(f, 'resume/last_event', [data%last_event], &
-                          'time within the drive cycle', err)
-            call h5_write(f, 'resume/same_instant', [data%same_instant], &
-                          'impacts at the time of last_event', err)
+            call h5_write(f, 'resume/start_cycle', data%start_cycle, '1', err)
+            call describe(f, 'resume/start_cycle', "drive cycle of the run's start", &
+                          'drive cycles', '', err)
+            call h5_write(f, 'resume/start_time_in_cycle', data%start_s, '1', err)
+            call describe(f, 'resume/start_time_in_cycle', "time within the drive cycle of "// &
+                          "the run's start", 'time', '', err)
+            call h5_write(f, 'resume/last_event', data%last_event, '1', err)
+            call describe(f, 'resume/last_event', 'time within the drive cycle of the last '// &
+                          'impact', 'time', '', err)
+            call h5_write(f, 'resume/same_instant', data%same_instant, '1', err)
+            call describe(f, 'resume/same_instant', 'impacts at the time of last_event', '', &
+                          '', err)
             if (.not. data%has_tangent) return
-            call h5_write(f, 'resume/tangent', data%tangent, &
-                          '1 (times 2**-tangent_scale_bits)', err)
-            call h5_write(f, 'resume/tangent_scale_bits', [data%tangent_scale_bits], '1', err)
+            call h5_create_dimension(f, 'resume/state', size(data%tangent, 2, kind=i8), &
+                                     .false., err)
+            call h5_create_dimension(f, 'resume/vector', size(data%tangent, 1, kind=i8), &
+                                     .false., err)
+            call h5_create_dimension(f, 'resume/packed_int', size(data%lyapunov_int, kind=i8), &
+                                     .false., err)
+            call h5_create_dimension(f, 'resume/packed_real', &
+                                     size(data%lyapunov_real, kind=i8), .false., err)
+            call h5_write(f, 'resume/tangent', data%tangent, '1', err)
+            call describe(f, 'resume/tangent', 'tangent vectors (times '// &
+                          '2**-tangent_scale_bits)', '', 'state vector', err)
+            call h5_write(f, 'resume/tangent_scale_bits', data%tangent_scale_bits, '1', err)
+            call describe(f, 'resume/tangent_scale_bits', 'binary scale of the tangent '// &
+                          'vectors', '', '', err)
             call h5_write(f, 'resume/tangent_log', data%tangent_log, '1', err)
+            call describe(f, 'resume/tangent_log', 'growth of the tangent vector kept by '// &
+                          'the engine', 'nats', 'vector', err)
             call h5_write(f, 'resume/rank_losses', data%rank_losses, '1', err)
-            call h5_write(f, 'resume/jumps_volume', [data%jumps_volume], '1', err)
+            call describe(f, 'resume/rank_losses', 'singular tangent maps since the last '// &
+                          'QR step', '', '', err)
+            call h5_write(f, 'resume/jumps_volume', data%jumps_volume, '1', err)
+            call describe(f, 'resume/jumps_volume', 'ln |det| of the jumps since the last '// &
+                          'QR step', 'nats', '', err)
             call h5_write(f, 'resume/lyapunov_int', data%lyapunov_int, '1', err)
-            call h5_write(f, 'resume/lyapunov_real', data%lyapunov_real, 'nats', err)
+            call describe(f, 'resume/lyapunov_int', "the Lyapunov accumulator's integers "// &
+                          "(packed)", '', 'packed_int', err)
+            call h5_write(f, 'resume/lyapunov_real', data%lyapunov_real, '1', err)
+            call describe(f, 'resume/lyapunov_real', "the Lyapunov accumulator's reals "// &
+                          "(packed)", 'nats', 'packed_real', err)
         end associate
     end subroutine output_resume
 
@@ -382,7 +595,6 @@ contains
         type(resume_data_t), intent(out) :: data
         type(error_t), allocatable, intent(out) :: err
         type(h5_file_t) :: src
-        integer :: scalar(1)
         integer(i8) :: m
 
         call open_for_reading(path, '&output', src, err)
@@ -397,13 +609,11 @@ contains
         call h5_read(src, 'resume/start_cycle', data%start_cycle, err)
         call h5_read(src, 'resume/start_time_in_cycle', data%start_s, err)
         call h5_read(src, 'resume/last_event', data%last_event, err)
-        call h5_read(src, 'resume/same_instant', scalar, err)
-        data%same_instant = scalar(1)
+        call h5_read(src, 'resume/same_instant', data%same_instant, err)
         data%has_tangent = with_tangent
         if (with_tangent) then
             call h5_read_alloc(src, 'resume/tangent', data%tangent, err)
-            call h5_read(src, 'resume/tangent_scale_bits', scalar, err)
-            data%tangent_scale_bits = scalar(1)
+            call h5_read(src, 'resume/tangent_scale_bits', data%tangent_scale_bits, err)
             allocate (data%tangent_log(size(data%tangent, 1)))
             call h5_read(src, 'resume/tangent_log', data%tangent_log, err)
             call h5_read(src, 'resume/rank_losses', data%rank_losses, err)
@@ -435,7 +645,7 @@ contains
         integer, intent(out) :: kind
         type(h5_file_t) :: src
         type(error_t), allocatable :: err
-        integer(i8) :: complete
+        integer(i8) :: complete, version
         character(len=:), allocatable :: text
         logical :: exists
 
@@ -444,10 +654,13 @@ contains
         if (.not. exists) return
         call open_for_reading(path, '&output', src, err)
         if (allocated(err)) return
+        call h5_read_attr(src, '/', 'schema_version', version, err)
         call h5_read_attr(src, '/', 'complete', complete, err)
         call h5_exists(src, 'resume', exists, err)
         call h5_read_attr(src, '/', 'input_namelist', text, err)
-        if (.not. allocated(err) .and. complete == 0 .and. exists) then
+        ! (a run stopped early by an older version is not continued into another layout)
+        if (.not. allocated(err) .and. complete == 0 .and. exists .and. &
+            version == schema_version) then
             ! (trailing blanks of the text are not stored)
             kind = merge(file_continuable, file_other_input, text == input_text)
         end if
@@ -479,6 +692,9 @@ contains
         call h5_open_file(out%file, out%part_path, writable=.true., err=err)
         do j = 1, size(results)
             call h5_exists(out%file, trim(results(j)), exists, err)
+            ! (/strobe/oscillator stays: no reference to the deleted period may stay with it)
+            if (exists .and. results(j) == 'strobe/period') &
+                call h5_detach_dimensions(out%file, 'strobe/period', 'oscillator', err)
             if (exists) call h5_delete(out%file, trim(results(j)), err)
         end do
         call set_strobe_records(out, n_records, err)
@@ -520,9 +736,9 @@ contains
         call open_for_reading(path, '&initial', src, err)
         if (allocated(err)) return
         call h5_read_attr(src, '/', 'schema_version', version, err)
-        if (.not. allocated(err) .and. version /= schema_version) &
+        if (.not. allocated(err) .and. .not. any(version == readable_versions)) &
             call set_error(err, "&initial: file = '"//path//"' is not an impactchain "// &
-                           "output of schema version 1")
+                           "output of schema version 1 or 2")
         call h5_read_attr(src, 'params', 'n', n_file, err)
         if (.not. allocated(err) .and. n_file /= n) &
             call set_error(err, "&initial: file = '"//path//"' has n = "//fmt_int8(n_file)// &

@@ -21,7 +21,7 @@
 !> live in the checkpoint `file.h5.ckpt` (written every `checkpoint_every` seconds and when
 !> stopped), from which the same input resumes.
 module chain_sweep
-    use chain_kinds, only: wp, i8
+    use chain_kinds, only: wp, i8, two_pi
     use chain_error, only: error_t, set_error, fmt_real, fmt_int
     use chain_engine, only: chain_t, chain_init, chain_positions, chain_velocities, &
                             chain_contacts, chain_cycle, chain_time
@@ -29,8 +29,9 @@ module chain_sweep
     use chain_config, only: config_t, validate_config, lyapunov_vectors, check_size
     use chain_record, only: memory_sink_t, record_result_t, record_cycles
     use chain_sim, only: start_chain, write_run_header
-    use chain_output, only: output_t, output_begin, output_group, output_end, output_abort
-    use chain_hdf5, only: h5_write, h5_write_attr
+    use chain_output, only: output_t, output_begin, output_group, output_end, output_abort, &
+                            output_describe, output_index, output_unset_param
+    use chain_hdf5, only: h5_write, h5_write_attr, h5_set_scale, h5_create_dimension
     use chain_files, only: rename_file, remove_file, close_checked
     implicit none
     private
@@ -420,39 +421,150 @@ contains
         path = cfg%output_file//'.ckpt'
     end function checkpoint_path
 
-    !> Header of a normal run (for the sweep's starting configuration) and the /sweep group:
-    !> the swept parameters and the mode as attributes, then per point (h5py shows the point
-    !> index first) the parameter values, the records, the periods and any exponents.
+    !> Header of a normal run (for the sweep's starting configuration, without the swept
+    !> parameters, which /params cannot hold as one number) and the /sweep group: the swept
+    !> parameters and the mode as attributes; the coordinates `point` (the values of
+    !> `parameter`) and, in a 2-D sweep, `point2` (those of `parameter2`); per point the
+    !> records, the periods, any exponents, and the drive period in an omega sweep. The point
+    !> axes come first in h5py's order: (point, record, oscillator), or (point, point2,
+    !> record, oscillator) in a 2-D sweep.
     subroutine write_sweep_file(out, cfg, plan, res, err)
         type(output_t), intent(inout) :: out
         type(config_t), intent(in) :: cfg
         type(sweep_plan_t), intent(in) :: plan
         type(sweep_result_t), intent(in) :: res
         type(error_t), allocatable, intent(out) :: err
+        character(len=:), allocatable :: points
+        integer :: n, c, n1, n2
 
         call write_run_header(out, cfg, err)
         if (allocated(err)) return
-        call output_group(out, 'sweep', err)
+        call output_unset_param(out, cfg%sweep_parameter, err)
+        if (plan%n_axes == 2 .and. .not. allocated(err)) &
+            call output_unset_param(out, cfg%sweep_parameter2, err)
+        if (.not. allocated(err)) call output_group(out, 'sweep', err)
         if (allocated(err)) return
+        n = cfg%model%n
+        c = int(cfg%record%cycles)
+        n1 = plan%n_axis1
+        n2 = plan%n_axis2
         associate (f => out%file)
             call h5_write_attr(f, 'sweep', 'parameter', cfg%sweep_parameter, err)
-            call h5_write_attr(f, 'sweep', 'parameter2', cfg%sweep_parameter2//' ', err)
+            call h5_write_attr(f, 'sweep', 'parameter2', cfg%sweep_parameter2, err)
             call h5_write_attr(f, 'sweep', 'mode', cfg%sweep_mode, err)
-            if (plan%n_axes == 1) then
-                call h5_write(f, 'sweep/values', res%values(1, :), 'parameter', err)
-            else
-                call h5_write(f, 'sweep/values', res%values, 'parameter', err)
+            call sweep_axis(out, 'sweep/point', cfg%sweep_parameter, res%values(1, :n1), err)
+            points = 'point'
+            if (plan%n_axes == 2) then
+                call sweep_axis(out, 'sweep/point2', cfg%sweep_parameter2, &
+                                res%values(2, ::n1), err)
+                points = 'point point2'
             end if
-            call h5_write(f, 'sweep/x', res%x, 'length', err)
-            call h5_write(f, 'sweep/collisions_per_cycle', res%collisions, &
-                          'impacts per drive cycle', err)
-            call h5_write(f, 'sweep/period', res%period, 'drive cycles (0 = aperiodic)', err)
-            if (plan%k == 0) return
-            call h5_write(f, 'sweep/exponents', res%exponents, 'bits per drive cycle', err)
-            call h5_write(f, 'sweep/stderr', res%stderr, 'bits per drive cycle', err)
-            call h5_write(f, 'sweep/ky_dimension', res%ky, '1', err)
+            if (allocated(err)) return
+            call h5_create_dimension(f, 'sweep/record', int(c, i8), .false., err)
+            if (.not. allocated(err)) call output_index(out, 'sweep/oscillator', 1, n, &
+                                                        'oscillator index', err)
+            if (allocated(err)) return
+            ! a 2-D sweep's points (index i along parameter, j along parameter2) are stored
+            ! in order p = i + (j - 1) n1; in the file their axes are (point, point2)
+            if (plan%n_axes == 1) then
+                call h5_write(f, 'sweep/x', res%x, '1', err)
+                call h5_write(f, 'sweep/collisions_per_cycle', res%collisions, '1', err)
+                call h5_write(f, 'sweep/period', res%period, '1', err)
+            else
+                call h5_write(f, 'sweep/x', reshape(res%x, [n, c, n2, n1], order=[1, 2, 4, 3]), &
+                              '1', err)
+                call h5_write(f, 'sweep/collisions_per_cycle', &
+                              reshape(res%collisions, [n2, n1], order=[2, 1]), '1', err)
+                call h5_write(f, 'sweep/period', reshape(res%period, [n, n2, n1], &
+                                                         order=[1, 3, 2]), '1', err)
+            end if
+            if (allocated(err)) return
+            call output_describe(out, 'sweep/x', 'displacement from equilibrium at the '// &
+                                 'section, the records of the point', 'length', &
+                                 points//' record oscillator', err)
+            if (.not. allocated(err)) &
+                call output_describe(out, 'sweep/collisions_per_cycle', 'collisions per '// &
+                                     'drive cycle', 'impacts per drive cycle', points, err)
+            if (.not. allocated(err)) &
+                call output_describe(out, 'sweep/period', "period of the oscillator's "// &
+                                     "strobe record (0: none found, aperiodic)", &
+                                     'drive cycles', points//' oscillator', err)
+            if (allocated(err)) return
+            call drive_periods(err)
+            if (plan%k == 0 .or. allocated(err)) return
+            call output_index(out, 'sweep/exponent', 1, plan%k, 'exponent index '// &
+                              '(descending order)', err)
+            if (allocated(err)) return
+            if (plan%n_axes == 1) then
+                call h5_write(f, 'sweep/exponents', res%exponents, 'bit', err)
+                call h5_write(f, 'sweep/stderr', res%stderr, 'bit', err)
+                call h5_write(f, 'sweep/ky_dimension', res%ky, '1', err)
+            else
+                call h5_write(f, 'sweep/exponents', reshape(res%exponents, [plan%k, n2, n1], &
+                                                            order=[1, 3, 2]), 'bit', err)
+                call h5_write(f, 'sweep/stderr', reshape(res%stderr, [plan%k, n2, n1], &
+                                                         order=[1, 3, 2]), 'bit', err)
+                call h5_write(f, 'sweep/ky_dimension', reshape(res%ky, [n2, n1], &
+                                                               order=[2, 1]), '1', err)
+            end if
+            if (allocated(err)) return
+            call output_describe(out, 'sweep/exponents', 'Lyapunov exponent', &
+                                 'bits per drive cycle', points//' exponent', err)
+            if (.not. allocated(err)) &
+                call output_describe(out, 'sweep/stderr', 'standard error of the Lyapunov '// &
+                                     'exponent (20 block averages)', 'bits per drive cycle', &
+                                     points//' exponent', err)
+            if (.not. allocated(err)) &
+                call output_describe(out, 'sweep/ky_dimension', 'Kaplan-Yorke dimension', &
+                                     '', points, err)
         end associate
+
+    contains
+
+        !> /sweep/drive_period along the omega axis of an omega sweep (2 pi / w, as
+        !> chain_flow's make_flow computes it).
+        subroutine drive_periods(err)
+            type(error_t), allocatable, intent(inout) :: err
+
+            if (cfg%sweep_parameter == 'omega') then
+                call h5_write(out%file, 'sweep/drive_period', two_pi/res%values(1, :n1), '1', &
+                              err)
+                if (.not. allocated(err)) call output_describe(out, 'sweep/drive_period', &
+                    'drive period 2 pi / omega', 'time', 'point', err)
+            else if (plan%n_axes == 2 .and. cfg%sweep_parameter2 == 'omega') then
+                call h5_write(out%file, 'sweep/drive_period', two_pi/res%values(2, ::n1), '1', &
+                              err)
+                if (.not. allocated(err)) call output_describe(out, 'sweep/drive_period', &
+                    'drive period 2 pi / omega', 'time', 'point2', err)
+            end if
+        end subroutine drive_periods
+
     end subroutine write_sweep_file
+
+    !> The coordinate variable `name` of a sweep axis: the values of `parameter` there.
+    subroutine sweep_axis(out, name, parameter, values, err)
+        type(output_t), intent(inout) :: out
+        character(len=*), intent(in) :: name, parameter
+        real(wp), intent(in) :: values(:)
+        type(error_t), allocatable, intent(inout) :: err
+        character(len=:), allocatable :: unit
+        real(wp), allocatable :: coordinates(:) ! (values may be strided: a contiguous copy)
+
+        if (allocated(err)) return
+        select case (parameter)
+        case ('amplitude', 'spacing')
+            unit = 'length'
+        case ('omega', 'damping')
+            unit = '1/time'
+        case default
+            unit = ''
+        end select
+        coordinates = values
+        call h5_write(out%file, name, coordinates, '1', err)
+        call h5_set_scale(out%file, name, err)
+        if (.not. allocated(err)) call output_describe(out, name, parameter//' (the swept '// &
+                                                       'parameter) at the point', unit, '', err)
+    end subroutine sweep_axis
 
     !> Finished points and where each branch resumes, written atomically (tmp + rename): a
     !> header naming the input and the sweep's sizes, then every branch as pack_branch lays

@@ -10,6 +10,7 @@ program main
     use test_lyapunov, only: run_lyapunov_tests
     use test_corners, only: run_corner_tests
     use test_invariants, only: run_invariant_tests
+    use test_hdf5, only: run_hdf5_tests
     implicit none
     type(suite_runner_t) :: runner
 
@@ -22,5 +23,6 @@ program main
     call runner%run('lyapunov', run_lyapunov_tests)
     call runner%run('corners', run_corner_tests)
     call runner%run('invariants', run_invariant_tests)
+    call runner%run('hdf5', run_hdf5_tests)
     call runner%finish()
 end program main

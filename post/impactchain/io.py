@@ -1,4 +1,4 @@
-"""Read impactchain HDF5 output (schema_version 1).
+"""Read impactchain HDF5 output (schema_version 2, and the older version 1).
 
 This is the only module that knows the file layout and its axis order. Everything
 else in ``impactchain`` works on the frozen dataclasses returned by :func:`read_run`, whose
@@ -19,6 +19,15 @@ HDF5 path                 dataclass field         shape (h5py / numpy order)
                                                   (n_points, n), ``exponents`` (n_points,
                                                   k), ``ky_dimension`` (n_points,)
 ========================  ======================  ===================================
+
+Version 2 (README "Output") is netCDF-4 readable: every group carries its dimensions and
+coordinates (``xarray.open_dataset(path, engine="h5netcdf", group="strobe")``), a sweep
+stores its parameter values as the coordinates ``/sweep/point`` (and ``point2``), a 2-D
+sweep's per-point datasets as (point, point2, ...), and ``/params`` lacks the swept
+parameters (``NaN`` in :class:`Params`; ``drive_period`` too in an omega sweep, whose
+``Sweep.drive_period`` has it per point). This module returns both versions in the same
+dataclasses, a 2-D sweep's points flattened in version 1's order (the first parameter
+varying fastest), so nothing downstream depends on the version.
 
 Every group except ``/params`` is optional; a figure states what it needs through
 ``read_run(path, require=...)`` and gets a :class:`SchemaError` naming the missing
@@ -43,6 +52,7 @@ import numpy as np
 
 __all__ = [
     "SCHEMA_VERSION",
+    "READABLE_VERSIONS",
     "IMPACT",
     "STICK",
     "RELEASE",
@@ -63,8 +73,11 @@ __all__ = [
     "namelist_groups",
 ]
 
-SCHEMA_VERSION = 1
-"""The file layout this module reads."""
+SCHEMA_VERSION = 2
+"""The file layout the simulator writes (``Run.schema_version`` of a run made in memory)."""
+
+READABLE_VERSIONS = (1, 2)
+"""The file layouts this module reads."""
 
 IMPACT = 0
 """``/events/kind``: an ordinary impact."""
@@ -96,9 +109,10 @@ FILE_UNITS: Mapping[str, str] = MappingProxyType({
     "sweep/stderr": "bits per drive cycle",
     "sweep/ky_dimension": "1",
 })
-"""The ``units`` attribute the simulator writes on each dataset (src/chain_output.f90,
-src/chain_sweep.f90): the units of a run made in memory (:func:`run_from_api`) and the
-defaults of the figures' axis labels."""
+"""The unit of each dataset in the model's reduced units (docs/model.md section 1.5): a
+version-2 file's ``model_units`` attribute (its ``units`` are UDUNITS', ``1`` for these),
+a version-1 file's ``units``; the units of a run made in memory (:func:`run_from_api`) and
+the defaults of the figures' axis labels."""
 
 OPTIONAL_GROUPS = ("initial", "final", "strobe", "events", "stats", "lyapunov", "sweep")
 
@@ -242,13 +256,14 @@ class Sweep:
     parameter: str
     parameter2: str  # '' for a 1-D sweep
     mode: str
-    values: np.ndarray  # (n_points,) or (n_points, 2)
+    values: np.ndarray  # (n_points,) or (n_points, 2); point p = i + n1*j in a 2-D sweep
     x: np.ndarray  # (n_points, cycles, n)
     collisions_per_cycle: np.ndarray  # (n_points,)
     period: np.ndarray  # (n_points, n) the simulator's period per oscillator, 0 = aperiodic
     exponents: np.ndarray | None = None  # (n_points, k) bits/cycle
     stderr: np.ndarray | None = None  # (n_points, k) bits/cycle
     ky_dimension: np.ndarray | None = None  # (n_points,) written with the exponents
+    drive_period: np.ndarray | None = None  # (n_points,) in an omega sweep (version 2)
 
     @property
     def is_2d(self) -> bool:
@@ -342,10 +357,10 @@ def _check_schema(f: h5py.File, path: str) -> None:
             f"{path}: no 'schema_version' attribute; not an impactchain output file"
         )
     version = _int(f.attrs["schema_version"], path, "schema_version")
-    if version != SCHEMA_VERSION:
+    if version not in READABLE_VERSIONS:
         raise SchemaError(
-            f"{path}: schema_version {version} is not supported (this impactchain package reads "
-            f"schema_version {SCHEMA_VERSION})"
+            f"{path}: schema_version {version} is not supported (this impactchain package "
+            f"reads schema_version {' and '.join(map(str, READABLE_VERSIONS))})"
         )
     if "params" not in f:
         raise SchemaError(f"{path}: no /params group")
@@ -405,11 +420,19 @@ def _read(f: h5py.File, path: str, wanted: set[str]) -> Run:
 
 def _read_params(f: h5py.File, path: str) -> Params:
     g = f["params"]
-    attrs = {name: _attr(g, path, name) for name in _PARAM_TYPES}
+    # a version-2 sweep leaves out what differs from point to point
+    swept = set(_swept(f, path)) if "sweep" in f and _version(f, path) >= 2 else set()
+    if "omega" in swept:
+        swept.add("drive_period")
+    attrs = {name: math.nan if name in swept and name not in g.attrs else _attr(g, path, name)
+             for name in _PARAM_TYPES}
     n = _int(attrs["n"], path, "params/n")
     if n < 1:
         raise SchemaError(f"{path}: /params n = {n} must be >= 1")
-    spacing = _dataset(g, path, "spacing", (n + 1,), float)
+    if "spacing" in swept and "spacing" not in g:
+        spacing = _frozen(np.full(n + 1, math.nan))
+    else:
+        spacing = _dataset(g, path, "spacing", (n + 1,), float)
     values: dict[str, Any] = {}
     for name, kind in _PARAM_TYPES.items():
         where = f"params/{name}"
@@ -513,7 +536,22 @@ def _read_lyapunov(g: h5py.Group, path: str) -> Lyapunov:
     )
 
 
+def _version(f: h5py.File, path: str) -> int:
+    return _int(f.attrs["schema_version"], path, "schema_version")
+
+
+def _swept(f: h5py.File, path: str) -> list[str]:
+    """The swept parameters of a sweep's file."""
+    g = f["sweep"]
+    names = [_str(_attr(g, path, "parameter"))]
+    if "parameter2" in g.attrs and _str(g.attrs["parameter2"]):
+        names.append(_str(g.attrs["parameter2"]))
+    return names
+
+
 def _read_sweep(g: h5py.Group, path: str, n: int) -> Sweep:
+    if "point" in g:
+        return _read_sweep_v2(g, path, n)
     parameter2 = _str(_attr(g, path, "parameter2"))
     values = _dataset(g, path, "values", (None, 2) if parameter2 else (None,), float)
     p = values.shape[0]
@@ -531,6 +569,50 @@ def _read_sweep(g: h5py.Group, path: str, n: int) -> Sweep:
         stderr=_dataset(g, path, "stderr", (p, k), float) if "stderr" in g else None,
         ky_dimension=_dataset(g, path, "ky_dimension", (p,), float)
         if "ky_dimension" in g else None,
+    )
+
+
+def _read_sweep_v2(g: h5py.Group, path: str, n: int) -> Sweep:
+    """Version 2: the point axes (point, point2) first; returned flattened as version 1."""
+    parameter2 = _str(g.attrs.get("parameter2", ""))
+    point = _dataset(g, path, "point", (None,), float)
+    n1 = point.shape[0]
+    if parameter2:
+        point2 = _dataset(g, path, "point2", (None,), float)
+        n2 = point2.shape[0]
+        axes: tuple[int, ...] = (n1, n2)
+        values = np.column_stack([np.tile(point, n2), np.repeat(point2, n1)])
+    else:
+        axes = (n1,)
+        values = np.array(point)
+
+    def per_point(name: str, tail: tuple[int | None, ...], dtype: type) -> np.ndarray:
+        data = _dataset(g, path, name, axes + tail, dtype)
+        if parameter2:  # (n1, n2, ...) -> points p = i + n1*j
+            data = np.swapaxes(data, 0, 1).reshape((n1 * n2,) + data.shape[2:])
+        return _frozen(data)
+
+    exponents = per_point("exponents", (None,), float) if "exponents" in g else None
+    k = None if exponents is None else exponents.shape[1]
+    drive_period = None
+    if "drive_period" in g:
+        along = "point" if _str(_attr(g, path, "parameter")) == "omega" else "point2"
+        period = _dataset(g, path, "drive_period", (n1 if along == "point" else n2,), float)
+        if parameter2:
+            period = np.tile(period, n2) if along == "point" else np.repeat(period, n1)
+        drive_period = _frozen(period)
+    return Sweep(
+        parameter=_str(_attr(g, path, "parameter")),
+        parameter2=parameter2,
+        mode=_str(_attr(g, path, "mode")),
+        values=_frozen(values),
+        x=per_point("x", (None, n), float),
+        collisions_per_cycle=per_point("collisions_per_cycle", (), float),
+        period=per_point("period", (n,), int),
+        exponents=exponents,
+        stderr=per_point("stderr", (k,), float) if "stderr" in g else None,
+        ky_dimension=per_point("ky_dimension", (), float) if "ky_dimension" in g else None,
+        drive_period=drive_period,
     )
 
 
@@ -818,8 +900,11 @@ def _collect_units(f: h5py.File) -> dict[str, str]:
     units: dict[str, str] = {}
 
     def visit(name: str, obj: Any) -> None:
-        if isinstance(obj, h5py.Dataset) and "units" in obj.attrs:
-            units[name] = _str(obj.attrs["units"])
+        # version 2: the reduced unit in model_units (units is UDUNITS': 1 for it)
+        for key in ("model_units", "units"):
+            if isinstance(obj, h5py.Dataset) and key in obj.attrs:
+                units[name] = _str(obj.attrs[key])
+                break
 
     f.visititems(visit)
     return units

@@ -1,4 +1,5 @@
-"""impactchain.io: reading the schema_version 1 layout and rejecting what is not."""
+"""impactchain.io: reading the schema_version 1 layout (the synthetic files of conftest) and
+rejecting what is not; test_io_versions.py reads the simulator's own files of versions 1 and 2."""
 
 from __future__ import annotations
 
@@ -14,8 +15,8 @@ import pytest
 
 from conftest import PERIODS, cascade_events, lyapunov_spectrum, strobe_record, sweep_values
 from conftest import DEFAULT_SWEEP
-from impactchain.io import (FILE_UNITS, IN_MEMORY, SCHEMA_VERSION, SchemaError, namelist_groups,
-                     read_run, run_from_api)
+from impactchain.io import (FILE_UNITS, IN_MEMORY, SchemaError, namelist_groups, read_run,
+                            run_from_api)
 
 MakeRun = Callable[..., Path]
 
@@ -35,7 +36,7 @@ def test_reads_params_and_geometry(make_run: MakeRun) -> None:
 
 def test_reads_root_attributes_and_padded_strings(make_run: MakeRun) -> None:
     run = read_run(make_run(boundary="free"))
-    assert run.schema_version == SCHEMA_VERSION
+    assert run.schema_version == 1
     assert run.code_version == "0.1.0"
     assert run.input_namelist.startswith("&chain")
     assert run.complete is True
@@ -131,8 +132,8 @@ def test_schema_error_is_a_value_error() -> None:
 
 
 def test_wrong_schema_version(make_run: MakeRun) -> None:
-    with pytest.raises(SchemaError, match="schema_version 2 is not supported"):
-        read_run(make_run(schema_version=2))
+    with pytest.raises(SchemaError, match="schema_version 3 is not supported"):
+        read_run(make_run(schema_version=3))
 
 
 def test_missing_schema_version(make_run: MakeRun) -> None:

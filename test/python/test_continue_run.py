@@ -25,7 +25,9 @@ INPUT = f"""&chain n = 16, amplitude = 1.7, omega = 1.5 /
 
 
 def _contents(path: Path) -> dict[str, object]:
-    """Every dataset (values and type) and attribute of a file, by path."""
+    """Every dataset (values and type) and attribute of a file, by path; the dimension
+    scales' references (object addresses, which differ between two files of the same
+    content) as the names of the objects they refer to."""
     out: dict[str, object] = {}
     with h5py.File(path) as f:
         for name, value in f.attrs.items():
@@ -35,6 +37,10 @@ def _contents(path: Path) -> dict[str, object]:
             if isinstance(obj, h5py.Dataset):
                 out[name] = (obj.dtype.str, obj[()])
             for key, value in obj.attrs.items():
+                if key == "DIMENSION_LIST":
+                    value = [[f[ref].name for ref in axis] for axis in value]
+                elif key == "REFERENCE_LIST":
+                    value = sorted((f[ref].name, int(axis)) for ref, axis in value)
                 out[f"{name}@{key}"] = value
 
         f.visititems(visit)

@@ -23,7 +23,7 @@ def test_output_layout(impactchain_exe, tmp_path):
     result = run_namelist(impactchain_exe, BASE, tmp_path)
     assert "collisions per cycle" in result.stdout
     with h5py.File(tmp_path / "run.h5") as f:
-        assert f.attrs["schema_version"] == 1
+        assert f.attrs["schema_version"] == 2
         assert int(np.ravel(f.attrs["complete"])[0]) == 1
         assert "&chain" in f.attrs["input_namelist"].decode() if isinstance(
             f.attrs["input_namelist"], bytes) else "&chain" in str(f.attrs["input_namelist"])

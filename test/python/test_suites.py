@@ -14,7 +14,7 @@ from simulator import FPM, ROOT
 
 SUITE_LINE = re.compile(r"^  (\S+) checks: (\d+) passed, (\d+) failed$")
 COUNT_LINE = re.compile(r"^(\d+) passed, (\d+) failed")
-LIST_LINE = re.compile(r"^([a-z]+) +([\w-]+)$")
+LIST_LINE = re.compile(r"^([a-z][a-z0-9]*) +([\w-]+)$")
 
 
 def fpm_test(*args: str) -> subprocess.CompletedProcess[str]:

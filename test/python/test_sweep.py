@@ -65,9 +65,13 @@ def test_threads_and_ranks_give_identical_sweeps(impactchain_exe, mpi_exe, tmp_p
     run_with_threads(impactchain_exe, tmp_path, GRID.format(mode=mode, out="two.h5"), 2,
                      "two.nml")
     with h5py.File(tmp_path / "one.h5") as f:
-        assert f["sweep/values"].shape == (55, 2)
-        assert f["sweep/x"].shape == (55, 20, 6)
-        assert f["sweep/exponents"].shape == (55, 4)
+        # a 2-D sweep: amplitude (11 values) by omega (5 values)
+        np.testing.assert_allclose(f["sweep/point"][:], np.linspace(1.5, 2.5, 11), atol=1e-12)
+        np.testing.assert_allclose(f["sweep/point2"][:], np.linspace(1.3, 1.7, 5), atol=1e-12)
+        assert f["sweep/x"].shape == (11, 5, 20, 6)
+        assert f["sweep/exponents"].shape == (11, 5, 4)
+        np.testing.assert_allclose(f["sweep/drive_period"][:],
+                                   2 * np.pi / f["sweep/point2"][:], rtol=1e-15)
         assert int(np.ravel(f.attrs["complete"])[0]) == 1
     assert_same_sweep(tmp_path / "one.h5", tmp_path / "two.h5")
     if mpi_exe is None:
@@ -95,7 +99,7 @@ def test_continuation_equals_runs_from_files(impactchain_exe, tmp_path):
                      f"&output file = 'step{j}.h5' /", tmp_path, f"step{j}.nml")
         previous = f"step{j}.h5"
     with h5py.File(tmp_path / "sweep.h5") as f:
-        np.testing.assert_allclose(f["sweep/values"][:], values, rtol=0, atol=1e-12)
+        np.testing.assert_allclose(f["sweep/point"][:], values, rtol=0, atol=1e-12)
         for j in range(len(values)):
             with h5py.File(tmp_path / f"step{j}.h5") as g:
                 np.testing.assert_array_equal(f["sweep/x"][j], g["strobe/x"][:])

@@ -11,6 +11,7 @@ as `<dtype> <shape> sha256:<hex>`, e.g. `<f8 480x16 sha256:9f2c...`, under the d
     python test/recipes/recipe_checksums.py check   [--exe EXE] [--manifest FILE] [--keep DIR]
     python test/recipes/recipe_checksums.py run DIR [--exe EXE]
     python test/recipes/recipe_checksums.py compare DIR_A DIR_B
+    python test/recipes/recipe_checksums.py compare-versions DIR_V1 DIR_V2
 
 `compute` writes the manifest, {recipe: {path: hash}} (default test/recipes/checksums.json;
 `make recipe-checksums` runs it with the release build). `check` computes again and compares
@@ -19,6 +20,15 @@ on any, and ends with one line, "N datasets in M recipes identical". A hash cann
 two arrays differ; for that, `run` every recipe into a directory with each build (or keep a
 failing check's files with `check --keep DIR`) and `compare` the two directories: it reports
 the first differing element, how many differ and the largest absolute difference.
+
+`compare-versions` does the same across a change of the file layout: DIR_V1 holds every
+recipe run by a build writing schema version 1, DIR_V2 by one writing version 2 (the
+netCDF-4 layout, README "Output"). Every value of a version-1 file is looked up where version
+2 keeps it (a scalar instead of a one-element array, a variable-length string instead of a
+fixed-length one, /sweep/values as the coordinates /sweep/point and point2, a 2-D sweep's
+per-point datasets as (point, point2, ...)) and must hold the same bits; what version 2 left
+out (the swept parameters in /params) and what it added (coordinates, dimensions, the drive
+period per point) is checked and listed; anything else is a difference, and the exit code 1.
 
 `--exe` defaults to the release build (fpm builds it if needed). Recipes run one at a time
 (`--jobs N` for more); OMP_NUM_THREADS is passed on, and no result depends on it.
@@ -59,6 +69,16 @@ EXCLUDED = {
                            "&output file (the physical inputs are compared in /params)",
     "*@units": "describes a dataset, is not a result",
     "*@long_name": "describes a dataset, is not a result",
+    "*@model_units": "describes a dataset, is not a result",
+    "*@flag_values": "describes a dataset's codes, is not a result",
+    "*@flag_meanings": "describes a dataset's codes, is not a result",
+    "*@coordinates": "names a dataset's coordinates, is not a result",
+    # the dimension scales (HDF5's attributes): which dataset is whose axis, not a result;
+    # their references are object addresses, which differ between files of equal content
+    "*@CLASS": "marks a dimension scale, is not a result",
+    "*@NAME": "names a dimension scale, is not a result",
+    "*@DIMENSION_LIST": "references to a dataset's dimension scales, not a result",
+    "*@REFERENCE_LIST": "references to the datasets of a dimension scale, not a result",
 }
 
 RUN_TIMEOUT = 900    # seconds per recipe: a hung run must fail CI, not stall it
@@ -322,6 +342,123 @@ def compare_dirs(dir_a: Path, dir_b: Path) -> int:
     return 1 if problems else 0
 
 
+# ---- across the change of layout (schema version 1 -> 2) ---------------------------------
+
+def _text(value: np.ndarray) -> str:
+    return b"".join(np.ravel(value).astype(bytes)).decode().rstrip("\x00 ")
+
+
+def _same_values(a: np.ndarray, b: np.ndarray) -> bool:
+    """The same numbers bit for bit (or the same text), one-element arrays equal to scalars."""
+    if a.dtype.kind == "S" or b.dtype.kind == "S":
+        return _text(a) == _text(b)
+    if a.shape != b.shape and not (a.size == b.size == 1):
+        return False
+    return a.dtype == b.dtype and np.ravel(a).tobytes() == np.ravel(b).tobytes()
+
+
+def _swept(items: dict[str, np.ndarray]) -> list[str]:
+    return [_text(items[key]) for key in ("/sweep@parameter", "/sweep@parameter2")
+            if key in items and _text(items[key])]
+
+
+def version_map(v1: dict[str, np.ndarray], v2: dict[str, np.ndarray]
+                ) -> tuple[dict[str, np.ndarray], list[str]]:
+    """Version 1's values as version 2 keeps them ({version-2 key: value}), and what version 1
+    has that version 2 rightly does not keep (one line each)."""
+    mapped, dropped = {}, []
+    swept = _swept(v1)
+    two_d = len(swept) == 2
+    if two_d:
+        values = v1["/sweep/values"]
+        n1 = int(np.flatnonzero(values[:, 1] != values[0, 1])[0]) \
+            if (values[:, 1] != values[0, 1]).any() else values.shape[0]
+        n2 = values.shape[0] // n1
+    for key, value in v1.items():
+        if key == "/@schema_version":
+            continue                                   # 1 -> 2, checked by the caller
+        name = key.split("@")[-1] if key.startswith("/params@") else ""
+        if name in swept or (name == "drive_period" and "omega" in swept) or \
+                (key == "/params/spacing" and "spacing" in swept):
+            dropped.append(f"{key}: not in /params, as it differs from point to point "
+                           f"(the sweep's coordinates hold it)")
+            continue
+        if key == "/sweep/values":
+            if two_d:
+                mapped["/sweep/point"] = values[:n1, 0]
+                mapped["/sweep/point2"] = values[::n1, 1]
+            else:
+                mapped["/sweep/point"] = value
+            continue
+        if two_d and key.startswith("/sweep/") and "@" not in key:
+            # points p = i + n1 j, (n_points, ...) -> (n1, n2, ...)
+            value = value.reshape((n2, n1) + value.shape[1:]).swapaxes(0, 1)
+        mapped[key] = value
+    return mapped, dropped
+
+
+def compare_version_files(v1_path: Path, v2_path: Path) -> tuple[int, list[str], list[str]]:
+    """(values identical, explained lines, problems) for one recipe's two files."""
+    v1, v2 = dict(results(v1_path)), dict(results(v2_path))
+    mapped, explained = version_map(v1, v2)
+    problems = []
+    versions = [int(np.ravel(v.get("/@schema_version", [0]))[0]) for v in (v1, v2)]
+    if versions != [1, 2]:
+        problems.append(f"/@schema_version: {versions[0]} and {versions[1]}, not 1 and 2")
+    same = 0
+    for key, value in mapped.items():
+        if key not in v2:
+            problems.append(f"{key}: not in the version-2 file")
+        elif not _same_values(value, v2[key]):
+            problems.append(f"{key}: {describe_difference(value, v2[key]) or 'differs'}")
+        else:
+            same += 1
+    with h5py.File(v2_path, "r") as f:
+        for key in sorted(set(v2) - set(mapped) - {"/@schema_version"}):
+            obj = f[key.split("@")[0]] if "@" not in key else None
+            if obj is not None and obj.attrs.get("CLASS") == b"DIMENSION_SCALE":
+                if str(obj.attrs.get("NAME", b"")).find("not a netCDF variable") >= 0:
+                    explained.append(f"{key}: new, a dimension ({obj.shape[0]})")
+                    continue
+                if obj.dtype.kind == "i" and np.array_equal(
+                        obj[()], np.arange(obj[0], obj[0] + obj.shape[0])):
+                    explained.append(f"{key}: new, the index coordinate {obj[0]}.."
+                                     f"{obj[0] + obj.shape[0] - 1}")
+                    continue
+            if key == "/sweep/drive_period":
+                axis = "/sweep/point" if _swept(v1)[0] == "omega" else "/sweep/point2"
+                if np.ravel(v2[key]).tobytes() == (2 * np.pi / v2[axis]).tobytes():
+                    explained.append(f"{key}: new, 2 pi / {axis} bit for bit")
+                    continue
+            problems.append(f"{key}: new in version 2, not explained")
+    return same, explained, problems
+
+
+def compare_versions(dir_v1: Path, dir_v2: Path) -> int:
+    """Compare every recipe's version-1 file with its version-2 file, value by value."""
+    names = sorted({p.name for p in dir_v1.glob("*.h5")} | {p.name for p in dir_v2.glob("*.h5")})
+    if not names:
+        print(f"no .h5 files in {dir_v1} or {dir_v2}")
+        return 1
+    problems, total, explained_total = [], 0, 0
+    for name in names:
+        if not (dir_v1 / name).exists() or not (dir_v2 / name).exists():
+            problems.append(f"{name}: only in {dir_v1 if (dir_v1 / name).exists() else dir_v2}")
+            continue
+        same, explained, wrong = compare_version_files(dir_v1 / name, dir_v2 / name)
+        total += same
+        explained_total += len(explained)
+        print(f"{name}: {same} values identical; {len(explained)} layout changes"
+              + "".join(f"\n    {line}" for line in explained if "index coordinate" not in
+                        line and "a dimension" not in line))
+        problems += [f"{name}: {line}" for line in wrong]
+    for line in problems:
+        print(line)
+    print(differences(problems) + f"{total} values in {len(names)} recipes identical across "
+          f"the layouts ({explained_total} layout changes explained)")
+    return 1 if problems else 0
+
+
 # ---- command line ------------------------------------------------------------------------
 
 def workdir_for(keep: Path | None) -> tuple[Path, tempfile.TemporaryDirectory | None]:
@@ -356,10 +493,16 @@ def main(argv: list[str] | None = None) -> int:
     sub = commands.add_parser("compare", help="compare two directories of output files")
     sub.add_argument("dir_a", type=Path)
     sub.add_argument("dir_b", type=Path)
+    sub = commands.add_parser("compare-versions", help="compare the files of two directories "
+                              "across the layouts of schema versions 1 and 2")
+    sub.add_argument("dir_v1", type=Path)
+    sub.add_argument("dir_v2", type=Path)
     args = parser.parse_args(argv)
 
     if args.command == "compare":
         return compare_dirs(args.dir_a, args.dir_b)
+    if args.command == "compare-versions":
+        return compare_versions(args.dir_v1, args.dir_v2)
     try:
         exe = (args.exe or default_exe()).resolve()
         workdir, temporary = workdir_for(getattr(args, "keep", None))
