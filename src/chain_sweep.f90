@@ -435,7 +435,7 @@ contains
         type(sweep_result_t), intent(in) :: res
         type(error_t), allocatable, intent(out) :: err
         character(len=:), allocatable :: points
-        integer :: n, c, n1, n2
+        integer :: n1
 
         call write_run_header(out, cfg, err)
         if (allocated(err)) return
@@ -444,10 +444,7 @@ contains
             call output_unset_param(out, cfg%sweep_parameter2, err)
         if (.not. allocated(err)) call output_group(out, 'sweep', err)
         if (allocated(err)) return
-        n = cfg%model%n
-        c = int(cfg%record%cycles)
         n1 = plan%n_axis1
-        n2 = plan%n_axis2
         associate (f => out%file)
             call h5_write_attr(f, 'sweep', 'parameter', cfg%sweep_parameter, err)
             call h5_write_attr(f, 'sweep', 'parameter2', cfg%sweep_parameter2, err)
@@ -460,12 +457,33 @@ contains
                 points = 'point point2'
             end if
             if (allocated(err)) return
-            call h5_create_dimension(f, 'sweep/record', int(c, i8), .false., err)
-            if (.not. allocated(err)) call output_index(out, 'sweep/oscillator', 1, n, &
-                                                        'oscillator index', err)
-            if (allocated(err)) return
-            ! a 2-D sweep's points (index i along parameter, j along parameter2) are stored
-            ! in order p = i + (j - 1) n1; in the file their axes are (point, point2)
+            call h5_create_dimension(f, 'sweep/record', int(cfg%record%cycles, i8), .false., err)
+            if (.not. allocated(err)) call output_index(out, 'sweep/oscillator', 1, &
+                                                        cfg%model%n, 'oscillator index', err)
+        end associate
+        if (.not. allocated(err)) call write_sweep_records(out, cfg, plan, res, points, err)
+        if (.not. allocated(err)) call write_drive_periods(out, cfg, plan, res, err)
+        if (plan%k > 0 .and. .not. allocated(err)) &
+            call write_sweep_exponents(out, plan, res, points, err)
+    end subroutine write_sweep_file
+
+    !> /sweep/x, collisions_per_cycle and period. A 2-D sweep's points (index i along
+    !> parameter, j along parameter2) are stored in order p = i + (j - 1) n1; in the file their
+    !> axes are (point, point2).
+    subroutine write_sweep_records(out, cfg, plan, res, points, err)
+        type(output_t), intent(inout) :: out
+        type(config_t), intent(in) :: cfg
+        type(sweep_plan_t), intent(in) :: plan
+        type(sweep_result_t), intent(in) :: res
+        character(len=*), intent(in) :: points
+        type(error_t), allocatable, intent(inout) :: err
+        integer :: n, c, n1, n2
+
+        n = cfg%model%n
+        c = int(cfg%record%cycles)
+        n1 = plan%n_axis1
+        n2 = plan%n_axis2
+        associate (f => out%file)
             if (plan%n_axes == 1) then
                 call h5_write(f, 'sweep/x', res%x, '1', err)
                 call h5_write(f, 'sweep/collisions_per_cycle', res%collisions, '1', err)
@@ -478,23 +496,35 @@ contains
                 call h5_write(f, 'sweep/period', reshape(res%period, [n, n2, n1], &
                                                          order=[1, 3, 2]), '1', err)
             end if
-            if (allocated(err)) return
-            call output_describe(out, 'sweep/x', 'displacement from equilibrium at the '// &
-                                 'section, the records of the point', 'length', &
-                                 points//' record oscillator', err)
-            if (.not. allocated(err)) &
-                call output_describe(out, 'sweep/collisions_per_cycle', 'collisions per '// &
-                                     'drive cycle', 'impacts per drive cycle', points, err)
-            if (.not. allocated(err)) &
-                call output_describe(out, 'sweep/period', "period of the oscillator's "// &
-                                     "strobe record (0: none found, aperiodic)", &
-                                     'drive cycles', points//' oscillator', err)
-            if (allocated(err)) return
-            call drive_periods(err)
-            if (plan%k == 0 .or. allocated(err)) return
-            call output_index(out, 'sweep/exponent', 1, plan%k, 'exponent index '// &
-                              '(descending order)', err)
-            if (allocated(err)) return
+        end associate
+        if (allocated(err)) return
+        call output_describe(out, 'sweep/x', 'displacement from equilibrium at the '// &
+                             'section, the records of the point', 'length', &
+                             points//' record oscillator', err)
+        if (.not. allocated(err)) &
+            call output_describe(out, 'sweep/collisions_per_cycle', 'collisions per '// &
+                                 'drive cycle', 'impacts per drive cycle', points, err)
+        if (.not. allocated(err)) &
+            call output_describe(out, 'sweep/period', "period of the oscillator's "// &
+                                 "strobe record (0: none found, aperiodic)", &
+                                 'drive cycles', points//' oscillator', err)
+    end subroutine write_sweep_records
+
+    !> /sweep/exponents, stderr and ky_dimension, in the layout of write_sweep_records.
+    subroutine write_sweep_exponents(out, plan, res, points, err)
+        type(output_t), intent(inout) :: out
+        type(sweep_plan_t), intent(in) :: plan
+        type(sweep_result_t), intent(in) :: res
+        character(len=*), intent(in) :: points
+        type(error_t), allocatable, intent(inout) :: err
+        integer :: n1, n2
+
+        n1 = plan%n_axis1
+        n2 = plan%n_axis2
+        call output_index(out, 'sweep/exponent', 1, plan%k, 'exponent index '// &
+                          '(descending order)', err)
+        if (allocated(err)) return
+        associate (f => out%file)
             if (plan%n_axes == 1) then
                 call h5_write(f, 'sweep/exponents', res%exponents, 'bit', err)
                 call h5_write(f, 'sweep/stderr', res%stderr, 'bit', err)
@@ -507,39 +537,40 @@ contains
                 call h5_write(f, 'sweep/ky_dimension', reshape(res%ky, [n2, n1], &
                                                                order=[2, 1]), '1', err)
             end if
-            if (allocated(err)) return
-            call output_describe(out, 'sweep/exponents', 'Lyapunov exponent', &
-                                 'bits per drive cycle', points//' exponent', err)
-            if (.not. allocated(err)) &
-                call output_describe(out, 'sweep/stderr', 'standard error of the Lyapunov '// &
-                                     'exponent (20 block averages)', 'bits per drive cycle', &
-                                     points//' exponent', err)
-            if (.not. allocated(err)) &
-                call output_describe(out, 'sweep/ky_dimension', 'Kaplan-Yorke dimension', &
-                                     '', points, err)
         end associate
+        if (allocated(err)) return
+        call output_describe(out, 'sweep/exponents', 'Lyapunov exponent', &
+                             'bits per drive cycle', points//' exponent', err)
+        if (.not. allocated(err)) &
+            call output_describe(out, 'sweep/stderr', 'standard error of the Lyapunov '// &
+                                 'exponent (20 block averages)', 'bits per drive cycle', &
+                                 points//' exponent', err)
+        if (.not. allocated(err)) &
+            call output_describe(out, 'sweep/ky_dimension', 'Kaplan-Yorke dimension', &
+                                 '', points, err)
+    end subroutine write_sweep_exponents
 
-    contains
+    !> /sweep/drive_period along the omega axis of an omega sweep (2 pi / w, as
+    !> chain_flow's make_flow computes it).
+    subroutine write_drive_periods(out, cfg, plan, res, err)
+        type(output_t), intent(inout) :: out
+        type(config_t), intent(in) :: cfg
+        type(sweep_plan_t), intent(in) :: plan
+        type(sweep_result_t), intent(in) :: res
+        type(error_t), allocatable, intent(inout) :: err
+        integer :: n1
 
-        !> /sweep/drive_period along the omega axis of an omega sweep (2 pi / w, as
-        !> chain_flow's make_flow computes it).
-        subroutine drive_periods(err)
-            type(error_t), allocatable, intent(inout) :: err
-
-            if (cfg%sweep_parameter == 'omega') then
-                call h5_write(out%file, 'sweep/drive_period', two_pi/res%values(1, :n1), '1', &
-                              err)
-                if (.not. allocated(err)) call output_describe(out, 'sweep/drive_period', &
-                    'drive period 2 pi / omega', 'time', 'point', err)
-            else if (plan%n_axes == 2 .and. cfg%sweep_parameter2 == 'omega') then
-                call h5_write(out%file, 'sweep/drive_period', two_pi/res%values(2, ::n1), '1', &
-                              err)
-                if (.not. allocated(err)) call output_describe(out, 'sweep/drive_period', &
-                    'drive period 2 pi / omega', 'time', 'point2', err)
-            end if
-        end subroutine drive_periods
-
-    end subroutine write_sweep_file
+        n1 = plan%n_axis1
+        if (cfg%sweep_parameter == 'omega') then
+            call h5_write(out%file, 'sweep/drive_period', two_pi/res%values(1, :n1), '1', err)
+            if (.not. allocated(err)) call output_describe(out, 'sweep/drive_period', &
+                'drive period 2 pi / omega', 'time', 'point', err)
+        else if (plan%n_axes == 2 .and. cfg%sweep_parameter2 == 'omega') then
+            call h5_write(out%file, 'sweep/drive_period', two_pi/res%values(2, ::n1), '1', err)
+            if (.not. allocated(err)) call output_describe(out, 'sweep/drive_period', &
+                'drive period 2 pi / omega', 'time', 'point2', err)
+        end if
+    end subroutine write_drive_periods
 
     !> The coordinate variable `name` of a sweep axis: the values of `parameter` there.
     subroutine sweep_axis(out, name, parameter, values, err)
