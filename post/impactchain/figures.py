@@ -178,6 +178,16 @@ def _parent(ax: Axes) -> Figure | SubFigure:
     return fig
 
 
+def _one_axes(ax: Axes | Sequence[Axes] | np.ndarray | None, width: float, height: float,
+              what: str) -> tuple[Figure, Axes]:
+    """The one axes a figure draws into: the caller's (and its figure), or a new figure's."""
+    if ax is None:
+        fig: Figure = _new_figure(width, height)
+        return fig, fig.add_subplot()
+    (given,) = _axes_list(ax, 1, what)
+    return _root(given), given
+
+
 def _new_figure(width: float, height: float) -> ProvenanceFigure:
     return ProvenanceFigure(figsize=(width, height), layout="constrained")
 
@@ -416,12 +426,7 @@ def space_amplitude(
         raise FigureError(f"periods = {periods!r} must be 'file' or 'none'")
     if labels is not None and len(labels) != len(runs):
         raise FigureError(f"{len(labels)} labels for {len(runs)} runs")
-    if ax is None:
-        fig: Figure = _new_figure(8.0, 5.0)
-        ax = fig.add_subplot()
-    else:
-        (ax,) = _axes_list(ax, 1, "space-amplitude")
-        fig = _root(ax)
+    fig, ax = _one_axes(ax, 8.0, 5.0, "space-amplitude")
     colours = _overlay_colours(len(runs))
     label_rows = 0
     for index, (run, colour) in enumerate(zip(runs, colours)):
@@ -643,12 +648,7 @@ def poincare(run: RunLike, site: int = 1, cycles: int | None = None,
     x = _last(strobe.x[:, site - 1], cycles)
     v = _last(strobe.v[:, site - 1], cycles)
     cycle = _last(strobe.cycle, cycles)
-    if ax is None:
-        fig: Figure = _new_figure(6.0, 5.0)
-        ax = fig.add_subplot()
-    else:
-        (ax,) = _axes_list(ax, 1, "poincare")
-        fig = _root(ax)
+    fig, ax = _one_axes(ax, 6.0, 5.0, "poincare")
     points = ax.scatter(x, v, c=cycle, cmap="viridis", s=14, linewidths=0, gid="section")
     _parent(ax).colorbar(points, ax=ax, label=_cycle_label(run))
     ax.set_xlabel(_label("displacement", _unit(run, "strobe/x"), f"x_{{{site}}}"))
@@ -860,12 +860,7 @@ def ky_dimension(runs: RunLike | Sequence[RunLike], labels: Sequence[str] | None
         raise FigureError("ky-dimension needs at least one sweep file")
     if labels is not None and len(labels) != len(runs):
         raise FigureError(f"{len(labels)} labels for {len(runs)} runs")
-    if ax is None:
-        fig: Figure = _new_figure(7.0, 4.5)
-        ax = fig.add_subplot()
-    else:
-        (ax,) = _axes_list(ax, 1, "ky-dimension")
-        fig = _root(ax)
+    fig, ax = _one_axes(ax, 7.0, 4.5, "ky-dimension")
     colours = _overlay_colours(len(runs))
     swept = {name for run in runs if run.sweep is not None
              for name in (run.sweep.parameter, run.sweep.parameter2) if name}
