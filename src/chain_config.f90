@@ -924,16 +924,23 @@ contains
         end do
     end function strip_zeros
 
+    !> The values as a namelist list, "v1, v2, ...". Built in a buffer that doubles, so that a
+    !> list of 10^5 values costs linear time, not a copy of the text per value.
     pure function exact_list(values) result(text)
         real(wp), intent(in) :: values(:)
-        character(len=:), allocatable :: text
-        integer :: i
+        character(len=:), allocatable :: text, buffer, piece
+        integer :: i, used
 
-        text = ''
+        allocate (character(len=max(64, 24*size(values))) :: buffer)
+        used = 0
         do i = 1, size(values)
-            if (i > 1) text = text//', '
-            text = text//exact(values(i))
+            piece = exact(values(i))
+            if (i > 1) piece = ', '//piece
+            if (used + len(piece) > len(buffer)) buffer = buffer//repeat(' ', len(buffer))
+            buffer(used + 1:used + len(piece)) = piece
+            used = used + len(piece)
         end do
+        text = buffer(:used)
     end function exact_list
 
     pure function fmt_logical(flag) result(text)

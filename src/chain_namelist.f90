@@ -37,7 +37,8 @@ module chain_namelist
         character(len=:), allocatable :: group, key, written
         integer :: line = 0, first = 0, last = 0, n_values = 0
         logical :: subscripted = .false.
-        integer, allocatable :: value_first(:), value_last(:) !! where each value token is
+        integer :: n_tokens = 0 !! value tokens, at value_first(:n_tokens), value_last(:n_tokens)
+        integer, allocatable :: value_first(:), value_last(:)
     end type item_t
 
     !> One group of the text: name, line, and the position of its closing `/` (0: none).
@@ -107,7 +108,7 @@ contains
             call set_error(err, where//unknown_key(schema, item%group, item%key))
             return
         end if
-        do j = size(item%value_first), 1, -1
+        do j = item%n_tokens, 1, -1
             if (.not. is_value_of(text(item%value_first(j):item%value_last(j)), &
                                   schema(k)%kind)) &
                 bad_value = text(item%value_first(j):item%value_last(j))
@@ -330,7 +331,7 @@ contains
         item%line = line
         item%first = first
         item%last = first + len(written) - 1
-        allocate (item%value_first(0), item%value_last(0))
+        allocate (item%value_first(8), item%value_last(8))
     end subroutine start_item
 
     pure subroutine add_value(token, first, last, item)
@@ -340,8 +341,14 @@ contains
 
         item%n_values = item%n_values + repeats(token)
         item%last = last
-        item%value_first = [item%value_first, first]
-        item%value_last = [item%value_last, last]
+        ! capacity doubles: a list of 10^5 values is read in linear time
+        if (item%n_tokens == size(item%value_first)) then
+            item%value_first = [item%value_first, item%value_first]
+            item%value_last = [item%value_last, item%value_last]
+        end if
+        item%n_tokens = item%n_tokens + 1
+        item%value_first(item%n_tokens) = first
+        item%value_last(item%n_tokens) = last
     end subroutine add_value
 
     !> The next token from text(pos:): a quoted string, '=', '/', '&...', or a word (anything

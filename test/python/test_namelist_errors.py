@@ -184,3 +184,18 @@ def test_progress_on_a_terminal_is_one_updating_line(impactchain_exe, tmp_path):
     shown = b"".join(chunks).decode()
     assert shown.count("\r") >= 2 and shown.count("\n") == 1, repr(shown[:400])
     assert progress_lines(shown)[-1].startswith("impactchain: cycle 300000 / 300000")
+
+
+def test_a_long_list_is_read_and_echoed_in_full(impactchain_exe, tmp_path):
+    """10^5 start positions (the longest list a namelist may hold is 100001): every value is
+    checked and comes back, in order, in the resolved input (lists and echo grow by doubling)."""
+    n = 100000
+    values = [f"{0.25 * (i % 7) / 7:.6f}" for i in range(n)]
+    (tmp_path / "long.nml").write_text(
+        f"&chain n = {n}, amplitude = 1, omega = 1.5 /\n"
+        f"&initial kind = 'explicit', x0 = {', '.join(values)} /\n&output file = 'x.h5' /\n")
+    result = run(impactchain_exe, ["--check", "long.nml"], tmp_path)
+    line = next(text for text in result.stdout.splitlines() if text.startswith("&initial"))
+    echoed = line.split("x0 = ", 1)[1].rstrip(" /").split(", ")
+    assert len(echoed) == n
+    np.testing.assert_array_equal(np.array(echoed, dtype=float), np.array(values, dtype=float))
