@@ -90,7 +90,8 @@ contains
         keep_going = .not. interrupted()
         if (quiet) return
         call progress_update(shown, done, total, seconds(), text)
-        if (len(text) > 0) write (error_unit, '(a)', advance='no') text
+        if (len(text) == 0) return
+        write (error_unit, '(a)', advance='no') text
         flush (error_unit)
     end function progress
 
