@@ -31,7 +31,7 @@ module chain_sim
     implicit none
     private
     public :: simulate_to_file, initial_state, start_chain, write_run_header, chain_on_section
-    public :: restart_chain, uniform
+    public :: restart_chain, continuation_start, uniform
 
     !> Sends records to the HDF5 file as they come.
     type, extends(record_sink_t) :: file_sink_t
@@ -150,11 +150,21 @@ contains
         type(error_t), allocatable, intent(out) :: err
         type(chain_state_t) :: state
 
-        state = moving_state(chain_positions(chain), chain_velocities(chain), &
-                             chain_cycle(chain), chain_time(chain))
-        state%contact = chain_contacts(chain)
+        state = continuation_start(chain)
         call chain_init(chain, cfg%model, state, err)
     end subroutine restart_chain
+
+    !> Where the next point of a continuation starts: the chain's positions, velocities and
+    !> contacts, at its cycle and time; its schedule is searched afresh (other parameters) and
+    !> its clock and counters start there.
+    function continuation_start(chain) result(state)
+        type(chain_t), intent(in) :: chain
+        type(chain_state_t) :: state
+
+        state = moving_state(chain_positions(chain), chain_velocities(chain), chain_cycle(chain), &
+                             chain_time(chain))
+        state%contact = chain_contacts(chain)
+    end function continuation_start
 
     !> Root attributes, /params and /initial of the run described by cfg (for a sweep file: of
     !> its starting configuration).
@@ -175,10 +185,8 @@ contains
         type(error_t), allocatable, intent(out) :: err
 
         call output_header(out, cfg%input_text, config_summary(cfg), cfg%model%n, &
-            cfg%model%spacing, &
-                           cfg%model%damping, cfg%model%restitution, cfg%model%amplitude, &
-                               cfg%model%omega, &
-                           model_walls(cfg%model), chain_period(chain), cfg%record%phase, &
+                           cfg%model%spacing, cfg%model%damping, cfg%model%restitution, &
+                           cfg%model%amplitude, cfg%model%omega, model_walls(cfg%model), chain_period(chain), cfg%record%phase, &
                            cfg%record%transient, cfg%record%cycles, chain_positions(chain), &
                            chain_velocities(chain), err)
     end subroutine header_for

@@ -23,12 +23,11 @@
 module chain_sweep
     use chain_kinds, only: wp, i8, two_pi
     use chain_error, only: error_t, set_error, fmt_real, fmt_int
-    use chain_engine, only: chain_t, chain_init, chain_positions, chain_velocities, &
-                            chain_contacts, chain_cycle, chain_time
+    use chain_engine, only: chain_t, chain_init
     use chain_state, only: chain_state_t, moving_state
     use chain_config, only: config_t, validate_config, lyapunov_vectors, check_size
     use chain_record, only: memory_sink_t, record_result_t, record_cycles
-    use chain_sim, only: start_chain, write_run_header
+    use chain_sim, only: start_chain, write_run_header, continuation_start
     use chain_output, only: output_t, output_begin, output_group, output_end, output_abort, &
                             output_describe, output_index, output_unset_param
     use chain_hdf5, only: h5_write, h5_write_attr, h5_set_scale, h5_create_dimension
@@ -118,18 +117,6 @@ contains
         end if
         plan%k = lyapunov_vectors(cfg)
     end function plan_sweep
-
-    !> Where the next point of a continuation starts: the chain's positions, velocities and
-    !> contacts, at its cycle and time; its schedule is searched afresh (other parameters) and
-    !> its clock and counters start there.
-    function continuation_start(chain) result(state)
-        type(chain_t), intent(in) :: chain
-        type(chain_state_t) :: state
-
-        state = moving_state(chain_positions(chain), chain_velocities(chain), chain_cycle(chain), &
-                             chain_time(chain))
-        state%contact = chain_contacts(chain)
-    end function continuation_start
 
     !> Number of points from start to stop in steps of step (rounding-safe).
     pure integer function axis_points(start, stop, step)
