@@ -121,11 +121,10 @@ module chain_engine
         integer(i8), allocatable :: row_stamp(:) !! instant at which rows were moved to now
         integer, allocatable :: touched(:)  !! the oscillators whose rows are now "now"
         integer :: n_touched = 0
-        integer(i8) :: impacts = 0, sticks = 0, releases = 0, touches = 0
+        type(event_counts_t) :: counts      !! impacts, sticks, releases, touches, per bond
         !> Events whose tangent map is singular (a rest zeroes rows, a collapse averages them,
         !> K = 0 kills relative velocities): the QR step then looks for collapsed directions.
         integer(i8) :: rank_losses = 0
-        integer(i8), allocatable :: site_counts(:) !! site_counts(0:n): impacts per bond
         real(wp) :: last_event = -huge(1.0_wp)
         integer :: same_instant = 0
     end type chain_t
@@ -1066,7 +1065,7 @@ contains
         call propagators_now(chain)
         call drive_now(chain)
         call set_moving_state(chain, i, rest_position(chain, i, chain%contact(i)), 0.0_wp)
-        chain%releases = chain%releases + 1
+        chain%counts%releases = chain%counts%releases + 1
         call event_log_append(log, chain_elapsed(chain, chain%s), bond, 0.0_wp, event_release)
         call schedule_around(chain, i, i, err)
     end subroutine release_event
@@ -1107,8 +1106,8 @@ contains
         real(wp), intent(in) :: u
         type(event_log_t), intent(inout) :: log
 
-        chain%impacts = chain%impacts + 1
-        chain%site_counts(bond) = chain%site_counts(bond) + 1
+        chain%counts%impacts = chain%counts%impacts + 1
+        chain%counts%site_counts(bond) = chain%counts%site_counts(bond) + 1
         call event_log_append(log, chain_elapsed(chain, chain%s), bond, u, event_impact)
     end subroutine count_impact
 

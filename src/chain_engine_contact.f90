@@ -25,11 +25,11 @@ contains
     module procedure stick_event
         chain%contact(i) = side
         chain%synced = .false.
-        chain%sticks = chain%sticks + 1
+        chain%counts%sticks = chain%counts%sticks + 1
         if (chain%n_vectors > 0) call forget_rows(chain, i)
         if (u > 0) then
-            chain%impacts = chain%impacts + 1
-            chain%site_counts(bond) = chain%site_counts(bond) + 1
+            chain%counts%impacts = chain%counts%impacts + 1
+            chain%counts%site_counts(bond) = chain%counts%site_counts(bond) + 1
         end if
         call event_log_append(log, chain_elapsed(chain, chain%s), bond, max(u, 0.0_wp), &
                               event_stick)
@@ -47,7 +47,7 @@ contains
         wait = max(wait, 64*epsilon(1.0_wp)*chain%flow%period)
         chain%action(bond) = action_recheck
         call queue_set(chain%queue, bond, chain%s + min(wait, 0.25_wp*chain%flow%period))
-        chain%touches = chain%touches + 1
+        chain%counts%touches = chain%counts%touches + 1
         call event_log_append(log, chain_elapsed(chain, chain%s), bond, u, event_touch)
     end procedure touch_event
 

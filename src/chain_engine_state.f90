@@ -59,14 +59,14 @@ contains
         chain%v = state%v
         chain%cycle = state%cycle
         chain%s = state%time
-        allocate (chain%contact(n), chain%action(0:n), chain%site_counts(0:n))
+        allocate (chain%contact(n), chain%action(0:n), chain%counts%site_counts(0:n))
         allocate (chain%y_now(n), chain%vy_now(n), chain%stamp(n))
         chain%stamp = -1
         allocate (chain%row_stamp(n), chain%touched(n))
         chain%row_stamp = -1
         chain%contact = contact_free
         if (allocated(state%contact)) chain%contact = state%contact
-        chain%site_counts = 0
+        chain%counts%site_counts = 0
     end procedure take_state
 
     module procedure restore_schedule
@@ -83,11 +83,13 @@ contains
         chain%start_s = state%start_time
         chain%last_event = state%last_event
         chain%same_instant = state%same_instant
-        chain%impacts = state%counts%impacts
-        chain%sticks = state%counts%sticks
-        chain%releases = state%counts%releases
-        chain%touches = state%counts%touches
-        if (allocated(state%counts%site_counts)) chain%site_counts = state%counts%site_counts
+        chain%counts%impacts = state%counts%impacts
+        chain%counts%sticks = state%counts%sticks
+        chain%counts%releases = state%counts%releases
+        chain%counts%touches = state%counts%touches
+        ! (:) keeps the engine's bounds 0:n whatever those of the state
+        if (allocated(state%counts%site_counts)) &
+            chain%counts%site_counts(:) = state%counts%site_counts
         if (.not. state%has_tangent) return
         associate (tangent => state%tangent)
             call chain_set_tangent(chain, transpose(tangent%frame), tangent%orthonormalise_jumps)
@@ -180,19 +182,15 @@ contains
     end procedure chain_contacts
 
     module procedure chain_counts
-        counts%impacts = chain%impacts
-        counts%sticks = chain%sticks
-        counts%releases = chain%releases
-        counts%touches = chain%touches
-        counts%site_counts = chain%site_counts
+        counts = chain%counts
     end procedure chain_counts
 
     module procedure chain_reset_counts
-        chain%impacts = 0
-        chain%sticks = 0
-        chain%releases = 0
-        chain%touches = 0
-        chain%site_counts = 0
+        chain%counts%impacts = 0
+        chain%counts%sticks = 0
+        chain%counts%releases = 0
+        chain%counts%touches = 0
+        chain%counts%site_counts = 0
     end procedure chain_reset_counts
 
     module procedure chain_next_event

@@ -186,8 +186,9 @@ contains
 
         call output_header(out, cfg%input_text, config_summary(cfg), cfg%model%n, &
                            cfg%model%spacing, cfg%model%damping, cfg%model%restitution, &
-                           cfg%model%amplitude, cfg%model%omega, model_walls(cfg%model), chain_period(chain), cfg%record%phase, &
-                           cfg%record%transient, cfg%record%cycles, chain_positions(chain), &
+                           cfg%model%amplitude, cfg%model%omega, model_walls(cfg%model), &
+                           chain_period(chain), cfg%record%phase, cfg%record%transient, &
+                           cfg%record%cycles, chain_positions(chain), &
                            chain_velocities(chain), err)
     end subroutine header_for
 
