@@ -24,6 +24,8 @@ module chain_output
     use chain_kinds, only: wp, i8
     use chain_error, only: error_t, set_error, fmt_int, fmt_int8
     use chain_files, only: rename_file, remove_file, copy_file
+    use chain_model, only: model_t
+    use chain_state, only: chain_state_t
     use chain_hdf5, only: h5_file_t, h5_real, h5_int, h5_int8, h5_create_file, h5_open_file, &
                           h5_close_file, h5_is_hdf5_file, h5_create_group, h5_exists, &
                           h5_delete, h5_write_attr, h5_read_attr, h5_write, h5_read, &
@@ -53,26 +55,14 @@ module chain_output
     integer, parameter :: file_other_input = 2  !! a run stopped early, of another input
     integer, parameter :: file_other = 3        !! anything else (a finished run, not ours)
 
-    !> What a run stopped early keeps for its continuation in /resume (written only while the
-    !> file is incomplete), and what the continuation reads back from /stats and /strobe. The
-    !> engine's state itself is /final (read_final_state). Plain arrays: this module knows no
-    !> other module's types.
+    !> What a run stopped early keeps for its continuation besides the chain's state (whose
+    !> bookkeeping and tangent frame go to /resume with it, its counters to /stats, the rest to
+    !> /final): the records done, the Lyapunov accumulator (packed), and the last records
+    !> read back from /strobe for the period window.
     type :: resume_data_t
         integer(i8) :: cycles_done = 0       !! records done (/stats/cycles_done)
-        integer(i8) :: start_cycle = 0       !! cycle and time within it of the run's start
-        real(wp) :: start_s = 0
-        real(wp) :: last_event = 0           !! the engine's record of simultaneous impacts
-        integer :: same_instant = 0
-        logical :: has_tangent = .false.     !! with &lyapunov:
-        real(wp), allocatable :: tangent(:, :)      !! (n_vectors, 2n), as the engine keeps it
-        integer :: tangent_scale_bits = 0
-        real(wp), allocatable :: tangent_log(:)     !! (n_vectors): growth kept by the engine
-        integer(i8) :: rank_losses = 0              !! singular tangent maps since the QR step
-        real(wp) :: jumps_volume = 0                !! ln |det| of the jumps since then
         integer(i8), allocatable :: lyapunov_int(:) !! the accumulator (lyapunov_pack)
         real(wp), allocatable :: lyapunov_real(:)
-        integer(i8) :: impacts = 0, sticks = 0, releases = 0, touches = 0 !! /stats
-        integer(i8), allocatable :: site_counts(:)
         real(wp), allocatable :: x_last(:, :), v_last(:, :) !! (n, m): the last m records
     end type resume_data_t
 
@@ -341,43 +331,42 @@ contains
     end subroutine output_events_append
 
     !> /final: everything needed to continue bit-for-bit.
-    subroutine output_final(out, x, v, cycle, phase, time_in_cycle, contact, queue_time, &
-                            queue_action, err)
+    !> /final: the chain's state at the end (with its schedule, so that a continuation goes on
+    !> bit for bit); `omega` gives the drive phase.
+    subroutine output_final(out, state, omega, err)
         type(output_t), intent(inout) :: out
-        real(wp), intent(in), contiguous :: x(:), v(:), queue_time(:)
-        real(wp), intent(in) :: phase, time_in_cycle
-        integer(i8), intent(in) :: cycle
-        integer, intent(in), contiguous :: contact(:), queue_action(:)
+        type(chain_state_t), intent(in) :: state
+        real(wp), intent(in) :: omega
         type(error_t), allocatable, intent(out) :: err
 
         associate (f => out%file)
             call h5_create_group(f, 'final', err)
             call oscillator_coordinate(f, 'final', out%n, err)
             call bond_coordinate(f, 'final', out%n, err)
-            call h5_write(f, 'final/x', x, '1', err)
+            call h5_write(f, 'final/x', state%x, '1', err)
             call describe(f, 'final/x', 'displacement from equilibrium at the end', 'length', &
                           'oscillator', err)
-            call h5_write(f, 'final/v', v, '1', err)
+            call h5_write(f, 'final/v', state%v, '1', err)
             call describe(f, 'final/v', 'velocity at the end', 'length/time', 'oscillator', err)
-            call h5_write(f, 'final/phase', phase, 'radian', err)
+            call h5_write(f, 'final/phase', state%time*omega, 'radian', err)
             call describe(f, 'final/phase', 'drive phase at the end', '', '', err)
-            call h5_write(f, 'final/time_in_cycle', time_in_cycle, '1', err)
+            call h5_write(f, 'final/time_in_cycle', state%time, '1', err)
             call describe(f, 'final/time_in_cycle', 'time since the start of the drive '// &
                           'cycle at the end', 'time', '', err)
-            call h5_write(f, 'final/contact', contact, '1', err)
+            call h5_write(f, 'final/contact', state%contact, '1', err)
             call describe(f, 'final/contact', 'resting contact of the oscillator with a wall', &
                           '', 'oscillator', err)
             call flags(f, 'final/contact', [-1, 0, 1], 'resting_on_the_left_wall free '// &
                        'resting_on_the_right_wall', err)
-            call h5_write(f, 'final/event_time', queue_time, '1', err)
+            call h5_write(f, 'final/event_time', state%event_time, '1', err)
             call describe(f, 'final/event_time', 'time within the drive cycle of the '// &
                           'next event scheduled at the bond', 'time', 'bond', err)
-            call h5_write(f, 'final/event_action', queue_action, '1', err)
+            call h5_write(f, 'final/event_action', state%event_action, '1', err)
             call describe(f, 'final/event_action', 'next event scheduled at the bond', '', &
                           'bond', err)
             call flags(f, 'final/event_action', [0, 1, 2, 3], 'none impact release recheck', &
                        err)
-            call h5_write(f, 'final/cycle', cycle, '1', err)
+            call h5_write(f, 'final/cycle', state%cycle, '1', err)
             call describe(f, 'final/cycle', 'drive cycle at the end', 'drive cycles', '', err)
         end associate
     end subroutine output_final
@@ -534,47 +523,48 @@ contains
     ! ---- a run stopped early, and its continuation ----------------------------------------
 
     !> /resume of a run stopped early (see resume_data_t).
-    subroutine output_resume(out, data, err)
+    subroutine output_resume(out, state, data, err)
         type(output_t), intent(inout) :: out
-        type(resume_data_t), intent(in) :: data
+        type(chain_state_t), intent(in) :: state !! the chain's bookkeeping and tangent frame
+        type(resume_data_t), intent(in) :: data  !! the Lyapunov accumulator
         type(error_t), allocatable, intent(out) :: err
 
         associate (f => out%file)
             call h5_create_group(f, 'resume', err)
-            call h5_write(f, 'resume/start_cycle', data%start_cycle, '1', err)
+            call h5_write(f, 'resume/start_cycle', state%start_cycle, '1', err)
             call describe(f, 'resume/start_cycle', "drive cycle of the run's start", &
                           'drive cycles', '', err)
-            call h5_write(f, 'resume/start_time_in_cycle', data%start_s, '1', err)
+            call h5_write(f, 'resume/start_time_in_cycle', state%start_time, '1', err)
             call describe(f, 'resume/start_time_in_cycle', "time within the drive cycle of "// &
                           "the run's start", 'time', '', err)
-            call h5_write(f, 'resume/last_event', data%last_event, '1', err)
+            call h5_write(f, 'resume/last_event', state%last_event, '1', err)
             call describe(f, 'resume/last_event', 'time within the drive cycle of the last '// &
                           'impact', 'time', '', err)
-            call h5_write(f, 'resume/same_instant', data%same_instant, '1', err)
+            call h5_write(f, 'resume/same_instant', state%same_instant, '1', err)
             call describe(f, 'resume/same_instant', 'impacts at the time of last_event', '', &
                           '', err)
-            if (.not. data%has_tangent) return
-            call h5_create_dimension(f, 'resume/state', size(data%tangent, 2, kind=i8), &
+            if (.not. state%has_tangent) return
+            call h5_create_dimension(f, 'resume/state', size(state%tangent%frame, 2, kind=i8), &
                                      .false., err)
-            call h5_create_dimension(f, 'resume/vector', size(data%tangent, 1, kind=i8), &
+            call h5_create_dimension(f, 'resume/vector', size(state%tangent%frame, 1, kind=i8), &
                                      .false., err)
             call h5_create_dimension(f, 'resume/packed_int', size(data%lyapunov_int, kind=i8), &
                                      .false., err)
             call h5_create_dimension(f, 'resume/packed_real', &
                                      size(data%lyapunov_real, kind=i8), .false., err)
-            call h5_write(f, 'resume/tangent', data%tangent, '1', err)
+            call h5_write(f, 'resume/tangent', state%tangent%frame, '1', err)
             call describe(f, 'resume/tangent', 'tangent vectors (times '// &
                           '2**-tangent_scale_bits)', '', 'state vector', err)
-            call h5_write(f, 'resume/tangent_scale_bits', data%tangent_scale_bits, '1', err)
+            call h5_write(f, 'resume/tangent_scale_bits', state%tangent%scale_bits, '1', err)
             call describe(f, 'resume/tangent_scale_bits', 'binary scale of the tangent '// &
                           'vectors', '', '', err)
-            call h5_write(f, 'resume/tangent_log', data%tangent_log, '1', err)
+            call h5_write(f, 'resume/tangent_log', state%tangent%growth_log, '1', err)
             call describe(f, 'resume/tangent_log', 'growth of the tangent vector kept by '// &
                           'the engine', 'nats', 'vector', err)
-            call h5_write(f, 'resume/rank_losses', data%rank_losses, '1', err)
+            call h5_write(f, 'resume/rank_losses', state%tangent%rank_losses, '1', err)
             call describe(f, 'resume/rank_losses', 'singular tangent maps since the last '// &
                           'QR step', '', '', err)
-            call h5_write(f, 'resume/jumps_volume', data%jumps_volume, '1', err)
+            call h5_write(f, 'resume/jumps_volume', state%tangent%jumps_volume, '1', err)
             call describe(f, 'resume/jumps_volume', 'ln |det| of the jumps since the last '// &
                           'QR step', 'nats', '', err)
             call h5_write(f, 'resume/lyapunov_int', data%lyapunov_int, '1', err)
@@ -588,10 +578,11 @@ contains
 
     !> What a continuation of the run stopped early in `path` needs besides /final: /resume,
     !> the counters of /stats, and the last min(cycles done, window) strobe records.
-    subroutine read_resume(path, n, with_tangent, window, data, err)
+    subroutine read_resume(path, n, with_tangent, window, state, data, err)
         character(len=*), intent(in) :: path
         integer, intent(in) :: n, window
         logical, intent(in) :: with_tangent
+        type(chain_state_t), intent(inout) :: state !! gets the bookkeeping and tangent frame
         type(resume_data_t), intent(out) :: data
         type(error_t), allocatable, intent(out) :: err
         type(h5_file_t) :: src
@@ -599,25 +590,25 @@ contains
 
         call open_for_reading(path, '&output', src, err)
         if (allocated(err)) return
-        allocate (data%site_counts(n + 1))
+        allocate (state%counts%site_counts(n + 1))
         call h5_read(src, 'stats/cycles_done', data%cycles_done, err)
-        call h5_read_attr(src, 'stats', 'impacts', data%impacts, err)
-        call h5_read_attr(src, 'stats', 'sticks', data%sticks, err)
-        call h5_read_attr(src, 'stats', 'releases', data%releases, err)
-        call h5_read_attr(src, 'stats', 'touches', data%touches, err)
-        call h5_read(src, 'stats/site_counts', data%site_counts, err)
-        call h5_read(src, 'resume/start_cycle', data%start_cycle, err)
-        call h5_read(src, 'resume/start_time_in_cycle', data%start_s, err)
-        call h5_read(src, 'resume/last_event', data%last_event, err)
-        call h5_read(src, 'resume/same_instant', data%same_instant, err)
-        data%has_tangent = with_tangent
+        call h5_read_attr(src, 'stats', 'impacts', state%counts%impacts, err)
+        call h5_read_attr(src, 'stats', 'sticks', state%counts%sticks, err)
+        call h5_read_attr(src, 'stats', 'releases', state%counts%releases, err)
+        call h5_read_attr(src, 'stats', 'touches', state%counts%touches, err)
+        call h5_read(src, 'stats/site_counts', state%counts%site_counts, err)
+        call h5_read(src, 'resume/start_cycle', state%start_cycle, err)
+        call h5_read(src, 'resume/start_time_in_cycle', state%start_time, err)
+        call h5_read(src, 'resume/last_event', state%last_event, err)
+        call h5_read(src, 'resume/same_instant', state%same_instant, err)
+        state%has_tangent = with_tangent
         if (with_tangent) then
-            call h5_read_alloc(src, 'resume/tangent', data%tangent, err)
-            call h5_read(src, 'resume/tangent_scale_bits', data%tangent_scale_bits, err)
-            allocate (data%tangent_log(size(data%tangent, 1)))
-            call h5_read(src, 'resume/tangent_log', data%tangent_log, err)
-            call h5_read(src, 'resume/rank_losses', data%rank_losses, err)
-            call h5_read(src, 'resume/jumps_volume', data%jumps_volume, err)
+            call h5_read_alloc(src, 'resume/tangent', state%tangent%frame, err)
+            call h5_read(src, 'resume/tangent_scale_bits', state%tangent%scale_bits, err)
+            allocate (state%tangent%growth_log(size(state%tangent%frame, 1)))
+            call h5_read(src, 'resume/tangent_log', state%tangent%growth_log, err)
+            call h5_read(src, 'resume/rank_losses', state%tangent%rank_losses, err)
+            call h5_read(src, 'resume/jumps_volume', state%tangent%jumps_volume, err)
             call h5_read_alloc(src, 'resume/lyapunov_int', data%lyapunov_int, err)
             call h5_read_alloc(src, 'resume/lyapunov_real', data%lyapunov_real, err)
         end if
@@ -709,30 +700,21 @@ contains
     ! ---- a start from a file --------------------------------------------------------------
 
     !> The final state of an earlier run, to continue from it.
-    subroutine read_final_state(path, n, x, v, cycle, phase, contact, queue_time, &
-                                queue_action, time_in_cycle, model, spacing, boundary, err)
+    !> The state in /final of the run in `path` (n oscillators), with its schedule, and the
+    !> model of its /params (the stick speed is not stored: the default).
+    subroutine read_final_state(path, n, state, model, err)
         character(len=*), intent(in) :: path
         integer, intent(in) :: n
-        real(wp), allocatable, intent(out) :: x(:), v(:), queue_time(:)
-        integer(i8), intent(out) :: cycle
-        real(wp), intent(out) :: phase, time_in_cycle
-        real(wp), intent(out) :: model(4) !! damping, restitution, amplitude, omega of the file
-        real(wp), allocatable, intent(out) :: spacing(:)
-        character(len=8), intent(out) :: boundary
-        integer, allocatable, intent(out) :: contact(:), queue_action(:)
+        type(chain_state_t), intent(out) :: state
+        type(model_t), intent(out) :: model
         type(error_t), allocatable, intent(out) :: err
         type(h5_file_t) :: src
         integer(i8) :: version, n_file
-        character(len=:), allocatable :: text
-        logical :: exists
+        character(len=:), allocatable :: boundary
 
-        cycle = 0
-        phase = 0
-        time_in_cycle = 0
-        model = 0
-        boundary = ''
-        allocate (x(n), v(n), queue_time(n + 1), contact(n), queue_action(n + 1))
-        allocate (spacing(n + 1))
+        allocate (state%x(n), state%v(n), state%contact(n), state%event_time(n + 1), &
+                  state%event_action(n + 1), model%spacing(n + 1))
+        model%n = n
         call open_for_reading(path, '&initial', src, err)
         if (allocated(err)) return
         call h5_read_attr(src, '/', 'schema_version', version, err)
@@ -743,29 +725,44 @@ contains
         if (.not. allocated(err) .and. n_file /= n) &
             call set_error(err, "&initial: file = '"//path//"' has n = "//fmt_int8(n_file)// &
                            " oscillators, the input n = "//fmt_int(n))
-        call h5_exists(src, 'final', exists, err)
-        if (.not. allocated(err) .and. .not. exists) &
-            call set_error(err, "&initial: file = '"//path//"' has no /final state")
-        call h5_read(src, 'final/x', x, err)
-        call h5_read(src, 'final/v', v, err)
-        call h5_read(src, 'final/contact', contact, err)
-        call h5_read(src, 'final/event_time', queue_time, err)
-        call h5_read(src, 'final/event_action', queue_action, err)
-        call h5_read(src, 'final/phase', phase, err)
-        call h5_read(src, 'final/time_in_cycle', time_in_cycle, err)
-        call h5_read(src, 'final/cycle', cycle, err)
-        call h5_read_attr(src, 'params', 'damping', model(1), err)
-        call h5_read_attr(src, 'params', 'restitution', model(2), err)
-        call h5_read_attr(src, 'params', 'amplitude', model(3), err)
-        call h5_read_attr(src, 'params', 'omega', model(4), err)
-        call h5_read_attr(src, 'params', 'boundary', text, err)
-        if (.not. allocated(err)) boundary = text
-        call h5_read(src, 'params/spacing', spacing, err)
+        call read_final_group(src, path, state, err)
+        call h5_read_attr(src, 'params', 'damping', model%damping, err)
+        call h5_read_attr(src, 'params', 'restitution', model%restitution, err)
+        call h5_read_attr(src, 'params', 'amplitude', model%amplitude, err)
+        call h5_read_attr(src, 'params', 'omega', model%omega, err)
+        call h5_read_attr(src, 'params', 'boundary', boundary, err)
+        if (.not. allocated(err)) model%walls = trim(boundary) == 'fixed'
+        call h5_read(src, 'params/spacing', model%spacing, err)
         if (allocated(err)) then
             if (err%message(1:5) == 'hdf5:') err%message = "&initial: "//err%message
         end if
         call h5_close_file(src, err)
     end subroutine read_final_state
+
+    !> /final into `state` (arrays allocated): a run's clock starts there.
+    subroutine read_final_group(src, path, state, err)
+        type(h5_file_t), intent(in) :: src
+        character(len=*), intent(in) :: path
+        type(chain_state_t), intent(inout) :: state
+        type(error_t), allocatable, intent(inout) :: err
+        logical :: exists
+        real(wp) :: phase
+
+        call h5_exists(src, 'final', exists, err)
+        if (.not. allocated(err) .and. .not. exists) &
+            call set_error(err, "&initial: file = '"//path//"' has no /final state")
+        call h5_read(src, 'final/x', state%x, err)
+        call h5_read(src, 'final/v', state%v, err)
+        call h5_read(src, 'final/contact', state%contact, err)
+        call h5_read(src, 'final/event_time', state%event_time, err)
+        call h5_read(src, 'final/event_action', state%event_action, err)
+        call h5_read(src, 'final/phase', phase, err) ! (read for its check: /final is whole)
+        call h5_read(src, 'final/time_in_cycle', state%time, err)
+        call h5_read(src, 'final/cycle', state%cycle, err)
+        state%has_schedule = .true.
+        state%start_cycle = state%cycle
+        state%start_time = state%time
+    end subroutine read_final_group
 
     !> Open an existing file read-only (`where` names the input that points at it).
     subroutine open_for_reading(path, where, src, err)

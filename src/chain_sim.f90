@@ -15,7 +15,7 @@ module chain_sim
     use chain_engine, only: chain_t, chain_init, chain_snapshot, chain_model, chain_positions, &
                             chain_velocities, chain_contacts, chain_cycle, chain_time, &
                             chain_period
-    use chain_state, only: chain_state_t, event_counts_t, tangent_state_t, moving_state
+    use chain_state, only: chain_state_t, moving_state
     use chain_event_log, only: event_log_t
     use chain_config, only: config_t, config_summary, check_size
     use chain_model, only: model_t, model_walls
@@ -95,25 +95,17 @@ contains
         type(chain_state_t), intent(out) :: state
         logical, intent(out) :: same_model
         type(error_t), allocatable, intent(out) :: err
-        real(wp), allocatable :: x(:), v(:), queue_time(:), spacing(:)
-        integer, allocatable :: contact(:), queue_action(:)
-        integer(i8) :: cycle
-        real(wp) :: phase, s, model(4)
-        character(len=8) :: boundary
+        type(model_t) :: file_model
 
         same_model = .false.
-        call read_final_state(path, cfg%model%n, x, v, cycle, phase, contact, queue_time, &
-                              queue_action, s, model, spacing, boundary, err)
+        call read_final_state(path, cfg%model%n, state, file_model, err)
         if (allocated(err)) return
-        state = moving_state(x, v, cycle, s)
-        state%contact = contact
-        state%has_schedule = .true.
-        state%event_time = queue_time
-        state%event_action = queue_action
-        same_model = .not. (any(model /= [cfg%model%damping, cfg%model%restitution, &
-                                          cfg%model%amplitude, cfg%model%omega]) .or. &
-                            any(spacing /= cfg%model%spacing) .or. &
-                            trim(boundary) /= model_walls(cfg%model))
+        same_model = file_model%damping == cfg%model%damping .and. &
+                     file_model%restitution == cfg%model%restitution .and. &
+                     file_model%amplitude == cfg%model%amplitude .and. &
+                     file_model%omega == cfg%model%omega .and. &
+                     all(file_model%spacing == cfg%model%spacing) .and. &
+                     (file_model%walls .eqv. cfg%model%walls)
     end subroutine read_final_chain_state
 
     !> A chain ready to run from the configuration's initial state.
@@ -255,20 +247,10 @@ contains
         type(chain_state_t) :: now
 
         now = chain_snapshot(chain)
-        data%start_cycle = now%start_cycle
-        data%start_s = now%start_time
-        data%last_event = now%last_event
-        data%same_instant = now%same_instant
-        data%has_tangent = cfg%record%lyapunov
-        if (cfg%record%lyapunov) then
-            data%tangent = now%tangent%frame
-            data%tangent_scale_bits = now%tangent%scale_bits
-            data%tangent_log = now%tangent%growth_log
-            data%rank_losses = now%tangent%rank_losses
-            data%jumps_volume = now%tangent%jumps_volume
-            call lyapunov_pack(state%acc, data%lyapunov_int, data%lyapunov_real)
-        end if
-        call output_resume(out, data, err)
+        now%has_tangent = cfg%record%lyapunov
+        if (cfg%record%lyapunov) call lyapunov_pack(state%acc, data%lyapunov_int, &
+                                                    data%lyapunov_real)
+        call output_resume(out, now, data, err)
     end subroutine write_resume
 
     !> The chain and record_cycles's state where the run stopped early in cfg%output_file left
@@ -316,7 +298,7 @@ contains
         end if
         call read_resume(cfg%output_file, cfg%model%n, cfg%record%lyapunov, &
                          int(min(cfg%record%cycles, int(period_window(cfg%record%max_period), &
-                             i8))), data, err)
+                             i8))), stopped, data, err)
         if (allocated(err)) return
         if (data%cycles_done >= cfg%record%cycles) then
             call set_error(err, "&output: file = '"//cfg%output_file//"' holds all "// &
@@ -324,22 +306,10 @@ contains
                            "to run it again")
             return
         end if
-        stopped%start_cycle = data%start_cycle
-        stopped%start_time = data%start_s
-        stopped%last_event = data%last_event
-        stopped%same_instant = data%same_instant
-        stopped%counts = event_counts_t(data%impacts, data%sticks, data%releases, data%touches, &
-                                        data%site_counts)
         if (.not. cfg%record%lyapunov) return
-        if (size(data%tangent, 2) /= 2*cfg%model%n) then
+        if (size(stopped%tangent%frame, 2) /= 2*cfg%model%n) &
             call set_error(err, "&output: cannot continue '"//cfg%output_file//"': "// &
                            "/resume/tangent is not a frame of the chain's 2n coordinates")
-            return
-        end if
-        stopped%has_tangent = .true.
-        stopped%tangent = tangent_state_t(data%tangent, data%tangent_scale_bits, &
-                                          data%tangent_log, data%rank_losses, &
-                                          data%jumps_volume, orthonormalise_jumps=.true.)
     end subroutine read_stopped_run
 
     subroutine write_results(out, chain, res, jacobian_cycles, err)
@@ -353,8 +323,7 @@ contains
 
         final = chain_snapshot(chain)
         model = chain_model(chain)
-        call output_final(out, final%x, final%v, final%cycle, final%time*model%omega, &
-                          final%time, final%contact, final%event_time, final%event_action, err)
+        call output_final(out, final, model%omega, err)
         if (allocated(err)) return
         call output_stats(out, res%collisions_per_cycle, res%impacts, res%sticks, &
                           res%releases, res%touches, res%site_counts, res%cycles_done, err)

@@ -14,6 +14,7 @@ module test_sweep
     use chain_record, only: record_result_t
     use chain_output, only: read_final_state
     use chain_state, only: chain_state_t
+    use chain_model, only: model_t
     use chain_sweep, only: sweep_plan_t, sweep_result_t, plan_sweep, &
                            sweep_result_init, sweep_point_config, run_sweep_branches, &
                            save_checkpoint, load_checkpoint, remove_file
@@ -151,11 +152,8 @@ contains
         type(chain_state_t), allocatable :: starts(:)
         type(record_result_t) :: summary
         type(error_t), allocatable :: err
-        real(wp), allocatable :: x(:), v(:), qt(:), spacing(:)
-        integer, allocatable :: contact(:), qa(:)
-        integer(i8) :: cycle
-        real(wp) :: phase, s, model(4)
-        character(len=8) :: boundary
+        type(chain_state_t) :: last
+        type(model_t) :: file_model
         character(len=:), allocatable :: previous, path, tmp
         integer :: j
 
@@ -187,18 +185,16 @@ contains
             if (j > 1) call remove_file(previous)
             previous = path
         end do
-        call read_final_state(previous, cfg%model%n, x, v, cycle, phase, contact, qt, qa, s, &
-            model, &
-                              spacing, boundary, err)
+        call read_final_state(previous, cfg%model%n, last, file_model, err)
         call remove_file(previous)
         call check(t, .not. allocated(err), 'final state of the last step')
         if (allocated(err)) return
-        call check(t, all(x == starts(1)%x) .and. all(v == starts(1)%v) .and. &
-                   cycle == starts(1)%cycle .and. s == starts(1)%time .and. &
-                   all(contact == starts(1)%contact), &
+        call check(t, all(last%x == starts(1)%x) .and. all(last%v == starts(1)%v) .and. &
+                   last%cycle == starts(1)%cycle .and. last%time == starts(1)%time .and. &
+                   all(last%contact == starts(1)%contact), &
                    'continuation = steps from files, bit for bit')
-        call check(t, all(x == res%x(:, 10, 3)), 'the last record of the sweep is the final x')
-        call check(t, cycle == 3*(20 + 10), 'the drive cycle count runs on over the steps')
+        call check(t, all(last%x == res%x(:, 10, 3)), 'the last record of the sweep is the final x')
+        call check(t, last%cycle == 3*(20 + 10), 'the drive cycle count runs on over the steps')
     end subroutine test_continuation_equals_files
 
     !> Stopped after a few points, saved, loaded into a fresh result and finished: the same
