@@ -4,21 +4,20 @@
 !> SIGINT / SIGTERM ask a running simulation to stop at the next strobe record (chain_interrupt);
 !> the file is then closed cleanly and marked complete = 0, and the same command continues it.
 program main
-    use, intrinsic :: iso_fortran_env, only: error_unit, output_unit, int64
-    use impactchain, only: wp, i8, error_t, config_t, read_config, simulate_to_file, &
+    use, intrinsic :: iso_fortran_env, only: error_unit, output_unit
+    use impactchain, only: error_t, config_t, read_config, simulate_to_file, &
                            record_result_t, run_sweep, sweep_summary_t, checkpoint_path, &
-                           catch_interrupts, interrupted, cli_t, parse_command_line, cli_run, &
+                           catch_interrupts, cli_t, parse_command_line, cli_run, &
                            cli_help, cli_version, cli_usage, code_version, config_summary, &
-                           plan_sweep, validate_sweep_points, progress_t, &
-                           progress_start, progress_update, stderr_is_terminal
+                           plan_sweep, validate_sweep_points
+    use stderr_monitor, only: stderr_monitor_t, close_progress
     implicit none
     type(config_t) :: cfg
     type(record_result_t) :: summary
     type(sweep_summary_t) :: sweep_summary
     type(error_t), allocatable :: err
     type(cli_t) :: cli
-    logical :: quiet
-    type(progress_t) :: shown
+    type(stderr_monitor_t) :: monitor
 
     cli = parse_command_line()
     select case (cli%action)
@@ -35,7 +34,7 @@ program main
     case default
         call fail(cli%message)
     end select
-    quiet = cli%quiet
+    monitor%quiet = cli%quiet
     call read_config(cli%input, cfg, err, cli%overrides)
     if (allocated(err)) call fail(err%message)
     if (cli%check) then
@@ -46,16 +45,14 @@ program main
     end if
     call catch_interrupts()
     if (cfg%sweep) then
-        shown = progress_start('point', stderr_is_terminal(), seconds())
-        call run_sweep(cfg, sweep_summary, err, progress)
-        call close_progress()
+        call run_sweep(cfg, sweep_summary, err, monitor)
+        call close_progress(monitor)
         if (allocated(err)) call fail(err%message)
         call report_sweep(sweep_summary, cfg%output_file, checkpoint_path(cfg))
         if (.not. sweep_summary%complete) stop 3, quiet=.true.
     else
-        shown = progress_start('cycle', stderr_is_terminal(), seconds())
-        call simulate_to_file(cfg, summary, err, progress)
-        call close_progress()
+        call simulate_to_file(cfg, summary, err, monitor)
+        call close_progress(monitor)
         if (allocated(err)) call fail(err%message)
         call report(summary, cfg%output_file)
         if (.not. summary%complete) stop 3, quiet=.true.
@@ -80,34 +77,6 @@ contains
             '  -h, --help             this text', &
             '  --version              the code version'
     end subroutine usage
-
-    !> Progress on stderr (chain_progress decides when and how); .false. after a signal.
-    function progress(done, total) result(keep_going)
-        integer(i8), intent(in) :: done, total
-        logical :: keep_going
-        character(len=:), allocatable :: text
-
-        keep_going = .not. interrupted()
-        if (quiet) return
-        call progress_update(shown, done, total, seconds(), text)
-        if (len(text) == 0) return
-        write (error_unit, '(a)', advance='no') text
-        flush (error_unit)
-    end function progress
-
-    !> Seconds since an arbitrary start.
-    real(wp) function seconds()
-        integer(int64) :: now, rate
-
-        call system_clock(now, rate)
-        seconds = real(now, wp)/rate
-    end function seconds
-
-    !> A progress line left open on a terminal gets its newline before anything else is said.
-    subroutine close_progress()
-        if (shown%line_open) write (error_unit, '(a)') ''
-        shown%line_open = .false.
-    end subroutine close_progress
 
     subroutine report(summary, output_file)
         type(record_result_t), intent(in) :: summary

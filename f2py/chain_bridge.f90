@@ -3,24 +3,28 @@
 !> It turns plain arguments into the same `config_t` the namelist reader builds, so that
 !> `validate_config` and `check_size` give the CLI's own messages; it provides a record sink
 !> that writes strobe records and events straight into arrays owned by the caller (numpy); and
-!> it copies error messages into a buffer of byte values. There is no physics here: every
-!> number comes from `chain_record` / `chain_sim`, exactly as for the CLI.
+!> it copies error messages into a buffer of byte values; it shares a small control array with
+!> the Python caller during a call (stop requests, progress). There is no physics here: every
+!> number comes from `chain_record` / `chain_sweep`, exactly as for the CLI.
 module chain_bridge
     use, intrinsic :: iso_c_binding, only: c_int, c_int64_t, c_double
     use impactchain, only: wp, i8, error_t, set_error, config_t, fmt_real, fmt_int, &
                            lyapunov_vectors, event_log_t, chain_t, record_sink_t, record_result_t, &
-                           set_boundary, chain_copy_state
+                           set_boundary, chain_copy_state, monitor_t
+    !$ use omp_lib, only: omp_set_num_threads
     implicit none
     private
-    public :: array_sink_t, make_config, put_message, run_sizes_ok, put_run_results
+    public :: array_sink_t, shared_monitor_t, make_config, set_sweep, put_message
+    public :: run_sizes_ok, put_run_results, use_threads, call_ended
     public :: status_ok, status_invalid, status_failed, status_capacity, status_internal
-    public :: message_capacity
+    public :: status_stopped, message_capacity
 
     integer(c_int), parameter :: status_ok = 0        !! success
     integer(c_int), parameter :: status_invalid = 1   !! a bad argument (Python: ValueError)
     integer(c_int), parameter :: status_failed = 2    !! the run itself failed (RuntimeError)
     integer(c_int), parameter :: status_capacity = 3  !! the event buffer is too small
     integer(c_int), parameter :: status_internal = 4  !! the caller broke the layer's protocol
+    integer(c_int), parameter :: status_stopped = 5   !! the caller asked to stop (control(1))
     integer, parameter :: message_capacity = 1024     !! bytes of the message buffer
 
     !> Strobe records and events go straight into the caller's arrays (pointers valid during
@@ -40,7 +44,90 @@ module chain_bridge
         procedure :: put_events => array_put_events
     end type array_sink_t
 
+    !> A control array shared with the caller while a call runs (the Python layer polls it from
+    !> another thread; pointer valid during one layer call only): the caller sets control(1) to
+    !> a nonzero value to ask for a stop; the layer writes control(2) the stage
+    !> (chain_monitor's stage_*), control(3) the units done and control(4) their total.
+    type, extends(monitor_t) :: shared_monitor_t
+        integer(c_int64_t), pointer :: control(:) => null()
+    contains
+        procedure :: keep_going => shared_keep_going
+    end type shared_monitor_t
+
 contains
+
+    logical function shared_keep_going(monitor, stage, done, total) result(keep_going)
+        class(shared_monitor_t), intent(inout) :: monitor
+        integer, intent(in) :: stage
+        integer(i8), intent(in) :: done, total
+        ! volatile: the other thread's write must be seen at every call
+        integer(c_int64_t), pointer, volatile :: control(:)
+
+        control => monitor%control
+        control(2) = stage
+        control(3) = done
+        control(4) = total
+        keep_going = control(1) == 0
+    end function shared_keep_going
+
+    !> After a watched call: status 5 when the caller asked to stop (whatever the library said
+    !> then: a stop in the transient is an error there), else 2 with the library's message
+    !> when it failed. .true. in either case.
+    logical function call_ended(control, err, status, msg_len, message) result(ended)
+        integer(c_int64_t), intent(in) :: control(:)
+        type(error_t), allocatable, intent(in) :: err
+        integer(c_int), intent(inout) :: status, msg_len !! (unchanged when not ended)
+        integer(c_int), intent(inout) :: message(:)
+
+        ended = control(1) /= 0 .or. allocated(err)
+        if (control(1) /= 0) then
+            call put_message("stopped at the caller's request", status_stopped, status, &
+                             msg_len, message)
+        else if (allocated(err)) then
+            call put_message(err%message, status_failed, status, msg_len, message)
+        end if
+    end function call_ended
+
+    !> OpenMP threads for the sweeps of this call's thread: `threads` > 0, or the default
+    !> (OMP_NUM_THREADS, else every core) for 0.
+    subroutine use_threads(threads)
+        integer, intent(in) :: threads
+
+        !$ if (threads > 0) call omp_set_num_threads(threads)
+    end subroutine use_threads
+
+    !> Add the &sweep group with these values (names as byte values, lower case; parameter2
+    !> empty for a 1-D sweep) to a configuration made by make_config.
+    subroutine set_sweep(cfg, parameter, start, stop, step, mode, parameter2, start2, stop2, &
+                         step2)
+        type(config_t), intent(inout) :: cfg
+        integer(c_int), intent(in) :: parameter(:), mode(:), parameter2(:)
+        real(wp), intent(in) :: start, stop, step, start2, stop2, step2
+
+        cfg%sweep = .true.
+        cfg%sweep_parameter = text_of(parameter)
+        cfg%sweep_mode = text_of(mode)
+        cfg%sweep_parameter2 = text_of(parameter2)
+        cfg%sweep_start = start
+        cfg%sweep_stop = stop
+        cfg%sweep_step = step
+        if (len(cfg%sweep_parameter2) > 0) then
+            cfg%sweep_start2 = start2
+            cfg%sweep_stop2 = stop2
+            cfg%sweep_step2 = step2
+        end if
+    end subroutine set_sweep
+
+    !> Byte values 0..255 as text.
+    pure function text_of(bytes) result(text)
+        integer(c_int), intent(in) :: bytes(:)
+        character(len=size(bytes)) :: text
+        integer :: j
+
+        do j = 1, size(bytes)
+            text(j:j) = achar(iand(int(bytes(j)), 255))
+        end do
+    end function text_of
 
     !> The configuration a namelist with these values would give. `spacing` has one value
     !> (uniform) or n+1 values, as in &chain; `boundary` is the lower-cased name as byte values;
@@ -57,8 +144,6 @@ contains
         logical, intent(in) :: explicit, record_events, lyapunov, jacobian
         integer(i8), intent(in) :: transient, cycles
         type(error_t), allocatable, intent(out) :: err
-        integer :: j
-        character(len=:), allocatable :: name
 
         cfg%model%n = n
         if (size(spacing) == 1) then
@@ -71,11 +156,7 @@ contains
         cfg%model%restitution = restitution
         cfg%model%amplitude = amplitude
         cfg%model%omega = omega
-        allocate (character(len=size(boundary)) :: name)
-        do j = 1, size(boundary)
-            name(j:j) = achar(iand(int(boundary(j)), 255))
-        end do
-        call set_boundary(cfg%model, name, err)
+        call set_boundary(cfg%model, text_of(boundary), err)
         if (explicit) then
             cfg%initial_kind = 'explicit'
         else
@@ -104,15 +185,16 @@ contains
     end subroutine make_config
 
     !> Do ic_run's caller-given sizes fit the (validated) configuration? nf = n always; the
-    !> strobe records, when kept (nc > 0), are (n, cycles); kcap exponents with &lyapunov;
-    !> a 2n x 2n Jacobian when asked.
-    pure logical function run_sizes_ok(cfg, nr, nc, nf, kcap, mj)
+    !> strobe records, when kept, are (n, cycles); kcap exponents with &lyapunov; a 2n x 2n
+    !> Jacobian when asked.
+    pure logical function run_sizes_ok(cfg, keep_strobe, nr, nc, nf, kcap, mj)
         type(config_t), intent(in) :: cfg
+        logical, intent(in) :: keep_strobe
         integer, intent(in) :: nr, nf, kcap, mj
         integer(i8), intent(in) :: nc
 
         run_sizes_ok = nf == cfg%model%n .and. &
-                       (nc == 0 .or. (nr == cfg%model%n .and. nc == cfg%record%cycles))
+                       (.not. keep_strobe .or. (nr == cfg%model%n .and. nc == cfg%record%cycles))
         if (cfg%record%lyapunov) run_sizes_ok = run_sizes_ok .and. kcap == lyapunov_vectors(cfg)
         if (cfg%record%jacobian) run_sizes_ok = run_sizes_ok .and. mj == 2*cfg%model%n
     end function run_sizes_ok

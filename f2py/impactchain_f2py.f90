@@ -1,6 +1,6 @@
 !> The thin layer wrapped by f2py into `impactchain._kernels` (SHTOOLS' PythonWrapper
 !> pattern): plain external subroutines with explicit-shape c_double / c_int / c_int64_t
-!> arrays. Only these three routines cross into Python; `impactchain.api`
+!> arrays. Only these four routines cross into Python; `impactchain.api`
 !> (post/impactchain/api.py) is the interface people use.
 !>
 !> Each routine builds the `config_t` a namelist with the same values would give, checks
@@ -10,8 +10,14 @@
 !>
 !> Protocol (every routine):
 !> - `status` = 0 ok, 1 bad argument (ValueError), 2 the run failed (RuntimeError), 3 the event
-!>   buffer was too small, 4 the caller broke this protocol; `message(1:msg_len)` holds the
-!>   library's message as byte values when status /= 0. Nothing is printed, nothing stops.
+!>   buffer was too small, 4 the caller broke this protocol, 5 stopped at the caller's request;
+!>   `message(1:msg_len)` holds the library's message as byte values when status /= 0.
+!>   Nothing is printed, nothing stops.
+!> - Long routines (`ic_run`, `ic_sweep`) share `control(4)` (int64, intent(inout): f2py passes
+!>   the caller's buffer itself) with the caller, who polls it from another thread while the
+!>   routine runs with the GIL released: the caller sets control(1) /= 0 to ask for a stop
+!>   (seen at the next transient cycle, record or sweep point); the routine keeps control(2:4)
+!>   = stage (1 transient, 2 records, 3 sweep points), units done, their total.
 !> - Booleans are c_int 0 / 1. No strings cross: `boundary` (the lower-cased name) and
 !>   `message` are c_int arrays of byte values 0..255 (f2py 2.x cannot declare c_int8_t).
 !> - Sizes of outputs are caller-given. With `dry_run = 1` a routine only validates (`ic_run`
@@ -25,49 +31,55 @@
 !>   while they run (`threadsafe`): Python threads can run several chains at once.
 
 !> One run: transient, then `cycles` recorded cycles, as `fpm run` on the equivalent namelist.
-!> Strobe records are kept when nc > 0 (then nr = n, nc = cycles), events when record_events;
+!> Strobe records are kept when keep_strobe (then nr = n, nc = cycles), events when
+!> record_events, in arrays the caller gives (x, v, cycle; ev_*: f2py refuses a size 0 there,
+!> so give at least 1 where nothing is kept);
 !> the Lyapunov spectrum (kcap = number of exponents) and the Jacobian of the `jacobian_cycles`
 !> Poincare map at the final state with its eigenvalues (mj = 2n) when asked. nf = n always.
-!> (Long because f2py's protocol flattens a whole run into 57 plain arguments: their list and
+!> (Long because f2py's protocol flattens a whole run into 59 plain arguments: their list and
 !> declarations are half of it; the rest validates, runs and hands the results over.)
 subroutine ic_run(n, nsp, spacing, damping, restitution, amplitude, omega, nb, boundary, &
                   explicit, nx0, x0, nv0, v0, transient, cycles, phase, stick_speed, &
                   max_size_mb, record_events, lyapunov, vectors, qr_every, jacobian, &
-                  jacobian_cycles, dry_run, nr, nc, nf, ncap, kcap, mj, x, v, cycle, final_x, &
-                  final_v, periods, site_counts, counts, collisions_per_cycle, nev, ev_time, &
-                  ev_site, ev_speed, ev_kind, k, exponents, stderr_bits, per_time, ky, jac, &
-                  mult_re, mult_im, status, msg_len, message)
+                  jacobian_cycles, dry_run, keep_strobe, nr, nc, nf, ncap, kcap, mj, x, v, &
+                  cycle, final_x, final_v, periods, site_counts, counts, collisions_per_cycle, &
+                  nev, ev_time, ev_site, ev_speed, ev_kind, k, exponents, stderr_bits, &
+                  per_time, ky, jac, mult_re, mult_im, control, status, msg_len, message)
     use, intrinsic :: iso_c_binding, only: c_int, c_int64_t, c_double
     use impactchain, only: i8, error_t, config_t, validate_config, chain_t, record_result_t, &
                            record_cycles, check_size, start_chain
-    use chain_bridge, only: array_sink_t, make_config, put_message, run_sizes_ok, &
-                            put_run_results, status_ok, status_invalid, status_failed, &
-                            status_capacity, status_internal
+    use chain_bridge, only: array_sink_t, shared_monitor_t, make_config, put_message, &
+                            run_sizes_ok, put_run_results, call_ended, status_ok, &
+                            status_invalid, status_capacity, status_internal
     implicit none
     !f2py threadsafe
     integer(c_int), intent(in) :: n, nsp, nb, nx0, nv0, explicit, record_events, lyapunov
     integer(c_int), intent(in) :: vectors, qr_every, jacobian, jacobian_cycles, dry_run
-    integer(c_int), intent(in) :: nr, nf, kcap, mj
+    integer(c_int), intent(in) :: keep_strobe, nr, nf, kcap, mj
     integer(c_int64_t), intent(in) :: transient, cycles, nc, ncap
     real(c_double), intent(in) :: spacing(nsp), damping, restitution, amplitude, omega
     real(c_double), intent(in) :: x0(nx0), v0(nv0), phase, stick_speed, max_size_mb
     integer(c_int), intent(in) :: boundary(nb)
-    real(c_double), intent(out), target :: x(nr, nc), v(nr, nc)
-    integer(c_int64_t), intent(out), target :: cycle(nc)
+    ! records and events: arrays the caller allocated (inout, so that f2py does not allocate
+    ! and zero them while holding the GIL: Ctrl-C would wait for gigabytes of zeros)
+    real(c_double), intent(inout), target :: x(nr, nc), v(nr, nc)
+    integer(c_int64_t), intent(inout), target :: cycle(nc)
     real(c_double), intent(out) :: final_x(nf), final_v(nf)
     integer(c_int), intent(out) :: periods(nf)
     integer(c_int64_t), intent(out) :: site_counts(nf + 1), counts(4), nev
     real(c_double), intent(out) :: collisions_per_cycle, ky
-    real(c_double), intent(out), target :: ev_time(ncap), ev_speed(ncap)
-    integer(c_int), intent(out), target :: ev_site(ncap), ev_kind(ncap)
+    real(c_double), intent(inout), target :: ev_time(ncap), ev_speed(ncap)
+    integer(c_int), intent(inout), target :: ev_site(ncap), ev_kind(ncap)
     integer(c_int), intent(out) :: k
     real(c_double), intent(out) :: exponents(kcap), stderr_bits(kcap), per_time(kcap)
     real(c_double), intent(out) :: jac(mj, mj), mult_re(mj), mult_im(mj)
+    integer(c_int64_t), intent(inout), target :: control(4)
     integer(c_int), intent(out) :: status, msg_len
     integer(c_int), intent(out) :: message(1024)
     type(config_t) :: cfg
     type(chain_t) :: chain
     type(array_sink_t) :: sink
+    type(shared_monitor_t) :: monitor
     type(record_result_t) :: res
     type(error_t), allocatable :: err
 
@@ -88,12 +100,13 @@ subroutine ic_run(n, nsp, spacing, damping, restitution, amplitude, omega, nb, b
     end if
     if (dry_run /= 0) return
 
-    if (.not. run_sizes_ok(cfg, int(nr), int(nc, i8), int(nf), int(kcap), int(mj))) then
+    if (.not. run_sizes_ok(cfg, keep_strobe /= 0, int(nr), int(nc, i8), int(nf), int(kcap), &
+                           int(mj))) then
         call put_message("python layer: output sizes do not match the configuration", &
                          status_internal, status, msg_len, message)
         return
     end if
-    if (nc > 0) then
+    if (keep_strobe /= 0) then
         sink%x => x
         sink%v => v
         sink%cycle => cycle
@@ -104,11 +117,9 @@ subroutine ic_run(n, nsp, spacing, damping, restitution, amplitude, omega, nb, b
         sink%site => ev_site
         sink%kind => ev_kind
     end if
-    call record_cycles(cfg%record, chain, sink, res, err)
-    if (allocated(err)) then
-        call put_message(err%message, status_failed, status, msg_len, message)
-        return
-    end if
+    monitor%control => control
+    call record_cycles(cfg%record, chain, sink, res, err, monitor)
+    if (call_ended(control, err, status, msg_len, message)) return
 
     call put_run_results(final_x, final_v, periods, site_counts, counts, collisions_per_cycle, &
                          k, exponents, stderr_bits, per_time, ky, jac, mult_re, mult_im, res, &
@@ -222,3 +233,94 @@ subroutine ic_random_start(n, nsp, spacing, seed, x_amp, v_amp, dry_run, nf, x, 
     x = start%x
     v = start%v
 end subroutine ic_random_start
+
+!> A sweep, as `fpm run` on a namelist with this &sweep group (chain_sweep, OpenMP threads over
+!> the branches: `threads`, 0 for the default), kept in memory: the arrays of the file's /sweep
+!> in the library's order, point p = i + (j - 1) n1 for index i along `parameter`, j along
+!> `parameter2`. A dry run validates every point and returns sizes = (n1, n2, k); then the
+!> caller gives nf = n, nc = cycles, npts = n1 n2, kcap = k, and x of that shape (of shape
+!> (1, 1, 1) with nf = nc = npts = 1 for the dry run: f2py refuses a size 0 there). Names are lower-case byte values;
+!> parameter2 empty for a 1-D sweep. Events and the Jacobian are not kept (as in a sweep file).
+subroutine ic_sweep(n, nsp, spacing, damping, restitution, amplitude, omega, nb, boundary, &
+                    explicit, nx0, x0, nv0, v0, transient, cycles, phase, stick_speed, &
+                    max_size_mb, lyapunov, vectors, qr_every, npar, parameter, start, stop, &
+                    step, nmode, mode, npar2, parameter2, start2, stop2, step2, threads, &
+                    dry_run, nf, nc, npts, kcap, sizes, values, x, collisions, period, &
+                    exponents, stderr_bits, ky, control, status, msg_len, message)
+    use, intrinsic :: iso_c_binding, only: c_int, c_int64_t, c_double
+    use impactchain, only: i8, error_t, config_t, validate_config, check_size, plan_sweep, &
+                           sweep_plan_t, sweep_result_t, sweep_result_init, chain_state_t, &
+                           validate_sweep_points, run_sweep_branches
+    use chain_bridge, only: shared_monitor_t, make_config, set_sweep, put_message, use_threads, &
+                            call_ended, status_ok, status_invalid, status_internal
+    implicit none
+    !f2py threadsafe
+    integer(c_int), intent(in) :: n, nsp, nb, nx0, nv0, explicit, lyapunov, vectors, qr_every
+    integer(c_int), intent(in) :: npar, nmode, npar2, threads, dry_run, nf, npts, kcap
+    integer(c_int64_t), intent(in) :: transient, cycles, nc
+    real(c_double), intent(in) :: spacing(nsp), damping, restitution, amplitude, omega
+    real(c_double), intent(in) :: x0(nx0), v0(nv0), phase, stick_speed, max_size_mb
+    real(c_double), intent(in) :: start, stop, step, start2, stop2, step2
+    integer(c_int), intent(in) :: boundary(nb), parameter(npar), mode(nmode), parameter2(npar2)
+    integer(c_int), intent(out) :: sizes(3)
+    real(c_double), intent(out) :: values(2, npts), collisions(npts)
+    real(c_double), intent(inout) :: x(nf, nc, npts) ! caller-allocated, as ic_run's records
+    integer(c_int), intent(out) :: period(nf, npts)
+    real(c_double), intent(out) :: exponents(kcap, npts), stderr_bits(kcap, npts), ky(npts)
+    integer(c_int64_t), intent(inout), target :: control(4)
+    integer(c_int), intent(out) :: status, msg_len
+    integer(c_int), intent(out) :: message(1024)
+    type(config_t) :: cfg
+    type(sweep_plan_t) :: plan
+    type(sweep_result_t) :: res
+    type(chain_state_t), allocatable :: starts(:)
+    type(shared_monitor_t) :: monitor
+    type(error_t), allocatable :: err
+
+    call put_message('', status_ok, status, msg_len, message)
+    sizes = 0
+    values = 0
+    collisions = 0
+    period = 0
+    exponents = 0
+    stderr_bits = 0
+    ky = 0
+    call make_config(cfg, int(n), spacing, damping, restitution, amplitude, omega, boundary, &
+                     explicit /= 0, x0, v0, int(transient, i8), int(cycles, i8), phase, &
+                     stick_speed, max_size_mb, .false., lyapunov /= 0, int(vectors), &
+                     int(qr_every), .false., 1, err)
+    if (.not. allocated(err)) then
+        call set_sweep(cfg, parameter, start, stop, step, mode, parameter2, start2, stop2, step2)
+        call validate_config(cfg, err)
+    end if
+    if (.not. allocated(err)) call check_size(cfg, err)
+    if (.not. allocated(err)) then
+        plan = plan_sweep(cfg)
+        call validate_sweep_points(cfg, plan, err)
+    end if
+    if (allocated(err)) then
+        call put_message(err%message, status_invalid, status, msg_len, message)
+        return
+    end if
+    sizes = [plan%n_axis1, plan%n_axis2, plan%k]
+    if (dry_run /= 0) return
+
+    if (nf /= n .or. nc /= cycles .or. npts /= plan%n_points .or. kcap /= plan%k) then
+        call put_message("python layer: output sizes do not match the configuration", &
+                         status_internal, status, msg_len, message)
+        return
+    end if
+    call sweep_result_init(res, cfg, plan)
+    allocate (starts(plan%n_branches))
+    monitor%control => control
+    call use_threads(int(threads))
+    call run_sweep_branches(cfg, plan, res, starts, err, monitor=monitor)
+    if (call_ended(control, err, status, msg_len, message)) return
+    values(:plan%n_axes, :) = res%values
+    x = res%x
+    collisions = res%collisions
+    period = res%period
+    exponents = res%exponents
+    stderr_bits = res%stderr
+    ky = res%ky
+end subroutine ic_sweep

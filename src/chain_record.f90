@@ -6,7 +6,7 @@
 !> Where the records are taken: chain_section; the Jacobian and multipliers: chain_floquet.
 module chain_record
     use chain_kinds, only: wp, i8
-    use chain_error, only: error_t, set_error
+    use chain_error, only: error_t, set_error, fmt_int8
     use chain_engine, only: chain_t, chain_advance, chain_sync, chain_new_cycle, &
                             chain_set_tangent, chain_size, chain_cycle, chain_time, chain_start, &
                             chain_period, chain_section_time, chain_copy_state, chain_counts, &
@@ -20,9 +20,10 @@ module chain_record
     use chain_period, only: detect_period
     use chain_section, only: section_target, advance_to_point, advance_cycles
     use chain_floquet, only: floquet_result
+    use chain_monitor, only: monitor_t, stage_records
     implicit none
     private
-    public :: record_sink_t, memory_sink_t, record_result_t, record_cycles, progress_callback
+    public :: record_sink_t, memory_sink_t, record_result_t, record_cycles
     public :: record_spec_t, vector_count
     public :: period_window, record_state_t, set_window
 
@@ -69,12 +70,6 @@ module chain_record
             type(event_log_t), intent(in) :: log
             type(error_t), allocatable, intent(out) :: err
         end subroutine put_events_i
-        !> Called after every strobe record; return .false. to stop the run early.
-        function progress_callback(done, total) result(keep_going)
-            import :: i8
-            integer(i8), intent(in) :: done, total
-            logical :: keep_going
-        end function progress_callback
     end interface
 
     !> Keeps every record in memory: x(n, cycles), v(n, cycles), and all events.
@@ -130,13 +125,17 @@ contains
     !> With `state` of a stopped run (cycles_done > 0, the chain at that record with its
     !> counters and tangent frame) the run continues after that record instead; `state` comes
     !> back as the run ends, for a later continuation.
-    subroutine record_cycles(spec, chain, sink, res, err, progress, state)
+    !>
+    !> `monitor` is told every transient cycle and every record. Asked to stop at a record, the
+    !> run ends there (res%complete = .false.) and can be continued from `state`; asked during
+    !> the transient, where nothing is recorded yet, it returns an error saying so.
+    subroutine record_cycles(spec, chain, sink, res, err, monitor, state)
         type(record_spec_t), intent(in) :: spec
         type(chain_t), intent(inout) :: chain
         class(record_sink_t), intent(inout) :: sink
         type(record_result_t), intent(out) :: res
         type(error_t), allocatable, intent(out) :: err
-        procedure(progress_callback), optional :: progress
+        class(monitor_t), intent(inout), optional :: monitor
         type(record_state_t), intent(inout), optional :: state
         type(event_log_t) :: log
         type(record_state_t) :: st
@@ -151,7 +150,7 @@ contains
             if (state%cycles_done > 0) call move_state(state, st)
         end if
         if (st%cycles_done == 0) then
-            call begin_records(spec, chain, st, err)
+            call begin_records(spec, chain, st, err, monitor)
             if (allocated(err)) return
         end if
         call event_log_init(log, spec%record_events, 1024)
@@ -177,7 +176,8 @@ contains
             res%cycles_done = j
             st%cycles_done = j
             stop_now = .false.
-            if (present(progress)) stop_now = .not. progress(j, spec%cycles)
+            if (present(monitor)) stop_now = .not. monitor%keep_going(stage_records, j, &
+                                                                      spec%cycles)
             if (i == m .or. j == spec%cycles .or. log%count >= event_flush .or. stop_now) then
                 call sink%put_strobe(spec%cycles, first, xbuf(:, :i), vbuf(:, :i), cbuf(:i), err)
                 if (.not. allocated(err) .and. log%enabled) call sink%put_events(log, err)
@@ -195,15 +195,16 @@ contains
 
     !> A fresh run up to its first record: the transient, counters from zero, an empty
     !> Lyapunov accumulator and period window.
-    subroutine begin_records(spec, chain, st, err)
+    subroutine begin_records(spec, chain, st, err, monitor)
         type(record_spec_t), intent(in) :: spec
         type(chain_t), intent(inout) :: chain
         type(record_state_t), intent(inout) :: st
         type(error_t), allocatable, intent(out) :: err
+        class(monitor_t), intent(inout), optional :: monitor
         type(event_log_t) :: log
         integer :: nwin
 
-        call transient_part(spec, chain, log, err)
+        call transient_part(spec, chain, log, err, monitor)
         if (allocated(err)) return
         call chain_reset_counts(chain)
         if (spec%lyapunov) call lyapunov_start(st%acc, chain_vectors(chain), &
@@ -257,33 +258,56 @@ contains
     !> starts `align` whole cycles before its end, at the end of a cycle (where the state is
     !> synced anyway: the run's own numbers do not depend on whether exponents are
     !> computed), or at the end of the transient.
-    subroutine transient_part(spec, chain, log, err)
+    subroutine transient_part(spec, chain, log, err, monitor)
         type(record_spec_t), intent(in) :: spec
         type(chain_t), intent(inout) :: chain
         type(event_log_t), intent(inout) :: log
         type(error_t), allocatable, intent(out) :: err
+        class(monitor_t), intent(inout), optional :: monitor
         integer(i8) :: target_cycle, align_start
         real(wp) :: target_s
+        logical :: stopped
 
         call event_log_init(log, .false., 0)
         call section_target(chain, spec%transient, spec%phase, 0_i8, target_cycle, target_s)
         align_start = target_cycle - min(spec%transient, int(spec%align, i8))
+        stopped = .false.
         ! (a fresh start at t = 0 is the start of a cycle too)
         if (spec%lyapunov .and. (align_start > chain_cycle(chain) .or. &
                                 (align_start == chain_cycle(chain) .and. &
                                  chain_time(chain) == 0))) then
-            call advance_cycles(chain, align_start, log, err)
+            call advance_cycles(chain, align_start, log, err, monitor=monitor, stopped=stopped, &
+                                monitor_total=target_cycle)
+            if (stopped) call say_stopped(target_cycle)
             if (allocated(err)) return
             call start_tangent(chain, spec, err)
             if (allocated(err)) return
-            call advance_cycles(chain, target_cycle, log, err, spec%qr_every)
-            if (.not. allocated(err)) call advance_to_point(chain, target_cycle, target_s, &
-                                                            log, err)
+            call advance_cycles(chain, target_cycle, log, err, spec%qr_every, monitor, stopped)
+            if (stopped) call say_stopped(target_cycle)
+            if (allocated(err)) return
+            call advance_to_point(chain, target_cycle, target_s, log, err)
             if (.not. allocated(err)) call chain_reorthonormalise(chain, err)
         else
+            ! whole cycles first, so that the monitor is told at each (the same steps as
+            ! advance_to_point alone takes)
+            call advance_cycles(chain, target_cycle, log, err, monitor=monitor, stopped=stopped)
+            if (stopped) call say_stopped(target_cycle)
+            if (allocated(err)) return
             call advance_to_point(chain, target_cycle, target_s, log, err)
             if (.not. allocated(err) .and. spec%lyapunov) call start_tangent(chain, spec, err)
         end if
+
+    contains
+
+        !> A stop asked by the monitor is an error here: there is no record to keep.
+        subroutine say_stopped(last_cycle)
+            integer(i8), intent(in) :: last_cycle
+
+            call set_error(err, "run stopped during the transient, at drive cycle "// &
+                           fmt_int8(chain_cycle(chain))//" of "//fmt_int8(last_cycle)// &
+                           ", before the first record: nothing was recorded")
+        end subroutine say_stopped
+
     end subroutine transient_part
 
     !> Carry a tangent frame from now: &lyapunov vectors generic orthonormal vectors.

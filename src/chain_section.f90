@@ -9,6 +9,7 @@ module chain_section
     use chain_engine, only: chain_t, chain_advance, chain_sync, chain_new_cycle, chain_cycle, &
                             chain_start, chain_period, chain_section_time, chain_reorthonormalise
     use chain_event_log, only: event_log_t
+    use chain_monitor, only: monitor_t, stage_transient
     implicit none
     private
     public :: section_target, advance_to_point, advance_cycles
@@ -54,16 +55,26 @@ contains
     end subroutine advance_to_point
 
     !> Run the chain through the ends of drive cycles up to the start of `cycle`.
-    subroutine advance_cycles(chain, cycle, log, err, tangent_qr_every)
+    !> With `monitor` (a transient), it is told every cycle end (done = the chain's cycle,
+    !> total = `monitor_total`, default `cycle`) and may stop the run there: `stopped` then
+    !> comes back .true.
+    subroutine advance_cycles(chain, cycle, log, err, tangent_qr_every, monitor, stopped, &
+                              monitor_total)
         type(chain_t), intent(inout) :: chain
         integer(i8), intent(in) :: cycle
         type(event_log_t), intent(inout) :: log
         type(error_t), allocatable, intent(out) :: err
         !> re-orthonormalise the tangent frame, unaveraged, at every this many cycle ends
         integer, intent(in), optional :: tangent_qr_every
-        integer(i8) :: done
+        class(monitor_t), intent(inout), optional :: monitor
+        logical, intent(out), optional :: stopped
+        integer(i8), intent(in), optional :: monitor_total
+        integer(i8) :: done, total
 
         done = 0
+        total = cycle
+        if (present(monitor_total)) total = monitor_total
+        if (present(stopped)) stopped = .false.
         do while (chain_cycle(chain) < cycle)
             call chain_advance(chain, chain_period(chain), log, err)
             if (allocated(err)) return
@@ -73,6 +84,12 @@ contains
                 if (modulo(done, int(tangent_qr_every, i8)) == 0) then
                     call chain_reorthonormalise(chain, err)
                     if (allocated(err)) return
+                end if
+            end if
+            if (present(monitor)) then
+                if (.not. monitor%keep_going(stage_transient, chain_cycle(chain), total)) then
+                    if (present(stopped)) stopped = .true.
+                    return
                 end if
             end if
         end do

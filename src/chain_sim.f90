@@ -1,8 +1,9 @@
 !> One run from a configuration to an HDF5 file: the initial state (rest, seeded random,
 !> explicit, or the final state of an earlier run), the records of `chain_record` streamed to
 !> disk, then the final state, statistics, periods, spectrum and Floquet multipliers.
-!> The library never prints: progress goes to an optional callback, which may also ask the run
-!> to stop (the file is then kept, marked complete = 0, with /resume).
+!> The library never prints: progress goes to an optional monitor (chain_monitor), which may
+!> also ask the run to stop (at a record, the file is then kept, marked complete = 0, with
+!> /resume; during the transient nothing is written).
 !>
 !> A run whose output file is such a stopped run of the same input text continues it into the
 !> same file, bit for bit as if it had never stopped: the engine from /final, the rest of
@@ -20,8 +21,9 @@ module chain_sim
     use chain_config, only: config_t, config_summary, check_size
     use chain_model, only: model_t, model_walls
     use chain_lyapunov, only: lyapunov_pack, lyapunov_unpack
-    use chain_record, only: record_sink_t, record_result_t, record_cycles, progress_callback, &
-                            record_state_t, set_window, period_window
+    use chain_record, only: record_sink_t, record_result_t, record_cycles, record_state_t, &
+                            set_window, period_window
+    use chain_monitor, only: monitor_t
     use chain_output, only: output_t, output_begin, output_header, output_strobe_write, &
                             output_events_append, output_final, output_stats, output_periods, &
                             output_lyapunov, output_jacobian, output_end, output_abort, &
@@ -186,11 +188,11 @@ contains
 
     !> The whole run described by `cfg`, written to cfg%output_file; or, when that file is a
     !> run of the same input stopped early, the rest of it, continued into that file.
-    subroutine simulate_to_file(cfg, res, err, progress)
+    subroutine simulate_to_file(cfg, res, err, monitor)
         type(config_t), intent(in) :: cfg
         type(record_result_t), intent(out) :: res
         type(error_t), allocatable, intent(out) :: err
-        procedure(progress_callback), optional :: progress
+        class(monitor_t), intent(inout), optional :: monitor
         type(chain_t) :: chain
         type(file_sink_t) :: sink
         type(record_state_t) :: state
@@ -220,7 +222,7 @@ contains
             call header_for(sink%out, cfg, chain, err)
         end if
         if (.not. allocated(err)) &
-            call record_cycles(cfg%record, chain, sink, res, err, progress, state)
+            call record_cycles(cfg%record, chain, sink, res, err, monitor, state)
         if (.not. allocated(err)) &
             call write_results(sink%out, chain, res, cfg%record%jacobian_cycles, err)
         if (.not. allocated(err) .and. .not. res%complete) then

@@ -32,10 +32,11 @@ module chain_sweep
                             output_describe, output_index, output_unset_param
     use chain_hdf5, only: h5_write, h5_write_attr, h5_set_scale, h5_create_dimension
     use chain_files, only: rename_file, remove_file, close_checked
+    use chain_monitor, only: monitor_t, stage_points
     implicit none
     private
     public :: sweep_plan_t, sweep_result_t, plan_sweep, sweep_point_config, run_branch
-    public :: run_sweep_branches, sweep_result_init, point_hook
+    public :: run_sweep_branches, sweep_result_init
     public :: run_sweep, write_sweep_file, sweep_summary_t, validate_sweep_points
     public :: checkpoint_path
     public :: save_checkpoint, load_checkpoint, checkpoint_every
@@ -78,21 +79,22 @@ module chain_sweep
         logical, allocatable :: done(:)              !! done(n_points)
     end type sweep_result_t
 
-    abstract interface
-        !> Progress of a sweep in points; .false. stops it (the checkpoint keeps the points).
-        function progress_i(done, total) result(keep_going)
-            import :: i8
-            integer(i8), intent(in) :: done, total
-            logical :: keep_going
-        end function progress_i
-        !> Called after every finished point with the whole sweep; .false. stops the sweep.
-        function point_hook(res, starts) result(keep_going)
-            import :: sweep_result_t, chain_state_t
-            type(sweep_result_t), intent(in) :: res
-            type(chain_state_t), intent(in) :: starts(:)
-            logical :: keep_going
-        end function point_hook
-    end interface
+    !> run_sweep's monitor: the caller's, and a checkpoint every few seconds. It is told
+    !> inside run_branch's critical section, so one thread at a time, with `res` and `starts`
+    !> consistent. A checkpoint that cannot be written stops the sweep with that error (`err`):
+    !> going on would risk hours of points on a full disk.
+    type, extends(monitor_t) :: checkpoint_monitor_t
+        class(monitor_t), pointer :: outer => null()  !! the caller's monitor, if any
+        type(config_t) :: cfg
+        type(sweep_plan_t) :: plan
+        type(sweep_result_t), pointer :: res => null()
+        type(chain_state_t), pointer :: starts(:) => null()
+        character(len=:), allocatable :: path          !! of the checkpoint
+        integer(i8) :: clock_last = 0, clock_rate = 1  !! system_clock counts
+        type(error_t), allocatable :: err              !! a checkpoint that failed
+    contains
+        procedure :: keep_going => checkpoint_keep_going
+    end type checkpoint_monitor_t
 
 contains
 
@@ -211,9 +213,10 @@ contains
 
     !> Run the points of branch b in order into `res`, skipping those already done (a resumed
     !> sweep); starts(b) holds where a continuation resumes. Results, the done flag and the
-    !> resume state are written in one critical section, where `hook` then sees a consistent
-    !> snapshot of the whole sweep (for progress and checkpoints); it may ask to stop.
-    subroutine run_branch(cfg, plan, b, res, starts, stop_now, err, hook)
+    !> resume state are written in one critical section, where `monitor` is then told the
+    !> points done, the whole sweep being consistent (for progress and checkpoints); it may ask
+    !> to stop (the points running in other threads finish first).
+    subroutine run_branch(cfg, plan, b, res, starts, stop_now, err, monitor)
         type(config_t), intent(in) :: cfg
         type(sweep_plan_t), intent(in) :: plan
         integer, intent(in) :: b
@@ -221,7 +224,7 @@ contains
         type(chain_state_t), intent(inout) :: starts(:)
         logical, intent(inout) :: stop_now
         type(error_t), allocatable, intent(out) :: err
-        procedure(point_hook), optional :: hook
+        class(monitor_t), intent(inout), optional :: monitor
         type(config_t) :: point
         type(chain_t) :: chain
         type(memory_sink_t) :: sink
@@ -261,8 +264,9 @@ contains
             if (cfg%sweep_mode == 'continuation') then
                 starts(b) = continuation_start(chain)
             end if
-            if (present(hook)) then
-                if (.not. hook(res, starts)) then
+            if (present(monitor)) then
+                if (.not. monitor%keep_going(stage_points, int(count(res%done), i8), &
+                                             int(plan%n_points, i8))) then
                     !$omp atomic write
                     stop_now = .true.
                 end if
@@ -274,14 +278,14 @@ contains
 
     !> Run the branches selected by `mine` (all when absent) with OpenMP threads; the first
     !> error met, if any, is returned after all threads stop.
-    subroutine run_sweep_branches(cfg, plan, res, starts, err, mine, hook)
+    subroutine run_sweep_branches(cfg, plan, res, starts, err, mine, monitor)
         type(config_t), intent(in) :: cfg
         type(sweep_plan_t), intent(in) :: plan
         type(sweep_result_t), intent(inout) :: res
         type(chain_state_t), intent(inout) :: starts(:)
         type(error_t), allocatable, intent(out) :: err
         logical, intent(in), optional :: mine(:)
-        procedure(point_hook), optional :: hook
+        class(monitor_t), intent(inout), optional :: monitor
         type(error_t), allocatable :: branch_err
         character(len=:), allocatable :: first_message
         logical :: stop_now
@@ -295,7 +299,7 @@ contains
             if (present(mine)) then
                 if (.not. mine(b)) cycle
             end if
-            call run_branch(cfg, plan, b, res, starts, stop_now, branch_err, hook)
+            call run_branch(cfg, plan, b, res, starts, stop_now, branch_err, monitor)
             if (allocated(branch_err)) then
                 !$omp critical (sweep_results)
                 if (.not. allocated(first_message)) first_message = branch_err%message
@@ -310,19 +314,20 @@ contains
 
     !> The whole sweep described by cfg: resumes from `file.ckpt` when one exists for the same
     !> input, checkpoints every few seconds, and writes the HDF5 file when every point is done.
-    !> `progress(done, total)` may ask to stop: the checkpoint then keeps the finished points.
-    subroutine run_sweep(cfg, summary, err, progress)
+    !> `monitor`, told the points done, may ask to stop: the checkpoint then keeps the finished
+    !> points.
+    subroutine run_sweep(cfg, summary, err, monitor)
         type(config_t), intent(in) :: cfg
         type(sweep_summary_t), intent(out) :: summary
         type(error_t), allocatable, intent(out) :: err
-        procedure(progress_i), optional :: progress
+        class(monitor_t), intent(inout), optional, target :: monitor
         type(sweep_plan_t) :: plan
-        type(sweep_result_t) :: res
-        type(chain_state_t), allocatable :: starts(:)
+        type(sweep_result_t), target :: res
+        type(chain_state_t), allocatable, target :: starts(:)
         type(output_t) :: out
-        type(error_t), allocatable :: err2, ckpt_err
+        type(error_t), allocatable :: err2
         character(len=:), allocatable :: checkpoint
-        integer(i8) :: clock_last, clock_rate, now
+        type(checkpoint_monitor_t) :: watch
 
         plan = plan_sweep(cfg)
         call validate_sweep_points(cfg, plan, err)
@@ -341,10 +346,16 @@ contains
         end if
         summary%n_points = plan%n_points
         summary%points_resumed = count(res%done)
-        call system_clock(clock_last, clock_rate)
-        call run_sweep_branches(cfg, plan, res, starts, err, hook=after_point)
+        if (present(monitor)) watch%outer => monitor
+        watch%cfg = cfg
+        watch%plan = plan
+        watch%res => res
+        watch%starts => starts
+        watch%path = checkpoint
+        call system_clock(watch%clock_last, watch%clock_rate)
+        call run_sweep_branches(cfg, plan, res, starts, err, monitor=watch)
         ! a periodic checkpoint that could not be written stopped the sweep
-        if (allocated(ckpt_err) .and. .not. allocated(err)) call move_alloc(ckpt_err, err)
+        if (allocated(watch%err) .and. .not. allocated(err)) call move_alloc(watch%err, err)
         summary%points_done = count(res%done)
         summary%complete = all(res%done)
         if (.not. summary%complete .or. allocated(err)) then
@@ -361,29 +372,24 @@ contains
         end if
         call output_end(out, .true., err)
         if (.not. allocated(err)) call remove_file(checkpoint)
-
-    contains
-
-        !> Progress, and a checkpoint every few seconds (called inside the critical section
-        !> of run_branch, so one thread at a time). A checkpoint that cannot be written stops
-        !> the sweep with that error: going on would risk hours of points on a full disk.
-        logical function after_point(res, starts) result(keep_going)
-            type(sweep_result_t), intent(in) :: res
-            type(chain_state_t), intent(in) :: starts(:)
-
-            keep_going = .true.
-            if (present(progress)) keep_going = progress(int(count(res%done), i8), &
-                                                         int(plan%n_points, i8))
-            call system_clock(now)
-            if (now - clock_last >= checkpoint_every*clock_rate .and. &
-                .not. allocated(ckpt_err)) then
-                call save_checkpoint(checkpoint, cfg, plan, res, starts, ckpt_err)
-                clock_last = now
-                if (allocated(ckpt_err)) keep_going = .false.
-            end if
-        end function after_point
-
     end subroutine run_sweep
+
+    logical function checkpoint_keep_going(monitor, stage, done, total) result(keep_going)
+        class(checkpoint_monitor_t), intent(inout) :: monitor
+        integer, intent(in) :: stage
+        integer(i8), intent(in) :: done, total
+        integer(i8) :: now
+
+        keep_going = .true.
+        if (associated(monitor%outer)) keep_going = monitor%outer%keep_going(stage, done, total)
+        call system_clock(now)
+        if (now - monitor%clock_last < checkpoint_every*monitor%clock_rate .or. &
+            allocated(monitor%err)) return
+        call save_checkpoint(monitor%path, monitor%cfg, monitor%plan, monitor%res, &
+                             monitor%starts, monitor%err)
+        monitor%clock_last = now
+        if (allocated(monitor%err)) keep_going = .false.
+    end function checkpoint_keep_going
 
     !> Validate every point before any work (an out-of-range point is an error up front).
     subroutine validate_sweep_points(cfg, plan, err)

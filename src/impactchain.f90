@@ -1,8 +1,8 @@
 !> The public API of impactchain in one module: what the command line (app/), the MPI sweep
 !> driver (mpi/), the Python layer (f2py/) and the benchmark (bench/) use. Configuration,
 !> runs and their results, sweeps (including the pieces a distributed driver needs), the
-!> Poincare-map Jacobian of a state, the shared command line and interrupt flag. A chain is
-!> an opaque `chain_t`: it is started from a configuration, run to a point or through
+!> Poincare-map Jacobian of a state, the shared command line, interrupt flag and monitors.
+!> A chain is an opaque `chain_t`: it is started from a configuration, run to a point or through
 !> recorded cycles, restarted under other parameters, and read (its clock, state, contacts
 !> and counters); its state travels as a `chain_state_t`. The engine's own procedures (flow,
 !> gap searches, impact laws, the event loop, the schedule) stay behind it; the tests reach
@@ -20,7 +20,9 @@ module impactchain
                             chain_contacts, chain_counts
     use chain_event_log, only: event_log_t
     use chain_record, only: record_sink_t, memory_sink_t, record_result_t, record_cycles, &
-                            progress_callback, record_spec_t
+                            record_spec_t
+    use chain_monitor, only: monitor_t, signal_monitor_t, stage_transient, stage_records, &
+                             stage_points, stage_name
     use chain_section, only: advance_to_point
     use chain_floquet, only: poincare_jacobian
     use chain_sim, only: simulate_to_file, start_chain, initial_state, chain_on_section, &
@@ -44,7 +46,9 @@ module impactchain
     public :: chain_t, chain_state_t, event_counts_t, event_log_t
     public :: chain_size, chain_cycle, chain_time, chain_start, chain_period, chain_positions
     public :: chain_velocities, chain_copy_state, chain_contacts, chain_counts
-    public :: record_sink_t, memory_sink_t, record_result_t, record_cycles, progress_callback
+    public :: record_sink_t, memory_sink_t, record_result_t, record_cycles
+    public :: monitor_t, signal_monitor_t, stage_transient, stage_records, stage_points
+    public :: stage_name
     public :: record_spec_t
     public :: advance_to_point, poincare_jacobian, simulate_to_file, start_chain, initial_state
     public :: chain_on_section, restart_chain

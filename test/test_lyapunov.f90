@@ -2,7 +2,8 @@
 !> the spectrum without impacts, finite differences of the one-cycle map, leading vectors
 !> against the full spectrum (and the sum rule on every full
 !> spectrum computed here), Floquet multipliers of a period-1 state, and a chaotic and a
-!> periodic case of the paper separated by their error bars.
+!> periodic case of the paper separated by their error bars. Also a run watched by a monitor
+!> (chain_monitor): told every transient cycle and record, the same numbers, and its stops.
 module test_lyapunov
     use chain_kinds, only: wp, i8
     use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
@@ -25,10 +26,22 @@ module test_lyapunov
     use test_engine, only: make_chain
     use test_invariants, only: check_sum_rule
     use test_chains, only: flow_of
+    use chain_monitor, only: monitor_t, stage_transient, stage_records
     use testing, only: tally_t, check, check_close
     implicit none
     private
     public :: run_lyapunov_tests
+
+    !> Writes down what it is told; asks to stop at (stage, done) = (stop_stage, stop_at).
+    type, extends(monitor_t) :: watching_monitor_t
+        integer :: stop_stage = 0
+        integer(i8) :: stop_at = -1
+        integer(i8) :: transient_calls = 0, record_calls = 0
+        integer(i8) :: last_done = -1, last_total = -1
+        logical :: in_order = .true.   !! stages never go back, counts rise by one
+    contains
+        procedure :: keep_going => watching_keep_going
+    end type watching_monitor_t
 
 contains
 
@@ -58,6 +71,8 @@ contains
         call running_estimates_decimated(t, 300, 300)
         call size_check_matches_storage(t)
         call pack_round_trip(t)
+        call monitored_run(t, .false.)
+        call monitored_run(t, .true.)
     end subroutine run_lyapunov_tests
 
     !> An accumulator packed to plain arrays and unpacked goes on exactly as the original
@@ -196,6 +211,82 @@ contains
         call check_size(cfg, err)
         call check(t, allocated(err), 'size check: a run just beyond the limit is refused')
     end subroutine size_check_matches_storage
+
+    !> A run watched by a monitor (with exponents: the transient's aligning part is its own
+    !> loop) is told every transient cycle and every record, in order, and has the numbers of
+    !> the same run unwatched, bit for bit. Asked to stop at a record, it ends there,
+    !> incomplete; asked during the transient, it says so in an error.
+    subroutine monitored_run(t, exponents)
+        type(tally_t), intent(inout) :: t
+        logical, intent(in) :: exponents
+        type(chain_t) :: plain_chain, chain
+        type(config_t) :: cfg
+        type(record_result_t) :: plain, res
+        type(memory_sink_t) :: plain_sink, sink
+        type(watching_monitor_t) :: watch
+        type(error_t), allocatable :: err
+        character(len=:), allocatable :: label
+
+        label = ' (no exponents)'
+        if (exponents) label = ' (exponents)'
+        cfg = spectrum_config(4, 150_i8, 40_i8, 0)
+        cfg%record%lyapunov = exponents
+        call make_chain(plain_chain, 4, 4.15_wp, 0.9_wp, 0.05_wp, 0.7_wp, .true., 0.3_wp, &
+                        0.5_wp, err)
+        call record_cycles(cfg%record, plain_chain, plain_sink, plain, err)
+        call make_chain(chain, 4, 4.15_wp, 0.9_wp, 0.05_wp, 0.7_wp, .true., 0.3_wp, 0.5_wp, err)
+        call record_cycles(cfg%record, chain, sink, res, err, watch)
+        call check(t, .not. allocated(err) .and. res%complete, 'a watched run completes'//label)
+        if (allocated(err)) return
+        call check(t, watch%transient_calls == 150 .and. watch%record_calls == 40 .and. &
+                   watch%in_order .and. watch%last_done == 40 .and. watch%last_total == 40, &
+                   'the monitor is told every transient cycle and every record'//label)
+        call check(t, all(sink%x == plain_sink%x) .and. all(sink%v == plain_sink%v) .and. &
+                   all(chain_positions(chain) == chain_positions(plain_chain)), &
+                   'a watched run has the records of the unwatched one, bit for bit'//label)
+        if (exponents) call check(t, all(res%lyapunov%bits_per_cycle == &
+                                          plain%lyapunov%bits_per_cycle), &
+                                  'and its exponents, bit for bit')
+
+        watch = watching_monitor_t(stop_stage=stage_records, stop_at=7)
+        call make_chain(chain, 4, 4.15_wp, 0.9_wp, 0.05_wp, 0.7_wp, .true., 0.3_wp, 0.5_wp, err)
+        call record_cycles(cfg%record, chain, sink, res, err, watch)
+        call check(t, .not. allocated(err) .and. .not. res%complete .and. &
+                   res%cycles_done == 7 .and. watch%record_calls == 7, &
+                   'a run asked to stop at record 7 ends there, incomplete'//label)
+        call check(t, all(sink%x(:, 7) == plain_sink%x(:, 7)), &
+                   'its records up to the stop are those of the whole run'//label)
+
+        watch = watching_monitor_t(stop_stage=stage_transient, stop_at=30)
+        call make_chain(chain, 4, 4.15_wp, 0.9_wp, 0.05_wp, 0.7_wp, .true., 0.3_wp, 0.5_wp, err)
+        call record_cycles(cfg%record, chain, sink, res, err, watch)
+        call check(t, allocated(err) .and. watch%record_calls == 0, &
+                   'a run asked to stop during the transient stops with an error'//label)
+        if (allocated(err)) call check(t, index(err%message, 'transient') > 0 .and. &
+                                       index(err%message, 'cycle 30 of 150') > 0, &
+                                       'which says where: '//err%message)
+    end subroutine monitored_run
+
+    logical function watching_keep_going(monitor, stage, done, total) result(keep_going)
+        class(watching_monitor_t), intent(inout) :: monitor
+        integer, intent(in) :: stage
+        integer(i8), intent(in) :: done, total
+
+        select case (stage)
+        case (stage_transient)
+            monitor%in_order = monitor%in_order .and. monitor%record_calls == 0 .and. &
+                               done == monitor%transient_calls + 1 .and. total == 150
+            monitor%transient_calls = monitor%transient_calls + 1
+        case (stage_records)
+            monitor%in_order = monitor%in_order .and. done == monitor%record_calls + 1
+            monitor%record_calls = monitor%record_calls + 1
+        case default
+            monitor%in_order = .false.
+        end select
+        monitor%last_done = done
+        monitor%last_total = total
+        keep_going = .not. (stage == monitor%stop_stage .and. done == monitor%stop_at)
+    end function watching_keep_going
 
     !> A configuration for record_cycles: transient, recorded cycles, Lyapunov vectors (0 = all).
     function spectrum_config(n, transient, cycles, vectors) result(cfg)

@@ -18,10 +18,20 @@ module test_sweep
     use chain_sweep, only: sweep_plan_t, sweep_result_t, plan_sweep, &
                            sweep_result_init, sweep_point_config, run_sweep_branches, &
                            save_checkpoint, load_checkpoint, remove_file
+    use chain_monitor, only: monitor_t, stage_points
     use testing, only: tally_t, check, check_close
     implicit none
     private
     public :: run_sweep_tests, run_checkpoint_tests
+
+    !> Asks the sweep to stop once five points are done (and records what it was told).
+    type, extends(monitor_t) :: stop_after_five_t
+        integer :: calls = 0
+        integer :: points = 0            !! of the sweep
+        logical :: told_points = .true.  !! every call was about sweep points, of the right total
+    contains
+        procedure :: keep_going => stop_after_five
+    end type stop_after_five_t
 
 contains
 
@@ -207,6 +217,7 @@ contains
         type(chain_state_t), allocatable :: starts(:), loaded_starts(:)
         type(error_t), allocatable :: err
         character(len=:), allocatable :: path, tmp
+        type(stop_after_five_t) :: monitor
         integer :: b
 
         tmp = temp_prefix()
@@ -219,9 +230,12 @@ contains
         call sweep_result_init(part, cfg, plan)
         allocate (starts(plan%n_branches))
         !$ call omp_set_num_threads(2)
-        call run_sweep_branches(cfg, plan, part, starts, err, hook=stop_after_five)
+        monitor%points = plan%n_points
+        call run_sweep_branches(cfg, plan, part, starts, err, monitor=monitor)
         call check(t, .not. allocated(err) .and. count(part%done) >= 5 .and. &
                    .not. all(part%done), 'the sweep stops early when asked')
+        call check(t, monitor%calls == count(part%done) .and. monitor%told_points, &
+                   'the monitor is told every finished point, with the total')
         path = tmp//'sweep.ckpt'
         call save_checkpoint(path, cfg, plan, part, starts, err)
         call check(t, .not. allocated(err), 'checkpoint written')
@@ -294,11 +308,15 @@ contains
         call check(t, allocated(err), 'a checkpoint in a missing directory is an error')
     end subroutine test_checkpoint_write_failure
 
-    logical function stop_after_five(res, starts) result(keep_going)
-        type(sweep_result_t), intent(in) :: res
-        type(chain_state_t), intent(in) :: starts(:)
+    logical function stop_after_five(monitor, stage, done, total) result(keep_going)
+        class(stop_after_five_t), intent(inout) :: monitor
+        integer, intent(in) :: stage
+        integer(i8), intent(in) :: done, total
 
-        keep_going = count(res%done) < 5 .or. size(starts) < 0
+        monitor%calls = monitor%calls + 1
+        monitor%told_points = monitor%told_points .and. stage == stage_points .and. &
+                              done == monitor%calls .and. total == monitor%points
+        keep_going = done < 5
     end function stop_after_five
 
     subroutine whole_sweep(t, cfg, res)

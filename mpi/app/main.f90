@@ -25,7 +25,8 @@ program impactchain_mpi
                            write_sweep_file, save_checkpoint, load_checkpoint, remove_file, &
                            checkpoint_every, branch_record_sizes, pack_branch, unpack_branch, &
                            output_t, output_begin, output_end, output_abort, catch_interrupts, &
-                           interrupted, cli_t, parse_command_line, cli_run, config_summary
+                           interrupted, cli_t, parse_command_line, cli_run, config_summary, &
+                           signal_monitor_t
     implicit none
     type(config_t) :: cfg
     type(sweep_plan_t) :: plan
@@ -106,8 +107,11 @@ contains
     !> results, and (unless every point is done) writes the checkpoint. Sets `left` (points
     !> not done) and `stopping` (a signal reached some rank).
     subroutine run_round()
+        type(signal_monitor_t) :: round ! ends the round after round_seconds, or on a signal
+
         call system_clock(clock_round)
-        call run_sweep_branches(cfg, plan, res, starts, err, mine=mine, hook=round_hook)
+        round%deadline = clock_round + int(round_seconds*clock_rate, int64)
+        call run_sweep_branches(cfg, plan, res, starts, err, mine=mine, monitor=round)
         call agree_or_stop(err)
         call collect_on_root()
         left = count(.not. res%done)
@@ -154,18 +158,6 @@ contains
         failed = merge(1, 0, allocated(err))
         call MPI_Bcast(failed, 1, MPI_INTEGER, 0, MPI_COMM_WORLD)
     end subroutine finish_sweep
-
-    !> Called by the sweep after each finished point: ends the round after round_seconds, or
-    !> at once on a signal.
-    logical function round_hook(res, starts) result(keep_going)
-        type(sweep_result_t), intent(in) :: res
-        type(chain_state_t), intent(in) :: starts(:)
-        integer(int64) :: now
-
-        call system_clock(now)
-        keep_going = .not. interrupted() .and. &
-                     real(now - clock_round, wp) < round_seconds*clock_rate
-    end function round_hook
 
     !> Rank 0 receives every rank's branches: their points (results and done flags) and the
     !> states they resume from, in the layout of chain_sweep's pack_branch (the checkpoint's).

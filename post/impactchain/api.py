@@ -19,6 +19,14 @@ Python and the equivalent namelist / CLI output:
 - ``poincare_jacobian(x, v, ...)``: the same kernel at any state (the CLI evaluates it
   only at the final state of a run).
 - ``random_start(n, seed, x_amp, v_amp)``: ``&initial kind='random'``.
+- ``sweep(..., parameter='amplitude', start, stop, step, ...)``: ``&sweep``; the file's
+  ``/sweep`` as an :class:`xarray.Dataset` with the same names (needs xarray).
+
+Long calls (:func:`simulate`, :func:`lyapunov`, :func:`floquet`, :func:`sweep`) run the
+Fortran in a worker thread with the GIL released while this thread watches it: Ctrl-C stops
+the computation at its next transient cycle, strobe record or sweep point (within a second
+unless one cycle alone takes longer) and raises :class:`KeyboardInterrupt`; nothing is
+returned from a stopped call. ``progress=True`` shows a tqdm progress bar (needs tqdm).
 
 Argument names are the namelist keys. ``x0 = v0 = None`` is a start at rest
 (``kind='rest'``); arrays are ``kind='explicit'`` (``v0 = None`` then means v = 0).
@@ -42,7 +50,8 @@ Example::
 from __future__ import annotations
 
 import operator
-from collections.abc import Mapping
+import threading
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from types import MappingProxyType
 from typing import TYPE_CHECKING, Any
@@ -70,6 +79,7 @@ __all__ = [
     "floquet",
     "poincare_jacobian",
     "random_start",
+    "sweep",
     "extension_available",
     "IMPACT",
     "STICK",
@@ -88,6 +98,13 @@ TOUCH = 3
 of the tangent (not a collision)."""
 
 _STATUS_OK, _STATUS_INVALID, _STATUS_FAILED, _STATUS_CAPACITY = 0, 1, 2, 3
+_STATUS_STOPPED = 5
+_POLL_SECONDS = 0.05  # how often the calling thread looks at a running kernel
+#: chain_monitor's stages, as (description, unit) of a progress bar
+_STAGES = {1: ("transient", "cycle"), 2: ("records", "cycle"), 3: ("sweep", "point")}
+#: Units of the parameters a sweep can run over
+_PARAMETER_UNITS = {"amplitude": "length", "omega": "1/time", "damping": "1",
+                    "restitution": "1", "spacing": "length"}
 _MAX_N = 10_000_000  # chain_config's max_n: only used to phrase errors for n beyond int32
 _INT32 = (-(2**31), 2**31 - 1)
 _INT64 = (-(2**63), 2**63 - 1)
@@ -96,9 +113,13 @@ _BYTES_PER_EVENT = 24  # time, speed (float64), site, kind (int32)
 
 #: Outputs of ``_kernels.ic_run``, in f2py's order (checked by post/tests/test_api.py).
 RUN_OUTPUTS = (
-    "x", "v", "cycle", "final_x", "final_v", "periods", "site_counts", "counts",
-    "collisions_per_cycle", "nev", "ev_time", "ev_site", "ev_speed", "ev_kind", "k",
-    "exponents", "stderr_bits", "per_time", "ky", "jac", "mult_re", "mult_im", "status",
+    "final_x", "final_v", "periods", "site_counts", "counts", "collisions_per_cycle", "nev",
+    "k", "exponents", "stderr_bits", "per_time", "ky", "jac", "mult_re", "mult_im", "status",
+    "msg_len", "message",
+)
+#: Outputs of ``_kernels.ic_sweep``, in f2py's order (checked by post/tests/test_api.py).
+SWEEP_OUTPUTS = (
+    "sizes", "values", "collisions", "period", "exponents", "stderr_bits", "ky", "status",
     "msg_len", "message",
 )
 
@@ -245,6 +266,7 @@ def simulate(
     phase: float = 0.0,
     stick_speed: float = 1.0e-9,
     max_size_mb: float = 4096.0,
+    progress: bool = False,
 ) -> Simulation:
     """Run the chain: ``transient`` unrecorded drive cycles, then ``cycles`` recorded ones.
 
@@ -262,6 +284,7 @@ def simulate(
             below which chatter on a wall ends in sticking, (0, 1].
         max_size_mb: refuse runs whose records need more memory (the CLI's
             ``&output max_size_mb``, also applied to the event stream here).
+        progress: show a tqdm progress bar (transient cycles, then records).
 
     Returns:
         A :class:`Simulation`; ``x``, ``v`` have shape (cycles, n).
@@ -269,11 +292,12 @@ def simulate(
     Raises:
         ValueError: a bad argument, with the CLI's message. TypeError: an argument of the
         wrong type. RuntimeError: the run itself failed (the engine's message).
+        KeyboardInterrupt: Ctrl-C; the run stops at its next cycle or record.
     """
     cfg = _config(n, amplitude, omega, damping, restitution, spacing, boundary, x0, v0,
                   transient, cycles, phase, stick_speed, max_size_mb)
     keep_events = bool(events)
-    out = _run(cfg, strobe=True, events=keep_events)
+    out = _run(cfg, strobe=True, events=keep_events, progress=progress)
     nev = int(out["nev"])
     counts = out["counts"]
     return Simulation(
@@ -317,6 +341,7 @@ def lyapunov(
     phase: float = 0.0,
     stick_speed: float = 1.0e-9,
     max_size_mb: float = 4096.0,
+    progress: bool = False,
 ) -> Lyapunov:
     """Lyapunov spectrum averaged over ``cycles`` drive cycles after ``transient``.
 
@@ -334,7 +359,7 @@ def lyapunov(
     cfg["lyapunov"] = 1
     cfg["vectors"] = _int32(vectors, "&lyapunov: vectors", "[0, 2n] (0 means all 2n)")
     cfg["qr_every"] = _int32(qr_every, "&lyapunov: qr_every", "[1, cycles]")
-    out = _run(cfg, strobe=False, events=False)
+    out = _run(cfg, strobe=False, events=False, progress=progress)
     k = int(out["k"])
     return Lyapunov(
         exponents=_frozen(out["exponents"][:k]),
@@ -366,6 +391,7 @@ def floquet(
     phase: float = 0.0,
     stick_speed: float = 1.0e-9,
     max_size_mb: float = 4096.0,
+    progress: bool = False,
 ) -> Floquet:
     """Floquet multipliers: eigenvalues of the ``period``-cycle Poincare-map Jacobian at
     the state reached after ``transient + cycles`` drive cycles (where the CLI evaluates
@@ -381,7 +407,7 @@ def floquet(
                   transient, cycles, phase, stick_speed, max_size_mb)
     cfg["jacobian"] = 1
     cfg["jacobian_cycles"] = _int32(period, "&lyapunov: jacobian_cycles", "[1, 1000]")
-    out = _run(cfg, strobe=False, events=False)
+    out = _run(cfg, strobe=False, events=False, progress=progress)
     return Floquet(
         multipliers=_frozen(out["mult_re"] + 1j * out["mult_im"]),
         jacobian=_frozen(out["jac"]),
@@ -474,6 +500,203 @@ def random_start(
     return _frozen(x), _frozen(v)
 
 
+def sweep(
+    n: int,
+    amplitude: float,
+    omega: float,
+    damping: float = 0.05,
+    restitution: float = 0.7,
+    spacing: float | ArrayLike = 1.0,
+    boundary: str = "fixed",
+    x0: ArrayLike | None = None,
+    v0: ArrayLike | None = None,
+    transient: int = 0,
+    cycles: int = 100,
+    *,
+    parameter: str,
+    start: float,
+    stop: float,
+    step: float,
+    mode: str = "continuation",
+    parameter2: str | None = None,
+    start2: float | None = None,
+    stop2: float | None = None,
+    step2: float | None = None,
+    lyapunov: bool = False,
+    vectors: int = 0,
+    qr_every: int = 1,
+    phase: float = 0.0,
+    stick_speed: float = 1.0e-9,
+    max_size_mb: float = 4096.0,
+    threads: int = 0,
+    progress: bool = False,
+) -> Any:
+    """A parameter sweep (bifurcation diagram, Lyapunov scan): the CLI's ``&sweep``.
+
+    ``parameter`` (``'amplitude'``, ``'omega'``, ``'damping'``, ``'restitution'`` or
+    ``'spacing'``) runs from ``start`` to ``stop`` in steps of ``step``; its value among the
+    run's arguments is replaced at each point. ``mode='continuation'`` starts each point from
+    the final state of the one before (the paper's procedure), ``'independent'`` every point
+    from ``x0``, ``v0``. ``parameter2``, ``start2``, ``stop2``, ``step2``: a second axis, each
+    of its values a branch of its own (a 2-D grid). Each point runs ``transient`` cycles and
+    records ``cycles`` strobe records; with ``lyapunov=True`` also ``vectors`` exponents (0:
+    all 2n). Branches run on ``threads`` OpenMP threads (0: ``OMP_NUM_THREADS``, else every
+    core); the numbers are the same for any count, and the CLI's on the same namelist.
+    Ctrl-C stops the sweep once the points running finish (:class:`KeyboardInterrupt`);
+    ``progress=True`` shows a tqdm bar of the points. Other arguments as :func:`simulate`.
+
+    Returns:
+        An :class:`xarray.Dataset`, the CLI file's ``/sweep`` group
+        (``xarray.open_dataset(path, engine="h5netcdf", group="sweep")``) with the same
+        names: dimensions ``point`` (the values of ``parameter``; ``point2`` for
+        ``parameter2``), ``record``, ``oscillator``, ``exponent``; variables ``x``
+        (point, [point2,] record, oscillator), ``collisions_per_cycle``, ``period``
+        (0: aperiodic), with ``lyapunov`` also ``exponents``, ``stderr`` (bits per drive
+        cycle) and ``ky_dimension``, and ``drive_period`` in an ``omega`` sweep;
+        attributes ``parameter``, ``parameter2`` ('' for 1-D), ``mode`` and the run's
+        other arguments.
+
+    Raises:
+        ImportError: xarray is missing. ValueError, TypeError, RuntimeError: as
+        :func:`simulate` (a point outside its range names the point).
+    """
+    try:
+        import xarray as xr
+    except ImportError:
+        raise ImportError("api.sweep returns an xarray.Dataset: pip install xarray") from None
+    cfg = _config(n, amplitude, omega, damping, restitution, spacing, boundary, x0, v0,
+                  transient, cycles, phase, stick_speed, max_size_mb)
+    for name in ("record_events", "jacobian", "jacobian_cycles"):
+        del cfg[name]
+    cfg["lyapunov"] = int(bool(lyapunov))
+    cfg["vectors"] = _int32(vectors, "&lyapunov: vectors", "[0, 2n] (0 means all 2n)")
+    cfg["qr_every"] = _int32(qr_every, "&lyapunov: qr_every", "[1, cycles]")
+    two_d = parameter2 is not None
+    if two_d and (start2 is None or stop2 is None or step2 is None):
+        raise ValueError("&sweep: parameter2 needs start2, stop2 and step2")
+    args = dict(
+        cfg,
+        parameter=_name(parameter, "parameter"),
+        start=_float(start, "start"),
+        stop=_float(stop, "stop"),
+        step=_float(step, "step"),
+        mode=_name(mode, "mode"),
+        parameter2=_name(parameter2 if two_d else "", "parameter2"),
+        start2=_float(start2, "start2") if two_d else 0.0,
+        stop2=_float(stop2, "stop2") if two_d else 0.0,
+        step2=_float(step2, "step2") if two_d else 0.0,
+        threads=_int32(threads, "threads", "the non-negative 32-bit integers"),
+    )
+    if args["threads"] < 0:
+        raise ValueError(f"threads = {args['threads']} is outside [0, 2**31) (0: the default)")
+    kernels = _extension()
+    no_control = np.zeros(4, dtype=np.int64)
+    out = dict(zip(SWEEP_OUTPUTS, kernels.ic_sweep(**args, dry_run=1, nf=1, nc=1, npts=1,
+                                                   kcap=0, x=np.empty((1, 1, 1), order="F"),
+                                                   control=no_control), strict=True))
+    _raise_for(out["status"], out["msg_len"], out["message"])
+    n1, n2, k = (int(i) for i in out["sizes"])
+    sizes = dict(nf=cfg["n"], nc=cfg["cycles"], npts=n1 * n2, kcap=k)
+    x = np.empty((cfg["n"], cfg["cycles"], n1 * n2), order="F")
+    result = _watched(kernels.ic_sweep, dict(args, dry_run=0, x=x, **sizes), progress)
+    out = dict(zip(SWEEP_OUTPUTS, result, strict=True), x=x)
+    _raise_for(out["status"], out["msg_len"], out["message"])
+    return _sweep_dataset(xr, out, cfg, args, n1, n2, k, boundary)
+
+
+def _sweep_dataset(xr: Any, out: dict[str, Any], cfg: dict[str, Any], args: dict[str, Any],
+                   n1: int, n2: int, k: int, boundary: str) -> Any:
+    """ic_sweep's arrays (point p = i + n1 j, Fortran order) as the file's /sweep group:
+    the same dimensions, coordinates, variables and variable attributes (``units`` UDUNITS'
+    as in the file, ``model_units`` the reduced ones)."""
+    parameter = _text(args["parameter"])
+    parameter2 = _text(args["parameter2"])
+    two_d = len(parameter2) > 0
+    points = ("point", "point2") if two_d else ("point",)
+
+    def grid(a: Any) -> NDArray[Any]:
+        """(..., n1 n2) in Fortran order -> (n1, [n2,] ...), the file's layout."""
+        a = np.moveaxis(np.asarray(a), -1, 0)           # [p, ...], p = i + n1 j
+        a = np.swapaxes(a.reshape((n2, n1) + a.shape[1:]), 0, 1)  # [i, j, ...]
+        return np.ascontiguousarray(a if two_d else a[:, 0])
+
+    def described(dims: tuple[str, ...], values: Any, long_name: str, units: str = "1",
+                  model_units: str | None = None) -> tuple[Any, ...]:
+        attrs = {"long_name": long_name, "units": units}
+        if model_units is not None:
+            attrs["model_units"] = model_units
+        return (dims, values, attrs)
+
+    values = np.asarray(out["values"])
+    coords = {
+        "point": described(("point",), values[0, :n1].copy(),
+                           f"{parameter} (the swept parameter) at the point",
+                           model_units=_PARAMETER_UNITS[parameter]),
+        "oscillator": described(("oscillator",), np.arange(1, cfg["n"] + 1, dtype=np.int32),
+                                "oscillator index"),
+    }
+    if two_d:
+        coords["point2"] = described(("point2",), values[1, ::n1].copy(),
+                                     f"{parameter2} (the swept parameter) at the point",
+                                     model_units=_PARAMETER_UNITS[parameter2])
+    data = {
+        "x": described(points + ("record", "oscillator"),
+                       grid(np.asarray(out["x"]).transpose(1, 0, 2)),
+                       "displacement from equilibrium at the section, the records of the point",
+                       model_units="length"),
+        "collisions_per_cycle": described(points, grid(out["collisions"]),
+                                          "collisions per drive cycle",
+                                          model_units="impacts per drive cycle"),
+        "period": described(points + ("oscillator",), grid(out["period"]),
+                            "period of the oscillator's strobe record (0: none found, "
+                            "aperiodic)", model_units="drive cycles"),
+    }
+    if k > 0:
+        coords["exponent"] = described(("exponent",), np.arange(1, k + 1, dtype=np.int32),
+                                       "exponent index (descending order)")
+        data["exponents"] = described(points + ("exponent",), grid(out["exponents"]),
+                                      "Lyapunov exponent", "bit", "bits per drive cycle")
+        data["stderr"] = described(points + ("exponent",), grid(out["stderr_bits"]),
+                                   "standard error of the Lyapunov exponent (20 block "
+                                   "averages)", "bit", "bits per drive cycle")
+        data["ky_dimension"] = described(points, grid(out["ky"]), "Kaplan-Yorke dimension")
+    if "omega" in (parameter, parameter2):
+        axis = "point" if parameter == "omega" else "point2"
+        data["drive_period"] = described((axis,), 2 * np.pi / coords[axis][1],
+                                         "drive period 2 pi / omega", model_units="time")
+    attrs: dict[str, Any] = dict(parameter=parameter, parameter2=parameter2,
+                                 mode=_text(args["mode"]))
+    attrs.update({key: cfg[key] for key in ("n", "amplitude", "omega", "damping",
+                                             "restitution", "transient", "cycles", "phase")
+                  if key not in (parameter, parameter2)})
+    used = _used(cfg, boundary, events=False, vectors=cfg["vectors"], qr_every=cfg["qr_every"])
+    if parameter != "spacing" and parameter2 != "spacing":
+        attrs["spacing"] = np.asarray(used["spacing"])
+    attrs.update(boundary=used["boundary"], stick_speed=cfg["stick_speed"],
+                 code_version=used["code_version"],
+                 input_namelist=_sweep_namelist(used, k > 0, attrs, args))
+    return xr.Dataset(data, coords=coords, attrs=attrs)
+
+
+def _sweep_namelist(used: Mapping[str, Any], lyapunov: bool, attrs: Mapping[str, Any],
+                    args: Mapping[str, Any]) -> str:
+    """The command-line input equal to this sweep (io's equivalent namelist + &sweep)."""
+    from impactchain.io import _equivalent_namelist
+
+    text = _equivalent_namelist(used, lyapunov)
+    group = (f"&sweep parameter = '{attrs['parameter']}', start = {args['start']!r}, "
+             f"stop = {args['stop']!r}, step = {args['step']!r}, mode = '{attrs['mode']}'")
+    if attrs["parameter2"]:
+        group += (f", parameter2 = '{attrs['parameter2']}', start2 = {args['start2']!r}, "
+                  f"stop2 = {args['stop2']!r}, step2 = {args['step2']!r}")
+    return text + group + " /\n"
+
+
+def _text(name: NDArray[np.int32]) -> str:
+    """A name passed to the kernels as byte values (:func:`_name`), as text."""
+    return bytes(np.asarray(name).astype(np.uint8)).decode()
+
+
 # ------------------------------------------------------------------------------ helpers
 
 
@@ -541,7 +764,8 @@ def _code_version() -> str:
     return f"impactchain.api {__version__}"
 
 
-def _run(cfg: dict[str, Any], strobe: bool, events: bool) -> dict[str, Any]:
+def _run(cfg: dict[str, Any], strobe: bool, events: bool, progress: bool = False
+         ) -> dict[str, Any]:
     """Validate, allocate, run; retry once with the exact event count if it was short."""
     kernels = _extension()
     cfg = dict(cfg, record_events=int(events))
@@ -555,7 +779,7 @@ def _run(cfg: dict[str, Any], strobe: bool, events: bool) -> dict[str, Any]:
     if events:
         low, high = _FIRST_EVENT_CAPACITY
         capacity = int(min(max(low, 4 * (n + 1) * cfg["cycles"]), high))
-    out = _call_run(kernels, cfg, dry_run=False, ncap=capacity, **sizes)
+    out = _call_run(kernels, cfg, dry_run=False, ncap=capacity, progress=progress, **sizes)
     if out["status"] == _STATUS_CAPACITY:
         need = int(out["nev"])
         megabytes = need * _BYTES_PER_EVENT / 1e6
@@ -564,16 +788,96 @@ def _run(cfg: dict[str, Any], strobe: bool, events: bool) -> dict[str, Any]:
                 f"events: this run has {need} events, about {megabytes:.6g} MB, more than "
                 f"max_size_mb = {cfg['max_size_mb']:.8g}; pass events=False or raise "
                 "max_size_mb")
-        out = _call_run(kernels, cfg, dry_run=False, ncap=need, **sizes)
+        out = _call_run(kernels, cfg, dry_run=False, ncap=need, progress=progress, **sizes)
     _raise_for(out["status"], out["msg_len"], out["message"])
     return out
 
 
 def _call_run(kernels: Any, cfg: dict[str, Any], dry_run: bool, nr: int = 0, nc: int = 0,
-              nf: int = 0, ncap: int = 0, kcap: int = 0, mj: int = 0) -> dict[str, Any]:
-    result = kernels.ic_run(**cfg, dry_run=int(dry_run), nr=nr, nc=nc, nf=nf, ncap=ncap,
-                            kcap=kcap, mj=mj)
-    return dict(zip(RUN_OUTPUTS, result, strict=True))
+              nf: int = 0, ncap: int = 0, kcap: int = 0, mj: int = 0,
+              progress: bool = False) -> dict[str, Any]:
+    # records and events in arrays allocated here, untouched (np.empty): the kernel fills
+    # them with the GIL released (f2py refuses a size 0 there: one element when none is kept)
+    keep_strobe = nr > 0 and nc > 0
+    nr, nc, ncap = max(nr, 1), max(nc, 1), max(ncap, 1)
+    records = dict(x=np.empty((nr, nc), order="F"), v=np.empty((nr, nc), order="F"),
+                   cycle=np.empty(nc, dtype=np.int64), ev_time=np.empty(ncap),
+                   ev_site=np.empty(ncap, dtype=np.int32), ev_speed=np.empty(ncap),
+                   ev_kind=np.empty(ncap, dtype=np.int32))
+    args = dict(cfg, dry_run=int(dry_run), keep_strobe=int(keep_strobe), nr=nr, nc=nc, nf=nf,
+                ncap=ncap, kcap=kcap, mj=mj, **records)
+    if dry_run:
+        result = kernels.ic_run(**args, control=np.zeros(4, dtype=np.int64))
+    else:
+        result = _watched(kernels.ic_run, args, progress)
+    return dict(zip(RUN_OUTPUTS, result, strict=True)) | records
+
+
+def _watched(kernel: Callable[..., Any], args: dict[str, Any], progress: bool) -> Any:
+    """``kernel(**args, control=...)`` in a worker thread, watched from this one.
+
+    The kernel releases the GIL and polls ``control`` (int64, 4 values: chain_bridge's
+    shared_monitor_t) at every transient cycle, record and sweep point: control[0] set here
+    asks it to stop; it keeps control[1:4] = stage, done, total. Ctrl-C here (this thread
+    gets Python's signals) sets the flag, waits for the kernel to stop, and re-raises.
+    """
+    control = np.zeros(4, dtype=np.int64)
+    outcome: dict[str, Any] = {}
+
+    def work() -> None:
+        try:
+            outcome["result"] = kernel(**args, control=control)
+        except BaseException as exc:  # handed to the calling thread
+            outcome["error"] = exc
+
+    bar = _ProgressBar() if progress else None
+    worker = threading.Thread(target=work, name="impactchain-kernel", daemon=True)
+    worker.start()
+    try:
+        while worker.is_alive():
+            worker.join(_POLL_SECONDS)
+            if bar is not None:
+                bar.show(control)
+    except KeyboardInterrupt:
+        control[0] = 1
+        worker.join()
+        raise
+    finally:
+        if bar is not None:
+            bar.close()
+    if "error" in outcome:
+        raise outcome["error"]
+    return outcome["result"]
+
+
+class _ProgressBar:
+    """A tqdm bar per stage of a watched kernel (a new one when the stage changes)."""
+
+    def __init__(self) -> None:
+        try:
+            from tqdm.auto import tqdm
+        except ImportError:
+            raise ImportError("progress=True needs tqdm: pip install tqdm") from None
+        self._tqdm = tqdm
+        self._bar: Any = None
+        self._stage = 0
+
+    def show(self, control: NDArray[np.int64]) -> None:
+        stage, done, total = (int(c) for c in control[1:4])
+        if stage not in _STAGES:
+            return
+        if stage != self._stage:
+            self.close()
+            description, unit = _STAGES[stage]
+            self._bar = self._tqdm(total=total, desc=description, unit=unit, leave=False)
+            self._stage = stage
+        self._bar.total = total
+        self._bar.update(done - self._bar.n)
+
+    def close(self) -> None:
+        if self._bar is not None:
+            self._bar.close()
+            self._bar = None
 
 
 def _raise_for(status: int, msg_len: int, message: NDArray[np.int32]) -> None:

@@ -57,7 +57,8 @@ from matplotlib.lines import Line2D
 
 from impactchain import __version__
 from impactchain.analysis import panel_ranges, period_label
-from impactchain.io import FILE_UNITS, Run, Strobe, Sweep, read_run
+from impactchain.io import (FILE_UNITS, Run, Strobe, Sweep, is_sweep_dataset, read_run,
+                            run_from_sweep)
 from impactchain.shockwave import Wave, build_shock_waves
 
 __all__ = [
@@ -121,12 +122,14 @@ RunLike = Union[Run, str, "os.PathLike[str]", SupportsRun]
 
 def as_run(data: RunLike, require: Iterable[str] = (), purpose: str | None = None) -> Run:
     """The :class:`Run` of ``data``: a Run, a file path (read with ``require``, see
-    :func:`impactchain.io.read_run`), or an object with ``to_run()`` (``impactchain.api``
-    results)."""
+    :func:`impactchain.io.read_run`), an object with ``to_run()`` (``impactchain.api``
+    results) or the Dataset of :func:`impactchain.api.sweep`."""
     if isinstance(data, Run):
         return data
     if isinstance(data, (str, os.PathLike)):
         return read_run(data, require=require, purpose=purpose)
+    if is_sweep_dataset(data):
+        return run_from_sweep(data)
     if isinstance(data, SupportsRun):
         run = data.to_run()
         if not isinstance(run, Run):
@@ -139,7 +142,8 @@ def as_run(data: RunLike, require: Iterable[str] = (), purpose: str | None = Non
 
 def _as_runs(data: RunLike | Sequence[RunLike], require: Iterable[str] = (),
              purpose: str | None = None) -> list[Run]:
-    single = isinstance(data, (Run, str, os.PathLike)) or isinstance(data, SupportsRun)
+    single = (isinstance(data, (Run, str, os.PathLike)) or isinstance(data, SupportsRun)
+              or is_sweep_dataset(data))
     items = [data] if single else list(data)  # type: ignore[arg-type]
     return [as_run(item, require, purpose) for item in items]
 

@@ -70,6 +70,8 @@ __all__ = [
     "FILE_UNITS",
     "read_run",
     "run_from_api",
+    "run_from_sweep",
+    "is_sweep_dataset",
     "namelist_groups",
 ]
 
@@ -772,6 +774,67 @@ def run_from_api(simulation: Any = None, lyapunov: Any = None) -> Run:
         units=FILE_UNITS,
         **parts,
     )
+
+
+def is_sweep_dataset(data: Any) -> bool:
+    """Is ``data`` an :func:`impactchain.api.sweep` result (an xarray Dataset of /sweep)?"""
+    attrs = getattr(data, "attrs", None)
+    return (hasattr(data, "data_vars") and isinstance(attrs, Mapping)
+            and "parameter" in attrs and "input_namelist" in attrs)
+
+
+def run_from_sweep(ds: Any) -> Run:
+    """A :class:`Run` holding the sweep of :func:`impactchain.api.sweep` (an xarray Dataset),
+    for the figures: ``Run.sweep`` with its points in the file's order (version 1's flat
+    list, p = i + n1 j), ``Run.params`` from the Dataset's attributes (NaN for the swept
+    parameters, as in a sweep file)."""
+    if not is_sweep_dataset(ds):
+        raise TypeError(f"{type(ds).__name__} is not a sweep of impactchain.api.sweep")
+    attrs = ds.attrs
+    two_d = bool(attrs["parameter2"])
+    n1 = ds.sizes["point"]
+    n2 = ds.sizes["point2"] if two_d else 1
+
+    def flat(name: str) -> np.ndarray | None:
+        """(n1, [n2,] ...) -> (n1 n2, ...), p = i + n1 j."""
+        if name not in ds:
+            return None
+        a = np.asarray(ds[name].values)
+        if two_d:
+            a = np.swapaxes(a, 0, 1).reshape((n1 * n2,) + a.shape[2:])
+        return _frozen(a)
+
+    point = np.asarray(ds["point"].values)
+    if two_d:
+        point2 = np.asarray(ds["point2"].values)
+        values = np.column_stack([np.tile(point, n2), np.repeat(point2, n1)])
+    else:
+        values = point
+    drive_period = None
+    if "drive_period" in ds:
+        axis = 0 if attrs["parameter"] == "omega" else 1
+        drive_period = _frozen(2 * math.pi / np.atleast_2d(values.T)[axis])
+    sweep = Sweep(parameter=str(attrs["parameter"]), parameter2=str(attrs["parameter2"]),
+                  mode=str(attrs["mode"]), values=_frozen(values), x=flat("x"),
+                  collisions_per_cycle=flat("collisions_per_cycle"), period=flat("period"),
+                  exponents=flat("exponents"), stderr=flat("stderr"),
+                  ky_dimension=flat("ky_dimension"), drive_period=drive_period)
+    n = int(attrs["n"])
+    nan = math.nan
+    omega = float(attrs.get("omega", nan))
+    params = Params(
+        n=n, damping=float(attrs.get("damping", nan)),
+        restitution=float(attrs.get("restitution", nan)),
+        amplitude=float(attrs.get("amplitude", nan)), omega=omega,
+        boundary=str(attrs["boundary"]), drive_period=2 * math.pi / omega,
+        phase=float(attrs["phase"]), transient=int(attrs["transient"]),
+        cycles=int(attrs["cycles"]),
+        spacing=_frozen(np.asarray(attrs.get("spacing", np.full(n + 1, nan)), dtype=float)),
+    )
+    return Run(path=IN_MEMORY, schema_version=SCHEMA_VERSION,
+               code_version=str(attrs["code_version"]),
+               input_namelist=str(attrs["input_namelist"]), complete=True, params=params,
+               units=FILE_UNITS, sweep=sweep)
 
 
 def _simulation_parts(sim: Any, params: Params, events: bool) -> dict[str, Any]:

@@ -305,11 +305,14 @@ def test_threads_give_the_same_results() -> None:
         np.testing.assert_array_equal(s.event_time, p.event_time)
 
 
-def test_extension_outputs_in_documented_order() -> None:
-    """api.RUN_OUTPUTS names the tuple f2py returns; a reordered layer must fail here."""
-    first_line = api._extension().ic_run.__doc__.splitlines()[0]
+@pytest.mark.parametrize("kernel, names", [("ic_run", "RUN_OUTPUTS"),
+                                           ("ic_sweep", "SWEEP_OUTPUTS")])
+def test_extension_outputs_in_documented_order(kernel: str, names: str) -> None:
+    """api.RUN_OUTPUTS / SWEEP_OUTPUTS name the tuples f2py returns; a reordered layer must
+    fail here."""
+    first_line = getattr(api._extension(), kernel).__doc__.splitlines()[0]
     returned = first_line.split(" = ")[0].split(",")
-    assert tuple(returned) == api.RUN_OUTPUTS
+    assert tuple(returned) == getattr(api, names)
 
 
 # ---------------------------------------------------------------- 2. errors as exceptions
@@ -542,3 +545,158 @@ def test_example_writes_a_png(tmp_path: Path) -> None:
     bad = subprocess.run([sys.executable, str(EXAMPLE), str(out), "--amplitude", "-1"],
                          capture_output=True, text=True, timeout=120)
     assert bad.returncode == 2 and "&chain: amplitude = -1.0000000 is outside" in bad.stderr
+
+
+# --------------------------------------- 4. long calls: Ctrl-C, progress; sweeps from Python
+
+# A child process makes one long call (hours if never stopped); the parent sends SIGINT
+# (Ctrl-C) once the kernel runs and measures how long the call takes to raise.
+_LONG_CALLS = {
+    "records": "api.simulate(16, 1.7, 1.5, cycles=10**6, events=False)",
+    "transient": "api.simulate(16, 1.7, 1.5, transient=10**10, cycles=2)",
+    "exponents": "api.lyapunov(16, 1.7, 1.5, transient=10, cycles=10**6)",
+    "sweep": ("api.sweep(8, 6.0, 1.9, transient=250, cycles=50, parameter='amplitude', "
+              "start=6.0, stop=1.0, step=-1e-5, threads=1)"),
+}
+_CHILD = """
+import sys, time
+from impactchain import api
+print("calling", flush=True)
+try:
+    {call}
+except KeyboardInterrupt:
+    print("KeyboardInterrupt", time.monotonic(), flush=True)
+    sys.exit(0)
+print("returned", flush=True)
+"""
+
+
+@pytest.mark.parametrize("name", sorted(_LONG_CALLS))
+def test_ctrl_c_stops_a_long_call(name: str) -> None:
+    """SIGINT during a call that would run for hours raises KeyboardInterrupt promptly (the
+    kernel polls a stop flag at every cycle, record and sweep point; the wait is printed)."""
+    import signal
+    import time
+
+    child = subprocess.Popen([sys.executable, "-c", _CHILD.format(call=_LONG_CALLS[name])],
+                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        assert child.stdout is not None
+        assert child.stdout.readline() == "calling\n"
+        time.sleep(1.5)  # the kernel is running by now
+        sent = time.monotonic()
+        child.send_signal(signal.SIGINT)
+        out, err = child.communicate(timeout=60)
+    finally:
+        child.kill()
+    words = out.split()
+    assert child.returncode == 0 and words[:1] == ["KeyboardInterrupt"], (out, err)
+    waited = float(words[1]) - sent
+    print(f"{name}: KeyboardInterrupt {waited:.3f} s after SIGINT")
+    assert waited < 10  # (a second on an idle machine; the call itself would take hours)
+
+
+def test_progress_bar_shows_and_changes_nothing(capfd: pytest.CaptureFixture[str]) -> None:
+    """progress=True draws tqdm bars on stderr (the transient, then the records) and leaves
+    every number as it was."""
+    pytest.importorskip("tqdm")
+    args = dict(n=16, amplitude=1.7, omega=1.5, transient=30000, cycles=30000, events=False)
+    quiet = api.simulate(**args)
+    capfd.readouterr()
+    shown = api.simulate(**args, progress=True)
+    err = capfd.readouterr().err
+    assert "transient" in err and "records" in err and "cycle" in err, err
+    np.testing.assert_array_equal(quiet.x, shown.x)
+    np.testing.assert_array_equal(quiet.final_v, shown.final_v)
+
+
+def _sweep_namelist(sweep: str, **kwargs: Any) -> str:
+    return namelist(**kwargs) + sweep + "\n"
+
+
+SWEEPS: dict[str, tuple[dict[str, Any], str]] = {
+    # figure 10's kind: a continuation in A with exponents
+    "amplitude-continuation": (
+        dict(parameter="amplitude", start=2.4, stop=2.0, step=-0.1, lyapunov=True, vectors=4),
+        "&sweep parameter = 'amplitude', start = 2.4, stop = 2.0, step = -0.1 /"),
+    # a 2-D grid (omega along the branches, so drive_period is there), independent points
+    "grid-independent": (
+        dict(parameter="restitution", start=0.5, stop=0.7, step=0.1, parameter2="omega",
+             start2=1.8, stop2=1.9, step2=0.1, mode="independent"),
+        "&sweep parameter = 'restitution', start = 0.5, stop = 0.7, step = 0.1, "
+        "mode = 'independent', parameter2 = 'omega', start2 = 1.8, stop2 = 1.9, "
+        "step2 = 0.1 /"),
+}
+
+
+@pytest.mark.parametrize("name", sorted(SWEEPS))
+def test_sweep_is_the_cli_file(name: str, cli: Path, tmp_path: Path) -> None:
+    """api.sweep returns the CLI file's /sweep group as xarray reads it: the same
+    dimensions, coordinates, variables and attributes, every value bit for bit."""
+    xr = pytest.importorskip("xarray")
+    pytest.importorskip("h5netcdf")
+    python_args, group = SWEEPS[name]
+    run = dict(n=4, amplitude=2.2, omega=1.9, x0=[0.1, -0.1, 0.05, 0.0], transient=40,
+               cycles=6)
+    text = _sweep_namelist(group, **run, events=False,
+                           lyapunov=bool(python_args.get("lyapunov")),
+                           vectors=python_args.get("vectors", 0))
+    result = run_cli(cli, text, tmp_path)
+    assert result.returncode == 0, result.stderr
+    ds = api.sweep(**run, **python_args, threads=2)
+    with xr.open_dataset(tmp_path / "run.h5", engine="h5netcdf", group="sweep") as f:
+        xr.testing.assert_identical(ds.drop_attrs(), f.load().drop_attrs())
+        for key in ("parameter", "parameter2", "mode"):
+            assert ds.attrs[key] == f.attrs[key]
+    # the figures take the Dataset as they take the file: the same Sweep, field by field
+    from impactchain import figures
+    from impactchain.io import read_run, run_from_sweep
+
+    mine, theirs = run_from_sweep(ds), read_run(tmp_path / "run.h5")
+    for name in ("values", "x", "collisions_per_cycle", "period", "exponents", "stderr",
+                 "ky_dimension", "drive_period"):
+        a, b = getattr(mine.sweep, name), getattr(theirs.sweep, name)
+        assert (a is None) == (b is None), name
+        if a is not None:
+            np.testing.assert_array_equal(a, b, err_msg=name)
+    assert mine.params.n == theirs.params.n and mine.params.cycles == theirs.params.cycles
+    assert "&sweep parameter = " in mine.input_namelist
+    if not mine.sweep.is_2d:
+        figures.bifurcation(ds, sites=[1])
+
+
+def test_sweep_threads_and_errors() -> None:
+    """1 and 2 threads give the same bits; a bad sweep raises the CLI's message."""
+    args = dict(n=4, amplitude=2.2, omega=1.9, transient=20, cycles=4, parameter="amplitude",
+                start=2.0, stop=2.6, step=0.1, mode="independent", lyapunov=True)
+    one = api.sweep(**args, threads=1)
+    two = api.sweep(**args, threads=2)
+    for var in one.data_vars:
+        np.testing.assert_array_equal(one[var].values, two[var].values)
+    assert one.x.dims == ("point", "record", "oscillator")
+    with pytest.raises(ValueError, match="^&sweep: parameter = 'omgea' is not one of"):
+        api.sweep(**{**args, "parameter": "omgea"})
+    with pytest.raises(ValueError, match=r"^&sweep: point 2 \(amplitude = -0\.1.*\): "
+                                         r"&chain: amplitude = -0\.1"):
+        api.sweep(**{**args, "start": 0.0, "stop": -0.5, "step": -0.1})
+    with pytest.raises(ValueError, match="parameter2 needs start2, stop2 and step2"):
+        api.sweep(**args, parameter2="omega")
+
+
+def test_extension_needs_no_executable_stack() -> None:
+    """The extension's ELF marks the stack non-executable: the library passes no internal
+    procedures (which would need trampolines on the stack; monitors are objects), so it
+    loads where executable stacks are refused."""
+    import struct
+
+    path = Path(api._extension().__file__)
+    data = path.read_bytes()
+    assert data[:4] == b"\x7fELF" and data[4] == 2, "a 64-bit ELF"  # ELFCLASS64
+    phoff, = struct.unpack_from("<Q", data, 0x20)
+    phentsize, phnum = struct.unpack_from("<HH", data, 0x36)
+    flags = {}
+    for i in range(phnum):
+        p_type, p_flags = struct.unpack_from("<II", data, phoff + i * phentsize)
+        flags[p_type] = p_flags
+    pt_gnu_stack, pf_x = 0x6474E551, 1
+    assert pt_gnu_stack in flags and not flags[pt_gnu_stack] & pf_x

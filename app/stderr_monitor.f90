@@ -1,0 +1,56 @@
+!> The command line's monitor: progress on standard error (chain_progress decides when and
+!> formats; this writes) and a stop after SIGINT / SIGTERM (chain_interrupt).
+module stderr_monitor
+    use, intrinsic :: iso_fortran_env, only: error_unit, int64
+    use impactchain, only: wp, i8, monitor_t, interrupted, progress_t, progress_start, &
+                           progress_update, stderr_is_terminal, stage_name
+    implicit none
+    private
+    public :: stderr_monitor_t, close_progress
+
+    type, extends(monitor_t) :: stderr_monitor_t
+        logical :: quiet = .false.     !! no progress, only the signal check
+        integer :: stage = 0           !! what the line counts now (chain_monitor's stages)
+        type(progress_t) :: shown
+    contains
+        procedure :: keep_going => stderr_keep_going
+    end type stderr_monitor_t
+
+contains
+
+    logical function stderr_keep_going(monitor, stage, done, total) result(keep_going)
+        class(stderr_monitor_t), intent(inout) :: monitor
+        integer, intent(in) :: stage
+        integer(i8), intent(in) :: done, total
+        character(len=:), allocatable :: text
+
+        keep_going = .not. interrupted()
+        if (monitor%quiet) return
+        if (stage /= monitor%stage) then ! a new count (the records after the transient)
+            call close_progress(monitor)
+            monitor%stage = stage
+            monitor%shown = progress_start(stage_name(stage), stderr_is_terminal(), seconds())
+        end if
+        call progress_update(monitor%shown, done, total, seconds(), text)
+        if (len(text) == 0) return
+        write (error_unit, '(a)', advance='no') text
+        flush (error_unit)
+    end function stderr_keep_going
+
+    !> A progress line left open on a terminal gets its newline before anything else is said.
+    subroutine close_progress(monitor)
+        type(stderr_monitor_t), intent(inout) :: monitor
+
+        if (monitor%shown%line_open) write (error_unit, '(a)') ''
+        monitor%shown%line_open = .false.
+    end subroutine close_progress
+
+    !> Seconds since an arbitrary start.
+    real(wp) function seconds()
+        integer(int64) :: now, rate
+
+        call system_clock(now, rate)
+        seconds = real(now, wp)/rate
+    end function seconds
+
+end module stderr_monitor

@@ -1,0 +1,77 @@
+!> Watching a long computation from outside: after each unit of work (a transient cycle, a
+!> strobe record, a sweep point) the library tells a monitor how far it is, and the monitor may
+!> ask it to stop. The command line shows progress and stops on a signal, the Python layer
+!> shares a flag with the interpreter (Ctrl-C, progress bars), the MPI driver ends its rounds.
+!> Infrastructure, no model section.
+!>
+!> A monitor is an object, not a procedure argument: a procedure that needs the caller's
+!> variables would be an internal procedure, and passing one needs a trampoline on an
+!> executable stack, which a Python extension must not require.
+module chain_monitor
+    use, intrinsic :: iso_fortran_env, only: int64
+    use chain_kinds, only: i8
+    use chain_interrupt, only: interrupted
+    implicit none
+    private
+    public :: monitor_t, signal_monitor_t
+    public :: stage_transient, stage_records, stage_points, stage_name
+
+    integer, parameter :: stage_transient = 1 !! drive cycles of the transient (nothing recorded)
+    integer, parameter :: stage_records = 2   !! strobe records of a run
+    integer, parameter :: stage_points = 3    !! finished points of a sweep
+
+    type, abstract :: monitor_t
+    contains
+        procedure(keep_going_i), deferred :: keep_going
+    end type monitor_t
+
+    abstract interface
+        !> `done` of `total` units of `stage` are finished; .false. asks the work to stop
+        !> there (what a stop means is the caller's: see record_cycles, run_sweep).
+        logical function keep_going_i(monitor, stage, done, total)
+            import :: monitor_t, i8
+            class(monitor_t), intent(inout) :: monitor
+            integer, intent(in) :: stage
+            integer(i8), intent(in) :: done, total
+        end function keep_going_i
+    end interface
+
+    !> Keeps going until SIGINT / SIGTERM (once chain_interrupt catches them) and, when
+    !> `deadline` is set, until the system clock passes it (in system_clock counts).
+    type, extends(monitor_t) :: signal_monitor_t
+        integer(int64) :: deadline = huge(1_int64)
+    contains
+        procedure :: keep_going => signal_keep_going
+    end type signal_monitor_t
+
+contains
+
+    !> (Whatever the stage and the count.)
+    logical function signal_keep_going(monitor, stage, done, total) result(keep_going)
+        class(signal_monitor_t), intent(inout) :: monitor
+        integer, intent(in) :: stage
+        integer(i8), intent(in) :: done, total
+        integer(int64) :: now
+
+        keep_going = .not. interrupted()
+        if (.not. keep_going .or. monitor%deadline == huge(1_int64)) return
+        call system_clock(now)
+        keep_going = now < monitor%deadline
+    end function signal_keep_going
+
+    !> What a stage counts, for progress lines: 'transient cycle', 'cycle', 'point'.
+    pure function stage_name(stage) result(name)
+        integer, intent(in) :: stage
+        character(len=:), allocatable :: name
+
+        select case (stage)
+        case (stage_transient)
+            name = 'transient cycle'
+        case (stage_records)
+            name = 'cycle'
+        case default
+            name = 'point'
+        end select
+    end function stage_name
+
+end module chain_monitor
