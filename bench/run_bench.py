@@ -36,6 +36,8 @@ class Row:
     unit_name: str
     peak_kib: int
     min_bond_share: float
+    vectors: int
+    reps: int
     label: str
 
     @property
@@ -104,7 +106,7 @@ def run_case(exe: Path, case: str, quick: bool) -> tuple[Row, list[float] | None
         f = line.split("\t")
         if f[0] == "row":
             row = Row(f[1], int(f[2]), int(f[3]), int(f[4]), float(f[5]), int(f[6]), f[7],
-                      int(f[8]), float(f[9]), f[10])
+                      int(f[8]), float(f[9]), int(f[10]), int(f[11]), f[12])
         elif f[0] == "state":
             state = [float(z) for z in f[1:]]
         elif f[0] == "machine":
