@@ -83,9 +83,8 @@ contains
         case ('n1024-lyap10')
             call case_chain(row, 'paper default parameters, 10 leading exponents', &
                             1024, 1.7_wp, 1.5_wp, 0.05_wp, 0.7_wp, 0.3_wp, 0.3_wp, 200_i8, 10)
-        case ('n64-full', 'n256-full', 'n1024-full')
-            call case_spectrum(row, name)
-        case ('n4096-lyap10', 'n4096-lyap64', 'n4096-lyap256')
+        case ('n64-full', 'n256-full', 'n1024-full', 'n4096-lyap10', 'n4096-lyap64', &
+              'n4096-lyap256')
             call case_spectrum(row, name)
         case ('fig10-sweep')
             call case_fig10(row)
