@@ -24,6 +24,8 @@ module bench_kit
         character(len=:), allocatable :: unit_name
         integer(int64) :: peak_kib = -1         !! VmHWM after the case (process high-water mark)
         real(wp) :: min_bond_share = -1         !! least-colliding bond over the mean (-1: n/a)
+        integer :: vectors = 0                  !! Lyapunov exponents computed (0: none)
+        integer :: reps = 0                     !! repetitions timed (the best is reported)
     end type row_t
 
 contains
@@ -112,7 +114,8 @@ contains
             real_text(real(row%peak_kib, wp)/1024)//' |'
     end subroutine print_row_markdown
 
-    !> row, name, n, cycles, collisions, seconds, units, unit name, peak KiB, bond share, label
+    !> row, name, n, cycles, collisions, seconds, units, unit name, peak KiB, bond share,
+    !> vectors, repetitions, label
     subroutine print_row_tsv(row)
         type(row_t), intent(in) :: row
         character(len=32) :: sec, share
@@ -123,7 +126,7 @@ contains
         write (output_unit, '(a)') 'row'//tab//row%name//tab//itoa(row%n)//tab// &
             itoa(row%cycles)//tab//itoa(row%collisions)//tab//trim(adjustl(sec))//tab// &
             itoa(row%units)//tab//row%unit_name//tab//itoa(row%peak_kib)//tab// &
-            trim(adjustl(share))//tab//row%label
+            trim(adjustl(share))//tab//itoa(row%vectors)//tab//itoa(row%reps)//tab//row%label
     end subroutine print_row_tsv
 
     !> Rate of the row's units: points per second, or ns per oscillator snapshot.
