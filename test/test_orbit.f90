@@ -359,8 +359,8 @@ contains
                          .true., 1.0e-9_wp)
         call find_orbit(model, 0.0_wp, 1, [0.0_wp, 0.0_wp], [0.0_wp, 0.0_wp], orbit, err)
         call check(t, .not. allocated(err) .and. .not. orbit%converged .and. &
-                   index(orbit%reason, 'sticks on a wall') > 0, 'failure: an orbit with a rest: '// &
-                   orbit%reason)
+                   index(orbit%reason, 'sticks on a wall') > 0, &
+                   'failure: an orbit with a rest: '//orbit%reason)
         call find_orbit(fig10(3.0_wp), 0.0_wp, 1, [(2.0_wp, i=1, 8)], [(0.0_wp, i=1, 8)], &
                         orbit, err)
         call check(t, allocated(err), 'an overlapping guess is an error')
