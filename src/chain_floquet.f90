@@ -12,7 +12,7 @@ module chain_floquet
     use chain_section, only: advance_to_point
     implicit none
     private
-    public :: poincare_jacobian, floquet_multipliers, floquet_result
+    public :: poincare_jacobian, advance_with_jacobian, floquet_multipliers, floquet_result
 
 contains
 
@@ -25,23 +25,36 @@ contains
         type(error_t), allocatable, intent(out) :: err
         type(chain_t) :: copy
         type(event_log_t) :: log
+
+        copy = chain
+        call event_log_init(log, .false., 0)
+        call advance_with_jacobian(copy, cycles, log, jacobian, err)
+    end subroutine poincare_jacobian
+
+    !> Run the chain (synced) through p drive cycles to the same in-cycle time, carrying the
+    !> identity frame: the one pass that gives both the p-cycle map (the chain's state after)
+    !> and its Jacobian (2n x 2n). Events go to `log`.
+    subroutine advance_with_jacobian(chain, cycles, log, jacobian, err)
+        type(chain_t), intent(inout) :: chain
+        integer, intent(in) :: cycles
+        type(event_log_t), intent(inout) :: log
+        real(wp), allocatable, intent(out) :: jacobian(:, :)
+        type(error_t), allocatable, intent(out) :: err
         real(wp), allocatable :: frame(:, :)
         integer :: i, m
 
-        copy = chain
         m = 2*chain_size(chain)
         allocate (frame(m, m))
         frame = 0
         do i = 1, m
             frame(i, i) = 1
         end do
-        call chain_set_tangent(copy, frame)
-        call event_log_init(log, .false., 0)
-        call advance_to_point(copy, chain_cycle(copy) + cycles, chain_time(copy), log, err)
+        call chain_set_tangent(chain, frame)
+        call advance_to_point(chain, chain_cycle(chain) + cycles, chain_time(chain), log, err)
         if (allocated(err)) return
         ! (the engine's power-of-two scaling undone, saturating at huge: such a map is singular)
-        jacobian = chain_tangent_frame(copy)
-    end subroutine poincare_jacobian
+        jacobian = chain_tangent_frame(chain)
+    end subroutine advance_with_jacobian
 
     !> The Jacobian of the p-cycle Poincare map at the chain's final state and its
     !> eigenvalues, the Floquet multipliers.

@@ -7,6 +7,7 @@ module chain_lapack
     implicit none
     private
     public :: qr_orthonormalise, qr_workspace_t, general_eigenvalues
+    public :: solve_linear
 
     !> Arrays qr_orthonormalise needs, kept by its caller between calls of the same shape
     !> (a Lyapunov run re-orthonormalises its frame every cycle).
@@ -144,5 +145,28 @@ contains
         allocate (work(max(1, int(query(1)))))
         call dgeev('N', 'N', n, a, n, wr, wi, dummy, 1, dummy, 1, work, size(work), info)
     end subroutine general_eigenvalues
+
+    !> Solve a x = b in place (b(n, nrhs) becomes x; a is overwritten by its LU factors) by
+    !> LAPACK dgesv, partial pivoting: the Newton steps of periodic orbits (docs/model.md
+    !> section 11). info > 0: U(info, info) is exactly zero, a is singular.
+    subroutine solve_linear(a, b, info)
+        real(wp), intent(inout) :: a(:, :), b(:, :)
+        integer, intent(out) :: info
+        interface
+            subroutine dgesv(n, nrhs, a, lda, ipiv, b, ldb, info)
+                import :: wp
+                implicit none
+                integer, intent(in) :: n, nrhs, lda, ldb
+                real(wp), intent(inout) :: a(lda, *), b(ldb, *)
+                integer, intent(out) :: ipiv(*), info
+            end subroutine dgesv
+        end interface
+        integer, allocatable :: pivots(:)
+        integer :: n
+
+        n = size(a, 1)
+        allocate (pivots(n))
+        call dgesv(n, size(b, 2), a, n, pivots, b, n, info)
+    end subroutine solve_linear
 
 end module chain_lapack

@@ -7,12 +7,15 @@ module chain_section
     use chain_kinds, only: wp, i8
     use chain_error, only: error_t
     use chain_engine, only: chain_t, chain_advance, chain_sync, chain_new_cycle, chain_cycle, &
-                            chain_start, chain_period, chain_section_time, chain_reorthonormalise
+                            chain_start, chain_period, chain_section_time, chain_reorthonormalise, &
+                            chain_init
+    use chain_model, only: model_t
+    use chain_state, only: moving_state
     use chain_event_log, only: event_log_t
     use chain_monitor, only: monitor_t, stage_transient
     implicit none
     private
-    public :: section_target, advance_to_point, advance_cycles
+    public :: section_target, advance_to_point, advance_cycles, chain_at_section
 
 contains
 
@@ -37,6 +40,19 @@ contains
             cycle = cycle + 1
         end if
     end subroutine section_target
+
+    !> A fresh chain of `model` in state (x, v) on the section (drive phase `phase` of cycle 0),
+    !> every oscillator moving and every bond scheduled from scratch: where a Poincare map and
+    !> its Jacobian start from an arbitrary state.
+    subroutine chain_at_section(model, phase, x, v, chain, err)
+        type(model_t), intent(in) :: model
+        real(wp), intent(in) :: phase
+        real(wp), intent(in) :: x(:), v(:)
+        type(chain_t), intent(out) :: chain
+        type(error_t), allocatable, intent(out) :: err
+
+        call chain_init(chain, model, moving_state(x, v, 0_i8, phase/model%omega), err)
+    end subroutine chain_at_section
 
     !> Run the chain to (cycle, s) and bring every oscillator there.
     subroutine advance_to_point(chain, cycle, s, log, err)

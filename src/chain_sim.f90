@@ -24,6 +24,7 @@ module chain_sim
     use chain_record, only: record_sink_t, record_result_t, record_cycles, record_state_t, &
                             set_window, period_window
     use chain_monitor, only: monitor_t
+    use chain_section, only: chain_at_section
     use chain_output, only: output_t, output_begin, output_header, output_strobe_write, &
                             output_events_append, output_final, output_stats, output_periods, &
                             output_lyapunov, output_jacobian, output_end, output_abort, &
@@ -131,8 +132,7 @@ contains
         type(chain_t), intent(out) :: chain
         type(error_t), allocatable, intent(out) :: err
 
-        call chain_init(chain, cfg%model, &
-                        moving_state(x, v, 0_i8, cfg%record%phase/cfg%model%omega), err)
+        call chain_at_section(cfg%model, cfg%record%phase, x, v, chain, err)
     end subroutine chain_on_section
 
     !> The chain goes on from where it stands (positions, velocities, rests, cycle and time)

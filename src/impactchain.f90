@@ -1,7 +1,8 @@
 !> The public API of impactchain in one module: what the command line (app/), the MPI sweep
 !> driver (mpi/), the Python layer (f2py/) and the benchmark (bench/) use. Configuration,
 !> runs and their results, sweeps (including the pieces a distributed driver needs), the
-!> Poincare-map Jacobian of a state, the shared command line, interrupt flag and monitors.
+!> Poincare-map Jacobian of a state, periodic orbits (Newton shooting), the shared command
+!> line, interrupt flag and monitors.
 !> A chain is an opaque `chain_t`: it is started from a configuration, run to a point or through
 !> recorded cycles, restarted under other parameters, and read (its clock, state, contacts
 !> and counters); its state travels as a `chain_state_t`. The engine's own procedures (flow,
@@ -25,6 +26,7 @@ module impactchain
                              stage_points, stage_name
     use chain_section, only: advance_to_point
     use chain_floquet, only: poincare_jacobian
+    use chain_orbit, only: orbit_t, orbit_options_t, find_orbit, orbit_gap_minimum
     use chain_sim, only: simulate_to_file, start_chain, initial_state, chain_on_section, &
                          restart_chain
     use chain_sweep, only: run_sweep, sweep_summary_t, plan_sweep, sweep_plan_t, &
@@ -52,6 +54,7 @@ module impactchain
     public :: record_spec_t
     public :: advance_to_point, poincare_jacobian, simulate_to_file, start_chain, initial_state
     public :: chain_on_section, restart_chain
+    public :: orbit_t, orbit_options_t, find_orbit, orbit_gap_minimum
     public :: run_sweep, sweep_summary_t, plan_sweep, sweep_plan_t, sweep_result_t
     public :: sweep_result_init, sweep_point_config, run_sweep_branches
     public :: write_sweep_file, save_checkpoint, load_checkpoint, remove_file, checkpoint_every

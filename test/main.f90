@@ -11,6 +11,7 @@ program main
     use test_corners, only: run_corner_tests
     use test_invariants, only: run_invariant_tests
     use test_hdf5, only: run_hdf5_tests
+    use test_orbit, only: run_orbit_tests
     implicit none
     type(suite_runner_t) :: runner
 
@@ -24,5 +25,6 @@ program main
     call runner%run('corners', run_corner_tests)
     call runner%run('invariants', run_invariant_tests)
     call runner%run('hdf5', run_hdf5_tests)
+    call runner%run('orbit', run_orbit_tests)
     call runner%finish()
 end program main
