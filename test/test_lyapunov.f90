@@ -513,8 +513,8 @@ contains
     end subroutine qr_factors
 
     !> Sweep threads factorise their frames at the same time: the BLAS and LAPACK linked in
-    !> must be thread-safe (Debian's single-threaded OpenBLAS 0.3.21 is not: it fails this
-    !> check). Two threads, 200 factorisations of a 200 x 100 frame: every one equal to the
+    !> must be thread-safe (BLIS is reentrant; Debian's single-threaded OpenBLAS 0.3.21 is not:
+    !> it fails this check). Two threads, 200 factorisations of a 200 x 100 frame: every one equal to the
     !> serial result bit for bit.
     subroutine qr_in_threads(t)
         type(tally_t), intent(inout) :: t
