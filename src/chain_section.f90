@@ -7,7 +7,9 @@ module chain_section
     use chain_kinds, only: wp, i8
     use chain_error, only: error_t
     use chain_engine, only: chain_t, chain_advance, chain_sync, chain_new_cycle, chain_cycle, &
-                            chain_start, chain_period, chain_section_time, chain_reorthonormalise
+                            chain_start, chain_period, chain_section_time, &
+                            chain_reorthonormalise, chain_rank_lost, chain_vectors
+    use chain_lyapunov, only: adaptive_interval, longest_interval
     use chain_event_log, only: event_log_t
     implicit none
     private
@@ -60,21 +62,32 @@ contains
         type(event_log_t), intent(inout) :: log
         type(error_t), allocatable, intent(out) :: err
         !> re-orthonormalise the tangent frame, unaveraged, at every this many cycle ends
+        !> (0: at the adaptive interval of chain_lyapunov, from the growths of each step)
         integer, intent(in), optional :: tangent_qr_every
-        integer(i8) :: done
+        real(wp), allocatable :: growth(:)
+        integer :: since, interval
 
-        done = 0
+        since = 0
+        interval = 1
+        if (present(tangent_qr_every)) interval = max(1, tangent_qr_every)
         do while (chain_cycle(chain) < cycle)
             call chain_advance(chain, chain_period(chain), log, err)
             if (allocated(err)) return
             call chain_new_cycle(chain)
-            done = done + 1
-            if (present(tangent_qr_every)) then
-                if (modulo(done, int(tangent_qr_every, i8)) == 0) then
-                    call chain_reorthonormalise(chain, err)
-                    if (allocated(err)) return
-                end if
+            since = since + 1
+            if (.not. present(tangent_qr_every)) cycle
+            if (since < interval .and. .not. (tangent_qr_every == 0 .and. &
+                                               chain_rank_lost(chain))) cycle
+            if (tangent_qr_every > 0) then
+                call chain_reorthonormalise(chain, err)
+            else
+                allocate (growth(chain_vectors(chain)))
+                call chain_reorthonormalise(chain, err, growth)
+                interval = adaptive_interval(growth/since, longest_interval)
+                deallocate (growth)
             end if
+            if (allocated(err)) return
+            since = 0
         end do
     end subroutine advance_cycles
 
