@@ -235,9 +235,15 @@ contains
         acc%block_sum(:, b) = acc%block_sum(:, b) + acc%growth
         acc%block_len(b) = acc%block_len(b) + span
         if (modulo(acc%steps, acc%stride) == 0) call keep_running(acc)
-        if (acc%qr_every == 0) acc%interval = min(adaptive_interval(acc%growth/span, acc%longest), &
-                                                  adaptive_interval(acc%total/acc%cycles, &
-                                                                    acc%longest))
+        if (acc%qr_every == 0) then
+            acc%interval = min(adaptive_interval(acc%growth/span, acc%longest), &
+                               adaptive_interval(acc%total/acc%cycles, acc%longest))
+            ! a step never crosses into the next block: each block then holds the same cycles
+            ! as with a step every cycle, and its growth is theirs (the R factors telescope)
+            b = int(min(int(n_blocks, i8), 1 + acc%cycles*n_blocks/max(1_i8, acc%planned)))
+            if (b < n_blocks) acc%interval = int(min(int(acc%interval, i8), &
+                (b*acc%planned + n_blocks - 1)/n_blocks - acc%cycles))
+        end if
     end subroutine lyapunov_step
 
     !> Cycles until the spread of growths of columns growing at `rates` (ln per cycle; values

@@ -423,8 +423,9 @@ contains
     end subroutine leading_vectors
 
     !> QR steps at the adaptive interval (qr_every = 0) give the exponents of a QR step every
-    !> cycle to 1e-10 bits per cycle (the R factors telescope: only rounding differs), with
-    !> fewer steps, on the chains of the tests above; full spectra keep the sum rule.
+    !> cycle to 1e-10 bits per cycle (the R factors telescope: only rounding differs), and their
+    !> standard errors, with fewer steps, on the chains of the tests above; full spectra keep
+    !> the sum rule.
     subroutine adaptive_matches_every_cycle(t, n, amplitude, omega, transient, cycles, vectors, &
                                             full)
         type(tally_t), intent(inout) :: t
@@ -461,6 +462,11 @@ contains
         call check_close(t, maxval(abs(adaptive%lyapunov%bits_per_cycle - &
                                        every%lyapunov%bits_per_cycle)), 0.0_wp, &
                          'adaptive QR = QR every cycle to 1e-10 bits/cycle, '//trim(label), &
+                         1.0e-10_wp)
+        ! (steps never cross a block: each block holds the cycles it holds every cycle)
+        call check_close(t, maxval(abs(adaptive%lyapunov%stderr_bits - &
+                                       every%lyapunov%stderr_bits)), 0.0_wp, &
+                         'adaptive QR: the standard errors of every cycle, '//trim(label), &
                          1.0e-10_wp)
         call check(t, size(adaptive%lyapunov%running_cycles) < &
                    size(every%lyapunov%running_cycles), &
