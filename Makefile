@@ -9,10 +9,13 @@ FPM := $(abspath $(VENV))/bin/fpm
 RELEASE := --profile release
 # gfortran's runtime checks: bounds, and traps on invalid operations, division by zero, overflow
 CHECKED := --flag "-g -O1 -fcheck=all -ffpe-trap=invalid,zero,overflow -fbacktrace"
-# The reference BLAS/LAPACK: thread-safe (sweep threads factorise their frames at the same
-# time) and the same bits whatever the number of threads. Debian's single-threaded OpenBLAS
-# (libopenblas0-serial) is not thread-safe: never with threaded sweeps (README, Performance).
-APT_PACKAGES := gfortran libhdf5-dev liblapack-dev libblas-dev \
+# LAPACK: the reference one (liblapack-dev) on BLIS (libblis-serial-dev), an optimised BLAS
+# that is reentrant (sweep threads factorise their frames at the same time) and runs every call
+# on one thread (the same bits whatever the number of threads). fpm.toml and meson.build link
+# both statically by their packages' paths, so Debian's libblas.so.3 alternative (which
+# libblis4-serial, once installed, selects unless set by hand) does not matter. Debian's
+# single-threaded OpenBLAS (libopenblas0-serial) is not thread-safe (README, Performance).
+APT_PACKAGES := gfortran libhdf5-dev liblapack-dev libblas-dev libblis-serial-dev \
                 pkg-config libopenmpi-dev openmpi-bin
 PY_STAMP := $(VENV)/.requirements-installed
 # The Python package impactchain (post/impactchain/ and its extension impactchain._kernels,

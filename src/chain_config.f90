@@ -652,9 +652,10 @@ contains
                            " is outside [0, 2n = "//fmt_int(2*cfg%model%n)//"] (0 means all 2n)")
             return
         end if
-        if (cfg%record%qr_every < 1 .or. cfg%record%qr_every > cfg%record%cycles) then
+        if (cfg%record%qr_every < 0 .or. cfg%record%qr_every > cfg%record%cycles) then
             call set_error(err, "&lyapunov: qr_every = "//fmt_int(cfg%record%qr_every)// &
-                           " is outside [1, cycles = "//fmt_int8(cfg%record%cycles)//"]")
+                           " is outside [0, cycles = "//fmt_int8(cfg%record%cycles)// &
+                           "] (0: adaptive)")
             return
         end if
         if (cfg%record%align < 0 .or. cfg%record%align > 100000) then
@@ -1014,7 +1015,8 @@ contains
         ! strobe x, v, cycle; running estimates (k values and a cycle per kept row)
         mb = (16.0_wp*cfg%model%n + 8)*real(cfg%record%cycles, wp)/1.0e6_wp
         if (cfg%record%lyapunov) mb = mb + (8.0_wp*k + 8)* &
-                                      running_rows(cfg%record%cycles/cfg%record%qr_every)/1.0e6_wp
+                                      running_rows(cfg%record%cycles/ &
+                                                   max(1, cfg%record%qr_every))/1.0e6_wp
         if (mb > cfg%max_size_mb) then
             call set_error(err, "&output: the strobe records of this run need about "// &
                            fmt_real(mb)//" MB (n x cycles x 16 bytes, plus Lyapunov "// &
@@ -1022,8 +1024,9 @@ contains
                            "; lower &run cycles or raise &output max_size_mb")
             return
         end if
-        ! tangent frames in memory: the frame, the engine's transposed copy, the QR's copy and
-        ! its workspace; for the Poincare-map Jacobian the same for a full 2n x 2n frame
+        ! tangent frames in memory: the frame, the QR's copy, the copy kept while lost
+        ! directions are looked for, and a bound on the rest; for the Poincare-map Jacobian the
+        ! same for a full 2n x 2n frame
         mb = 32.0_wp*k*2*cfg%model%n/1.0e6_wp
         if (cfg%record%jacobian) mb = max(mb, 32.0_wp*(2.0_wp*cfg%model%n)**2/1.0e6_wp)
         if (mb > cfg%max_size_mb) then

@@ -52,7 +52,7 @@ module chain_engine
     public :: chain_elapsed, chain_positions, chain_velocities, chain_copy_state, chain_contacts
     public :: chain_counts, chain_reset_counts
     public :: chain_set_tangent, chain_vectors, chain_tangent_frame, chain_qr_step
-    public :: chain_reorthonormalise
+    public :: chain_reorthonormalise, chain_rank_lost
 
     !> What the next event of a bond is (stored with the schedule as chain_state's
     !> event_action).
@@ -102,7 +102,8 @@ module chain_engine
         type(queue_t) :: queue              !! next event time of each bond
         integer, allocatable :: action(:)   !! action(0:n): what that event is
         integer :: n_vectors = 0            !! tangent vectors carried (0: none)
-        real(wp), allocatable :: tangent(:, :) !! tangent(n_vectors, 2n): frame, transposed;
+        real(wp), allocatable :: tangent(:, :) !! tangent(2n, n_vectors): the frame, columns
+                                               !! as LAPACK factorises them (no copies);
                                                !! moving rows referred back to the epoch
         integer :: tangent_scale_bits = 0   !! the frame is the true one times 2**(-bits)
         !> For Lyapunov spectra: re-orthonormalise the frame right after a large jump (a slow
@@ -113,7 +114,7 @@ module chain_engine
         logical :: orthonormalise_jumps = .false.
         real(wp) :: jumps_volume = 0 !! ln |det| of the jumps since the frame was orthonormal
         real(wp), allocatable :: tangent_log(:)
-        real(wp), allocatable :: frame_work(:, :), r_diag(:)
+        real(wp), allocatable :: r_diag(:)
         type(qr_workspace_t) :: qr
         !> Tangent rows hit at the current instant are kept in the coordinates of now (not of
         !> the epoch) until the instant ends: the saltation matrices of a collapse cascade are
@@ -220,18 +221,29 @@ module chain_engine
             real(wp), allocatable :: frame(:, :)
         end function chain_tangent_frame
 
-        !> One QR step of the tangent frame into `acc`; the engine's bookkeeping restarts.
-        module subroutine chain_qr_step(chain, acc, err)
+        !> One QR step of the tangent frame into `acc`, closing an interval of `cycles` drive
+        !> cycles; the engine's bookkeeping restarts.
+        module subroutine chain_qr_step(chain, acc, cycles, err)
             type(chain_t), intent(inout) :: chain
             type(lyapunov_acc_t), intent(inout) :: acc
+            integer, intent(in) :: cycles
             type(error_t), allocatable, intent(out) :: err
         end subroutine chain_qr_step
 
-        !> Re-orthonormalise the tangent frame without averaging (while it aligns).
-        module subroutine chain_reorthonormalise(chain, err)
+        !> Re-orthonormalise the tangent frame without averaging (while it aligns); `growth`,
+        !> if present, gets each column's ln growth since the frame was last orthonormal
+        !> (-huge for a column that vanished).
+        module subroutine chain_reorthonormalise(chain, err, growth)
             type(chain_t), intent(inout) :: chain
             type(error_t), allocatable, intent(out) :: err
+            real(wp), intent(out), optional :: growth(:)
         end subroutine chain_reorthonormalise
+
+        !> Has an event with a singular tangent map (a rest, a collapse, K = 0) happened since
+        !> the frame was last orthonormal? The next QR step then looks for lost directions.
+        pure module logical function chain_rank_lost(chain)
+            type(chain_t), intent(in) :: chain
+        end function chain_rank_lost
 
         !> The jump S of an impact now on the rows of oscillator i (s 2x2) or of i and i + 1
         !> (s 4x4).

@@ -92,6 +92,7 @@ contains
             chain%counts%site_counts(:) = state%counts%site_counts
         if (.not. state%has_tangent) return
         associate (tangent => state%tangent)
+            ! (the state keeps the frame as rows, tangent%frame(k, 2n): the layout of /resume)
             call chain_set_tangent(chain, transpose(tangent%frame), tangent%orthonormalise_jumps)
             chain%tangent_scale_bits = tangent%scale_bits
             chain%tangent_log = tangent%growth_log
@@ -116,7 +117,7 @@ contains
         state%counts = chain_counts(chain)
         state%has_tangent = allocated(chain%tangent)
         if (.not. state%has_tangent) return
-        state%tangent%frame = chain%tangent
+        state%tangent%frame = transpose(chain%tangent)
         state%tangent%scale_bits = chain%tangent_scale_bits
         state%tangent%growth_log = chain%tangent_log
         state%tangent%rank_losses = chain%rank_losses

@@ -3,14 +3,16 @@
 !> epoch and of now, the frame kept finite, its re-orthonormalisation after large jumps, while
 !> it aligns, and at every QR step of a Lyapunov spectrum, and the frame as a Jacobian.
 !>
-!> The frame is stored transposed, tangent(n_vectors, 2n), so the rows of one oscillator are
-!> adjacent columns and a jump runs over contiguous memory. Rows of moving oscillators are
-!> referred back to the epoch, like their free parts; rows hit at the current instant are kept
-!> in the coordinates of now until the instant ends.
+!> The frame is stored as its columns, tangent(2n, n_vectors), the layout LAPACK factorises:
+!> a QR step works on it in place, with no transposed copies (a jump touches a few rows of
+!> every column instead, which costs little next to a factorisation). Rows of moving
+!> oscillators are referred back to the epoch, like their free parts; rows hit at the current
+!> instant are kept in the coordinates of now until the instant ends.
 submodule(chain_engine) chain_engine_tangent
     use chain_error, only: set_error, fmt_int
     use chain_lapack, only: qr_orthonormalise
     use chain_lyapunov, only: lyapunov_step
+    use, intrinsic :: ieee_arithmetic, only: ieee_value, ieee_negative_inf
     use chain_state, only: contact_free
     implicit none
 
@@ -38,7 +40,7 @@ contains
         chain%rank_losses = 0
         chain%n_touched = 0
         chain%row_stamp = -1
-        chain%tangent = transpose(frame)
+        chain%tangent = frame
         call forget_resting_rows(chain)
     end procedure chain_set_tangent
 
@@ -47,7 +49,7 @@ contains
     end procedure chain_vectors
 
     module procedure chain_tangent_frame
-        frame = transpose(chain%tangent)
+        frame = chain%tangent
         if (chain%tangent_scale_bits > 0) then
             where (frame /= 0 .and. exponent(frame) + chain%tangent_scale_bits < &
                    maxexponent(1.0_wp))
@@ -65,9 +67,9 @@ contains
         integer :: info, i
 
         call lyapunov_step(acc, chain%tangent, info, chain%tangent_scale_bits, &
-                           chain%tangent_log, chain%rank_losses > 0)
+                           chain%tangent_log, chain%rank_losses > 0, cycles)
         ! (the step may have dropped collapsed directions)
-        chain%n_vectors = size(chain%tangent, 1)
+        chain%n_vectors = size(chain%tangent, 2)
         chain%tangent_log = [(0.0_wp, i=1, chain%n_vectors)]
         call restart_bookkeeping(chain)
         if (info /= 0) call set_error(err, "lyapunov: QR factorisation failed (LAPACK info "// &
@@ -79,23 +81,30 @@ contains
     !> towards the leading directions they meet mostly the first. Rows of resting oscillators
     !> stay zero. A change of columns needs no sync: the state is not touched.
     module procedure chain_reorthonormalise
-        type(qr_workspace_t) :: ws
-        real(wp), allocatable :: frame(:, :)
         real(wp) :: r_diag(chain%n_vectors)
-        integer :: info
+        integer :: info, j
 
-        frame = transpose(chain%tangent)
-        call qr_orthonormalise(frame, r_diag, ws, info)
+        call qr_orthonormalise(chain%tangent, r_diag, chain%qr, info)
         if (info /= 0) then
             call set_error(err, "lyapunov: QR factorisation failed while aligning the "// &
                            "frame (LAPACK info "//fmt_int(info)//")")
             return
         end if
-        chain%tangent = transpose(frame)
+        if (present(growth)) then
+            growth = ieee_value(1.0_wp, ieee_negative_inf)
+            do j = 1, chain%n_vectors
+                if (r_diag(j) /= 0) growth(j) = log(abs(r_diag(j))) + chain%tangent_log(j) + &
+                                                chain%tangent_scale_bits*log(2.0_wp)
+            end do
+        end if
         call forget_resting_rows(chain)
         chain%tangent_log = 0
         call restart_bookkeeping(chain)
     end procedure chain_reorthonormalise
+
+    module procedure chain_rank_lost
+        chain_rank_lost = chain%rank_losses > 0
+    end procedure chain_rank_lost
 
     !> The frame has just been orthonormalised (and tangent_log cleared): no scaling, no
     !> singular jump since, no shrinking of its volume.
@@ -173,15 +182,24 @@ contains
     !> (After propagators_now.) Rows already moved to now at this instant stay. Afterwards every row
     !> is in the coordinates of now.
     module procedure move_tangent_epoch
-        real(wp) :: largest
-        integer :: i
+        real(wp) :: a, b
+        logical :: moves(chain%n)
+        integer :: i, j
 
         if (chain%n_vectors > 0) then
-            do i = 1, chain%n
-                if (chain%row_stamp(i) == chain%instant) cycle
-                if (chain%contact(i) == contact_free) &
-                    call jump_two_rows(chain%tangent(:, 2*i - 1:2*i), chain%m, largest)
-            end do
+            moves = chain%row_stamp /= chain%instant .and. chain%contact == contact_free
+            ! column by column: each column is read and written once, in order
+            associate (t => chain%tangent, m => chain%m)
+                do j = 1, chain%n_vectors
+                    do i = 1, chain%n
+                        if (.not. moves(i)) cycle
+                        a = t(2*i - 1, j)
+                        b = t(2*i, j)
+                        t(2*i - 1, j) = m(1, 1)*a + m(1, 2)*b
+                        t(2*i, j) = m(2, 1)*a + m(2, 2)*b
+                    end do
+                end do
+            end associate
         end if
         chain%n_touched = 0
     end procedure move_tangent_epoch
@@ -193,14 +211,14 @@ contains
 
         do j = 1, chain%n_touched
             i = chain%touched(j)
-            call jump_two_rows(chain%tangent(:, 2*i - 1:2*i), chain%m_inv, largest)
+            call jump_two_rows(chain%tangent, 2*i - 1, chain%m_inv, largest)
         end do
         chain%n_touched = 0
     end procedure rows_back_to_epoch
 
     !> (The tangent map of a rest is singular: the QR step looks for the lost direction.)
     module procedure forget_rows
-        chain%tangent(:, 2*i - 1:2*i) = 0
+        chain%tangent(2*i - 1:2*i, :) = 0
         chain%rank_losses = chain%rank_losses + 1
     end procedure forget_rows
 
@@ -225,12 +243,12 @@ contains
         allocate (rows(chain%n_vectors))
         rows = 0
         do i = first, last
-            rows = rows + chain%tangent(:, 2*i)
+            rows = rows + chain%tangent(2*i, :)
         end do
         ! a cluster stopped by a wall has v = 0 whatever the perturbation
         if (stopped) rows = 0
         do i = first, last
-            chain%tangent(:, 2*i) = rows/m
+            chain%tangent(2*i, :) = rows/m
         end do
     end procedure average_rows
 
@@ -242,7 +260,7 @@ contains
         real(wp) :: largest
 
         if (chain%row_stamp(i) == chain%instant) return
-        call jump_two_rows(chain%tangent(:, 2*i - 1:2*i), chain%m, largest)
+        call jump_two_rows(chain%tangent, 2*i - 1, chain%m, largest)
         chain%row_stamp(i) = chain%instant
         chain%n_touched = chain%n_touched + 1
         chain%touched(chain%n_touched) = i
@@ -255,16 +273,15 @@ contains
         type(chain_t), intent(inout) :: chain
         integer :: info, j
 
-        chain%frame_work = transpose(chain%tangent)
         if (.not. allocated(chain%r_diag)) allocate (chain%r_diag(chain%n_vectors))
         if (size(chain%r_diag) /= chain%n_vectors) then
             deallocate (chain%r_diag)
             allocate (chain%r_diag(chain%n_vectors))
         end if
-        call qr_orthonormalise(chain%frame_work, chain%r_diag, chain%qr, info)
-        ! a zero diagonal (a direction lost exactly) is left to the QR step to report
+        ! a zero diagonal (a direction lost exactly) is left to the QR step to report: the
+        ! frame is then left as it was
+        call qr_orthonormalise(chain%tangent, chain%r_diag, chain%qr, info, keep_singular=.true.)
         if (info /= 0 .or. any(chain%r_diag == 0)) return
-        chain%tangent = transpose(chain%frame_work)
         chain%jumps_volume = 0
         do j = 1, chain%n_vectors
             chain%tangent_log(j) = chain%tangent_log(j) + log(abs(chain%r_diag(j)))
@@ -288,10 +305,9 @@ contains
     end subroutine keep_tangent_finite
 
     !> Replace the tangent rows first, first + 1, ... (one oscillator, s 2x2, or a neighbour
-    !> pair, s 4x4) by S times them; `largest` is the largest magnitude written. The frame
-    !> is stored transposed, so these rows are adjacent columns of chain%tangent and the
-    !> loops run over contiguous memory (jump_two_rows, jump_four_rows: the rows of one
-    !> oscillator, or of two).
+    !> pair, s 4x4) by S times them; `largest` is the largest magnitude written
+    !> (jump_two_rows, jump_four_rows: the rows of one oscillator, or of two, in every
+    !> column; the whole frame is passed, as a section of its rows would be copied).
     pure subroutine apply_jump(chain, first, s, largest)
         type(chain_t), intent(inout) :: chain
         integer, intent(in) :: first
@@ -299,47 +315,50 @@ contains
         real(wp), intent(out) :: largest
 
         if (size(s, 1) == 2) then
-            call jump_two_rows(chain%tangent(:, first:first + 1), s, largest)
+            call jump_two_rows(chain%tangent, first, s, largest)
         else
-            call jump_four_rows(chain%tangent(:, first:first + 3), s, largest)
+            call jump_four_rows(chain%tangent, first, s, largest)
         end if
     end subroutine apply_jump
 
-    pure subroutine jump_two_rows(t, s, largest)
+    pure subroutine jump_two_rows(t, first, s, largest)
         real(wp), contiguous, intent(inout) :: t(:, :)
+        integer, intent(in) :: first
         real(wp), intent(in) :: s(2, 2)
         real(wp), intent(out) :: largest
         real(wp) :: a, b
         integer :: j
 
         largest = 0
-        do j = 1, size(t, 1)
-            a = t(j, 1)
-            b = t(j, 2)
-            t(j, 1) = s(1, 1)*a + s(1, 2)*b
-            t(j, 2) = s(2, 1)*a + s(2, 2)*b
-            largest = max(largest, abs(t(j, 1)), abs(t(j, 2)))
+        do j = 1, size(t, 2)
+            a = t(first, j)
+            b = t(first + 1, j)
+            t(first, j) = s(1, 1)*a + s(1, 2)*b
+            t(first + 1, j) = s(2, 1)*a + s(2, 2)*b
+            largest = max(largest, abs(t(first, j)), abs(t(first + 1, j)))
         end do
     end subroutine jump_two_rows
 
-    pure subroutine jump_four_rows(t, s, largest)
+    pure subroutine jump_four_rows(t, first, s, largest)
         real(wp), contiguous, intent(inout) :: t(:, :)
+        integer, intent(in) :: first
         real(wp), intent(in) :: s(4, 4)
         real(wp), intent(out) :: largest
         real(wp) :: a, b, c, d
         integer :: j
 
         largest = 0
-        do j = 1, size(t, 1)
-            a = t(j, 1)
-            b = t(j, 2)
-            c = t(j, 3)
-            d = t(j, 4)
-            t(j, 1) = s(1, 1)*a + s(1, 2)*b + s(1, 3)*c + s(1, 4)*d
-            t(j, 2) = s(2, 1)*a + s(2, 2)*b + s(2, 3)*c + s(2, 4)*d
-            t(j, 3) = s(3, 1)*a + s(3, 2)*b + s(3, 3)*c + s(3, 4)*d
-            t(j, 4) = s(4, 1)*a + s(4, 2)*b + s(4, 3)*c + s(4, 4)*d
-            largest = max(largest, abs(t(j, 1)), abs(t(j, 2)), abs(t(j, 3)), abs(t(j, 4)))
+        do j = 1, size(t, 2)
+            a = t(first, j)
+            b = t(first + 1, j)
+            c = t(first + 2, j)
+            d = t(first + 3, j)
+            t(first, j) = s(1, 1)*a + s(1, 2)*b + s(1, 3)*c + s(1, 4)*d
+            t(first + 1, j) = s(2, 1)*a + s(2, 2)*b + s(2, 3)*c + s(2, 4)*d
+            t(first + 2, j) = s(3, 1)*a + s(3, 2)*b + s(3, 3)*c + s(3, 4)*d
+            t(first + 3, j) = s(4, 1)*a + s(4, 2)*b + s(4, 3)*c + s(4, 4)*d
+            largest = max(largest, abs(t(first, j)), abs(t(first + 1, j)), &
+                          abs(t(first + 2, j)), abs(t(first + 3, j)))
         end do
     end subroutine jump_four_rows
 

@@ -5,6 +5,11 @@
 !> matrices at impacts); this module only turns frames into numbers. Block averages of the
 !> per-step growth rates give the standard error of each exponent.
 !>
+!> QR steps come every `qr_every` cycles, or, with qr_every = 0, at an adaptive interval: the
+!> frame is re-orthonormalised before the growths of its columns since the last step are
+!> predicted (from the growth rates of the last step and of the whole run) to span more than
+!> `condition_bound`. Every average is weighted by cycles, not by steps.
+!>
 !> The running estimates (the exponents after each QR step, for convergence plots) are kept
 !> in a buffer of at most `running_capacity` rows, whatever the length of the run: every
 !> `stride`-th step, the stride a power of two that doubles (dropping every other kept row)
@@ -17,7 +22,8 @@ module chain_lyapunov
     implicit none
     private
     public :: lyapunov_acc_t, lyapunov_start, lyapunov_step, lyapunov_result_t
-    public :: lyapunov_result, ky_dimension, initial_frame
+    public :: lyapunov_result, ky_dimension, initial_frame, lyapunov_due, adaptive_interval
+    public :: longest_interval
     public :: running_capacity, running_rows, lyapunov_pack, lyapunov_unpack
 
     integer, parameter :: max_blocks = 20
@@ -29,22 +35,34 @@ module chain_lyapunov
     !> Most running estimates kept (even: a full buffer halves), 4096 x k x 8 bytes.
     integer, parameter :: running_capacity = 4096
     !> Layout of lyapunov_pack's arrays; change it when the accumulator changes.
-    integer(i8), parameter :: pack_layout = 2
+    integer(i8), parameter :: pack_layout = 3
+    !> Adaptive QR steps keep the frame's condition (the spread of its columns' growths since
+    !> it was orthonormal) below this: the smallest columns then keep about 16 - log10(bound)
+    !> significant digits, and QR steps spaced by it give the exponents of a step every cycle
+    !> to 1e-10 bits per cycle (test_lyapunov's adaptive_matches_every_cycle).
+    real(wp), parameter :: condition_bound = 1.0e8_wp
+    !> ... and never wait more than this many cycles (nor more than a fortieth of the run, so
+    !> that each block of the standard error holds at least two steps).
+    integer, parameter :: longest_interval = 64
 
     type :: lyapunov_acc_t
         integer :: k = 0              !! number of exponents
         integer :: collapsed = 0      !! directions removed by rests or collapses (-infinity)
         integer, allocatable :: active(:) !! exponent index of each remaining frame column
         integer :: steps = 0          !! QR steps done
-        integer :: planned = 0        !! QR steps planned (sets the blocks)
+        integer(i8) :: cycles = 0     !! drive cycles the steps cover
+        integer(i8) :: planned = 0    !! drive cycles planned (sets the blocks)
+        integer :: qr_every = 1       !! cycles per step, 0: adaptive
+        integer :: interval = 1       !! cycles from the last step to the next
+        integer :: longest = 1        !! longest adaptive interval
         real(wp), allocatable :: total(:)        !! total(k): sum of ln|R(j,j)|
         real(wp), allocatable :: block_sum(:, :) !! block_sum(k, n_blocks)
-        integer, allocatable :: block_len(:)     !! steps in each block
+        integer(i8), allocatable :: block_len(:) !! cycles in each block
         integer :: stride = 1         !! steps between kept running estimates (a power of 2)
         integer :: rows = 0           !! running estimates kept: steps stride, 2 stride, ...
         real(wp), allocatable :: running(:, :)   !! running(k, <= running_capacity): total /
-                                                 !! steps at steps stride, 2 stride, ...
-        real(wp), allocatable :: frame(:, :)     !! the frame untransposed, for the QR
+                                                 !! cycles at steps stride, 2 stride, ...
+        integer(i8), allocatable :: running_cycles(:) !! the cycles each row covers
         real(wp), allocatable :: r_diag(:), growth(:) !! one QR step's
         type(qr_workspace_t) :: qr
     end type lyapunov_acc_t
@@ -54,23 +72,34 @@ module chain_lyapunov
         real(wp), allocatable :: nats_per_time(:)
         real(wp), allocatable :: stderr_bits(:)     !! standard error from block means
         real(wp), allocatable :: running_bits(:, :) !! running(k, rows), bits per cycle
-        integer, allocatable :: running_steps(:)    !! the QR step of each row
+        integer(i8), allocatable :: running_cycles(:) !! cycles averaged at each row
         real(wp) :: ky_dimension = 0
         real(wp) :: positive_sum = 0                !! bits per cycle
     end type lyapunov_result_t
 
 contains
 
-    pure subroutine lyapunov_start(acc, k, planned_steps)
+    !> An empty accumulator of k exponents for a run of `cycles` drive cycles with a QR step
+    !> every `qr_every` cycles (default 1; 0: adaptive). The blocks of the standard error
+    !> divide the cycles the steps will cover.
+    pure subroutine lyapunov_start(acc, k, cycles, qr_every)
         type(lyapunov_acc_t), intent(out) :: acc
-        integer, intent(in) :: k, planned_steps
+        integer, intent(in) :: k
+        integer(i8), intent(in) :: cycles
+        integer, intent(in), optional :: qr_every
+        integer(i8) :: most_steps
         integer :: n_blocks, j
 
         acc%k = k
-        acc%planned = planned_steps
-        n_blocks = max(1, min(max_blocks, planned_steps))
+        if (present(qr_every)) acc%qr_every = qr_every
+        acc%interval = max(1, acc%qr_every)
+        acc%planned = (cycles/acc%interval)*acc%interval
+        most_steps = acc%planned/acc%interval
+        n_blocks = int(max(1_i8, min(int(max_blocks, i8), most_steps)))
+        acc%longest = int(max(1_i8, min(int(longest_interval, i8), acc%planned/(2*max_blocks))))
         allocate (acc%total(k), acc%block_sum(k, n_blocks), acc%block_len(n_blocks))
-        allocate (acc%running(k, max(0, min(planned_steps, running_capacity))))
+        allocate (acc%running(k, max(0_i8, min(most_steps, int(running_capacity, i8)))))
+        allocate (acc%running_cycles(size(acc%running, 2)))
         allocate (acc%r_diag(k), acc%growth(k))
         acc%active = [(j, j=1, k)]
         acc%total = 0
@@ -86,9 +115,10 @@ contains
         integer(i8), allocatable, intent(out) :: ints(:)
         real(wp), allocatable, intent(out) :: reals(:)
 
-        ints = [pack_layout, int(acc%k, i8), int(acc%steps, i8), int(acc%planned, i8), &
+        ints = [pack_layout, int(acc%k, i8), int(acc%steps, i8), acc%planned, &
                 int(acc%stride, i8), int(acc%rows, i8), int(acc%collapsed, i8), &
-                int(acc%block_len, i8), int(acc%active, i8)]
+                acc%cycles, int(acc%qr_every, i8), int(acc%interval, i8), &
+                acc%block_len, acc%running_cycles(:acc%rows), int(acc%active, i8)]
         reals = [acc%total, reshape(acc%block_sum, [size(acc%block_sum)]), &
                  reshape(acc%running(:, :acc%rows), [acc%k*acc%rows])]
     end subroutine lyapunov_pack
@@ -100,26 +130,33 @@ contains
         real(wp), intent(in) :: reals(:)
         type(lyapunov_acc_t), intent(out) :: acc
         integer, intent(out) :: info
+        integer, parameter :: head = 10
         integer :: k, nb, rows, p
 
         info = 1
-        if (size(ints) < 7) return
+        if (size(ints) < head) return
         if (ints(1) /= pack_layout .or. ints(2) < 1 .or. any(ints(3:4) < 0) .or. &
             ints(5) < 1 .or. ints(6) < 0 .or. ints(7) < 0 .or. ints(7) > ints(2) .or. &
-            any(ints(2:7) > huge(1))) return
+            ints(8) < 0 .or. ints(9) < 0 .or. ints(10) < 1 .or. &
+            any(ints([2, 3, 5, 6, 7, 9, 10]) > huge(1))) return
         k = int(ints(2))
-        call lyapunov_start(acc, k, int(ints(4)))
+        call lyapunov_start(acc, k, ints(4), int(ints(9)))
+        if (acc%planned /= ints(4)) return
         nb = size(acc%block_len)
         rows = int(ints(6))
         acc%collapsed = int(ints(7))
-        if (size(ints) /= 7 + nb + k - acc%collapsed .or. rows > size(acc%running, 2)) return
+        if (size(ints) /= head + nb + rows + k - acc%collapsed .or. &
+            rows > size(acc%running, 2)) return
         if (size(reals) /= k*(1 + nb + rows)) return
-        if (any(ints(8 + nb:) < 1 .or. ints(8 + nb:) > k)) return
+        if (any(ints(head + nb + rows + 1:) < 1 .or. ints(head + nb + rows + 1:) > k)) return
         acc%steps = int(ints(3))
         acc%stride = int(ints(5))
         acc%rows = rows
-        acc%block_len = int(ints(8:7 + nb))
-        acc%active = int(ints(8 + nb:))
+        acc%cycles = ints(8)
+        acc%interval = int(ints(10))
+        acc%block_len = ints(head + 1:head + nb)
+        acc%running_cycles(:rows) = ints(head + nb + 1:head + nb + rows)
+        acc%active = int(ints(head + nb + rows + 1:))
         acc%total = reals(1:k)
         p = k
         acc%block_sum = reshape(reals(p + 1:p + k*nb), [k, nb])
@@ -128,38 +165,41 @@ contains
         info = 0
     end subroutine lyapunov_unpack
 
-    !> Re-orthonormalise the frame (stored transposed, frame_t(k, m)) and accumulate. Column j
-    !> may be the true one times 2**(-scale_bits) exp(-log_scale(j)).
+    !> Re-orthonormalise the frame (frame(m, k), its columns the vectors) and accumulate the
+    !> growth of an interval of `cycles` drive cycles (default 1). Column j may be the true one
+    !> times 2**(-scale_bits) exp(-log_scale(j)).
     !> After an event with a singular tangent map (`singular`: a rest began, a cluster
     !> collapsed, or K = 0) a column that now lies in the span of the columns before it is a
     !> direction that event removed: its exponent is -infinity, and the column leaves the
-    !> frame (frame_t loses that row), so that the other exponents never take the logarithm of
-    !> a diagonal that is only rounding.
-    subroutine lyapunov_step(acc, frame_t, info, scale_bits, log_scale, singular)
+    !> frame, so that the other exponents never take the logarithm of a diagonal that is only
+    !> rounding. With adaptive steps, the interval to the next step is set here.
+    subroutine lyapunov_step(acc, frame, info, scale_bits, log_scale, singular, cycles)
         type(lyapunov_acc_t), intent(inout) :: acc
-        real(wp), allocatable, intent(inout) :: frame_t(:, :)
+        real(wp), allocatable, intent(inout) :: frame(:, :)
         integer, intent(out) :: info
         integer, intent(in), optional :: scale_bits !! the frame was scaled by 2**(-scale_bits)
         !> ln of the factor each column was scaled down by besides (the engine's
         !> re-orthonormalisations after large jumps)
         real(wp), intent(in), optional :: log_scale(:)
         logical, intent(in), optional :: singular
+        integer, intent(in), optional :: cycles
         real(wp), allocatable :: before(:, :), scale(:)
         real(wp) :: minus_infinity
         logical, allocatable :: gone(:)
-        integer :: b, n_blocks, j, kept
+        integer :: b, n_blocks, j, kept, span
 
         info = 0
+        span = 1
+        if (present(cycles)) span = cycles
         minus_infinity = ieee_value(1.0_wp, ieee_negative_inf)
         if (present(log_scale)) scale = log_scale
-        acc%frame = transpose(frame_t)
         if (present(singular)) then
-            if (singular) before = acc%frame
+            if (singular) before = frame
         end if
         do
-            kept = size(acc%frame, 2)
+            kept = size(frame, 2)
             if (kept == 0) exit
-            call qr_orthonormalise(acc%frame, acc%r_diag(:kept), acc%qr, info)
+            call qr_orthonormalise(frame, acc%r_diag(:kept), acc%qr, info)
             if (info /= 0) return
             if (.not. allocated(before)) exit
             gone = [(abs(acc%r_diag(j)) <= collapse_tolerance*norm2(before(:, j)), j=1, kept)]
@@ -170,10 +210,9 @@ contains
             acc%collapsed = acc%collapsed + count(gone)
             acc%active = pack(acc%active, .not. gone)
             before = before(:, pack([(j, j=1, kept)], .not. gone))
-            acc%frame = before
+            frame = before
             if (size(acc%active) == 0) exit
         end do
-        frame_t = transpose(acc%frame)
         ! a rest that zeroes every row leaves exact zeros: that growth is -infinity too, set
         ! without a floating-point exception (log(0) traps under -ffpe-trap=zero)
         acc%growth = minus_infinity
@@ -186,14 +225,53 @@ contains
                     acc%growth(acc%active(j)) + scale(j)
             end if
         end do
-        acc%steps = acc%steps + 1
-        acc%total = acc%total + acc%growth
+        ! the block of the step's first cycle (with a fixed interval q: of step m, as
+        ! 1 + (m - 1) q n_blocks / (planned steps q))
         n_blocks = size(acc%block_len)
-        b = min(n_blocks, 1 + (acc%steps - 1)*n_blocks/max(1, acc%planned))
+        b = int(min(int(n_blocks, i8), 1 + acc%cycles*n_blocks/max(1_i8, acc%planned)))
+        acc%steps = acc%steps + 1
+        acc%cycles = acc%cycles + span
+        acc%total = acc%total + acc%growth
         acc%block_sum(:, b) = acc%block_sum(:, b) + acc%growth
-        acc%block_len(b) = acc%block_len(b) + 1
+        acc%block_len(b) = acc%block_len(b) + span
         if (modulo(acc%steps, acc%stride) == 0) call keep_running(acc)
+        if (acc%qr_every == 0) then
+            acc%interval = min(adaptive_interval(acc%growth/span, acc%longest), &
+                               adaptive_interval(acc%total/acc%cycles, acc%longest))
+            ! a step never crosses into the next block: each block then holds the same cycles
+            ! as with a step every cycle, and its growth is theirs (the R factors telescope)
+            b = int(min(int(n_blocks, i8), 1 + acc%cycles*n_blocks/max(1_i8, acc%planned)))
+            if (b < n_blocks) acc%interval = int(min(int(acc%interval, i8), &
+                (b*acc%planned + n_blocks - 1)/n_blocks - acc%cycles))
+        end if
     end subroutine lyapunov_step
+
+    !> Cycles until the spread of growths of columns growing at `rates` (ln per cycle; values
+    !> that are not finite, collapsed directions, are left out) reaches condition_bound:
+    !> at least 1, at most `longest`.
+    pure integer function adaptive_interval(rates, longest) result(interval)
+        real(wp), intent(in) :: rates(:)
+        integer, intent(in) :: longest
+        real(wp) :: spread
+
+        interval = longest
+        if (count(ieee_is_finite(rates)) < 2) return
+        spread = maxval(rates, mask=ieee_is_finite(rates)) - &
+                 minval(rates, mask=ieee_is_finite(rates))
+        if (spread*longest > log(condition_bound)) &
+            interval = max(1, int(log(condition_bound)/spread))
+    end function adaptive_interval
+
+    !> Is a QR step due after `done` recorded cycles? Every qr_every cycles, or once the
+    !> adaptive interval has passed; with adaptive steps also at the last record (`last`),
+    !> so that every cycle is averaged.
+    pure logical function lyapunov_due(acc, done, last)
+        type(lyapunov_acc_t), intent(in) :: acc
+        integer(i8), intent(in) :: done
+        logical, intent(in) :: last
+
+        lyapunov_due = done - acc%cycles >= acc%interval .or. (acc%qr_every == 0 .and. last)
+    end function lyapunov_due
 
     !> Keep the running estimate of this step (a multiple of the stride); when the buffer is
     !> full, keep every other row and double the stride first.
@@ -205,12 +283,14 @@ contains
         if (acc%rows == size(acc%running, 2)) then
             half = acc%rows/2
             acc%running(:, 1:half) = acc%running(:, 2:2*half:2)
+            acc%running_cycles(1:half) = acc%running_cycles(2:2*half:2)
             acc%rows = half
             acc%stride = 2*acc%stride
             if (modulo(acc%steps, acc%stride) /= 0) return
         end if
         acc%rows = acc%rows + 1
-        acc%running(:, acc%rows) = acc%total/acc%steps
+        acc%running(:, acc%rows) = acc%total/acc%cycles
+        acc%running_cycles(acc%rows) = acc%cycles
     end subroutine keep_running
 
     !> Rows of running estimates in the result of a run of `steps` QR steps: the multiples of
@@ -228,28 +308,29 @@ contains
     end function running_rows
 
     !> Exponents in the paper's units (bits per drive cycle) and per unit time, sorted
-    !> descending, with standard errors and the running estimates.
-    pure function lyapunov_result(acc, cycles_per_step, period) result(res)
+    !> descending, with standard errors and the running estimates; every mean is over cycles.
+    pure function lyapunov_result(acc, period) result(res)
         type(lyapunov_acc_t), intent(in) :: acc
-        integer, intent(in) :: cycles_per_step
         real(wp), intent(in) :: period
         type(lyapunov_result_t) :: res
         real(wp) :: nats(acc%k), err(acc%k), mean(acc%k), to_bits
         integer :: order(acc%k), j, b, nb, used
 
-        to_bits = 1/(log(2.0_wp)*cycles_per_step)
-        nats = acc%total/max(1, acc%steps)
+        to_bits = 1/log(2.0_wp)
+        nats = acc%total/max(1_i8, acc%cycles)
         err = 0
         nb = count(acc%block_len > 0)
         if (nb > 1) then
+            ! (the blocks that hold steps: the first nb, unless a run stopped early)
             mean = 0
-            do b = 1, nb
-                mean = mean + acc%block_sum(:, b)/acc%block_len(b)
+            do b = 1, size(acc%block_len)
+                if (acc%block_len(b) > 0) mean = mean + acc%block_sum(:, b)/acc%block_len(b)
             end do
             mean = mean/nb
             ! no error bar for an exponent of -infinity (a run with rests on the walls)
             where (.not. ieee_is_finite(mean)) mean = 0
-            do b = 1, nb
+            do b = 1, size(acc%block_len)
+                if (acc%block_len(b) == 0) cycle
                 where (ieee_is_finite(acc%block_sum(:, b))) &
                     err = err + (acc%block_sum(:, b)/acc%block_len(b) - mean)**2
             end do
@@ -258,19 +339,19 @@ contains
         end if
         order = descending_order(nats)
         res%bits_per_cycle = nats(order)*to_bits
-        res%nats_per_time = nats(order)/(cycles_per_step*period)
+        res%nats_per_time = nats(order)/period
         res%stderr_bits = err(order)*to_bits
         ! the kept rows, and the last step (the final estimate) if it is not one of them
         used = acc%rows
         if (acc%steps > acc%rows*acc%stride) used = used + 1
-        allocate (res%running_bits(acc%k, used), res%running_steps(used))
+        allocate (res%running_bits(acc%k, used), res%running_cycles(used))
         do j = 1, acc%rows
             res%running_bits(:, j) = acc%running(order, j)*to_bits
-            res%running_steps(j) = j*acc%stride
+            res%running_cycles(j) = acc%running_cycles(j)
         end do
         if (used > acc%rows) then
             res%running_bits(:, used) = nats(order)*to_bits
-            res%running_steps(used) = acc%steps
+            res%running_cycles(used) = acc%cycles
         end if
         res%ky_dimension = ky_dimension(res%bits_per_cycle)
         res%positive_sum = sum(res%bits_per_cycle, mask=res%bits_per_cycle > 0)

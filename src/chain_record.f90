@@ -11,12 +11,11 @@ module chain_record
                             chain_set_tangent, chain_size, chain_cycle, chain_time, chain_start, &
                             chain_period, chain_section_time, chain_copy_state, chain_counts, &
                             chain_reset_counts, chain_vectors, chain_tangent_frame, &
-                            chain_qr_step, chain_reorthonormalise
+                            chain_qr_step, chain_reorthonormalise, chain_rank_lost
     use chain_state, only: event_counts_t
     use chain_event_log, only: event_log_t, event_log_init, event_log_clear, event_log_append
-    use chain_lyapunov, only: lyapunov_acc_t, lyapunov_start, lyapunov_step, &
-                              lyapunov_result_t, lyapunov_result, &
-                              initial_frame, running_rows
+    use chain_lyapunov, only: lyapunov_acc_t, lyapunov_start, lyapunov_due, &
+                              lyapunov_result_t, lyapunov_result, initial_frame
     use chain_period, only: detect_period
     use chain_section, only: section_target, advance_to_point, advance_cycles
     use chain_floquet, only: floquet_result
@@ -39,7 +38,7 @@ module chain_record
         real(wp) :: period_tol = 1.0e-6_wp   !! relative tolerance of the period rule
         logical :: lyapunov = .false.        !! carry a tangent frame, average its growth
         integer :: vectors = 0               !! exponents (0: all 2n)
-        integer :: qr_every = 1              !! cycles per QR step
+        integer :: qr_every = 0              !! cycles per QR step, 0: adaptive
         !> cycles at the end of the transient over which the tangent frame is carried and
         !> re-orthonormalised, but not averaged, so that it has turned towards the leading
         !> directions when averaging starts (at most the transient)
@@ -169,9 +168,14 @@ contains
             w = int(modulo(j - 1, int(size(st%xwin, 2), i8))) + 1
             st%xwin(:, w) = xbuf(:, i)
             st%vwin(:, w) = vbuf(:, i)
-            if (spec%lyapunov .and. modulo(j, int(spec%qr_every, i8)) == 0) then
-                call chain_qr_step(chain, st%acc, err)
-                if (allocated(err)) return
+            if (spec%lyapunov) then
+                ! (adaptive steps also come at the first section after a rest or a collapse:
+                ! the step looks for the lost directions, as every cycle did)
+                if (lyapunov_due(st%acc, j, j == spec%cycles) .or. &
+                    (spec%qr_every == 0 .and. chain_rank_lost(chain))) then
+                    call chain_qr_step(chain, st%acc, int(j - st%acc%cycles), err)
+                    if (allocated(err)) return
+                end if
             end if
             res%cycles_done = j
             st%cycles_done = j
@@ -207,8 +211,8 @@ contains
         call transient_part(spec, chain, log, err, monitor)
         if (allocated(err)) return
         call chain_reset_counts(chain)
-        if (spec%lyapunov) call lyapunov_start(st%acc, chain_vectors(chain), &
-                                              int(spec%cycles/spec%qr_every))
+        if (spec%lyapunov) call lyapunov_start(st%acc, chain_vectors(chain), spec%cycles, &
+                                              spec%qr_every)
         nwin = int(min(spec%cycles, int(period_window(spec%max_period), i8)))
         allocate (st%xwin(chain_size(chain), nwin), st%vwin(chain_size(chain), nwin))
     end subroutine begin_records
@@ -244,11 +248,11 @@ contains
         end if
         if (spec%lyapunov .and. st%acc%steps > 0) then
             res%has_lyapunov = .true.
-            res%lyapunov = lyapunov_result(st%acc, spec%qr_every, chain_period(chain))
-            allocate (res%running_cycle(size(res%lyapunov%running_steps)))
+            res%lyapunov = lyapunov_result(st%acc, chain_period(chain))
+            allocate (res%running_cycle(size(res%lyapunov%running_cycles)))
             do i = 1, size(res%running_cycle)
                 call section_target(chain, spec%transient, spec%phase, &
-                                    int(res%lyapunov%running_steps(i), i8)*spec%qr_every, &
+                                    res%lyapunov%running_cycles(i), &
                                     res%running_cycle(i), target_s)
             end do
         end if

@@ -7,10 +7,11 @@ module chain_section
     use chain_kinds, only: wp, i8
     use chain_error, only: error_t
     use chain_engine, only: chain_t, chain_advance, chain_sync, chain_new_cycle, chain_cycle, &
-                            chain_start, chain_period, chain_section_time, chain_reorthonormalise, &
-                            chain_init
+                            chain_start, chain_period, chain_section_time, &
+                            chain_reorthonormalise, chain_rank_lost, chain_vectors, chain_init
     use chain_model, only: model_t
     use chain_state, only: moving_state
+    use chain_lyapunov, only: adaptive_interval, longest_interval
     use chain_event_log, only: event_log_t
     use chain_monitor, only: monitor_t, stage_transient
     implicit none
@@ -81,33 +82,45 @@ contains
         type(event_log_t), intent(inout) :: log
         type(error_t), allocatable, intent(out) :: err
         !> re-orthonormalise the tangent frame, unaveraged, at every this many cycle ends
+        !> (0: at the adaptive interval of chain_lyapunov, from the growths of each step)
         integer, intent(in), optional :: tangent_qr_every
         class(monitor_t), intent(inout), optional :: monitor
         logical, intent(out), optional :: stopped
         integer(i8), intent(in), optional :: monitor_total
-        integer(i8) :: done, total
+        real(wp), allocatable :: growth(:)
+        integer(i8) :: total
+        integer :: since, interval
 
-        done = 0
         total = cycle
         if (present(monitor_total)) total = monitor_total
         if (present(stopped)) stopped = .false.
+        since = 0
+        interval = 1
+        if (present(tangent_qr_every)) interval = max(1, tangent_qr_every)
         do while (chain_cycle(chain) < cycle)
             call chain_advance(chain, chain_period(chain), log, err)
             if (allocated(err)) return
             call chain_new_cycle(chain)
-            done = done + 1
-            if (present(tangent_qr_every)) then
-                if (modulo(done, int(tangent_qr_every, i8)) == 0) then
-                    call chain_reorthonormalise(chain, err)
-                    if (allocated(err)) return
-                end if
-            end if
             if (present(monitor)) then
                 if (.not. monitor%keep_going(stage_transient, chain_cycle(chain), total)) then
                     if (present(stopped)) stopped = .true.
                     return
                 end if
             end if
+            since = since + 1
+            if (.not. present(tangent_qr_every)) cycle
+            if (since < interval .and. .not. (tangent_qr_every == 0 .and. &
+                                               chain_rank_lost(chain))) cycle
+            if (tangent_qr_every > 0) then
+                call chain_reorthonormalise(chain, err)
+            else
+                allocate (growth(chain_vectors(chain)))
+                call chain_reorthonormalise(chain, err, growth)
+                interval = adaptive_interval(growth/since, longest_interval)
+                deallocate (growth)
+            end if
+            if (allocated(err)) return
+            since = 0
         end do
     end subroutine advance_cycles
 

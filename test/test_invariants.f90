@@ -171,7 +171,7 @@ contains
 
         call event_log_init(log, .true., 64)
         spectrum = chain_vectors(chain) == 2*chain_size(chain)
-        if (spectrum) call lyapunov_start(acc, chain_vectors(chain), cycles)
+        if (spectrum) call lyapunov_start(acc, chain_vectors(chain), int(cycles, i8), 1)
         call chain_reset_counts(chain)
         flow = flow_of(chain)
         walls = chain_walls(chain)
@@ -185,7 +185,7 @@ contains
                 call chain_new_cycle(chain)
                 call look_at_gaps(chain, walk)
                 if (spectrum) then
-                    call chain_qr_step(chain, acc, err)
+                    call chain_qr_step(chain, acc, 1, err)
                     if (allocated(err)) return
                 end if
                 cycle
@@ -201,7 +201,7 @@ contains
         walk%impacts = counts%impacts
         walk%sticks = counts%sticks
         if (spectrum) then
-            res = lyapunov_result(acc, 1, flow%period)
+            res = lyapunov_result(acc, flow%period)
             walk%bits_per_cycle = res%bits_per_cycle
         end if
     end subroutine walk_events

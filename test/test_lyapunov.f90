@@ -59,6 +59,12 @@ contains
         ! a section inside the drive cycle (the map crosses the end of a cycle)
         call finite_differences(t, 4, .true., 2.0_wp)
         call leading_vectors(t)
+        call adaptive_matches_every_cycle(t, 4, 4.15_wp, 0.9_wp, 200_i8, 1000_i8, 0, .true.)
+        call adaptive_matches_every_cycle(t, 16, 1.7_wp, 1.5_wp, 200_i8, 1000_i8, 0, .true.)
+        call adaptive_matches_every_cycle(t, 16, 1.7_wp, 1.5_wp, 100_i8, 300_i8, 6, .false.)
+        call adaptive_matches_every_cycle(t, 16, 1.7_wp, 1.5_wp, 500_i8, 2000_i8, 2, .false.)
+        call adaptive_matches_every_cycle(t, 3, 0.2_wp, 1.5_wp, 0_i8, 2000_i8, 0, .true.)
+        call adaptive_matches_every_cycle(t, 8, 3.0_wp, 1.9_wp, 500_i8, 2000_i8, 2, .false.)
         call floquet_period_one(t)
         call chaotic_and_periodic(t)
         call kaplan_yorke(t)
@@ -86,7 +92,7 @@ contains
         real(wp), allocatable :: frame_t(:, :)
         integer :: q, info
 
-        call lyapunov_start(acc, 3, 9000)
+        call lyapunov_start(acc, 3, 9000_i8)
         do q = 1, 9000
             if (q == 5000) then
                 call lyapunov_pack(acc, ints, reals)
@@ -96,12 +102,12 @@ contains
             call step(acc, q)
             if (q >= 5000) call step(copy, q)
         end do
-        a = lyapunov_result(acc, 1, 1.0_wp)
-        b = lyapunov_result(copy, 1, 1.0_wp)
+        a = lyapunov_result(acc, 1.0_wp)
+        b = lyapunov_result(copy, 1.0_wp)
         call check(t, all(a%bits_per_cycle == b%bits_per_cycle) .and. &
                    all(a%stderr_bits == b%stderr_bits) .and. &
                    all(a%running_bits == b%running_bits) .and. &
-                   all(a%running_steps == b%running_steps), &
+                   all(a%running_cycles == b%running_cycles), &
                    'pack: packed, unpacked and continued = never packed, bit for bit')
         ints(1) = ints(1) + 1
         call lyapunov_unpack(ints, reals, copy, info)
@@ -129,8 +135,8 @@ contains
         type(tally_t), intent(inout) :: t
         type(lyapunov_acc_t) :: short, long
 
-        call lyapunov_start(short, 32, 10000)
-        call lyapunov_start(long, 32, 1000000000)
+        call lyapunov_start(short, 32, 10000_i8)
+        call lyapunov_start(long, 32, 1000000000_i8)
         call check(t, size(long%running) == size(short%running) .and. &
                    size(long%running, 2) <= running_capacity, &
                    'running estimates: the buffer does not grow with the planned steps')
@@ -152,7 +158,7 @@ contains
         character(len=40) :: label
 
         write (label, '(a,i0,a,i0,a)') ' (', steps, ' of ', planned, ' steps)'
-        call lyapunov_start(acc, 2, planned)
+        call lyapunov_start(acc, 2, int(planned, i8))
         sums(0) = 0
         ok = .true.
         allocate (frame_t(2, 2))
@@ -165,8 +171,8 @@ contains
             sums(q) = sums(q - 1) + (1 + modulo(q, 3))
         end do
         call check(t, ok, 'running estimates: QR steps'//trim(label))
-        res = lyapunov_result(acc, 1, 1.0_wp)
-        rows = size(res%running_steps)
+        res = lyapunov_result(acc, 1.0_wp)
+        rows = size(res%running_cycles)
         call check(t, rows == running_rows(int(steps, i8)) .and. &
                    size(res%running_bits, 2) == rows .and. rows <= running_capacity + 1, &
                    'running estimates: running_rows predicts the rows kept'//trim(label))
@@ -174,16 +180,16 @@ contains
         do while (steps/stride > running_capacity)
             stride = 2*stride
         end do
-        ok = res%running_steps(rows) == steps
+        ok = res%running_cycles(rows) == steps
         do q = 1, rows - 1
-            ok = ok .and. res%running_steps(q) == q*stride
+            ok = ok .and. res%running_cycles(q) == q*stride
         end do
-        if (modulo(steps, stride) == 0) ok = ok .and. res%running_steps(rows - 1) == steps - stride
+        if (modulo(steps, stride) == 0) ok = ok .and. res%running_cycles(rows - 1) == steps - stride
         call check(t, ok, 'running estimates: every stride-th step and the last'//trim(label))
         ok = .true.
         do q = 1, rows
-            ok = ok .and. abs(res%running_bits(1, q) - sums(res%running_steps(q)) &
-                              /res%running_steps(q)) <= 1.0e-12_wp
+            ok = ok .and. abs(res%running_bits(1, q) - sums(res%running_cycles(q)) &
+                              /res%running_cycles(q)) <= 1.0e-12_wp
             ok = ok .and. abs(res%running_bits(2, q) + 1) <= 1.0e-12_wp
         end do
         call check(t, ok, 'running estimates: each row is the mean up to its step'//trim(label))
@@ -507,6 +513,61 @@ contains
                             full%lyapunov%bits_per_cycle, full%sticks)
     end subroutine leading_vectors
 
+    !> QR steps at the adaptive interval (qr_every = 0) give the exponents of a QR step every
+    !> cycle to 1e-10 bits per cycle (the R factors telescope: only rounding differs), and their
+    !> standard errors, with fewer steps, on the chains of the tests above; full spectra keep
+    !> the sum rule.
+    subroutine adaptive_matches_every_cycle(t, n, amplitude, omega, transient, cycles, vectors, &
+                                            full)
+        type(tally_t), intent(inout) :: t
+        integer, intent(in) :: n, vectors
+        real(wp), intent(in) :: amplitude, omega
+        integer(i8), intent(in) :: transient, cycles
+        logical, intent(in) :: full
+        type(chain_t) :: chain, copy
+        type(error_t), allocatable :: err
+        type(record_result_t) :: every, adaptive
+        type(config_t) :: cfg
+        real(wp) :: x_amp, v_amp
+        character(len=60) :: label
+
+        write (label, '(a,i0,a,f0.2,a,f0.2,a,i0)') 'n = ', n, ', A = ', amplitude, ', w = ', &
+            omega, ', vectors ', vectors
+        x_amp = merge(0.3_wp, 0.0_wp, n /= 8 .and. n /= 3)
+        v_amp = merge(0.5_wp, 0.0_wp, n /= 8 .and. n /= 3)
+        if (n == 3) then
+            x_amp = 0.2_wp
+            v_amp = 0.1_wp
+        end if
+        call make_chain(chain, n, amplitude, omega, 0.05_wp, merge(0.5_wp, 0.7_wp, n == 8), &
+                        .true., x_amp, v_amp, err)
+        copy = chain
+        cfg = spectrum_config(n, transient, cycles, vectors)
+        call spectrum(chain, cfg, every, err)
+        call check(t, .not. allocated(err), 'adaptive QR: every-cycle run '//trim(label))
+        if (allocated(err)) return
+        cfg%record%qr_every = 0
+        call spectrum(copy, cfg, adaptive, err)
+        call check(t, .not. allocated(err), 'adaptive QR: adaptive run '//trim(label))
+        if (allocated(err)) return
+        call check_close(t, maxval(abs(adaptive%lyapunov%bits_per_cycle - &
+                                       every%lyapunov%bits_per_cycle)), 0.0_wp, &
+                         'adaptive QR = QR every cycle to 1e-10 bits/cycle, '//trim(label), &
+                         1.0e-10_wp)
+        ! (steps never cross a block: each block holds the cycles it holds every cycle; the
+        ! errors agree to 1e-10 bits per cycle or, where they are large, to 1e-8 of their size)
+        call check(t, all(abs(adaptive%lyapunov%stderr_bits - every%lyapunov%stderr_bits) <= &
+                          max(1.0e-10_wp, 1.0e-8_wp*every%lyapunov%stderr_bits)), &
+                   'adaptive QR: the standard errors of every cycle, '//trim(label))
+        call check(t, size(adaptive%lyapunov%running_cycles) < &
+                   size(every%lyapunov%running_cycles), &
+                   'adaptive QR takes fewer steps, '//trim(label))
+        if (full) call check_sum_rule(t, 'adaptive QR, '//trim(label), n, flow_of(copy), &
+                                      merge(0.5_wp, 0.7_wp, n == 8), &
+                                      adaptive%collisions_per_cycle, &
+                                      adaptive%lyapunov%bits_per_cycle, adaptive%sticks)
+    end subroutine adaptive_matches_every_cycle
+
     !> Fig. 10's chain (n = 8, K = 0.5, w = 1.9, b = 0.05) at A = 3 from rest: a period-1 state
     !> with 8 impacts per cycle. Its multipliers lie inside the unit circle and their product
     !> is exp(-2 b n T) K**(2 c).
@@ -604,9 +665,9 @@ contains
     end subroutine qr_factors
 
     !> Sweep threads factorise their frames at the same time: the BLAS and LAPACK linked in
-    !> must be thread-safe (Debian's single-threaded OpenBLAS 0.3.21 is not: it fails this
-    !> check). Two threads, 200 factorisations of a 200 x 100 frame: every one equal to the
-    !> serial result bit for bit.
+    !> must be thread-safe (BLIS is reentrant; Debian's single-threaded OpenBLAS 0.3.21 is not:
+    !> it fails this check). Two threads, 200 factorisations of a 200 x 100 frame: every one
+    !> equal to the serial result bit for bit.
     subroutine qr_in_threads(t)
         type(tally_t), intent(inout) :: t
         integer, parameter :: repeats = 200

@@ -337,7 +337,7 @@ def lyapunov(
     cycles: int = 100,
     vectors: int = 0,
     *,
-    qr_every: int = 1,
+    qr_every: int = 0,
     phase: float = 0.0,
     stick_speed: float = 1.0e-9,
     max_size_mb: float = 4096.0,
@@ -347,8 +347,10 @@ def lyapunov(
 
     An orthonormal frame of ``vectors`` tangent vectors (0: all 2n) is carried through the
     exact flow and the saltation matrices of every impact and re-orthonormalised (LAPACK
-    QR) every ``qr_every`` cycles (1 <= qr_every <= cycles). The leading k exponents do not
-    depend on k. Other arguments as :func:`simulate`.
+    QR) every ``qr_every`` cycles (0 <= qr_every <= cycles; 0, the default: at an adaptive
+    interval, before the frame's columns are predicted to grow apart by 1e8, which gives the
+    exponents of qr_every = 1 to rounding). The leading k exponents do not depend on k. Other
+    arguments as :func:`simulate`.
 
     Returns:
         A :class:`Lyapunov`: ``exponents`` and ``stderr`` (k,) in bits per drive cycle,
@@ -358,7 +360,7 @@ def lyapunov(
                   transient, cycles, phase, stick_speed, max_size_mb)
     cfg["lyapunov"] = 1
     cfg["vectors"] = _int32(vectors, "&lyapunov: vectors", "[0, 2n] (0 means all 2n)")
-    cfg["qr_every"] = _int32(qr_every, "&lyapunov: qr_every", "[1, cycles]")
+    cfg["qr_every"] = _int32(qr_every, "&lyapunov: qr_every", "[0, cycles] (0: adaptive)")
     out = _run(cfg, strobe=False, events=False, progress=progress)
     k = int(out["k"])
     return Lyapunov(
@@ -524,7 +526,7 @@ def sweep(
     step2: float | None = None,
     lyapunov: bool = False,
     vectors: int = 0,
-    qr_every: int = 1,
+    qr_every: int = 0,
     phase: float = 0.0,
     stick_speed: float = 1.0e-9,
     max_size_mb: float = 4096.0,
@@ -570,7 +572,7 @@ def sweep(
         del cfg[name]
     cfg["lyapunov"] = int(bool(lyapunov))
     cfg["vectors"] = _int32(vectors, "&lyapunov: vectors", "[0, 2n] (0 means all 2n)")
-    cfg["qr_every"] = _int32(qr_every, "&lyapunov: qr_every", "[1, cycles]")
+    cfg["qr_every"] = _int32(qr_every, "&lyapunov: qr_every", "[0, cycles] (0: adaptive)")
     two_d = parameter2 is not None
     if two_d and (start2 is None or stop2 is None or step2 is None):
         raise ValueError("&sweep: parameter2 needs start2, stop2 and step2")
