@@ -74,7 +74,7 @@ def namelist(n: int, amplitude: float, omega: float, damping: float = 0.05,
              x0: Any = None, v0: Any = None, transient: int = 0, cycles: int = 100,
              events: bool = True, phase: float = 0.0, stick_speed: float = 1.0e-9,
              max_size_mb: float = 4096.0, lyapunov: bool = False, vectors: int = 0,
-             qr_every: int = 1, period: int | None = None, random: dict | None = None) -> str:
+             qr_every: int = 0, period: int | None = None, random: dict | None = None) -> str:
     """The namelist equivalent to a call of impactchain.api with these arguments."""
     lines = [f"&chain n = {n}, amplitude = {_values(amplitude)}, omega = {_values(omega)}, "
              f"damping = {_values(damping)}, restitution = {_values(restitution)}, "
@@ -160,7 +160,7 @@ def test_bit_identical_to_cli(name: str, cli: Path, tmp_path: Path) -> None:
     common = dict(n=case["n"], amplitude=case["amplitude"], omega=case["omega"], x0=x0, v0=v0,
                   **_model_args(case))
     sim = api.simulate(**common)
-    lyap = api.lyapunov(**common, vectors=case["vectors"], qr_every=case.get("qr_every", 1))
+    lyap = api.lyapunov(**common, vectors=case["vectors"], qr_every=case.get("qr_every", 0))
     flo = api.floquet(**common, period=case["period"])
 
     with h5py.File(tmp_path / "run.h5") as f:
