@@ -111,10 +111,25 @@ contains
         logical, intent(in) :: touching
         real(wp) :: tau_min
 
-        tau_min = modulo(pi - flow%alpha + atan2(ss, cc), two_pi)*flow%inv_gam
+        tau_min = wrap_angle(pi - flow%alpha + atan2(ss, cc))*flow%inv_gam
         if (touching .and. tau_min < 0.5_wp*pi*flow%inv_gam) &
             tau_min = tau_min + two_pi*flow%inv_gam
     end function first_minimum
+
+    !> modulo(x, two_pi) for -two_pi < x < 2 two_pi, bit for bit, without its call to fmod
+    !> (fmod is exact there, and so are these sums by Sterbenz's lemma, except x + two_pi
+    !> for x < 0, which is what modulo computes too).
+    pure function wrap_angle(x) result(wrapped)
+        real(wp), intent(in) :: x
+        real(wp) :: wrapped
+
+        wrapped = x
+        if (wrapped < 0) then
+            wrapped = wrapped + two_pi
+        else if (wrapped >= two_pi) then
+            wrapped = wrapped - two_pi
+        end if
+    end function wrap_angle
 
     !> The zero of c + y(tau) on the decreasing branch of y before its minimum at tau_min
     !> (where exp(-b tau_min) = e and c + y < 0), by Halley's method safeguarded by bisection.
