@@ -409,11 +409,12 @@ contains
         type(error_t), allocatable, intent(out) :: err
         integer :: bond
         real(wp) :: time
+        logical :: tied
 
         do
-            call queue_top(chain%queue, bond, time)
+            call queue_top(chain%queue, bond, time, tied)
             if (time > s_target) exit
-            if (has_tie(chain%queue)) bond = first_of_ties(chain, time)
+            if (tied) bond = first_of_ties(chain, time)
             chain%s = time
             call count_instant(chain, time, err)
             if (allocated(err)) return
@@ -434,18 +435,6 @@ contains
         end do
         chain%s = s_target
     end subroutine chain_advance
-
-    !> Is another bond due at exactly the time of the heap's top? (Its children hold the next
-    !> earliest keys.)
-    pure logical function has_tie(q)
-        type(queue_t), intent(in) :: q
-        integer :: c
-
-        has_tie = .false.
-        do c = 2, min(5, q%size)
-            if (q%key(c) == q%key(1)) has_tie = .true.
-        end do
-    end function has_tie
 
     !> Move the epoch to the current time and fill x, v (and the tangent rows) with the state
     !> now. The free parts are re-derived from x, v exactly as a start does (start_epoch), and a
