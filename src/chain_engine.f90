@@ -33,6 +33,7 @@ module chain_engine
     use chain_kinds, only: wp, i8
     use chain_error, only: error_t, set_error, fmt_int
     use chain_flow, only: flow_t, propagator_pair, forced_response_at, acceleration_at
+    use chain_phases, only: drive_phase
     use chain_gaps, only: gap_t, gap_search_t, next_gap_zero, search_root, search_horizon, &
                           resolvable_speed, earliest_closing
     use chain_impact, only: pair_impact, wall_impact, pair_reset_jacobian, &
@@ -587,11 +588,13 @@ contains
     pure subroutine drive_now(chain)
         type(chain_t), intent(inout) :: chain
 
+        real(wp) :: cos_wt
+
         if (chain%drive_s == chain%s) return
         chain%drive_s = chain%s
-        chain%drive_sin = sin(chain%flow%omega*chain%s)
-        call forced_response_at(chain%flow, chain%drive_sin, cos(chain%flow%omega*chain%s), &
-                                chain%drive_x, chain%drive_v)
+        call drive_phase(chain%flow%phases, chain%s, cos_wt, chain%drive_sin)
+        call forced_response_at(chain%flow, chain%drive_sin, cos_wt, chain%drive_x, &
+                                chain%drive_v)
     end subroutine drive_now
 
     !> Free part (x - xp, v - vp) of moving oscillator i now (after propagators_now).
