@@ -728,20 +728,18 @@ contains
         end do
     end subroutine schedule_around
 
-    !> Schedule a pair bond that is opening: rather than searching its next impact now, look
-    !> again when it could first close at the earliest (chain_gaps' earliest_closing), as long
-    !> as that is not soon; a neighbour's impact usually reschedules it before then.
-    subroutine schedule_separating(chain, bond, err)
+    !> Schedule a pair bond of two moving oscillators, with gap `gap` now, that is opening:
+    !> rather than searching its next impact now, look again when it could first close at the
+    !> earliest (chain_gaps' earliest_closing), as long as that is not soon; a neighbour's
+    !> impact usually reschedules it before then.
+    subroutine schedule_separating(chain, bond, gap, err)
         type(chain_t), intent(inout) :: chain
         integer, intent(in) :: bond
+        type(gap_t), intent(in) :: gap
         type(error_t), allocatable, intent(out) :: err
-        type(gap_t) :: gap
-        logical :: closes
-        integer :: resting
         real(wp) :: earliest
 
-        call gap_now(chain, bond, gap, closes, resting)
-        if (closes .and. resting == 0 .and. gap%beta == 0 .and. gap%vy > 0) then
+        if (gap%vy > 0) then
             earliest = earliest_closing(chain%flow, gap)
             if (earliest > defer_after) then
                 chain%action(bond) = action_recheck
@@ -993,9 +991,11 @@ contains
         end if
         if (u > 0) then
             call pair_bounce(chain, bond, u, yl, wl, yr, wr, log)
-            ! the pair just separated: its next impact is far, and usually pre-empted
+            ! the pair just separated: its next impact is far, and usually pre-empted (its gap
+            ! now is the one gap_now would give: both free parts were set at this instant)
             call schedule(chain, l - 1, err)
-            if (.not. allocated(err)) call schedule_separating(chain, bond, err)
+            if (.not. allocated(err)) call schedule_separating(chain, bond, &
+                gap_t(chain%spacing(bond), yr - yl, wr - wl, 0.0_wp), err)
             if (.not. allocated(err)) call schedule(chain, r, err)
             return
         end if
@@ -1100,7 +1100,9 @@ contains
 
         chain%counts%impacts = chain%counts%impacts + 1
         chain%counts%site_counts(bond) = chain%counts%site_counts(bond) + 1
-        call event_log_append(log, chain_elapsed(chain, chain%s), bond, u, event_impact)
+        ! (the elapsed time is a call into a submodule: only when there is a log to keep)
+        if (log%enabled) &
+            call event_log_append(log, chain_elapsed(chain, chain%s), bond, u, event_impact)
     end subroutine count_impact
 
 end module chain_engine
