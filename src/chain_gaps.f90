@@ -12,7 +12,7 @@
 module chain_gaps
     use chain_kinds, only: wp, pi, two_pi
     use chain_flow, only: flow_t, forced_response, forced_response_at, propagator, motion_at
-    use chain_phases, only: free_phase, free_decay, drive_phase, advance_free_phase
+    use chain_phases, only: free_phase, free_decay, drive_phase, advance_free_phase, phase_angle
     implicit none
     private
     public :: gap_t, gap_search_t, next_gap_zero, gap_value, resolvable_speed, earliest_closing
@@ -109,7 +109,7 @@ contains
         logical, intent(in) :: touching
         real(wp) :: tau_min
 
-        tau_min = wrap_angle(pi - flow%alpha + atan2(ss, cc))*flow%inv_gam
+        tau_min = wrap_angle(pi - flow%alpha + phase_angle(cc, ss))*flow%inv_gam
         if (touching .and. tau_min < 0.5_wp*pi*flow%inv_gam) &
             tau_min = tau_min + two_pi*flow%inv_gam
     end function first_minimum
@@ -149,10 +149,11 @@ contains
         ! first guess: the zero of the same (decreasing) branch with the decay frozen at
         ! tau_min, theta = acos(q); it lies at or after the true zero, whose |cos| is smaller
         q = max(-1.0_wp, -offset/(amp*e))
-        step = (pi - flow%alpha - acos(q))*flow%inv_gam
-        tau = tau_min - step
         cos_th = q
-        sin_th = sqrt(max(0.0_wp, 1 - q**2))
+        sin_th = sqrt(max(0.0_wp, (1 - q)*(1 + q)))
+        ! theta = acos(q), as the angle of (cos_th, sin_th)
+        step = (pi - flow%alpha - phase_angle(cos_th, sin_th))*flow%inv_gam
+        tau = tau_min - step
         decay = free_decay(flow%phases, tau)
         if (tau < lo .or. tau > hi) then
             tau = min(hi, max(lo, tau))

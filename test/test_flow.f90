@@ -4,7 +4,7 @@
 module test_flow
     use chain_kinds, only: wp, two_pi
     use chain_flow, only: flow_t, make_flow, forced_response, propagator, advance_state
-    use chain_phases, only: free_phase, free_decay, drive_phase, advance_free_phase
+    use chain_phases, only: free_phase, free_decay, drive_phase, advance_free_phase, phase_angle
     use testing, only: tally_t, check, check_close
     implicit none
     private
@@ -61,7 +61,48 @@ contains
                              rel_tol=1.0e-12_wp, abs_tol=1.0e-13_wp)
         end do
         call check_phase_tables(t)
+        call check_phase_angle(t)
     end subroutine run_flow_tests
+
+    !> phase_angle(c, s) is the library's atan2(s, c) to a few ulp of the angle, in every
+    !> octant and at every scale, on the axes and diagonals, and gives acos(q) as the angle
+    !> of (q, sqrt((1 - q) (1 + q))) to a few ulp.
+    subroutine check_phase_angle(t)
+        type(tally_t), intent(inout) :: t
+        real(wp), parameter :: eps = epsilon(1.0_wp)
+        real(wp) :: c, s, u, v, want, err_atan, err_acos, q
+        integer :: k
+
+        err_atan = 0
+        err_acos = 0
+        do k = 0, 200000
+            u = sin(12.9898_wp*k + 1.3_wp)*43758.5453_wp
+            u = u - floor(u)
+            v = sin(78.233_wp*k + 0.7_wp)*24634.6345_wp
+            v = v - floor(v)
+            c = cos(7*u)*10.0_wp**(6*v - 3)
+            s = sin(7*u)*10.0_wp**(6*v - 3)
+            select case (mod(k, 7))
+            case (0)
+                s = 0             ! on an axis
+            case (1)
+                c = merge(s, -s, v < 0.5_wp) ! on a diagonal
+            case (2)
+                s = s*1.0e-12_wp  ! next to an axis
+            end select
+            want = atan2(s, c)
+            err_atan = max(err_atan, abs(phase_angle(c, s) - want)/max(abs(want), tiny(1.0_wp)))
+            q = 2*u - 1
+            if (mod(k, 5) == 0) q = sign(1 - 10.0_wp**(-16*v), q) ! near +-1
+            err_acos = max(err_acos, abs(phase_angle(q, sqrt((1 - q)*(1 + q))) - acos(q)) &
+                           /max(acos(q), tiny(1.0_wp)))
+        end do
+        call check(t, err_atan <= 4*eps, "phase_angle is the library's atan2 to a few ulp")
+        call check(t, err_acos <= 4*eps, "phase_angle of (q, sqrt(1 - q**2)) is acos(q) to a "// &
+                   'few ulp')
+        if (err_atan > 4*eps .or. err_acos > 4*eps) &
+            print '(a, 2es10.2)', '    angle errors / eps: ', err_atan/eps, err_acos/eps
+    end subroutine check_phase_angle
 
     !> The tables and their Taylor turns agree with the library's exp, cos and sin to a few
     !> units in the last place of the argument and of the value, at times inside the tables,
