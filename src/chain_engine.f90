@@ -33,6 +33,7 @@ module chain_engine
     use chain_kinds, only: wp, i8
     use chain_error, only: error_t, set_error, fmt_int
     use chain_flow, only: flow_t, propagator_pair, forced_response_at, acceleration_at
+    use chain_phases, only: drive_phase
     use chain_gaps, only: gap_t, gap_search_t, next_gap_zero, search_root, search_horizon, &
                           resolvable_speed, earliest_closing
     use chain_impact, only: pair_impact, wall_impact, pair_reset_jacobian, &
@@ -173,7 +174,8 @@ module chain_engine
 
     ! -------------------------------------------------------------- chain_engine_instants
     interface
-        !> Guard against an unbounded number of impacts at one instant.
+        !> Another event at the current instant: count it, and guard against an unbounded
+        !> number of impacts at one instant.
         module subroutine count_instant(chain, time, err)
             type(chain_t), intent(inout) :: chain
             real(wp), intent(in) :: time
@@ -421,14 +423,22 @@ contains
         type(error_t), allocatable, intent(out) :: err
         integer :: bond
         real(wp) :: time
+        logical :: tied
 
         do
-            call queue_top(chain%queue, bond, time)
+            call queue_top(chain%queue, bond, time, tied)
             if (time > s_target) exit
-            if (has_tie(chain%queue)) bond = first_of_ties(chain, time)
+            if (tied) bond = first_of_ties(chain, time)
             chain%s = time
-            call count_instant(chain, time, err)
-            if (allocated(err)) return
+            ! events closer than the rounding of times within a cycle are simultaneous; a new
+            ! instant (nearly every event) needs no call into chain_engine_instants
+            if (.not. (time <= chain%last_event + 16*epsilon(1.0_wp)*chain%flow%period)) then
+                chain%same_instant = 0
+                chain%last_event = time
+            else
+                call count_instant(chain, time, err)
+                if (allocated(err)) return
+            end if
             if (chain%same_instant > 0 .and. modulo(chain%same_instant, collapse_after) == 0) then
                 call collapse_event(chain, bond, log, err)
                 if (allocated(err)) return
@@ -446,18 +456,6 @@ contains
         end do
         chain%s = s_target
     end subroutine chain_advance
-
-    !> Is another bond due at exactly the time of the heap's top? (Its children hold the next
-    !> earliest keys.)
-    pure logical function has_tie(q)
-        type(queue_t), intent(in) :: q
-        integer :: c
-
-        has_tie = .false.
-        do c = 2, min(5, q%size)
-            if (q%key(c) == q%key(1)) has_tie = .true.
-        end do
-    end function has_tie
 
     !> Move the epoch to the current time and fill x, v (and the tangent rows) with the state
     !> now. The free parts are re-derived from x, v exactly as a start does (start_epoch), and a
@@ -610,11 +608,13 @@ contains
     pure subroutine drive_now(chain)
         type(chain_t), intent(inout) :: chain
 
+        real(wp) :: cos_wt
+
         if (chain%drive_s == chain%s) return
         chain%drive_s = chain%s
-        chain%drive_sin = sin(chain%flow%omega*chain%s)
-        call forced_response_at(chain%flow, chain%drive_sin, cos(chain%flow%omega*chain%s), &
-                                chain%drive_x, chain%drive_v)
+        call drive_phase(chain%flow%phases, chain%s, cos_wt, chain%drive_sin)
+        call forced_response_at(chain%flow, chain%drive_sin, cos_wt, chain%drive_x, &
+                                chain%drive_v)
     end subroutine drive_now
 
     !> Free part (x - xp, v - vp) of moving oscillator i now (after propagators_now).
@@ -748,20 +748,18 @@ contains
         end do
     end subroutine schedule_around
 
-    !> Schedule a pair bond that is opening: rather than searching its next impact now, look
-    !> again when it could first close at the earliest (chain_gaps' earliest_closing), as long
-    !> as that is not soon; a neighbour's impact usually reschedules it before then.
-    subroutine schedule_separating(chain, bond, err)
+    !> Schedule a pair bond of two moving oscillators, with gap `gap` now, that is opening:
+    !> rather than searching its next impact now, look again when it could first close at the
+    !> earliest (chain_gaps' earliest_closing), as long as that is not soon; a neighbour's
+    !> impact usually reschedules it before then.
+    subroutine schedule_separating(chain, bond, gap, err)
         type(chain_t), intent(inout) :: chain
         integer, intent(in) :: bond
+        type(gap_t), intent(in) :: gap
         type(error_t), allocatable, intent(out) :: err
-        type(gap_t) :: gap
-        logical :: closes
-        integer :: resting
         real(wp) :: earliest
 
-        call gap_now(chain, bond, gap, closes, resting)
-        if (closes .and. resting == 0 .and. gap%beta == 0 .and. gap%vy > 0) then
+        if (gap%vy > 0) then
             earliest = earliest_closing(chain%flow, gap)
             if (earliest > defer_after) then
                 chain%action(bond) = action_recheck
@@ -1013,9 +1011,11 @@ contains
         end if
         if (u > 0) then
             call pair_bounce(chain, bond, u, yl, wl, yr, wr, log)
-            ! the pair just separated: its next impact is far, and usually pre-empted
+            ! the pair just separated: its next impact is far, and usually pre-empted (its gap
+            ! now is the one gap_now would give: both free parts were set at this instant)
             call schedule(chain, l - 1, err)
-            if (.not. allocated(err)) call schedule_separating(chain, bond, err)
+            if (.not. allocated(err)) call schedule_separating(chain, bond, &
+                gap_t(chain%spacing(bond), yr - yl, wr - wl, 0.0_wp), err)
             if (.not. allocated(err)) call schedule(chain, r, err)
             return
         end if
@@ -1120,7 +1120,9 @@ contains
 
         chain%counts%impacts = chain%counts%impacts + 1
         chain%counts%site_counts(bond) = chain%counts%site_counts(bond) + 1
-        call event_log_append(log, chain_elapsed(chain, chain%s), bond, u, event_impact)
+        ! (the elapsed time is a call into a submodule: only when there is a log to keep)
+        if (log%enabled) &
+            call event_log_append(log, chain_elapsed(chain, chain%s), bond, u, event_impact)
     end subroutine count_impact
 
 end module chain_engine

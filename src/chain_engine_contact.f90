@@ -54,16 +54,17 @@ contains
     !> At rest x = -S (left), so its acceleration is S + A sin(w t); on the right, x = S and
     !> it is A sin(w t) - S.
     module procedure pressed
-        real(wp) :: depth, push, rate, tol, phase
+        real(wp) :: depth, push, rate, tol, cos_wt, sin_wt
 
-        phase = chain%flow%omega*chain%s
+        ! the drive's phase as everywhere else in the engine (chain_phases)
+        call drive_phase(chain%flow%phases, chain%s, cos_wt, sin_wt)
         depth = abs(rest_position(chain, i, side))
         if (side == contact_left) then
-            push = depth + chain%flow%amplitude*sin(phase)
-            rate = chain%flow%amplitude*chain%flow%omega*cos(phase)
+            push = depth + chain%flow%amplitude*sin_wt
+            rate = chain%flow%amplitude*chain%flow%omega*cos_wt
         else
-            push = depth - chain%flow%amplitude*sin(phase)
-            rate = -chain%flow%amplitude*chain%flow%omega*cos(phase)
+            push = depth - chain%flow%amplitude*sin_wt
+            rate = -chain%flow%amplitude*chain%flow%omega*cos_wt
         end if
         tol = 64*epsilon(1.0_wp)*(depth + chain%flow%amplitude)
         pressed = push < -tol .or. (abs(push) <= tol .and. rate <= 0)

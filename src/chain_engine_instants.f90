@@ -1,5 +1,6 @@
-!> Simultaneous contacts (docs/model.md sections 5.6 and 5.7): which impacts belong to one
-!> instant, the order of contacts due at exactly one time, and the cluster of the cluster rule.
+!> Simultaneous contacts (docs/model.md sections 5.6 and 5.7): the count of the impacts of one
+!> instant (chain_advance decides which belong to it), the order of contacts due at exactly one
+!> time, and the cluster of the cluster rule.
 !>
 !> Triple contacts are resolved as a sequence of pair impacts in time order; contacts due at
 !> exactly one time go fastest first, then nearest the middle (a rule the mirror image keeps);
@@ -15,21 +16,17 @@ submodule(chain_engine) chain_engine_instants
 
 contains
 
+    !> (chain_advance decides what belongs to the current instant: events within 16 eps T of
+    !> its first.)
     module procedure count_instant
         character(len=32) :: buf
 
-        ! impacts closer than the rounding of times within a cycle are simultaneous
-        if (time <= chain%last_event + 16*epsilon(1.0_wp)*chain%flow%period) then
-            chain%same_instant = chain%same_instant + 1
-            if (chain%same_instant > max_same_instant) then
-                write (buf, '(es14.6)') chain_elapsed(chain, time)
-                call set_error(err, "event loop: more than "//fmt_int(max_same_instant)// &
-                               " impacts at t = "//trim(adjustl(buf))//" (inelastic collapse "// &
-                               "of a multi-body contact); raise restitution")
-            end if
-        else
-            chain%same_instant = 0
-            chain%last_event = time
+        chain%same_instant = chain%same_instant + 1
+        if (chain%same_instant > max_same_instant) then
+            write (buf, '(es14.6)') chain_elapsed(chain, time)
+            call set_error(err, "event loop: more than "//fmt_int(max_same_instant)// &
+                           " impacts at t = "//trim(adjustl(buf))//" (inelastic collapse "// &
+                           "of a multi-body contact); raise restitution")
         end if
     end procedure count_instant
 

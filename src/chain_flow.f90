@@ -8,9 +8,11 @@
 !> This module is the one place of these formulas. Besides the forms that start from a time,
 !> it has forms that start from the sines, cosines and exponentials a caller already holds:
 !> the engine computes one propagator per event time, and chain_gaps turns its phases by
-!> Taylor polynomials from one search step to the next.
+!> Taylor polynomials from one search step to the next. The sines, cosines and exponentials
+!> of a time come from the flow's tables (chain_phases, section 2.7).
 module chain_flow
     use chain_kinds, only: wp, two_pi
+    use chain_phases, only: phase_table_t, make_phase_table, free_phase, drive_phase
     implicit none
     private
     public :: flow_t, make_flow, forced_response, forced_response_at, acceleration_at
@@ -27,6 +29,10 @@ module chain_flow
         real(wp) :: p_sin = 0       !! P of the steady state
         real(wp) :: q_cos = 0       !! Q of the steady state
         real(wp) :: forced_amp = 0  !! sqrt(P**2 + Q**2), the amplitude of the steady state
+        !> exp(-b t), (cos, sin)(gam t) and (cos, sin)(w t): the free functions up to two turns
+        !> of the free oscillation and a drive period, the drive up to two periods (the reach of
+        !> the propagators and of the gap searches)
+        type(phase_table_t) :: phases
     end type flow_t
 
 contains
@@ -48,6 +54,8 @@ contains
         flow%p_sin = amplitude*(1 - omega**2) / d2
         flow%q_cos = -2*damping*omega*amplitude / d2
         flow%forced_amp = sqrt(flow%p_sin**2 + flow%q_cos**2)
+        flow%phases = make_phase_table(damping, flow%gam, omega, &
+                                       max(2*two_pi*flow%inv_gam, flow%period), 2*flow%period)
     end function make_flow
 
     !> Steady-state position and velocity at time s within the drive cycle.
@@ -55,8 +63,10 @@ contains
         type(flow_t), intent(in) :: flow
         real(wp), intent(in) :: s
         real(wp), intent(out) :: xp, vp
+        real(wp) :: cos_wt, sin_wt
 
-        call forced_terms(flow, sin(flow%omega*s), cos(flow%omega*s), xp, vp)
+        call drive_phase(flow%phases, s, cos_wt, sin_wt)
+        call forced_terms(flow, sin_wt, cos_wt, xp, vp)
     end subroutine forced_response
 
     !> Steady-state position and velocity where the drive phase w t has sine sin_wt and
@@ -93,10 +103,10 @@ contains
         type(flow_t), intent(in) :: flow
         real(wp), value :: tau
         real(wp), intent(out) :: m(2, 2), m_inv(2, 2)
-        real(wp) :: e, inv_det, r(2, 2)
+        real(wp) :: e, cos_gt, sin_gt, inv_det, r(2, 2)
 
-        e = exp(-flow%damping*tau)
-        call rotation_terms(flow, cos(flow%gam*tau), sin(flow%gam*tau), r)
+        call free_phase(flow%phases, tau, e, cos_gt, sin_gt)
+        call rotation_terms(flow, cos_gt, sin_gt, r)
         m = e*r
         inv_det = 1/(e*e)
         m_inv(1, 1) = m(2, 2)*inv_det

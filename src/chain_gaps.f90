@@ -11,7 +11,8 @@
 !> a zero, and converges quadratically onto transversal zeros. No sign-change sampling.
 module chain_gaps
     use chain_kinds, only: wp, pi, two_pi
-    use chain_flow, only: flow_t, forced_response, propagator, motion_at
+    use chain_flow, only: flow_t, forced_response, forced_response_at, propagator, motion_at
+    use chain_phases, only: free_phase, free_decay, drive_phase, advance_free_phase, phase_angle
     implicit none
     private
     public :: gap_t, gap_search_t, next_gap_zero, gap_value, resolvable_speed, earliest_closing
@@ -23,8 +24,6 @@ module chain_gaps
     real(wp), parameter :: time_tolerance = 1.0e-13_wp !! accuracy of a located zero
     integer, parameter :: max_steps = 200000
     integer, parameter :: lazy_steps = 2      !! steps of a forced search before it defers
-    real(wp), parameter :: short_angle = 0.05_wp !! steps this short turn phases by Taylor
-    integer, parameter :: max_turns = 16      !! Taylor turns in a row before a fresh start
 
     type :: gap_t
         real(wp) :: offset = 0 !! c: constant part of the gap (a sum of spacings)
@@ -94,8 +93,7 @@ contains
             return
         end if
         tau_min = first_minimum(flow, gap%y, ss, touching)
-        e = 1
-        if (flow%damping /= 0) e = exp(-flow%damping*tau_min)
+        e = free_decay(flow%phases, tau_min)
         if (gap%offset - amp*flow%gam*e > 0) return
         res%status = search_root
         res%tau = halley_zero(flow, gap%offset, gap%y, ss, amp, tau_min, e)
@@ -111,16 +109,31 @@ contains
         logical, intent(in) :: touching
         real(wp) :: tau_min
 
-        tau_min = modulo(pi - flow%alpha + atan2(ss, cc), two_pi)*flow%inv_gam
+        tau_min = wrap_angle(pi - flow%alpha + phase_angle(cc, ss))*flow%inv_gam
         if (touching .and. tau_min < 0.5_wp*pi*flow%inv_gam) &
             tau_min = tau_min + two_pi*flow%inv_gam
     end function first_minimum
 
+    !> modulo(x, two_pi) for -two_pi < x < 2 two_pi, bit for bit, without its call to fmod
+    !> (fmod is exact there, and so are these sums by Sterbenz's lemma, except x + two_pi
+    !> for x < 0, which is what modulo computes too).
+    pure function wrap_angle(x) result(wrapped)
+        real(wp), intent(in) :: x
+        real(wp) :: wrapped
+
+        wrapped = x
+        if (wrapped < 0) then
+            wrapped = wrapped + two_pi
+        else if (wrapped >= two_pi) then
+            wrapped = wrapped - two_pi
+        end if
+    end function wrap_angle
+
     !> The zero of c + y(tau) on the decreasing branch of y before its minimum at tau_min
     !> (where exp(-b tau_min) = e and c + y < 0), by Halley's method safeguarded by bisection.
     !> The iteration carries exp(-b tau), cos(theta) and sin(theta) along and updates them by
-    !> the step (angle addition), so a search costs one atan2, one acos and an exponential or
-    !> two, whatever the steps.
+    !> the step (angle addition), so a search costs one atan2 and one acos (and look-ups in the
+    !> flow's tables), whatever the steps.
     pure function halley_zero(flow, offset, cc, ss, amp, tau_min, e) result(root)
         type(flow_t), intent(in) :: flow
         real(wp), intent(in) :: offset, cc, ss, amp, tau_min, e
@@ -136,12 +149,12 @@ contains
         ! first guess: the zero of the same (decreasing) branch with the decay frozen at
         ! tau_min, theta = acos(q); it lies at or after the true zero, whose |cos| is smaller
         q = max(-1.0_wp, -offset/(amp*e))
-        step = (pi - flow%alpha - acos(q))*flow%inv_gam
-        tau = tau_min - step
         cos_th = q
-        sin_th = sqrt(max(0.0_wp, 1 - q**2))
-        decay = e
-        if (b /= 0) decay = e*exp(b*step)
+        sin_th = sqrt(max(0.0_wp, (1 - q)*(1 + q)))
+        ! theta = acos(q), as the angle of (cos_th, sin_th)
+        step = (pi - flow%alpha - phase_angle(cos_th, sin_th))*flow%inv_gam
+        tau = tau_min - step
+        decay = free_decay(flow%phases, tau)
         if (tau < lo .or. tau > hi) then
             tau = min(hi, max(lo, tau))
             call phase_at(flow, cc, ss, amp, tau, decay, cos_th, sin_th)
@@ -177,7 +190,7 @@ contains
                     root = min(hi, max(lo, tau + step))
                     return
                 end if
-                call rotate_phase(flow, step, decay, cos_th, sin_th)
+                call advance_free_phase(flow%phases, step, decay, cos_th, sin_th)
                 tau = tau + step
             else
                 ! bisection: a fresh evaluation, no accumulated rotations
@@ -201,86 +214,10 @@ contains
         real(wp), intent(out) :: decay, cos_th, sin_th
         real(wp) :: cg, sg
 
-        decay = exp(-flow%damping*t)
-        cg = cos(flow%gam*t)
-        sg = sin(flow%gam*t)
+        call free_phase(flow%phases, t, decay, cg, sg)
         cos_th = (cg*cc + sg*ss)/amp
         sin_th = (sg*cc - cg*ss)/amp
     end subroutine phase_at
-
-    !> Move exp(-b t), cos(theta), sin(theta) on by a time step h: short steps (the Halley
-    !> corrections) by Taylor polynomials accurate to rounding, long ones by the library.
-    pure subroutine rotate_phase(flow, h, decay, cos_th, sin_th)
-        type(flow_t), intent(in) :: flow
-        real(wp), intent(in) :: h
-        real(wp), intent(inout) :: decay, cos_th, sin_th
-        real(wp) :: x, u, cd, sd
-
-        x = flow%gam*h
-        u = -flow%damping*h
-        if (max(abs(x), abs(u)) <= short_angle) then
-            call short_cis(x, cd, sd)
-            decay = decay*short_exp(u)
-        else
-            cd = cos(x)
-            sd = sin(x)
-            decay = decay*exp(u)
-        end if
-        call turn(cd, sd, cos_th, sin_th)
-    end subroutine rotate_phase
-
-    !> (cos, sin) of an angle turned on by the angle with cosine cd and sine sd.
-    pure subroutine turn(cd, sd, cos_a, sin_a)
-        real(wp), intent(in) :: cd, sd
-        real(wp), intent(inout) :: cos_a, sin_a
-        real(wp) :: c0
-
-        c0 = cos_a
-        cos_a = c0*cd - sin_a*sd
-        sin_a = sin_a*cd + c0*sd
-    end subroutine turn
-
-    !> cos x and sin x for |x| <= short_angle by Taylor polynomials; the remainders are below
-    !> x**8 / 8! (|x| <= 1e-3) or x**12 / 12!: under 1e-19 relative.
-    pure subroutine short_cis(x, cd, sd)
-        real(wp), intent(in) :: x
-        real(wp), intent(out) :: cd, sd
-        real(wp), parameter :: s3 = -1/6.0_wp, s5 = 1/120.0_wp, s7 = -1/5040.0_wp, &
-                               s9 = 1/362880.0_wp
-        real(wp), parameter :: c2 = -1/2.0_wp, c4 = 1/24.0_wp, c6 = -1/720.0_wp, &
-                               c8 = 1/40320.0_wp, c10 = -1/3628800.0_wp
-        real(wp) :: x2, x4
-
-        x2 = x*x
-        ! Estrin's scheme: pairs of terms evaluated side by side, a short dependency chain
-        if (abs(x) <= 1.0e-3_wp) then
-            sd = x + (x*x2)*(s3 + x2*s5)
-            cd = (1 + c2*x2) + (x2*x2)*(c4 + c6*x2)
-        else
-            x4 = x2*x2
-            sd = x + (x*x2)*((s3 + x2*s5) + x4*(s7 + x2*s9))
-            cd = (1 + c2*x2) + x4*((c4 + c6*x2) + x4*(c8 + c10*x2))
-        end if
-    end subroutine short_cis
-
-    !> exp(u) for |u| <= short_angle by its Taylor polynomial (remainder under 1e-19 relative).
-    pure function short_exp(u) result(ed)
-        real(wp), intent(in) :: u
-        real(wp) :: ed, u2, u4
-        real(wp), parameter :: e2 = 1/2.0_wp, e3 = 1/6.0_wp, e4 = 1/24.0_wp, e5 = 1/120.0_wp, &
-                               e6 = 1/720.0_wp, e7 = 1/5040.0_wp, e8 = 1/40320.0_wp, &
-                               e9 = 1/362880.0_wp
-
-        u2 = u*u
-        ! Estrin's scheme, as in short_cis
-        if (abs(u) <= 1.0e-3_wp) then
-            ed = (1 + u) + u2*((e2 + e3*u) + u2*((e4 + e5*u) + e6*u2))
-        else
-            u4 = u2*u2
-            ed = ((1 + u) + u2*(e2 + e3*u)) + u4*(((e4 + e5*u) + u2*(e6 + e7*u)) + &
-                                               u4*(e8 + e9*u))
-        end if
-    end function short_exp
 
     !> Zero of c + y(tau) + beta xp(s0 + tau) by Taylor-bounded conservative advancement.
     pure function forced_gap_zero(flow, gap, s0, horizon) result(res)
@@ -290,7 +227,7 @@ contains
         type(gap_search_t) :: res
         real(wp) :: b, w, ry0, rp, tau, e, ry, g, g1, g2, g3, m2, m4, h, tol
         real(wp) :: cg, sg, cw, sw, y, vy, ay, jy, xp, vp
-        integer :: it, turns
+        integer :: it
 
         b = flow%damping
         w = flow%omega
@@ -299,10 +236,20 @@ contains
         tol = noise(gap%offset, ry0 + rp)
         tau = 0
         h = 0
-        turns = 0
         do it = 1, max_steps
-            call phases_at_step(flow, s0, tau, h, turns, e, cg, sg, cw, sw)
-            call motion_at(flow, e, cg, sg, sw, cw, gap%y, gap%vy, y, vy, xp, vp)
+            ! every step from the tables afresh: no rounding carried from step to step (the
+            ! first is at the start, where the free part is the gap's own)
+            if (it == 1) then
+                e = 1
+                y = gap%y
+                vy = gap%vy
+                call drive_phase(flow%phases, s0, cw, sw)
+                call forced_response_at(flow, sw, cw, xp, vp)
+            else
+                call free_phase(flow%phases, tau, e, cg, sg)
+                call drive_phase(flow%phases, s0 + tau, cw, sw)
+                call motion_at(flow, e, cg, sg, sw, cw, gap%y, gap%vy, y, vy, xp, vp)
+            end if
             ry = ry0*e
             if (gap%offset - ry - rp > 0) then
                 res%status = search_none
@@ -344,42 +291,6 @@ contains
         res%tau = tau
         if (it > max_steps) res%info = 1
     end function forced_gap_zero
-
-    !> exp(-b tau) = e, cos and sin of gam tau (cg, sg) and of w (s0 + tau) (cw, sw) after a
-    !> step h to tau: short steps turn the previous ones by Taylor polynomials (counted in
-    !> `turns`), others (and every max_turns-th) start afresh.
-    pure subroutine phases_at_step(flow, s0, tau, h, turns, e, cg, sg, cw, sw)
-        type(flow_t), intent(in) :: flow
-        real(wp), intent(in) :: s0, tau, h
-        integer, intent(inout) :: turns
-        real(wp), intent(inout) :: e, cg, sg, cw, sw
-        real(wp) :: b, w, cd, sd
-
-        b = flow%damping
-        w = flow%omega
-        if (tau == 0) then
-            e = 1
-            cg = 1
-            sg = 0
-            cw = cos(w*s0)
-            sw = sin(w*s0)
-        else if (max(flow%gam*h, b*h, w*h) <= short_angle .and. turns < max_turns) then
-            turns = turns + 1
-            e = e*short_exp(-b*h)
-            call short_cis(flow%gam*h, cd, sd)
-            call turn(cd, sd, cg, sg)
-            call short_cis(w*h, cd, sd)
-            call turn(cd, sd, cw, sw)
-        else
-            turns = 0
-            e = 1
-            if (b /= 0) e = exp(-b*tau)
-            cg = cos(flow%gam*tau)
-            sg = sin(flow%gam*tau)
-            cw = cos(w*(s0 + tau))
-            sw = sin(w*(s0 + tau))
-        end if
-    end subroutine phases_at_step
 
     !> Largest h with g + g1 h - m h**2/2 >= 0 on [0, h] (g >= 0, m > 0).
     pure function quadratic_step(g, g1, m) result(h)

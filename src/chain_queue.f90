@@ -4,6 +4,11 @@
 !> move a bond down, miss the cache half as often. Ties are broken by the bond index, which
 !> makes the order of events independent of how the heap was filled; the engine orders the
 !> bonds due at exactly one time by its own rule (`queue_ties` lists them).
+!>
+!> A short queue (up to `scan_limit` bonds) keeps no heap: an update only stores the time, and
+!> the top is found by a scan of the times in bond order. An event updates two or three bonds
+!> and asks for the top once, and a scan of a few cache lines costs less than keeping a heap
+!> in order (the paper's n = 16: 17 bonds). Both forms give the same top, ties included.
 !> Implements docs/model.md sections 2.4 (the event schedule) and 5.6 (ties between events).
 module chain_queue
     use chain_kinds, only: wp
@@ -12,9 +17,11 @@ module chain_queue
     public :: queue_t, queue_init, queue_set, queue_top, queue_shift, queue_ties
 
     integer, parameter :: arity = 4
+    integer, parameter :: scan_limit = 32 !! queues of up to this many bonds keep no heap
 
     type :: queue_t
         integer :: size = 0
+        logical :: scan = .false.        !! a short queue: the top is found by a scan of time
         real(wp), allocatable :: time(:) !! time(0:n): event time of each bond
         integer, allocatable :: heap(:)  !! heap(1:size): bonds in heap order
         real(wp), allocatable :: key(:)  !! key(1:size): their times, side by side in heap
@@ -32,6 +39,7 @@ contains
         integer :: j
 
         q%size = n_bonds
+        q%scan = n_bonds <= scan_limit
         allocate (q%time(0:n_bonds - 1), q%heap(n_bonds), q%key(n_bonds), q%slot(0:n_bonds - 1))
         q%time = never
         q%key = never
@@ -41,14 +49,45 @@ contains
         end do
     end subroutine queue_init
 
-    !> Bond with the earliest event, and its time.
-    pure subroutine queue_top(q, bond, time)
+    !> Bond with the earliest event, and its time; `tied`: another bond is due at that time.
+    pure subroutine queue_top(q, bond, time, tied)
         type(queue_t), intent(in) :: q
         integer, intent(out) :: bond
         real(wp), intent(out) :: time
+        logical, intent(out), optional :: tied
+        integer :: j, first
+        real(wp) :: earliest, t
+        logical :: equal
 
-        bond = q%heap(1)
-        time = q%key(1)
+        if (q%scan) then
+            ! the first of the earliest: the lowest bond wins a tie, as in the heap (locals,
+            ! not the arguments, so that the loop keeps them in registers)
+            first = 0
+            earliest = q%time(0)
+            equal = .false.
+            do j = 1, q%size - 1
+                t = q%time(j)
+                if (t <= earliest) then
+                    ! a tie with the earliest so far, or a new earliest (and no tie yet)
+                    equal = t == earliest
+                    if (.not. equal) then
+                        first = j
+                        earliest = t
+                    end if
+                end if
+            end do
+            bond = first
+            time = earliest
+        else
+            bond = q%heap(1)
+            time = q%key(1)
+            ! a key equals the minimum only if its parent's does: look at the root's children
+            equal = .false.
+            do j = 2, min(arity + 1, q%size)
+                if (q%key(j) == time) equal = .true.
+            end do
+        end if
+        if (present(tied)) tied = equal
     end subroutine queue_top
 
     !> The bonds whose event is due at exactly the earliest time (ties[1:count]). Those keys
@@ -58,7 +97,18 @@ contains
         integer, intent(inout) :: ties(:) !! room for every bond
         integer, intent(out) :: count
         integer :: seen, j, c
+        real(wp) :: first
 
+        if (q%scan) then
+            first = minval(q%time)
+            count = 0
+            do j = 0, q%size - 1
+                if (q%time(j) /= first) cycle
+                count = count + 1
+                ties(count) = j
+            end do
+            return
+        end if
         count = 1
         ties(1) = 1
         seen = 0
@@ -83,6 +133,10 @@ contains
         real(wp), intent(in) :: time
         real(wp) :: old
 
+        if (q%scan) then
+            q%time(bond) = time
+            return
+        end if
         old = q%time(bond)
         if (time == old) return
         q%time(bond) = time
@@ -98,7 +152,9 @@ contains
         type(queue_t), intent(inout) :: q
         real(wp), intent(in) :: dt, never
         where (q%time < never) q%time = q%time - dt
-        where (q%key < never) q%key = q%key - dt
+        if (.not. q%scan) then
+            where (q%key < never) q%key = q%key - dt
+        end if
     end subroutine queue_shift
 
     !> Does (time ta, bond a) come before (tb, b)? Ties go to the lower bond index.

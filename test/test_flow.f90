@@ -1,8 +1,10 @@
 !> docs/model.md section 2: the closed-form flow against the analytic steady state, the semigroup
-!> property, the determinant, and an independent power-series integration of the ODE.
+!> property, the determinant, and an independent power-series integration of the ODE; the
+!> flow's tables of exp, cos and sin (section 2.7) against the library at every kind of time.
 module test_flow
     use chain_kinds, only: wp, two_pi
     use chain_flow, only: flow_t, make_flow, forced_response, propagator, advance_state
+    use chain_phases, only: free_phase, free_decay, drive_phase, advance_free_phase, phase_angle
     use testing, only: tally_t, check, check_close
     implicit none
     private
@@ -58,7 +60,106 @@ contains
             call check_close(t, v, vs, 'closed form equals series integration (v)', &
                              rel_tol=1.0e-12_wp, abs_tol=1.0e-13_wp)
         end do
+        call check_phase_tables(t)
+        call check_phase_angle(t)
     end subroutine run_flow_tests
+
+    !> phase_angle(c, s) is the library's atan2(s, c) to a few ulp of the angle, in every
+    !> octant and at every scale, on the axes and diagonals, and gives acos(q) as the angle
+    !> of (q, sqrt((1 - q) (1 + q))) to a few ulp.
+    subroutine check_phase_angle(t)
+        type(tally_t), intent(inout) :: t
+        real(wp), parameter :: eps = epsilon(1.0_wp)
+        real(wp) :: c, s, u, v, want, err_atan, err_acos, q
+        integer :: k
+
+        err_atan = 0
+        err_acos = 0
+        do k = 0, 200000
+            u = sin(12.9898_wp*k + 1.3_wp)*43758.5453_wp
+            u = u - floor(u)
+            v = sin(78.233_wp*k + 0.7_wp)*24634.6345_wp
+            v = v - floor(v)
+            c = cos(7*u)*10.0_wp**(6*v - 3)
+            s = sin(7*u)*10.0_wp**(6*v - 3)
+            select case (mod(k, 7))
+            case (0)
+                s = 0             ! on an axis
+            case (1)
+                c = merge(s, -s, v < 0.5_wp) ! on a diagonal
+            case (2)
+                s = s*1.0e-12_wp  ! next to an axis
+            end select
+            want = atan2(s, c)
+            err_atan = max(err_atan, abs(phase_angle(c, s) - want)/max(abs(want), tiny(1.0_wp)))
+            q = 2*u - 1
+            if (mod(k, 5) == 0) q = sign(1 - 10.0_wp**(-16*v), q) ! near +-1
+            err_acos = max(err_acos, abs(phase_angle(q, sqrt((1 - q)*(1 + q))) - acos(q)) &
+                           /max(acos(q), tiny(1.0_wp)))
+        end do
+        call check(t, err_atan <= 4*eps, "phase_angle is the library's atan2 to a few ulp")
+        call check(t, err_acos <= 4*eps, "phase_angle of (q, sqrt(1 - q**2)) is acos(q) to a "// &
+                   'few ulp')
+        if (err_atan > 4*eps .or. err_acos > 4*eps) &
+            print '(a, 2es10.2)', '    angle errors / eps: ', err_atan/eps, err_acos/eps
+    end subroutine check_phase_angle
+
+    !> The tables and their Taylor turns agree with the library's exp, cos and sin to a few
+    !> units in the last place of the argument and of the value, at times inside the tables,
+    !> on their grid, and beyond (where the library answers), for weak and strong damping and
+    !> slow and fast drives; and a Halley-sized turn agrees with a fresh evaluation.
+    subroutine check_phase_tables(t)
+        type(tally_t), intent(inout) :: t
+        real(wp), parameter :: dampings(4) = [0.0_wp, 0.05_wp, 0.5_wp, 0.99_wp]
+        real(wp), parameter :: omegas(3) = [0.1_wp, 1.5_wp, 7.0_wp]
+        real(wp), parameter :: eps = epsilon(1.0_wp)
+        type(flow_t) :: flow
+        real(wp) :: tau, u, e, c, s, err_free, err_drive, err_turn, b, gam, w, e2, c2, s2, h
+        integer :: i, j, k
+
+        err_free = 0
+        err_drive = 0
+        err_turn = 0
+        do i = 1, size(dampings)
+            do j = 1, size(omegas)
+                flow = make_flow(dampings(i), 1.0_wp, omegas(j))
+                b = flow%damping
+                gam = flow%gam
+                w = flow%omega
+                do k = 0, 40000
+                    ! up to 70 time units, beyond the free table (64) and the drive's (2 T)
+                    u = sin(12.9898_wp*k + 78.233_wp*i + 3.7_wp*j)*43758.5453_wp
+                    u = u - floor(u)
+                    ! now and then a point of the grid
+                    tau = merge(mod(k, 2240)/32.0_wp, 70*u, mod(k, 5) == 0)
+                    call free_phase(flow%phases, tau, e, c, s)
+                    err_free = max(err_free, abs(e - exp(-b*tau))/(exp(-b*tau)*(1 + b*tau)), &
+                                   abs(c - cos(gam*tau))/(1 + gam*tau), &
+                                   abs(s - sin(gam*tau))/(1 + gam*tau), &
+                                   abs(free_decay(flow%phases, tau) - e)/e)
+                    call drive_phase(flow%phases, tau, c, s)
+                    err_drive = max(err_drive, abs(c - cos(w*tau))/(1 + w*tau), &
+                                    abs(s - sin(w*tau))/(1 + w*tau))
+                    ! a step of Halley's iteration, forward or back, short or long
+                    h = (u - 0.5_wp)*merge(1.0e-4_wp, 0.2_wp, mod(k, 2) == 0)
+                    call free_phase(flow%phases, tau, e, c, s)
+                    call advance_free_phase(flow%phases, h, e, c, s)
+                    call free_phase(flow%phases, tau + h, e2, c2, s2)
+                    err_turn = max(err_turn, abs(e - e2)/(e2*(1 + b*tau)), &
+                                   abs(c - c2)/(1 + gam*tau), abs(s - s2)/(1 + gam*tau))
+                end do
+            end do
+        end do
+        call check(t, err_free <= 4*eps, 'tables: exp(-b t), cos(gam t), sin(gam t) are the '// &
+                   "library's to a few ulp of the argument")
+        call check(t, err_drive <= 4*eps, "tables: cos(w t), sin(w t) are the library's to a "// &
+                   'few ulp of the argument')
+        call check(t, err_turn <= 8*eps, 'tables: a turn by a Halley step equals a fresh '// &
+                   'evaluation to a few ulp')
+        if (err_free > 4*eps .or. err_drive > 4*eps .or. err_turn > 8*eps) &
+            print '(a, 3es10.2)', '    table errors / eps: ', err_free/eps, err_drive/eps, &
+            err_turn/eps
+    end subroutine check_phase_tables
 
     !> Integrate x'' + 2b x' + x = A sin(w t) by power series of order 30, steps of 0.05.
     subroutine taylor_integrate(flow, s0, duration, x, v)

@@ -1,9 +1,10 @@
 !> The event queue against a brute-force minimum: after every update of a random bond, with
-!> ties in time, the top is the earliest (time, bond) pair, for queue sizes around the
-!> branching of the heap.
+!> ties in time, the top is the earliest (time, bond) pair and the ties are the bonds due
+!> then, for queue sizes around the branching of the heap and either side of the size below
+!> which the queue is scanned instead.
 module test_queue
     use chain_kinds, only: wp
-    use chain_queue, only: queue_t, queue_init, queue_set, queue_top, queue_shift
+    use chain_queue, only: queue_t, queue_init, queue_set, queue_top, queue_shift, queue_ties
     use testing, only: tally_t, check
     implicit none
     private
@@ -15,7 +16,9 @@ contains
         type(tally_t), intent(inout) :: t
         integer :: n_bonds
 
-        do n_bonds = 1, 23
+        ! short queues are scanned, longer ones kept as a heap (chain_queue's scan_limit = 32):
+        ! both forms, on either side of the limit
+        do n_bonds = 1, 40
             call random_updates(t, n_bonds, 400)
         end do
         call random_updates(t, 1000, 20000)
@@ -27,7 +30,8 @@ contains
         real(wp), parameter :: never = huge(1.0_wp)
         type(queue_t) :: q
         real(wp) :: times(0:n_bonds - 1), top_time, h
-        integer :: u, bond, top_bond, want, wrong
+        integer :: u, bond, top_bond, want, wrong, n_ties, ties(n_bonds)
+        logical :: tied, listed(0:n_bonds - 1)
         character(len=12) :: label
 
         call queue_init(q, n_bonds, never)
@@ -44,13 +48,20 @@ contains
                 call queue_shift(q, 3.0_wp, never)
                 where (times < never) times = times - 3
             end if
-            call queue_top(q, top_bond, top_time)
+            call queue_top(q, top_bond, top_time, tied)
             want = minloc(times, dim=1) - 1   ! the first (lowest bond) of the earliest
             if (top_bond /= want .or. top_time /= times(want)) wrong = wrong + 1
+            ! the bonds due at the earliest time: whether there are several, and which
+            if (tied .neqv. count(times == times(want)) > 1) wrong = wrong + 1
+            call queue_ties(q, ties, n_ties)
+            listed = .false.
+            listed(ties(:n_ties)) = .true.
+            if (count(listed) /= n_ties .or. any(listed .neqv. times == times(want))) &
+                wrong = wrong + 1
         end do
         write (label, '(i0)') n_bonds
         call check(t, wrong == 0, 'queue of '//trim(label)//' bonds: top is the earliest '// &
-                   '(time, bond) after every update')
+                   '(time, bond) after every update, and the ties are the bonds due then')
     end subroutine random_updates
 
 end module test_queue
