@@ -26,8 +26,8 @@ program bench
     use bench_yardsticks, only: transcendental_ns, dgemm_gflops
     implicit none
 
-    character(len=*), parameter :: case_names(16) = [character(len=16) :: &
-        'default', 'default-lyap', 'heavy-16', 'heavy-1024', 'heavy-16384', 'n1024-lyap10', &
+    character(len=*), parameter :: case_names(17) = [character(len=16) :: &
+        'default', 'default-lyap', 'default-adaptive', 'heavy-16', 'heavy-1024', 'heavy-16384', 'n1024-lyap10', &
         'n64-full', 'n256-full', 'n1024-full', 'n4096-lyap10', 'n4096-lyap64', 'n4096-lyap256', &
         'fig10-sweep', 'fig13-scan', 'strobe', 'strobe-record']
     character(len=:), allocatable :: only
@@ -78,6 +78,10 @@ contains
         case ('default-lyap')
             call case_chain(row, 'paper default, all 32 exponents (QR every cycle)', &
                             16, 1.7_wp, 1.5_wp, 0.05_wp, 0.7_wp, 0.3_wp, 0.3_wp, 500_i8, 32)
+        case ('default-adaptive')
+            call case_chain(row, 'paper default, all 32 exponents (adaptive QR, the default)', &
+                            16, 1.7_wp, 1.5_wp, 0.05_wp, 0.7_wp, 0.3_wp, 0.3_wp, 500_i8, 32, &
+                            qr_every=0)
         case ('heavy-16', 'heavy-1024', 'heavy-16384')
             call case_heavy(row, name)
         case ('n1024-lyap10')
@@ -225,13 +229,14 @@ contains
 
     !> Cases 1, 2 and 4: one chain, a transient, then timed record_cycles blocks.
     subroutine case_chain(row, label, n, amplitude, omega, damping, restitution, x_amp, &
-                          v_amp, transient, vectors, emit_state)
+                          v_amp, transient, vectors, emit_state, qr_every)
         type(row_t), intent(inout) :: row
         character(len=*), intent(in) :: label
         integer, intent(in) :: n, vectors
         real(wp), intent(in) :: amplitude, omega, damping, restitution, x_amp, v_amp
         integer(int64), intent(in) :: transient
         logical, intent(in), optional :: emit_state
+        integer, intent(in), optional :: qr_every !! 0: adaptive (default: every cycle)
         type(config_t) :: cfg
         type(chain_t) :: chain
         type(record_result_t) :: res
@@ -249,6 +254,7 @@ contains
             cfg%record%lyapunov = .true.
             cfg%record%vectors = vectors
             cfg%record%qr_every = 1
+            if (present(qr_every)) cfg%record%qr_every = qr_every
         end if
         row%vectors = vectors
         call time_cycles(cfg, chain, row)
