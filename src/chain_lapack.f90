@@ -78,6 +78,10 @@ contains
         logical, intent(in), optional :: keep_singular
         real(wp), parameter :: solve_span = 1.0e6_wp, unit_tolerance = 1.0e-10_wp
         integer, parameter :: block_width = 64
+        !> frames of at most this many columns are factorised here, without library calls:
+        !> on vectors this short, LAPACK's and the BLAS's per-call work (dnrm2's scaling, the
+        !> level-2 calls of dgeqr2, dtrsm's dispatch) cost more than the arithmetic
+        integer, parameter :: small_frame = 40
         real(wp) :: widest
         integer :: m, k, j
 
@@ -92,8 +96,13 @@ contains
         if (.not. allocated(ws%r)) allocate (ws%r(m, k), ws%tau(k), ws%work(block_width*k))
         associate (r => ws%r, tau => ws%tau, work => ws%work)
             r = a
-            call dgeqrf(m, k, r, m, tau, work, size(work), info)
-            if (info /= 0) return
+            if (k <= small_frame) then
+                call householder_qr(r, tau)
+                info = 0
+            else
+                call dgeqrf(m, k, r, m, tau, work, size(work), info)
+                if (info /= 0) return
+            end if
             widest = 0
             do j = 1, k
                 r_diag(j) = r(j, j)
@@ -104,13 +113,73 @@ contains
                 if (keep_singular .and. any(r_diag == 0)) return
             end if
             if (minval(abs(r_diag)) > widest/solve_span) then
-                call dtrsm('R', 'U', 'N', 'N', m, k, 1.0_wp, r, m, a, m)
+                if (k <= small_frame) then
+                    call solve_upper_right(r, a)
+                else
+                    call dtrsm('R', 'U', 'N', 'N', m, k, 1.0_wp, r, m, a, m)
+                end if
                 if (unit_columns(a, unit_tolerance)) return
             end if
             a = r
             call dorgqr(m, k, k, a, m, tau, work, size(work), info)
         end associate
     end subroutine qr_orthonormalise
+
+    !> Householder QR of r (m x k, m >= k) in place, in LAPACK's storage (dgeqrf's): R in the
+    !> upper triangle, the reflectors' vectors below it (first entry 1, implied) and their
+    !> factors in tau, each reflector H = I - tau (1, v)(1, v)^T built as dlarfg builds it
+    !> (beta = -sign(|x|, x(1)), R(j,j) = beta), so that dorgqr can form Q from it. Unblocked
+    !> loops over columns, for small frames (see qr_orthonormalise).
+    pure subroutine householder_qr(r, tau)
+        real(wp), intent(inout) :: r(:, :)
+        real(wp), intent(out) :: tau(:)
+        real(wp) :: alpha, beta, xnorm, scale, s
+        integer :: m, k, j, c
+
+        m = size(r, 1)
+        k = size(r, 2)
+        do j = 1, k
+            alpha = r(j, j)
+            xnorm = 0
+            if (j < m) then
+                scale = maxval(abs(r(j + 1:m, j)))
+                ! the plain sum of squares unless it could overflow or underflow
+                if (scale > 1.0e-100_wp .and. scale < 1.0e100_wp) then
+                    xnorm = sqrt(sum(r(j + 1:m, j)**2))
+                else if (scale > 0) then
+                    xnorm = norm2(r(j + 1:m, j))
+                end if
+            end if
+            if (xnorm == 0) then
+                tau(j) = 0
+                cycle
+            end if
+            beta = -sign(hypot(alpha, xnorm), alpha)
+            tau(j) = (beta - alpha)/beta
+            r(j + 1:m, j) = r(j + 1:m, j)/(alpha - beta)
+            r(j, j) = beta
+            do c = j + 1, k
+                s = tau(j)*(r(j, c) + dot_product(r(j + 1:m, j), r(j + 1:m, c)))
+                r(j, c) = r(j, c) - s
+                r(j + 1:m, c) = r(j + 1:m, c) - s*r(j + 1:m, j)
+            end do
+        end do
+    end subroutine householder_qr
+
+    !> a := a R^-1 for the upper triangle R of r (k x k of it), column by column: dtrsm's
+    !> 'R', 'U', 'N', 'N', without the library call (small frames).
+    pure subroutine solve_upper_right(r, a)
+        real(wp), intent(in) :: r(:, :)
+        real(wp), intent(inout) :: a(:, :)
+        integer :: j, l
+
+        do j = 1, size(a, 2)
+            do l = 1, j - 1
+                a(:, j) = a(:, j) - r(l, j)*a(:, l)
+            end do
+            a(:, j) = a(:, j)/r(j, j)
+        end do
+    end subroutine solve_upper_right
 
     !> Has every column of a unit length to `tolerance`?
     pure logical function unit_columns(a, tolerance)
