@@ -15,6 +15,7 @@ module chain_lapack
         real(wp), allocatable :: r(:, :)   !! the factorisation (R and the reflectors)
         real(wp), allocatable :: tau(:)
         real(wp), allocatable :: work(:)
+        real(wp), allocatable :: t(:, :)   !! dgeqrt's block reflector factors (large frames)
     end type qr_workspace_t
 
     interface
@@ -26,6 +27,14 @@ module chain_lapack
             real(wp), intent(out) :: tau(*), work(*)
             integer, intent(out) :: info
         end subroutine dgeqrf
+        subroutine dgeqrt(m, n, nb, a, lda, t, ldt, work, info)
+            import :: wp
+            implicit none
+            integer, intent(in) :: m, n, nb, lda, ldt
+            real(wp), intent(inout) :: a(lda, *)
+            real(wp), intent(out) :: t(ldt, *), work(*)
+            integer, intent(out) :: info
+        end subroutine dgeqrt
         subroutine dorgqr(m, n, k, a, lda, tau, work, lwork, info)
             import :: wp
             implicit none
@@ -82,6 +91,11 @@ contains
         !> on vectors this short, LAPACK's and the BLAS's per-call work (dnrm2's scaling, the
         !> level-2 calls of dgeqr2, dtrsm's dispatch) cost more than the arithmetic
         integer, parameter :: small_frame = 40
+        !> frames of at least this many columns are factorised by dgeqrt in blocks of
+        !> `large_block` columns (recursive panels): dgeqrf's blocks of 32 make its trailing
+        !> updates rank-32 products, which stream the whole frame per block (2048 x 2048 on
+        !> BLIS: 1.0 s against 0.58 s)
+        integer, parameter :: large_frame = 1024, large_block = 256
         real(wp) :: widest
         integer :: m, k, j
 
@@ -89,16 +103,27 @@ contains
         k = size(a, 2)
         if (allocated(ws%r)) then
             if (any(shape(ws%r) /= shape(a))) deallocate (ws%r, ws%tau, ws%work)
+            if (allocated(ws%t) .and. .not. allocated(ws%r)) deallocate (ws%t)
         end if
         ! room for LAPACK's blocked algorithms at any usual block size, without a workspace
         ! query (which costs as much as the factorisation of a small frame); a smaller
         ! lwork would only make them block less
-        if (.not. allocated(ws%r)) allocate (ws%r(m, k), ws%tau(k), ws%work(block_width*k))
+        if (.not. allocated(ws%r)) allocate (ws%r(m, k), ws%tau(k), &
+                                             ws%work(max(block_width, large_block)*k))
         associate (r => ws%r, tau => ws%tau, work => ws%work)
             r = a
             if (k <= small_frame) then
                 call householder_qr(r, tau)
                 info = 0
+            else if (k >= large_frame) then
+                if (.not. allocated(ws%t)) allocate (ws%t(large_block, k))
+                call dgeqrt(m, k, large_block, r, m, ws%t, large_block, work, info)
+                if (info /= 0) return
+                ! the same reflectors as dgeqrf's; their factors are the diagonals of the
+                ! blocks of T, which is what dorgqr takes
+                do j = 1, k
+                    tau(j) = ws%t(modulo(j - 1, large_block) + 1, j)
+                end do
             else
                 call dgeqrf(m, k, r, m, tau, work, size(work), info)
                 if (info /= 0) return

@@ -662,6 +662,13 @@ contains
                       .true.)
         call check_qr(t, reflected_kahan(32, 0.8_wp), 'U Kahan(0.8), cond 1e12', .false.)
         call check_qr(t, reflected_kahan(32, 1.0_wp), 'U Kahan(1.0), cond 4e8', .false.)
+        ! the three ways a frame is factorised (chain_lapack: by hand up to 40 columns, dgeqrf,
+        ! dgeqrt from 1024 columns), each with a safe solve and with Q by dorgqr
+        call check_qr(t, graded(96, 96, 0.25_wp, 0), 'dgeqrf frame (96 columns)', .true.)
+        call check_qr(t, graded(96, 96, 0.25_wp, 2), 'dgeqrf frame with two zero rows', .true.)
+        call check_qr(t, graded(1100, 1024, 0.01_wp, 0), 'dgeqrt frame (1024 columns)', .true.)
+        call check_qr(t, graded(1100, 1024, 0.05_wp, 0), 'dgeqrt frame, R diagonal spanning '// &
+                      '4e15 (Q by dorgqr)', .true.)
     end subroutine qr_factors
 
     !> Sweep threads factorise their frames at the same time: the BLAS and LAPACK linked in
@@ -752,13 +759,15 @@ contains
         real(wp), intent(in) :: a(:, :)
         character(len=*), intent(in) :: label
         logical, intent(in) :: exact
-        real(wp) :: q(size(a, 1), size(a, 2)), r_diag(size(a, 2)), eye(size(a, 2), size(a, 2))
-        real(wp) :: qta(size(a, 2), size(a, 2)), lower, orthonormal
+        ! (allocatable: the large frames would not fit on the stack)
+        real(wp), allocatable :: q(:, :), r_diag(:), eye(:, :), qta(:, :)
+        real(wp) :: lower, orthonormal
         type(qr_workspace_t) :: ws
         integer :: j, k, info
 
         k = size(a, 2)
         q = a
+        allocate (r_diag(k), eye(k, k))
         call qr_orthonormalise(q, r_diag, ws, info)
         eye = 0
         do j = 1, k
