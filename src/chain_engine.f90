@@ -38,7 +38,7 @@ module chain_engine
                           resolvable_speed, earliest_closing
     use chain_impact, only: pair_impact, wall_impact, pair_reset_jacobian, &
                             wall_reset_jacobian, saltation_matrix
-    use chain_model, only: model_t
+    use chain_model, only: model_t, bond_gaps
     use chain_state, only: chain_state_t, event_counts_t, contact_free, contact_left, &
                            contact_right
     use chain_queue, only: queue_t, queue_init, queue_set, queue_top, queue_shift, queue_ties
@@ -512,19 +512,10 @@ contains
     function chain_gaps_now(chain) result(gaps)
         type(chain_t), intent(inout) :: chain
         real(wp), allocatable :: gaps(:)
-        integer :: n
 
         call chain_sync(chain)
-        n = chain%n
-        allocate (gaps(0:n))
-        gaps(1:n - 1) = chain%spacing(1:n - 1) + chain%x(2:n) - chain%x(1:n - 1)
-        if (chain%walls) then
-            gaps(0) = chain%spacing(0) + chain%x(1)
-            gaps(n) = chain%spacing(n) - chain%x(n)
-        else
-            gaps(0) = huge(1.0_wp)
-            gaps(n) = huge(1.0_wp)
-        end if
+        allocate (gaps(0:chain%n))
+        gaps = bond_gaps(chain%spacing, chain%walls, chain%x)
     end function chain_gaps_now
 
     !> A chain of `model` in `state`, every bond scheduled. A state with a schedule (an

@@ -7,7 +7,7 @@ module chain_model
     use chain_kinds, only: wp
     implicit none
     private
-    public :: model_t, model_walls
+    public :: model_t, model_walls, bond_gaps
 
     type :: model_t
         integer :: n = 0                    !! oscillators
@@ -35,5 +35,24 @@ contains
             boundary = 'free'
         end if
     end function model_walls
+
+    !> Gaps of bonds 0..n at displacements x(n) (section 1.2): spacing(0:n) the rest gaps;
+    !> the end bonds of a free chain never close (huge).
+    pure function bond_gaps(spacing, walls, x) result(gaps)
+        real(wp), intent(in) :: spacing(0:), x(:)
+        logical, intent(in) :: walls
+        real(wp) :: gaps(0:size(x))
+        integer :: n
+
+        n = size(x)
+        gaps(1:n - 1) = spacing(1:n - 1) + x(2:n) - x(1:n - 1)
+        if (walls) then
+            gaps(0) = spacing(0) + x(1)
+            gaps(n) = spacing(n) - x(n)
+        else
+            gaps(0) = huge(1.0_wp)
+            gaps(n) = huge(1.0_wp)
+        end if
+    end function bond_gaps
 
 end module chain_model

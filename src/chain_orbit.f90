@@ -11,7 +11,7 @@
 module chain_orbit
     use chain_kinds, only: wp, i8, two_pi
     use chain_error, only: error_t, set_error, fmt_int
-    use chain_model, only: model_t
+    use chain_model, only: model_t, bond_gaps
     use chain_flow, only: flow_t, make_flow, propagator, forced_response
     use chain_engine, only: chain_t, chain_positions, chain_velocities, chain_counts, &
                             chain_contacts, chain_next_event, chain_advance, chain_sync, &
@@ -24,7 +24,7 @@ module chain_orbit
     use chain_lapack, only: solve_linear
     implicit none
     private
-    public :: orbit_t, orbit_options_t, find_orbit, orbit_gap_minimum
+    public :: orbit_t, orbit_options_t, find_orbit, orbit_gap_minimum, interleave
 
     !> How Newton is run.
     type :: orbit_options_t
@@ -195,7 +195,7 @@ contains
         integer :: k
 
         pass%z = z
-        pass%admissible = .not. any(gaps_of(model, z(1::2)) < 0)
+        pass%admissible = .not. any(bond_gaps(model%spacing, model%walls, z(1::2)) < 0)
         if (.not. pass%admissible) return
         call chain_at_section(model, phase, z(1::2), z(2::2), chain, err)
         if (allocated(err)) return
@@ -315,7 +315,7 @@ contains
             end do
             rate_before = gap_rates(model, vb)
             rate_after = gap_rates(model, va)
-            values = gaps_of(model, xa)
+            values = bond_gaps(model%spacing, model%walls, xa)
             do k = 0, model%n
                 if (own(k) .or. abs(values(k)) == huge(1.0_wp)) cycle
                 if (rate_before(k) <= 0 .and. rate_after(k) >= 0 .and. values(k) < gap) then
@@ -498,26 +498,6 @@ contains
 
     ! ------------------------------------------------------------------------- helpers
 
-    !> The gaps of bonds 0..n at positions x (section 1.2); huge for the ends of a free chain.
-    pure function gaps_of(model, x) result(gaps)
-        type(model_t), intent(in) :: model
-        real(wp), intent(in) :: x(:)
-        real(wp), allocatable :: gaps(:)
-        integer :: n
-
-        n = model%n
-        allocate (gaps(0:n))
-        ! (by position: a model's spacing may come with any lower bound)
-        gaps = model%spacing
-        gaps(1:n - 1) = gaps(1:n - 1) + x(2:n) - x(1:n - 1)
-        gaps(0) = huge(1.0_wp)
-        gaps(n) = huge(1.0_wp)
-        if (model%walls) then
-            gaps(0) = model%spacing(lbound(model%spacing, 1)) + x(1)
-            gaps(n) = model%spacing(ubound(model%spacing, 1)) - x(n)
-        end if
-    end function gaps_of
-
     !> The rates of the gaps of bonds 0..n at velocities v (0 for the ends of a free chain).
     pure function gap_rates(model, v) result(rates)
         type(model_t), intent(in) :: model
@@ -536,7 +516,7 @@ contains
         end if
     end function gap_rates
 
-    !> z = (x(1), v(1), ..., x(n), v(n)).
+    !> z = (x(1), v(1), ..., x(n), v(n)): the state in the order of the Jacobian's rows.
     pure function interleave(x, v) result(z)
         real(wp), intent(in) :: x(:), v(:)
         real(wp), allocatable :: z(:)

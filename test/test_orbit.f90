@@ -16,7 +16,7 @@ module test_orbit
     use chain_section, only: advance_to_point, chain_at_section
     use chain_floquet, only: floquet_multipliers
     use chain_lapack, only: solve_linear
-    use chain_orbit, only: orbit_t, orbit_options_t, find_orbit
+    use chain_orbit, only: orbit_t, orbit_options_t, find_orbit, interleave
     use test_engine, only: make_chain
     use test_chains, only: model_of
     use testing, only: tally_t, check, check_close
@@ -413,14 +413,5 @@ contains
             same = .false.
         end if
     end subroutine map_of
-
-    pure function interleave(x, v) result(z)
-        real(wp), intent(in) :: x(:), v(:)
-        real(wp), allocatable :: z(:)
-
-        allocate (z(2*size(x)))
-        z(1::2) = x
-        z(2::2) = v
-    end function interleave
 
 end module test_orbit

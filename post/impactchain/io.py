@@ -583,16 +583,13 @@ def _read_sweep_v2(g: h5py.Group, path: str, n: int) -> Sweep:
         point2 = _dataset(g, path, "point2", (None,), float)
         n2 = point2.shape[0]
         axes: tuple[int, ...] = (n1, n2)
-        values = np.column_stack([np.tile(point, n2), np.repeat(point2, n1)])
     else:
+        point2 = None
         axes = (n1,)
-        values = np.array(point)
+    values = _point_values(point, point2)
 
     def per_point(name: str, tail: tuple[int | None, ...], dtype: type) -> np.ndarray:
-        data = _dataset(g, path, name, axes + tail, dtype)
-        if parameter2:  # (n1, n2, ...) -> points p = i + n1*j
-            data = np.swapaxes(data, 0, 1).reshape((n1 * n2,) + data.shape[2:])
-        return _frozen(data)
+        return _frozen(_flat_points(_dataset(g, path, name, axes + tail, dtype), bool(parameter2)))
 
     exponents = per_point("exponents", (None,), float) if "exponents" in g else None
     k = None if exponents is None else exponents.shape[1]
@@ -783,6 +780,22 @@ def is_sweep_dataset(data: Any) -> bool:
             and "parameter" in attrs and "input_namelist" in attrs)
 
 
+def _point_values(point: np.ndarray, point2: np.ndarray | None) -> np.ndarray:
+    """A sweep's parameter values as version 1 lists them: (n1,), or (n1 n2, 2) with point
+    p = i + n1 j at (point[i], point2[j])."""
+    if point2 is None:
+        return np.array(point)
+    return np.column_stack([np.tile(point, point2.size), np.repeat(point2, point.size)])
+
+
+def _flat_points(data: np.ndarray, two_d: bool) -> np.ndarray:
+    """Per-point data (n1, [n2,] ...) as version 1 lists it: (n1 n2, ...), p = i + n1 j."""
+    if not two_d:
+        return data
+    n1, n2 = data.shape[:2]
+    return np.swapaxes(data, 0, 1).reshape((n1 * n2,) + data.shape[2:])
+
+
 def run_from_sweep(ds: Any) -> Run:
     """A :class:`Run` holding the sweep of :func:`impactchain.api.sweep` (an xarray Dataset),
     for the figures: ``Run.sweep`` with its points in the file's order (version 1's flat
@@ -792,24 +805,12 @@ def run_from_sweep(ds: Any) -> Run:
         raise TypeError(f"{type(ds).__name__} is not a sweep of impactchain.api.sweep")
     attrs = ds.attrs
     two_d = bool(attrs["parameter2"])
-    n1 = ds.sizes["point"]
-    n2 = ds.sizes["point2"] if two_d else 1
 
     def flat(name: str) -> np.ndarray | None:
-        """(n1, [n2,] ...) -> (n1 n2, ...), p = i + n1 j."""
-        if name not in ds:
-            return None
-        a = np.asarray(ds[name].values)
-        if two_d:
-            a = np.swapaxes(a, 0, 1).reshape((n1 * n2,) + a.shape[2:])
-        return _frozen(a)
+        return _frozen(_flat_points(np.asarray(ds[name].values), two_d)) if name in ds else None
 
-    point = np.asarray(ds["point"].values)
-    if two_d:
-        point2 = np.asarray(ds["point2"].values)
-        values = np.column_stack([np.tile(point, n2), np.repeat(point2, n1)])
-    else:
-        values = point
+    values = _point_values(np.asarray(ds["point"].values),
+                           np.asarray(ds["point2"].values) if two_d else None)
     drive_period = None
     if "drive_period" in ds:
         axis = 0 if attrs["parameter"] == "omega" else 1
