@@ -9,12 +9,14 @@ program main
                            record_result_t, run_sweep, sweep_summary_t, checkpoint_path, &
                            catch_interrupts, cli_t, parse_command_line, cli_run, &
                            cli_help, cli_version, cli_usage, code_version, config_summary, &
-                           plan_sweep, validate_sweep_points
+                           plan_sweep, validate_sweep_points, branches_t, &
+                           continuation_to_file
     use stderr_monitor, only: stderr_monitor_t, close_progress
     implicit none
     type(config_t) :: cfg
     type(record_result_t) :: summary
     type(sweep_summary_t) :: sweep_summary
+    type(branches_t) :: branches
     type(error_t), allocatable :: err
     type(cli_t) :: cli
     type(stderr_monitor_t) :: monitor
@@ -44,7 +46,17 @@ program main
         stop
     end if
     call catch_interrupts()
-    if (cfg%sweep) then
+    if (cfg%continuation) then
+        call continuation_to_file(cfg, branches, err, monitor)
+        call close_progress(monitor)
+        if (allocated(err)) call fail(err%message)
+        if (branches%stopped) then
+            write (error_unit, '(a)') 'impactchain: the continuation was stopped; nothing '// &
+                'was written'
+            stop 3, quiet=.true.
+        end if
+        call report_branches(branches, cfg%output_file)
+    else if (cfg%sweep) then
         call run_sweep(cfg, sweep_summary, err, monitor)
         call close_progress(monitor)
         if (allocated(err)) call fail(err%message)
@@ -111,6 +123,23 @@ contains
                 'command again to resume from '//checkpoint
         end if
     end subroutine report_sweep
+
+    !> Points and special points found, and why each branch ended (a Newton failure is a
+    !> result: the file then says so too).
+    subroutine report_branches(res, output_file)
+        type(branches_t), intent(in) :: res
+        character(len=*), intent(in) :: output_file
+        integer :: j
+
+        write (output_unit, '(a)') 'impactchain: wrote '//output_file
+        write (output_unit, '(a,i0,a,i0)') '  orbits ', res%n_points, ', special points ', &
+            res%n_specials
+        do j = 1, res%n_specials
+            write (output_unit, '(a,es22.14,a,i0,a)') '  '//res%specials(j)%kind//' at ', &
+                res%specials(j)%value, ' (point ', res%specials(j)%point - 1, ')'
+        end do
+        write (output_unit, '(a)') '  '//res%end_reason
+    end subroutine report_branches
 
     subroutine fail(message)
         character(len=*), intent(in) :: message

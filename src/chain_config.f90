@@ -1,7 +1,8 @@
 !> The run configuration: namelist input, defaults, and validation with messages that name the
 !> group, the key, the value and the allowed range.
 !>
-!> Groups: &chain (the model, required), &initial, &run, &lyapunov, &output, &sweep (optional).
+!> Groups: &chain (the model, required), &initial, &run, &lyapunov, &output, &sweep,
+!> &continuation (optional).
 !> Every key is documented in the README. A group may appear at most once; an unknown group or
 !> key is an error, never silently ignored.
 !> The model's parameters are those of docs/model.md section 1; run, Lyapunov and sweep keys
@@ -11,7 +12,8 @@ module chain_config
     use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
     use chain_kinds, only: wp, i8, two_pi
     use chain_error, only: error_t, set_error, fmt_real, fmt_int, fmt_int8
-    use chain_model, only: model_t, model_walls
+    use chain_model, only: model_t, model_walls, model_parameters, model_parameter, &
+                           set_model_parameter
     use chain_record, only: record_spec_t, vector_count
     use chain_lyapunov, only: running_rows
     use chain_namelist, only: key_spec_t, key_integer, key_real, key_logical, key_string, &
@@ -25,8 +27,9 @@ module chain_config
     integer, parameter :: max_list = 100001
     integer, parameter :: max_n = 10000000
     real(wp), parameter :: unset = -huge(1.0_wp)
-    character(len=*), parameter :: group_names(6) = &
-        [character(len=8) :: 'chain', 'initial', 'run', 'lyapunov', 'output', 'sweep']
+    character(len=*), parameter :: group_names(7) = &
+        [character(len=12) :: 'chain', 'initial', 'run', 'lyapunov', 'output', 'sweep', &
+         'continuation']
     !> Every key of every group with its type: what the namelist statements of the read_*
     !> procedures below declare (test/python/test_namelist_errors.py checks the two agree).
     type(key_spec_t), parameter :: input_keys(*) = [ &
@@ -68,9 +71,14 @@ module chain_config
         key_spec_t('sweep', 'parameter2', key_string, .false.), &
         key_spec_t('sweep', 'start2', key_real, .false.), &
         key_spec_t('sweep', 'stop2', key_real, .false.), &
-        key_spec_t('sweep', 'step2', key_real, .false.)]
-    character(len=*), parameter :: sweep_parameters(5) = &
-        [character(len=11) :: 'amplitude', 'omega', 'damping', 'restitution', 'spacing']
+        key_spec_t('sweep', 'step2', key_real, .false.), &
+        key_spec_t('continuation', 'parameter', key_string, .false.), &
+        key_spec_t('continuation', 'stop', key_real, .false.), &
+        key_spec_t('continuation', 'step', key_real, .false.), &
+        key_spec_t('continuation', 'period', key_integer, .false.), &
+        key_spec_t('continuation', 'max_points', key_integer, .false.), &
+        key_spec_t('continuation', 'doublings', key_integer, .false.)]
+    character(len=*), parameter :: sweep_parameters(*) = model_parameters
 
     type :: config_t
         !> &chain, and &run stick_speed: everything the dynamics depends on
@@ -92,6 +100,11 @@ module chain_config
         character(len=:), allocatable :: sweep_parameter, sweep_parameter2, sweep_mode
         real(wp) :: sweep_start = 0, sweep_stop = 0, sweep_step = 0
         real(wp) :: sweep_start2 = 0, sweep_stop2 = 0, sweep_step2 = 0
+        ! &continuation: periodic orbits and their branches (chain_branch)
+        logical :: continuation = .false.
+        character(len=:), allocatable :: cont_parameter
+        real(wp) :: cont_stop = 0, cont_step = 0
+        integer :: cont_period = 1, cont_max_points = 200, cont_doublings = 0
         ! the input as read
         character(len=:), allocatable :: input_text
     end type config_t
@@ -141,6 +154,7 @@ contains
         if (.not. allocated(err) .and. present_groups(4)) call read_lyapunov(u, cfg, err)
         if (.not. allocated(err) .and. present_groups(5)) call read_output(u, cfg, err)
         if (.not. allocated(err) .and. present_groups(6)) call read_sweep(u, cfg, err)
+        if (.not. allocated(err) .and. present_groups(7)) call read_continuation(u, cfg, err)
         close (u)
         if (allocated(err)) return
         if (.not. allocated(cfg%initial_kind)) cfg%initial_kind = 'rest'
@@ -149,6 +163,7 @@ contains
         if (.not. allocated(cfg%sweep_mode)) cfg%sweep_mode = 'continuation'
         if (.not. allocated(cfg%sweep_parameter)) cfg%sweep_parameter = ''
         if (.not. allocated(cfg%sweep_parameter2)) cfg%sweep_parameter2 = ''
+        if (.not. allocated(cfg%cont_parameter)) cfg%cont_parameter = ''
         if (.not. allocated(cfg%x0)) allocate (cfg%x0(0))
         if (.not. allocated(cfg%v0)) allocate (cfg%v0(0))
         call validate_config(cfg, err)
@@ -523,6 +538,44 @@ contains
         end if
     end subroutine read_sweep
 
+    subroutine read_continuation(u, cfg, err)
+        integer, intent(in) :: u
+        type(config_t), intent(inout) :: cfg
+        type(error_t), allocatable, intent(out) :: err
+        character(len=64) :: parameter
+        real(wp) :: stop, step
+        integer :: period, max_points, doublings, ios
+        character(len=512) :: msg
+        namelist /continuation/ parameter, stop, step, period, max_points, doublings
+
+        parameter = ''
+        stop = unset
+        step = unset
+        period = 1
+        max_points = 200
+        doublings = 0
+        rewind (u)
+        read (u, nml=continuation, iostat=ios, iomsg=msg)
+        if (ios /= 0) then
+            call group_error(err, 'continuation', ios, msg)
+            return
+        end if
+        if (max_points /= 1 .and. (stop == unset .or. step == unset)) then
+            call set_error(err, "&continuation: stop and step are required (unless "// &
+                           "max_points = 1: Newton only)")
+            return
+        end if
+        cfg%continuation = .true.
+        cfg%cont_parameter = lower(trim(adjustl(parameter)))
+        cfg%cont_stop = stop
+        cfg%cont_step = step
+        if (stop == unset) cfg%cont_stop = 0
+        if (step == unset) cfg%cont_step = 0
+        cfg%cont_period = period
+        cfg%cont_max_points = max_points
+        cfg%cont_doublings = doublings
+    end subroutine read_continuation
+
     !> Check every value against its allowed range (also used for values given from Python),
     !> group by group; the first value out of range is the error.
     subroutine validate_config(cfg, err)
@@ -535,6 +588,7 @@ contains
         if (.not. allocated(err)) call validate_lyapunov(cfg, err)
         if (.not. allocated(err)) call validate_output(cfg, err)
         if (.not. allocated(err) .and. cfg%sweep) call validate_sweep(cfg, err)
+        if (.not. allocated(err) .and. cfg%continuation) call validate_continuation(cfg, err)
     end subroutine validate_config
 
     subroutine validate_chain(cfg, err)
@@ -728,6 +782,59 @@ contains
         end if
     end subroutine validate_sweep
 
+    !> The start value is the one in &chain; the branch runs from it towards `stop`.
+    subroutine validate_continuation(cfg, err)
+        type(config_t), intent(in) :: cfg
+        type(error_t), allocatable, intent(out) :: err
+        type(config_t) :: far
+
+        if (cfg%sweep) then
+            call set_error(err, "&continuation cannot be combined with &sweep (run them as "// &
+                             "two inputs)")
+        else if (.not. any(sweep_parameters == cfg%cont_parameter)) then
+            call set_error(err, "&continuation: parameter = '"//cfg%cont_parameter// &
+                           "' is not one of amplitude, omega, damping, restitution, spacing")
+        else if (cfg%cont_period < 1 .or. cfg%cont_period > 10000) then
+            call set_error(err, "&continuation: period = "//fmt_int(cfg%cont_period)// &
+                           " must be in 1..10000 (drive cycles)")
+        else if (cfg%cont_max_points < 1) then
+            call set_error(err, "&continuation: max_points = "//fmt_int(cfg%cont_max_points)// &
+                           " must be >= 1")
+        else if (cfg%cont_doublings < 0 .or. cfg%cont_doublings > 8) then
+            call set_error(err, "&continuation: doublings = "//fmt_int(cfg%cont_doublings)// &
+                           " must be in 0..8")
+        else if (cfg%cont_parameter == 'spacing' .and. &
+                 any(cfg%model%spacing /= cfg%model%spacing(1))) then
+            call set_error(err, "&continuation: parameter = 'spacing' needs one spacing for "// &
+                           "every bond (&chain spacing = one value)")
+        end if
+        if (allocated(err) .or. cfg%cont_max_points == 1) return
+        associate (start => model_parameter(cfg%model, cfg%cont_parameter))
+        if (.not. (ieee_is_finite(cfg%cont_stop) .and. cfg%cont_stop /= start)) then
+            call set_error(err, "&continuation: stop = "//fmt_real(cfg%cont_stop)// &
+                           " must be finite and differ from the start, &chain "// &
+                           cfg%cont_parameter//" = "//fmt_real(start))
+        else if (.not. (ieee_is_finite(cfg%cont_step) .and. cfg%cont_step /= 0 .and. &
+                        (cfg%cont_step > 0 .eqv. cfg%cont_stop > start))) then
+            call set_error(err, "&continuation: step = "//fmt_real(cfg%cont_step)// &
+                           " must be nonzero with the sign of stop - start ("// &
+                           fmt_real(cfg%cont_stop)//" - "//fmt_real(start)//")")
+        else if (abs(cfg%cont_step) > abs(cfg%cont_stop - start)) then
+            call set_error(err, "&continuation: |step| = "//fmt_real(abs(cfg%cont_step))// &
+                           " is larger than |stop - start| = "// &
+                           fmt_real(abs(cfg%cont_stop - start)))
+        end if
+        end associate
+        if (allocated(err)) return
+        ! the far end must be a valid chain too
+        far = cfg
+        far%continuation = .false.
+        call set_model_parameter(far%model, cfg%cont_parameter, cfg%cont_stop)
+        call validate_chain(far, err)
+        if (allocated(err)) err%message = "&continuation: stop = "//fmt_real(cfg%cont_stop)// &
+                                          ": "//err%message
+    end subroutine validate_continuation
+
     subroutine check_axis(err, suffix, start, stop, step)
         type(error_t), allocatable, intent(out) :: err
         character(len=*), intent(in) :: suffix
@@ -772,7 +879,18 @@ contains
         text = chain_group(cfg%model)//initial_group(cfg)//run_group(cfg)// &
                lyapunov_group(cfg)//output_group(cfg)
         if (cfg%sweep) text = text//sweep_group(cfg)
+        if (cfg%continuation) text = text//continuation_group(cfg)
     end function config_summary
+
+    function continuation_group(cfg) result(text)
+        type(config_t), intent(in) :: cfg
+        character(len=:), allocatable :: text
+
+        text = "&continuation parameter = '"//cfg%cont_parameter//"', stop = "// &
+               exact(cfg%cont_stop)//", step = "//exact(cfg%cont_step)//", period = "// &
+               fmt_int(cfg%cont_period)//", max_points = "//fmt_int(cfg%cont_max_points)// &
+               ", doublings = "//fmt_int(cfg%cont_doublings)//" /"//new_line('a')
+    end function continuation_group
 
     function chain_group(model) result(text)
         type(model_t), intent(in) :: model

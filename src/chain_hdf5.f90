@@ -55,7 +55,7 @@ module chain_hdf5
     public :: h5_create_file, h5_open_file, h5_close_file, h5_is_hdf5_file
     public :: h5_create_group, h5_exists, h5_delete, h5_delete_attr
     public :: h5_write_attr, h5_read_attr
-    public :: h5_write, h5_read, h5_read_alloc, h5_extent
+    public :: h5_write, h5_read, h5_read_alloc, h5_extent, h5_write_strings
     public :: h5_create_growing, h5_create_appendable, h5_set_extent
     public :: h5_write_slab, h5_read_slab
     public :: h5_create_dimension, h5_set_scale, h5_dimensions, h5_detach_dimensions
@@ -678,6 +678,56 @@ contains
         call check(e, 'h5sclose_f', '/'//name, file%path, err)
         call write_attr_string(file, name, 'units', units, err)
     end subroutine write_dataset
+
+    !> A 1-D dataset of variable-length UTF-8 strings (netCDF-4's NC_STRING), `values` with
+    !> their trailing blanks removed, with its `units`.
+    subroutine h5_write_strings(file, name, values, units, err)
+        type(h5_file_t), intent(in) :: file
+        character(len=*), intent(in) :: name, values(:), units
+        type(error_t), allocatable, intent(inout) :: err
+        type :: text_t
+            character(kind=c_char), allocatable :: chars(:)
+        end type text_t
+        type(text_t), allocatable, target :: texts(:)
+        type(c_ptr), allocatable, target :: pointers(:)
+        integer(hid_t) :: string_type, space, dset
+        integer(hsize_t) :: dims(1)
+        integer :: e, j, k, length
+
+        if (allocated(err)) return
+        allocate (texts(size(values)), pointers(max(1, size(values))))
+        do j = 1, size(values)
+            length = len_trim(values(j))
+            allocate (texts(j)%chars(length + 1))
+            do k = 1, length
+                texts(j)%chars(k) = values(j)(k:k)
+            end do
+            texts(j)%chars(length + 1) = c_null_char
+            pointers(j) = c_loc(texts(j)%chars)
+        end do
+        call variable_string_type(file, '/'//name, string_type, err)
+        if (allocated(err)) return
+        dims = size(values)
+        call h5screate_simple_f(1, dims, space, e)
+        call check(e, 'h5screate_simple_f', '/'//name, file%path, err)
+        if (.not. allocated(err)) then
+            call h5dcreate_f(file%id, name, string_type, space, dset, e)
+            call check(e, 'h5dcreate_f', '/'//name, file%path, err)
+            if (.not. allocated(err)) then
+                if (size(values) > 0) then
+                    call h5dwrite_f(dset, string_type, c_loc(pointers), e)
+                    call check(e, 'h5dwrite_f', '/'//name, file%path, err)
+                end if
+                call h5dclose_f(dset, e)
+                call check(e, 'h5dclose_f', '/'//name, file%path, err)
+            end if
+            call h5sclose_f(space, e)
+            call check(e, 'h5sclose_f', '/'//name, file%path, err)
+        end if
+        call h5tclose_f(string_type, e)
+        call check(e, 'h5tclose_f', '/'//name, file%path, err)
+        call write_attr_string(file, name, 'units', units, err)
+    end subroutine h5_write_strings
 
     subroutine write_real_0d(file, name, value, units, err)
         type(h5_file_t), intent(in) :: file

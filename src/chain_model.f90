@@ -8,6 +8,12 @@ module chain_model
     implicit none
     private
     public :: model_t, model_walls, bond_gaps
+    public :: model_parameters, is_model_parameter, model_parameter, set_model_parameter
+
+    !> The parameters a sweep or a branch of orbits can vary ('spacing': every bond's rest
+    !> gap at once).
+    character(len=*), parameter :: model_parameters(5) = &
+        [character(len=11) :: 'amplitude', 'omega', 'damping', 'restitution', 'spacing']
 
     type :: model_t
         integer :: n = 0                    !! oscillators
@@ -54,5 +60,50 @@ contains
             gaps(n) = huge(1.0_wp)
         end if
     end function bond_gaps
+
+    pure logical function is_model_parameter(name)
+        character(len=*), intent(in) :: name
+
+        is_model_parameter = any(model_parameters == name)
+    end function is_model_parameter
+
+    !> The value of parameter `name` in the model (spacing: bond 0's, the same for all).
+    pure real(wp) function model_parameter(model, name) result(value)
+        type(model_t), intent(in) :: model
+        character(len=*), intent(in) :: name
+
+        select case (name)
+        case ('amplitude')
+            value = model%amplitude
+        case ('omega')
+            value = model%omega
+        case ('damping')
+            value = model%damping
+        case ('restitution')
+            value = model%restitution
+        case default
+            value = model%spacing(1)
+        end select
+    end function model_parameter
+
+    !> Set parameter `name` of the model to `value` (spacing: every bond's).
+    pure subroutine set_model_parameter(model, name, value)
+        type(model_t), intent(inout) :: model
+        character(len=*), intent(in) :: name
+        real(wp), intent(in) :: value
+
+        select case (name)
+        case ('amplitude')
+            model%amplitude = value
+        case ('omega')
+            model%omega = value
+        case ('damping')
+            model%damping = value
+        case ('restitution')
+            model%restitution = value
+        case ('spacing')
+            model%spacing = value
+        end select
+    end subroutine set_model_parameter
 
 end module chain_model

@@ -25,6 +25,7 @@ module chain_orbit
     implicit none
     private
     public :: orbit_t, orbit_options_t, find_orbit, orbit_gap_minimum, interleave
+    public :: orbit_pass_t, orbit_pass, describe_orbit
 
     !> How Newton is run.
     type :: orbit_options_t
@@ -62,7 +63,7 @@ module chain_orbit
     end type orbit_t
 
     !> One pass of p cycles from a state z.
-    type :: pass_t
+    type :: orbit_pass_t
         logical :: admissible = .false. !! z has no negative gap (else nothing else is set)
         logical :: rests = .false.      !! an oscillator came to rest during the pass
         logical :: collapse = .false.   !! the cluster rule acted (an impact of speed 0)
@@ -70,7 +71,7 @@ module chain_orbit
         real(wp), allocatable :: jacobian(:, :)
         real(wp) :: residual = huge(1.0_wp)
         type(event_log_t) :: log
-    end type pass_t
+    end type orbit_pass_t
 
 contains
 
@@ -86,7 +87,7 @@ contains
         type(error_t), allocatable, intent(out) :: err
         type(orbit_options_t), intent(in), optional :: options
         type(orbit_options_t) :: opt
-        type(pass_t) :: now, trial
+        type(orbit_pass_t) :: now, trial
         real(wp), allocatable :: a(:, :), step(:, :), history(:)
         real(wp) :: lambda
         integer :: m, i, halvings, info
@@ -98,7 +99,7 @@ contains
         orbit%cycles = cycles
         orbit%phase = phase
         orbit%reason = ''
-        call run_pass(model, phase, cycles, interleave(x, v), now, err)
+        call orbit_pass(model, phase, cycles, interleave(x, v), now, err)
         if (allocated(err)) return
         if (.not. now%admissible) then
             call set_error(err, "orbit: the starting guess has a negative gap (oscillators "// &
@@ -138,7 +139,7 @@ contains
             end if
             lambda = 1
             do halvings = 0, opt%max_halvings
-                call run_pass(model, phase, cycles, now%z + lambda*step(:, 1), trial, err)
+                call orbit_pass(model, phase, cycles, now%z + lambda*step(:, 1), trial, err)
                 if (allocated(err)) return
                 if (trial%admissible .and. trial%residual < now%residual) exit
                 lambda = lambda/2
@@ -155,7 +156,7 @@ contains
         end do
         allocate (orbit%residuals(0:orbit%iterations))
         orbit%residuals = history(0:orbit%iterations)
-        call describe(model, now, orbit, err)
+        call describe_orbit(model, now, orbit, err)
     end subroutine find_orbit
 
     !> Refuse arguments no orbit can have.
@@ -184,11 +185,11 @@ contains
 
     !> The p-cycle map and its Jacobian at z, and the events on the way: one pass of a fresh
     !> chain on the section with the identity frame.
-    subroutine run_pass(model, phase, cycles, z, pass, err)
+    subroutine orbit_pass(model, phase, cycles, z, pass, err)
         type(model_t), intent(in) :: model
         real(wp), intent(in) :: phase, z(:)
         integer, intent(in) :: cycles
-        type(pass_t), intent(out) :: pass
+        type(orbit_pass_t), intent(out) :: pass
         type(error_t), allocatable, intent(out) :: err
         type(chain_t) :: chain
         type(event_counts_t) :: counts
@@ -211,12 +212,12 @@ contains
             end do
         end associate
         pass%residual = maxval(abs(pass%image - z))/(1 + maxval(abs(z)))
-    end subroutine run_pass
+    end subroutine orbit_pass
 
     !> The orbit's state, Jacobian, events and, when converged, multipliers and gap monitor.
-    subroutine describe(model, pass, orbit, err)
+    subroutine describe_orbit(model, pass, orbit, err)
         type(model_t), intent(in) :: model
-        type(pass_t), intent(in) :: pass
+        type(orbit_pass_t), intent(in) :: pass
         type(orbit_t), intent(inout) :: orbit
         type(error_t), allocatable, intent(out) :: err
         logical, allocatable :: impact(:)
@@ -246,7 +247,7 @@ contains
         end if
         call orbit_gap_minimum(model, orbit%phase, orbit%cycles, orbit%x, orbit%v, &
                                orbit%min_gap, orbit%min_gap_bond, orbit%min_gap_time, err)
-    end subroutine describe
+    end subroutine describe_orbit
 
     ! ------------------------------------------------------------------ the gap monitor
 

@@ -24,6 +24,7 @@ module chain_sweep
     use chain_kinds, only: wp, i8, two_pi
     use chain_error, only: error_t, set_error, fmt_real, fmt_int
     use chain_engine, only: chain_t, chain_init
+    use chain_model, only: set_model_parameter
     use chain_state, only: chain_state_t, moving_state
     use chain_config, only: config_t, validate_config, lyapunov_vectors, check_size
     use chain_record, only: memory_sink_t, record_result_t, record_cycles
@@ -197,18 +198,7 @@ contains
         character(len=*), intent(in) :: name
         real(wp), intent(in) :: value
 
-        select case (name)
-        case ('amplitude')
-            cfg%model%amplitude = value
-        case ('omega')
-            cfg%model%omega = value
-        case ('damping')
-            cfg%model%damping = value
-        case ('restitution')
-            cfg%model%restitution = value
-        case ('spacing')
-            cfg%model%spacing = value
-        end select
+        call set_model_parameter(cfg%model, name, value)
     end subroutine set_parameter
 
     !> Run the points of branch b in order into `res`, skipping those already done (a resumed

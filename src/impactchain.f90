@@ -1,7 +1,8 @@
 !> The public API of impactchain in one module: what the command line (app/), the MPI sweep
 !> driver (mpi/), the Python layer (f2py/) and the benchmark (bench/) use. Configuration,
 !> runs and their results, sweeps (including the pieces a distributed driver needs), the
-!> Poincare-map Jacobian of a state, periodic orbits (Newton shooting), the shared command
+!> Poincare-map Jacobian of a state, periodic orbits (Newton shooting) and their branches
+!> (continuation), the shared command
 !> line, interrupt flag and monitors.
 !> A chain is an opaque `chain_t`: it is started from a configuration, run to a point or through
 !> recorded cycles, restarted under other parameters, and read (its clock, state, contacts
@@ -27,6 +28,10 @@ module impactchain
     use chain_section, only: advance_to_point
     use chain_floquet, only: poincare_jacobian
     use chain_orbit, only: orbit_t, orbit_options_t, find_orbit, orbit_gap_minimum
+    use chain_branch, only: branch_options_t, branch_point_t, special_point_t, branches_t, &
+                            follow_branches
+    use chain_branch_file, only: continuation_guess, continuation_options, run_continuation, &
+                                 continuation_to_file, write_continuation
     use chain_sim, only: simulate_to_file, start_chain, initial_state, chain_on_section, &
                          restart_chain
     use chain_sweep, only: run_sweep, sweep_summary_t, plan_sweep, sweep_plan_t, &
@@ -55,6 +60,9 @@ module impactchain
     public :: advance_to_point, poincare_jacobian, simulate_to_file, start_chain, initial_state
     public :: chain_on_section, restart_chain
     public :: orbit_t, orbit_options_t, find_orbit, orbit_gap_minimum
+    public :: branch_options_t, branch_point_t, special_point_t, branches_t, follow_branches
+    public :: continuation_guess, continuation_options, run_continuation
+    public :: continuation_to_file, write_continuation
     public :: run_sweep, sweep_summary_t, plan_sweep, sweep_plan_t, sweep_result_t
     public :: sweep_result_init, sweep_point_config, run_sweep_branches
     public :: write_sweep_file, save_checkpoint, load_checkpoint, remove_file, checkpoint_every

@@ -12,6 +12,7 @@ program main
     use test_invariants, only: run_invariant_tests
     use test_hdf5, only: run_hdf5_tests
     use test_orbit, only: run_orbit_tests
+    use test_branch, only: run_branch_tests
     implicit none
     type(suite_runner_t) :: runner
 
@@ -26,5 +27,6 @@ program main
     call runner%run('invariants', run_invariant_tests)
     call runner%run('hdf5', run_hdf5_tests)
     call runner%run('orbit', run_orbit_tests)
+    call runner%run('branch', run_branch_tests)
     call runner%finish()
 end program main
