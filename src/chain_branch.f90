@@ -255,7 +255,7 @@ contains
         character(len=:), allocatable :: reason, failure
         real(wp) :: h, mu_next
         integer :: count, iterations
-        logical :: ok, compare
+        logical :: ok, compare, crossed, grazed
 
         stopped = .false.
         call store(set, here, res, err)
@@ -274,8 +274,18 @@ contains
                 reason = "max_points = "//fmt_int(set%opt%max_points)//" reached"
                 exit
             end if
-            call correct(set, here, h, next, ok, iterations, failure, err)
+            call correct(set, here, h, next, ok, iterations, failure, err, crossed)
             if (allocated(err)) return
+            if (.not. ok .and. crossed .and. compare) then
+                ! Newton fails where the impacts change: a grazing, if the last orbit with
+                ! the old impacts has a vanishing gap or impact speed
+                call locate_grazing(set, here, h, res, err, grazed)
+                if (allocated(err)) return
+                if (grazed) then
+                    reason = grazing_reason(set, res)
+                    exit
+                end if
+            end if
             if (.not. ok) then
                 h = h/2
                 if (h < set%opt%min_step) then
@@ -288,11 +298,9 @@ contains
             end if
             mu_next = next%y(size(next%y))
             if (compare .and. any(next%impacts /= here%impacts)) then
-                call locate_grazing(set, here, h, next, res, err)
+                call locate_grazing(set, here, h, res, err)
                 if (allocated(err)) return
-                reason = "grazing at "//set%opt%parameter//" = "// &
-                         fmt_real(res%specials(res%n_specials)%value)// &
-                         ": the impacts change there, the branch ends"
+                reason = grazing_reason(set, res)
                 exit
             end if
             if (mu_next < set%low .or. mu_next > set%high) then
@@ -360,7 +368,7 @@ contains
     !> From `here`, the point at arclength h along the tangent: Newton on
     !> (P(z; mu) - z, t . (y - y_pred)) = 0 with the bordered Jacobian [[J - I, P_mu], [t]].
     !> ok = .false. with `failure` saying why when it does not converge.
-    subroutine correct(set, here, h, next, ok, iterations, failure, err)
+    subroutine correct(set, here, h, next, ok, iterations, failure, err, crossed)
         type(setting_t), intent(in) :: set
         type(cursor_t), intent(in) :: here
         real(wp), intent(in) :: h
@@ -369,6 +377,8 @@ contains
         integer, intent(out) :: iterations
         character(len=:), allocatable, intent(out) :: failure
         type(error_t), allocatable, intent(out) :: err
+        !> some iterate had other impacts per bond than `here`
+        logical, intent(out), optional :: crossed
         integer, parameter :: max_iterations = 10
         real(wp), parameter :: floor_factor = 100
         type(orbit_pass_t) :: pass
@@ -379,6 +389,7 @@ contains
 
         ok = .false.
         failure = ''
+        if (present(crossed)) crossed = .false.
         m = size(here%y) - 1
         y_pred = here%y + h*here%tangent
         y = y_pred
@@ -392,6 +403,11 @@ contains
             end if
             call orbit_pass(model, set%phase, set%cycles, y(:m), pass, err)
             if (allocated(err)) return
+            if (present(crossed) .and. pass%admissible) then
+                if (any(impacts_per_bond(set%model%n, pass%log%site(:pass%log%count), &
+                                         pass%log%kind(:pass%log%count)) /= here%impacts)) &
+                    crossed = .true.
+            end if
             if (.not. pass%admissible) then
                 failure = "a negative gap"
             else if (pass%rests) then
@@ -606,15 +622,19 @@ contains
         end select
     end function test_value
 
-    !> The impacts change between `here` and `next`: bisection on the arclength for the last
-    !> orbit with the impacts of `here` (a trial where Newton fails counts as changed), to
-    !> 1e-11 in the parameter; it is stored as a grazing point.
-    subroutine locate_grazing(set, here, h, next, res, err)
+    !> The impacts change within arclength h of `here`: bisection on the arclength for the
+    !> last orbit with the impacts of `here` (a trial where Newton fails counts as changed),
+    !> to 1e-11 in the parameter. It is stored as a grazing point, unconditionally or, with
+    !> `grazed`, only when its smallest gap or impact speed is below 1e-4 (else Newton failed
+    !> for another reason than a grazing and nothing is stored).
+    subroutine locate_grazing(set, here, h, res, err, grazed)
         type(setting_t), intent(in) :: set
-        type(cursor_t), intent(in) :: here, next
+        type(cursor_t), intent(in) :: here
         real(wp), intent(in) :: h
         type(branches_t), intent(inout) :: res
         type(error_t), allocatable, intent(out) :: err
+        logical, intent(out), optional :: grazed
+        real(wp), parameter :: vanishing = 1.0e-4_wp
         type(cursor_t) :: trial, last_same
         character(len=:), allocatable :: failure
         real(wp) :: s_lo, s_hi, s, mu_lo, mu_hi
@@ -625,7 +645,7 @@ contains
         s_lo = 0
         s_hi = h
         mu_lo = here%y(m + 1)
-        mu_hi = next%y(m + 1)
+        mu_hi = here%y(m + 1) + h*here%tangent(m + 1)
         last_same = here
         do k = 1, 80
             if (abs(mu_hi - mu_lo) <= 1.0e-11_wp .and. abs(s_hi - s_lo) <= 1.0e-6_wp) exit
@@ -639,13 +659,29 @@ contains
                 last_same = trial
             else
                 s_hi = s
+                mu_hi = here%y(m + 1) + s*here%tangent(m + 1)
                 if (allocated(trial%y)) mu_hi = trial%y(m + 1)
             end if
         end do
+        if (present(grazed)) then
+            grazed = min(last_same%orbit%min_gap, last_same%orbit%min_impact_speed) < vanishing
+            if (.not. grazed) return
+        end if
         call store(set, last_same, res, err)
         if (.not. allocated(err)) call add_special(res, res%n_points, 'grazing', &
                                                    last_same%y(m + 1))
     end subroutine locate_grazing
+
+    !> Why a branch ended at the grazing just stored.
+    function grazing_reason(set, res) result(reason)
+        type(setting_t), intent(in) :: set
+        type(branches_t), intent(in) :: res
+        character(len=:), allocatable :: reason
+
+        reason = "grazing at "//set%opt%parameter//" = "// &
+                 fmt_real(res%specials(res%n_specials)%value)// &
+                 ": the impacts change there, the branch ends"
+    end function grazing_reason
 
     ! ----------------------------------------------------------------- the cursor
 
@@ -689,13 +725,8 @@ contains
         type(cursor_t), intent(inout) :: c
         integer :: j
 
-        allocate (c%impacts(0:set%model%n))
-        c%impacts = 0
         associate (o => c%orbit)
-            do j = 1, size(o%event_bond)
-                if (o%event_kind(j) == event_impact) c%impacts(o%event_bond(j)) = &
-                    c%impacts(o%event_bond(j)) + 1
-            end do
+            c%impacts = impacts_per_bond(set%model%n, o%event_bond, o%event_kind)
             c%det_plus = 1
             c%unstable_pairs = 0
             do j = 1, size(o%multipliers_re)
@@ -710,6 +741,18 @@ contains
             end do
         end associate
     end subroutine measure
+
+    !> Impacts per bond 0..n among events (bonds, kinds).
+    pure function impacts_per_bond(n, bonds, kinds) result(counts)
+        integer, intent(in) :: n, bonds(:), kinds(:)
+        integer :: counts(0:n)
+        integer :: j
+
+        counts = 0
+        do j = 1, size(bonds)
+            if (kinds(j) == event_impact) counts(bonds(j)) = counts(bonds(j)) + 1
+        end do
+    end function impacts_per_bond
 
     ! --------------------------------------------------------------------- results
 

@@ -6,7 +6,7 @@
 !> failure on either side; a period doubling against a brute-force sweep of the simulator, and
 !> the branch switched to there against the simulator's period-2p orbit.
 module test_branch
-    use chain_kinds, only: wp, i8
+    use chain_kinds, only: wp, i8, two_pi
     use chain_error, only: error_t
     use chain_flow, only: flow_t, make_flow, forced_response
     use chain_model, only: model_t, model_parameters, set_model_parameter, model_parameter
@@ -16,7 +16,6 @@ module test_branch
     use chain_orbit, only: orbit_t, find_orbit, interleave
     use chain_parameter, only: map_parameter_derivative
     use chain_branch, only: branch_options_t, branches_t, follow_branches
-    use test_engine, only: make_chain
     use test_chains, only: model_of
     use testing, only: tally_t, check, check_close
     implicit none
@@ -44,6 +43,7 @@ contains
                                                            'non-impacting fig. 10 A = 1')
         call non_impacting_branch(t)
         call impacting_branch(t, impacting)
+        call period_doubling(t)
     end subroutine run_branch_tests
 
     !> Figure 10's chain at amplitude A (a = 1, fixed walls).
@@ -65,9 +65,10 @@ contains
         type(chain_t) :: chain
         type(error_t), allocatable :: err
         type(event_log_t) :: events
+        integer :: i
 
-        call make_chain(chain, model%n, model%amplitude, model%omega, model%damping, &
-                        model%restitution, .true., 0.0_wp, 0.0_wp, err)
+        call chain_at_section(model, 0.0_wp, [(0.0_wp, i=1, model%n)], [(0.0_wp, i=1, model%n)], &
+                              chain, err)
         call event_log_init(events, .false., 0)
         call advance_to_point(chain, transient, 0.0_wp, events, err)
         call find_orbit(model, 0.0_wp, cycles, chain_positions(chain), chain_velocities(chain), &
@@ -172,30 +173,150 @@ contains
                          'non-impacting branch: grazing at a sqrt(D2)', 1.0e-9_wp)
     end subroutine non_impacting_branch
 
+    !> Figure 10's impacting period-1 orbit at A = 3 followed down: it folds (a turning point
+    !> of the parameter) and comes back unstable to the start's value, a bound. At the located
+    !> fold the tangent has no parameter component and J has a multiplier +1.
     subroutine impacting_branch(t, start)
         type(tally_t), intent(inout) :: t
         type(orbit_t), intent(in) :: start
         type(branches_t) :: res
         type(branch_options_t) :: opt
         type(error_t), allocatable :: err
-        integer :: j
+        integer :: k
 
         opt%parameter = 'amplitude'
         opt%stop = 2
         opt%step = -0.05_wp
-        opt%max_points = 300
         call follow_branches(fig10(3.0_wp), 0.0_wp, 1, start%x, start%v, opt, res, err)
         call check(t, .not. allocated(err), 'impacting branch: followed')
         if (allocated(err)) return
         print '(a)', '    '//res%end_reason
-        do j = 1, res%n_points
-            print '(i4,f14.9,l3,i4,2es10.2, i4)', j, res%points(j)%value, res%points(j)%stable, &
-                res%points(j)%orbit%impacts, res%points(j)%orbit%min_gap, &
-                res%points(j)%orbit%min_impact_speed, res%points(j)%orbit%iterations
-        end do
-        do j = 1, res%n_specials
-            print *, res%specials(j)%point, res%specials(j)%kind, res%specials(j)%value
-        end do
+        call check(t, res%n_specials == 1, 'impacting branch: one special point')
+        if (res%n_specials /= 1) return
+        call check(t, res%specials(1)%kind == 'fold', 'impacting branch: a fold')
+        associate (fold => res%points(res%specials(1)%point))
+            k = minloc(abs(cmplx(fold%orbit%multipliers_re - 1, fold%orbit%multipliers_im, wp)), &
+                       1)
+            write (*, '(a,f15.11,a,es9.2)') '    impacting branch: fold at A = ', fold%value, &
+                ', |multiplier - 1| = ', abs(cmplx(fold%orbit%multipliers_re(k) - 1, &
+                                                   fold%orbit%multipliers_im(k), wp))
+            call check_close(t, abs(cmplx(fold%orbit%multipliers_re(k) - 1, &
+                                          fold%orbit%multipliers_im(k), wp)), 0.0_wp, &
+                             'impacting branch: a multiplier +1 at the fold', 1.0e-6_wp)
+            call check(t, all(res%points(:res%specials(1)%point - 1)%stable) .and. &
+                       .not. any(res%points(res%specials(1)%point + 1:res%n_points)%stable), &
+                       'impacting branch: stable before the fold, unstable after')
+            call check(t, all(res%points(:res%n_points)%value <= 3) .and. &
+                       all(res%points(:res%n_points)%value >= fold%value), &
+                       'impacting branch: the fold is the smallest amplitude on it')
+        end associate
+        call check_close(t, res%points(res%n_points)%value, 3.0_wp, &
+                         'impacting branch: it ends on the bound A = 3', 0.0_wp)
     end subroutine impacting_branch
+
+    !> A single impact oscillator (n = 1, wall gap 0.5 on the left, 100 on the right, w = 2.5,
+    !> K = 0.8) followed down from A = 8: its period-1 orbit doubles; the period-2 branch
+    !> switched to there doubles again. At each located doubling J has a multiplier -1; the
+    !> simulator, started on the orbit at A = doubling + 0.02 and - 0.02, keeps period 1 above
+    !> and settles on period 2 below (a brute-force sweep with a step of 0.04 around it); the
+    !> period-2 orbits' multipliers multiply to exp(-2 b n p T) K**(2c).
+    subroutine period_doubling(t)
+        type(tally_t), intent(inout) :: t
+        type(model_t) :: model
+        type(orbit_t) :: start
+        type(branches_t) :: res
+        type(branch_options_t) :: opt
+        type(error_t), allocatable :: err
+        real(wp) :: product_want, product_got
+        integer :: j, k, doubling
+
+        model = model_of(make_flow(0.05_wp, 8.0_wp, 2.5_wp), 0.8_wp, [0.5_wp, 100.0_wp], &
+                         .true., 1.0e-9_wp)
+        call settle(model, 1000_i8, 1, start)
+        call check(t, start%converged, 'impact oscillator A = 8: a period-1 orbit')
+        if (.not. start%converged) return
+        opt%parameter = 'amplitude'
+        opt%stop = 4.5_wp
+        opt%step = -0.05_wp
+        opt%doublings = 1
+        call follow_branches(model, 0.0_wp, 1, start%x, start%v, opt, res, err)
+        call check(t, .not. allocated(err), 'impact oscillator: followed')
+        if (allocated(err)) return
+        print '(a)', '    '//res%end_reason
+        call check(t, res%n_specials == 2, 'impact oscillator: two special points')
+        if (res%n_specials /= 2) return
+        call check(t, res%specials(1)%kind == 'period-doubling' .and. &
+                   res%specials(2)%kind == 'period-doubling', &
+                   'impact oscillator: both period doublings')
+        do j = 1, 2
+            associate (pd => res%points(res%specials(j)%point))
+                k = minloc(abs(cmplx(pd%orbit%multipliers_re + 1, pd%orbit%multipliers_im, wp)), 1)
+                write (*, '(a,i0,a,f15.11,a,es9.2)') '    impact oscillator: period ', &
+                    pd%orbit%cycles, ' doubles at A = ', pd%value, ', |multiplier + 1| = ', &
+                    abs(cmplx(pd%orbit%multipliers_re(k) + 1, pd%orbit%multipliers_im(k), wp))
+                call check_close(t, abs(cmplx(pd%orbit%multipliers_re(k) + 1, &
+                                              pd%orbit%multipliers_im(k), wp)), 0.0_wp, &
+                                 'impact oscillator: a multiplier -1 at the doubling', 1.0e-6_wp)
+                call check(t, pd%branch == j - 1 .and. pd%orbit%cycles == j, &
+                           'impact oscillator: the doubling of branch '//merge('0', '1', j == 1))
+            end associate
+        end do
+        doubling = res%specials(1)%point
+        call sweep_across(t, model, res%points(doubling)%value, res%points(doubling)%orbit)
+        ! the product of the multipliers on the period-2 branch
+        do j = 1, res%n_points
+            if (res%points(j)%branch /= 1 .or. j == doubling) cycle
+            associate (o => res%points(j)%orbit)
+                product_want = exp(-2*model%damping*model%n*o%cycles*two_pi/model%omega)* &
+                               model%restitution**(2*o%impacts)
+                product_got = real(product(cmplx(o%multipliers_re, o%multipliers_im, wp)), wp)
+            end associate
+            call check_close(t, product_got, product_want, 'impact oscillator: period-2 '// &
+                             'multipliers multiply to exp(-2 b n p T) K**(2c)', &
+                             1.0e-10_wp*product_want)
+            exit
+        end do
+    end subroutine period_doubling
+
+    !> The simulator from the doubling orbit at A = a_pd + 0.02 (period 1 expected) and
+    !> a_pd - 0.02 (period 2): 3000 cycles, then the strobe map's return after 1 and 2 cycles.
+    subroutine sweep_across(t, model, a_pd, orbit)
+        type(tally_t), intent(inout) :: t
+        type(model_t), intent(in) :: model
+        real(wp), intent(in) :: a_pd
+        type(orbit_t), intent(in) :: orbit
+        type(model_t) :: near
+        type(chain_t) :: chain
+        type(error_t), allocatable :: err
+        type(event_log_t) :: events
+        real(wp), allocatable :: z0(:), z1(:), z2(:)
+        real(wp) :: offset
+        integer :: side
+        logical :: period_one
+
+        call event_log_init(events, .false., 0)
+        do side = 1, 2
+            offset = merge(0.02_wp, -0.02_wp, side == 1)
+            near = model
+            near%amplitude = a_pd + offset
+            call chain_at_section(near, 0.0_wp, orbit%x + 1.0e-3_wp, orbit%v, chain, err)
+            call advance_to_point(chain, 3000_i8, 0.0_wp, events, err)
+            z0 = interleave(chain_positions(chain), chain_velocities(chain))
+            call advance_to_point(chain, 3001_i8, 0.0_wp, events, err)
+            z1 = interleave(chain_positions(chain), chain_velocities(chain))
+            call advance_to_point(chain, 3002_i8, 0.0_wp, events, err)
+            z2 = interleave(chain_positions(chain), chain_velocities(chain))
+            period_one = maxval(abs(z1 - z0)) < 1.0e-6_wp
+            write (*, '(a,f8.4,a,2es9.2)') '    impact oscillator: simulator at A = ', &
+                near%amplitude, ': |P(z) - z|, |P2(z) - z| = ', maxval(abs(z1 - z0)), &
+                maxval(abs(z2 - z0))
+            if (side == 1) then
+                call check(t, period_one, 'impact oscillator: period 1 just above the doubling')
+            else
+                call check(t, .not. period_one .and. maxval(abs(z2 - z0)) < 1.0e-6_wp, &
+                           'impact oscillator: period 2 just below the doubling')
+            end if
+        end do
+    end subroutine sweep_across
 
 end module test_branch
