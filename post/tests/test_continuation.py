@@ -12,6 +12,7 @@ attached to every dataset, each with ``long_name``, ``units`` and (for the reduc
 from __future__ import annotations
 
 import math
+import re
 from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
@@ -19,9 +20,17 @@ from typing import Any
 import h5py
 import numpy as np
 import pytest
+from matplotlib.axes import Axes
+from matplotlib.collections import PathCollection
+from matplotlib.figure import Figure
+from matplotlib.lines import Line2D
+
 from conftest import write_run
+from impactchain import figures
 from impactchain.io import (SPECIAL_KINDS, Continuation, SchemaError, read_continuation,
                             read_run)
+
+MakeRun = Callable[..., Path]
 
 N = 3
 """Oscillators of the synthetic continuation."""
@@ -329,3 +338,184 @@ def test_opens_in_xarray_with_its_dimensions(make_continuation: Callable[..., Pa
             np.testing.assert_array_equal(ds["values"], VALUES)
             strobe_x = ds["strobe_x"].sel(point=7, oscillator=1).values
             np.testing.assert_array_equal(strobe_x, read_continuation(path).strobe_x[7, :, 0])
+
+
+# ---------------------------------------------------------------------------------- figures
+
+
+RUNS = {"branch-0-stable": range(0, 4), "branch-0-unstable": range(3, 7),
+        "branch-1-stable": range(7, 10), "branch-1-unstable": range(9, 12)}
+"""The points of each line of the default continuation, by the lines' gid."""
+
+
+def _lines(ax: Axes, prefix: str) -> list[Line2D]:
+    return [line for line in ax.get_lines() if (line.get_gid() or "").startswith(prefix)]
+
+
+def _markers(ax: Axes) -> dict[str, np.ndarray]:
+    """The special-point markers of each kind: their (x, y)."""
+    return {str(c.get_gid())[len("special-"):]: np.asarray(c.get_offsets())
+            for c in ax.collections
+            if isinstance(c, PathCollection) and (c.get_gid() or "").startswith("special-")}
+
+
+def _legend(ax: Axes) -> list[str]:
+    legend = ax.get_legend()
+    assert legend is not None
+    return [text.get_text() for text in legend.get_texts()]
+
+
+@pytest.fixture
+def comparable_sweep(make_run: MakeRun) -> Path:
+    """A sweep of the continuation's parameter on its chain (n = 3, the same parameters)."""
+    return make_run("sweep.h5", n=N, strobe=False, events=False, sweep=True)
+
+
+def test_branches_are_the_section_crossings(cont_file: Path) -> None:
+    """A line per crossing of each run of equal stability on a branch: solid while stable,
+    dashed while unstable, a run after a change of stability starting at the last point of
+    the run before it, a new line at a new branch."""
+    cont = read_continuation(cont_file)
+    site = 2
+    fig = figures.branches(cont_file, site=site)
+    assert isinstance(fig, Figure)
+    (ax,) = fig.axes
+    lines = _lines(ax, "branch-")
+    assert sorted({str(line.get_gid()) for line in lines}) == sorted(RUNS)
+    for gid, points in RUNS.items():
+        drawn = [line for line in lines if line.get_gid() == gid]
+        assert len(drawn) == PERIOD[points[-1]], gid  # one line per crossing
+        for j, line in enumerate(drawn):
+            np.testing.assert_array_equal(line.get_xdata(), cont.values[list(points)])
+            np.testing.assert_array_equal(line.get_ydata(),
+                                          cont.strobe_x[list(points), j, site - 1])
+            assert line.get_linestyle() == ("-" if gid.endswith("-stable") else "--"), gid
+    assert len({line.get_color() for line in lines if "branch-0" in str(line.get_gid())}) == 1
+    assert _lines(ax, "branch-0")[0].get_color() != _lines(ax, "branch-1")[0].get_color()
+
+
+def test_branches_mark_the_special_points_at_every_crossing(cont_file: Path) -> None:
+    cont = read_continuation(cont_file)
+    ax = figures.branches(cont_file).axes[0]
+    markers = _markers(ax)
+    assert sorted(markers) == sorted(SPECIAL_KINDS)
+    # one marker per crossing of the special orbit: 1 + 1 (period 1), 2 + 2 (period 2)
+    assert sum(len(xy) for xy in markers.values()) == sum(PERIOD[i] for i, _ in SPECIAL) == 6
+    for index, kind in SPECIAL:
+        p = PERIOD[index]
+        np.testing.assert_array_equal(markers[kind][:, 0], np.full(p, VALUES[index]))
+        np.testing.assert_array_equal(markers[kind][:, 1], cont.strobe_x[index, :p, 0])
+    assert len({tuple(c.get_paths()[0].vertices.ravel()) for c in ax.collections}) == 4
+    assert _legend(ax) == ["stable", "unstable", "fold", "period doubling", "Neimark-Sacker",
+                           "grazing"]
+
+
+def test_branches_legend_shows_only_what_is_drawn(make_continuation: Callable[..., Path]
+                                                  ) -> None:
+    path = make_continuation(stable=(1,) * 12, special=((4, "period-doubling"),))
+    ax = figures.branches(path).axes[0]
+    assert _legend(ax) == ["stable", "period doubling"]
+    assert not [line for line in _lines(ax, "branch-") if line.get_linestyle() == "--"]
+
+
+def test_branches_over_a_sweep(cont_file: Path, comparable_sweep: Path) -> None:
+    sweep = read_run(comparable_sweep).sweep
+    assert sweep is not None
+    fig = figures.branches(cont_file, over=comparable_sweep, site=3)
+    (ax,) = fig.axes
+    first = ax.get_lines()[0]  # drawn first, under the branches
+    assert first.get_gid() == "bifurcation-3" and first.get_color() == figures.OVER_COLOUR
+    np.testing.assert_array_equal(first.get_xdata(), np.repeat(sweep.values, 5))
+    np.testing.assert_array_equal(first.get_ydata(), sweep.x[:, :, 2].ravel())
+    assert _legend(ax)[0] == "sweep"
+    assert figures.metadata(fig)["Source"] == f"{cont_file}\n{comparable_sweep}"
+
+
+def test_branches_refuse_a_sweep_of_another_parameter(cont_file: Path, make_run: MakeRun
+                                                      ) -> None:
+    omega = make_run("omega.h5", n=N, strobe=False, events=False,
+                     sweep={"parameter": "omega"})
+    with pytest.raises(figures.FigureError, match="a sweep over omega, the continuation "
+                                                  "follows amplitude"):
+        figures.branches(cont_file, over=omega)
+
+
+def test_branches_refuse_a_sweep_of_another_chain(cont_file: Path, make_run: MakeRun) -> None:
+    other_n = make_run("n4.h5", n=4, strobe=False, events=False, sweep=True)
+    with pytest.raises(figures.FigureError, match="a chain of 4 oscillators"):
+        figures.branches(cont_file, over=other_n)
+    other_b = make_run("b.h5", n=N, strobe=False, events=False, sweep=True, omega=1.6)
+    with pytest.raises(figures.FigureError, match=r"differs from the continuation in omega "
+                                                  r"\(1.6, not 1.5\)"):
+        figures.branches(cont_file, over=other_b)
+    other_phase = make_run("p.h5", n=N, strobe=False, events=False, sweep=True, phase=0.5)
+    with pytest.raises(figures.FigureError, match="section phase"):
+        figures.branches(cont_file, over=other_phase)
+    two_d = make_run("2d.h5", n=N, strobe=False, events=False,
+                     sweep={"parameter2": "omega"})
+    with pytest.raises(figures.FigureError, match="2-D sweep"):
+        figures.branches(cont_file, over=two_d)
+
+
+def test_branches_site_and_empty_continuation(cont_file: Path,
+                                              make_continuation: Callable[..., Path]) -> None:
+    with pytest.raises(figures.FigureError, match="site 4 is outside 1..3"):
+        figures.branches(cont_file, site=4)
+    empty = make_continuation("empty.h5", values=(), branch=(), period=(), stable=(),
+                              special=())
+    for draw in (figures.branches, figures.multipliers):
+        with pytest.raises(figures.FigureError, match=re.escape(f"holds no orbit ({END_REASON})")):
+            draw(empty)
+
+
+def test_multipliers_are_the_largest_moduli(cont_file: Path) -> None:
+    cont = read_continuation(cont_file)
+    fig = figures.multipliers(cont_file)
+    (ax,) = fig.axes
+    modulus = np.abs(cont.multipliers).max(axis=1)
+    lines = _lines(ax, "branch-")
+    assert len(lines) == 4  # (branch 0, 1) x (stable, unstable)
+    for line in lines:
+        gid = str(line.get_gid())
+        points = list(RUNS[gid])
+        np.testing.assert_array_equal(line.get_xdata(), cont.values[points])
+        np.testing.assert_array_equal(line.get_ydata(), modulus[points])
+        assert line.get_linestyle() == ("-" if gid.endswith("-stable") else "--")
+    (unit,) = _lines(ax, "unit")
+    assert list(unit.get_ydata()) == [1.0, 1.0]
+    markers = _markers(ax)
+    assert sum(len(xy) for xy in markers.values()) == len(SPECIAL)  # one per special point
+    for index, kind in SPECIAL:
+        np.testing.assert_array_equal(markers[kind], [[VALUES[index], modulus[index]]])
+    assert ax.get_yscale() == "linear"  # moduli from 0.81 to 2.6
+    assert _legend(ax) == ["stable", "unstable", "fold", "period doubling", "Neimark-Sacker",
+                           "grazing"]
+
+
+def test_multipliers_on_a_log_scale_when_they_span_decades(cont_file: Path) -> None:
+    with h5py.File(cont_file, "r+") as f:
+        f["continuation/multipliers_re"][11, 0] = 250.0
+    ax = figures.multipliers(cont_file).axes[0]
+    assert ax.get_yscale() == "log"
+
+
+def test_labels_units_and_axes(cont_file: Path, comparable_sweep: Path) -> None:
+    """Axis labels ``name $symbol$ [unit]``, the units the file's; ``ax=`` draws there."""
+    made = {"branches": figures.branches(cont_file, over=comparable_sweep, site=2),
+            "multipliers": figures.multipliers(cont_file)}
+    for name, fig in made.items():
+        ax = fig.axes[0]
+        for label in (ax.get_xlabel(), ax.get_ylabel()):
+            assert re.fullmatch(r"[^\[\]]+ \[[^\[\]]+\]", label), (name, label)
+        assert ax.get_xlabel() == "drive amplitude $A$ [length]"
+        assert "$A$" not in ax.get_title() and END_REASON in ax.get_title()
+    assert made["branches"].axes[0].get_ylabel() == \
+        "displacement at the section $x_{2}$ [length]"
+    assert made["multipliers"].axes[0].get_ylabel() == \
+        "largest Floquet multiplier $|\\mu|_{\\max}$ [1]"
+    fig = Figure()
+    left, right = fig.subplots(1, 2)
+    assert figures.branches(cont_file, ax=right) is fig
+    assert figures.multipliers(cont_file, ax=left) is fig
+    assert _lines(right, "branch-") and _lines(left, "branch-")
+
