@@ -27,6 +27,7 @@ from matplotlib.lines import Line2D
 
 from conftest import write_run
 from impactchain import figures
+from impactchain.cli import main
 from impactchain.io import (SPECIAL_KINDS, Continuation, SchemaError, read_continuation,
                             read_run)
 
@@ -519,3 +520,59 @@ def test_labels_units_and_axes(cont_file: Path, comparable_sweep: Path) -> None:
     assert figures.multipliers(cont_file, ax=left) is fig
     assert _lines(right, "branch-") and _lines(left, "branch-")
 
+
+# -------------------------------------------------------------------------------------- cli
+
+
+def test_cli_writes_the_figures(cont_file: Path, comparable_sweep: Path,
+                                tmp_path: Path) -> None:
+    from PIL import Image
+
+    out = tmp_path / "branches.png"
+    assert main(["branches", str(cont_file), "--over", str(comparable_sweep), "--site", "2",
+                 "-o", str(out)]) == 0
+    assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    with Image.open(out) as image:
+        assert image.text["Source"] == f"{cont_file}\n{comparable_sweep}"
+    out = tmp_path / "multipliers.pdf"
+    assert main(["multipliers", str(cont_file), "-o", str(out)]) == 0
+    assert out.read_bytes()[:5] == b"%PDF-"
+    assert main(["all", str(cont_file), "-o", str(tmp_path / "all" / "c")]) == 0
+    assert sorted(p.name for p in (tmp_path / "all").iterdir()) == [
+        "c_branches.png", "c_multipliers.png"]
+
+
+def _refused(argv: list[str], message: str, out: Path,
+             capsys: pytest.CaptureFixture[str]) -> None:
+    assert main([*argv, "-o", str(out)]) == 2
+    lines = capsys.readouterr().err.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("impactchain: error: "), lines
+    assert message in lines[0]
+    assert not out.exists()
+
+
+def test_cli_refuses_a_sweep_of_another_parameter(cont_file: Path, make_run: MakeRun,
+                                                  tmp_path: Path,
+                                                  capsys: pytest.CaptureFixture[str]) -> None:
+    omega = make_run("omega.h5", n=N, strobe=False, events=False,
+                     sweep={"parameter": "omega"})
+    _refused(["branches", str(cont_file), "--over", str(omega)],
+             "a sweep over omega, the continuation follows amplitude", tmp_path / "b.png",
+             capsys)
+
+
+def test_cli_errors(cont_file: Path, sweep_file: Path, tmp_path: Path,
+                    capsys: pytest.CaptureFixture[str]) -> None:
+    out = tmp_path / "x.png"
+    _refused(["branches", str(sweep_file)], "no /continuation, needed by branches (this is "
+             "not a continuation file)", out, capsys)
+    _refused(["multipliers", str(sweep_file)], "no /continuation, needed by multipliers",
+             out, capsys)
+    _refused(["branches", str(cont_file), "--over", str(cont_file)],
+             "no /sweep, needed by branches --over (this is not a parameter-sweep file)", out,
+             capsys)
+    _refused(["branches", str(cont_file), "--site", "5"], "site 5 is outside 1..3", out,
+             capsys)
+    with pytest.raises(SystemExit) as exit_info:
+        main(["branches", str(cont_file), "--site", "0", "-o", str(out)])
+    assert exit_info.value.code == 2
