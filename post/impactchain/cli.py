@@ -150,9 +150,13 @@ def _shock_wave_options(parser: argparse.ArgumentParser) -> None:
     _wait_option(parser)
 
 
-def _poincare_options(parser: argparse.ArgumentParser) -> None:
+def _site_option(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--site", type=_positive_int, default=1, metavar="I",
                         help="oscillator, 1-based (default: 1)")
+
+
+def _poincare_options(parser: argparse.ArgumentParser) -> None:
+    _site_option(parser)
     _cycles_option(parser)
 
 
@@ -168,6 +172,13 @@ def _lyapunov_options(parser: argparse.ArgumentParser) -> None:
                         help="add a bifurcation panel of oscillator 1 above the exponents")
 
 
+def _branches_options(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--over", metavar="SWEEP.h5",
+                        help="a 1-D sweep of the same parameter, drawn underneath in grey as "
+                             "the brute-force bifurcation diagram")
+    _site_option(parser)
+
+
 def _all_options(parser: argparse.ArgumentParser) -> None:
     _cycles_option(parser)
     _panel_options(parser)
@@ -179,6 +190,12 @@ def _no_options(parser: argparse.ArgumentParser) -> None:
 
 
 # ----------------------------------------------------------------------------- commands
+
+
+def _branches(run: Run, args: argparse.Namespace) -> Figure:
+    """The branches of a continuation, over the sweep of --over if given."""
+    over = None if args.over is None else _read(args.over, ("sweep",), (), "branches --over")
+    return figures.branches(run, over=over, site=args.site)
 
 
 COMMANDS: dict[str, Command] = {
@@ -219,6 +236,16 @@ COMMANDS: dict[str, Command] = {
                 "Lyapunov spectrum of one run and convergence of the running estimates",
                 ("lyapunov",), ("strobe",), False, _no_options,
                 lambda runs, a: figures.spectrum(runs[0])),
+        Command("branches",
+                "continued periodic orbits against the parameter, stable and unstable, "
+                "with their special points (continuation file)",
+                ("continuation",), (), False, _branches_options,
+                lambda runs, a: _branches(runs[0], a)),
+        Command("multipliers",
+                "largest Floquet multiplier of the continued orbits against the parameter "
+                "(continuation file)",
+                ("continuation",), (), False, _no_options,
+                lambda runs, a: figures.multipliers(runs[0])),
     )
 }
 
@@ -308,6 +335,9 @@ def _all_figures(run: Run, args: argparse.Namespace) -> Iterator[tuple[str, Figu
                 yield "lyapunov", figures.lyapunov([run], with_bifurcation=True)
         if sweep.ky_dimension is not None:
             yield "ky-dimension", figures.ky_dimension([run])
+    if run.continuation is not None and run.continuation.n_points:
+        yield "branches", figures.branches(run)
+        yield "multipliers", figures.multipliers(run)
 
 
 def _read(path: str, require: tuple[str, ...], optional: tuple[str, ...] | None,

@@ -57,8 +57,8 @@ from matplotlib.lines import Line2D
 
 from impactchain import __version__
 from impactchain.analysis import panel_ranges, period_label
-from impactchain.io import (FILE_UNITS, Run, Strobe, Sweep, is_sweep_dataset, read_run,
-                            run_from_sweep)
+from impactchain.io import (FILE_UNITS, SPECIAL_KINDS, Continuation, Run, Strobe, Sweep,
+                            is_sweep_dataset, read_run, run_from_sweep)
 from impactchain.shockwave import Wave, build_shock_waves
 
 __all__ = [
@@ -78,6 +78,8 @@ __all__ = [
     "lyapunov",
     "ky_dimension",
     "spectrum",
+    "branches",
+    "multipliers",
     "wave_points",
 ]
 
@@ -87,6 +89,20 @@ RIGHT_COLOUR = "tab:red"
 OVERLAY_COLOURS = ("tab:red", "tab:green", "tab:blue", "tab:orange", "tab:purple",
                    "tab:brown", "tab:pink", "tab:olive", "tab:cyan", "tab:gray")
 BAND_ALPHA = 0.35
+BRANCH_COLOURS = ("k", "tab:blue", "tab:cyan", "tab:brown", "tab:olive", "tab:pink",
+                  "tab:gray")
+"""Colour of continued branch 0, 1, 2, ... (cycled)."""
+OVER_COLOUR = "0.65"
+"""The brute-force bifurcation diagram under continued branches."""
+SPECIAL_STYLES = {
+    "fold": ("fold", "s", "tab:orange"),
+    "period-doubling": ("period doubling", "D", "tab:purple"),
+    "neimark-sacker": ("Neimark-Sacker", "^", "tab:green"),
+    "grazing": ("grazing", "X", "tab:red"),
+}
+"""Legend label, marker and colour of each kind of special point of a continuation."""
+LOG_SPAN = 10.0
+"""Largest Floquet multipliers spanning more than this factor are drawn on a log scale."""
 
 _SYMBOLS = {
     "n": ("oscillators", "n"),
@@ -708,10 +724,10 @@ def bifurcation(run: RunLike, sites: Sequence[int] | None = None,
     return fig
 
 
-def _bifurcation_points(ax: Axes, sweep: Sweep, site: int) -> None:
+def _bifurcation_points(ax: Axes, sweep: Sweep, site: int, colour: str = "k") -> None:
     cycles = sweep.x.shape[1]
     ax.plot(np.repeat(sweep.values, cycles), sweep.x[:, :, site - 1].reshape(-1),
-            linestyle="none", marker=".", markersize=1.0, color="k", rasterized=True,
+            linestyle="none", marker=".", markersize=1.0, color=colour, rasterized=True,
             gid=f"bifurcation-{site}")
 
 
@@ -985,6 +1001,182 @@ def _running_axis(run: Run) -> tuple[np.ndarray, str]:
     if run.strobe is not None and run.strobe.cycle.size == m:
         return run.strobe.cycle, _cycle_label(run)
     return np.arange(1, m + 1), _label("recorded cycles", _unit(run, "strobe/cycle"))
+
+
+# --------------------------------------------------------------------------- continuation
+
+
+def branches(run: RunLike, over: RunLike | None = None, site: int = 1,
+             ax: Axes | None = None) -> Figure:
+    """Continued periodic orbits: the positions of oscillator ``site`` (1-based) at the p
+    section crossings of each period-p orbit against the continued parameter.
+
+    Stable orbits are solid lines, unstable ones dashed; each branch (``Continuation.branch``)
+    has its colour, and a line ends where the branch or the stability changes (a change of
+    stability within a branch keeps the line unbroken). Special points are marked at every
+    crossing of their orbit, one marker per kind, with a legend. ``over``: a 1-D sweep of the
+    same parameter, on the same chain and section, drawn first in grey as the brute-force
+    bifurcation diagram. ``ax``: one Axes.
+    """
+    run = as_run(run, ("continuation",), "branches")
+    cont = _continuation(run)
+    _check_site(site, run.params.n)
+    shown = [run]
+    sweep = None
+    if over is not None:
+        over_run = as_run(over, ("sweep",), "branches")
+        sweep = _sweep_1d(over_run)
+        _check_comparable(run, cont, over_run, sweep)
+        shown.append(over_run)
+    fig, ax = _one_axes(ax, 7.5, 5.0, "branches")
+    if sweep is not None:
+        _bifurcation_points(ax, sweep, site, colour=OVER_COLOUR)
+    positions = cont.strobe_x[:, :, site - 1]
+    for branch, stable, points in _stability_runs(cont):
+        for strand in positions[points].T:
+            if np.isfinite(strand).any():
+                _branch_line(ax, cont.values[points], strand, branch, stable)
+    for kind, chosen in _specials(cont):
+        x = np.concatenate([np.full(cont.period[i], cont.special_value[j]) for j, i in chosen])
+        y = np.concatenate([positions[i, :cont.period[i]] for _, i in chosen])
+        _special_markers(ax, kind, x, y)
+    handles = _stability_handles(cont)
+    if sweep is not None:
+        handles.insert(0, Line2D([], [], linestyle="none", marker=".", color=OVER_COLOUR,
+                                 label="sweep"))
+    ax.legend(handles=handles + _special_handles(cont), loc="best", fontsize="small",
+              framealpha=0.9)
+    ax.set_xlabel(_parameter_label(cont.parameter))
+    ax.set_ylabel(_label("displacement at the section", _unit(run, "continuation/strobe_x"),
+                         f"x_{{{site}}}"))
+    ax.set_title(f"{_title(run, skip=cont.parameter)}\noscillator {site}; "
+                 f"{_continuation_summary(cont)}", fontsize="medium")
+    _record_sources(fig, shown)
+    return fig
+
+
+def multipliers(run: RunLike, ax: Axes | None = None) -> Figure:
+    """The largest modulus of the Floquet multipliers of the continued orbits against the
+    continued parameter, with the unit line where orbits lose stability; on a log scale when
+    the moduli span more than a factor :data:`LOG_SPAN`.
+
+    Lines as in :func:`branches` (solid stable, dashed unstable, a colour per branch);
+    special points marked, one marker each. ``ax``: one Axes.
+    """
+    run = as_run(run, ("continuation",), "multipliers")
+    cont = _continuation(run)
+    fig, ax = _one_axes(ax, 7.0, 4.5, "multipliers")
+    modulus = cont.max_multiplier
+    for branch, stable, points in _stability_runs(cont):
+        _branch_line(ax, cont.values[points], modulus[points], branch, stable)
+    ax.axhline(1.0, color="0.3", linewidth=0.8, linestyle=":", gid="unit")
+    for kind, chosen in _specials(cont):
+        _special_markers(ax, kind, cont.special_value[[j for j, _ in chosen]],
+                         modulus[[i for _, i in chosen]])
+    positive = modulus[np.isfinite(modulus) & (modulus > 0)]
+    if positive.size and positive.max() > LOG_SPAN * positive.min():
+        ax.set_yscale("log")
+    ax.legend(handles=_stability_handles(cont) + _special_handles(cont), loc="best",
+              fontsize="small", framealpha=0.9)
+    ax.set_xlabel(_parameter_label(cont.parameter))
+    ax.set_ylabel(_label("largest Floquet multiplier", "1", r"|\mu|_{\max}"))
+    ax.set_title(f"{_title(run, skip=cont.parameter)}\n{_continuation_summary(cont)}",
+                 fontsize="medium")
+    _record_sources(fig, [run])
+    return fig
+
+
+def _continuation(run: Run) -> Continuation:
+    cont = run.continuation
+    if cont is None:
+        raise FigureError(f"{run.path}: not a continuation file")
+    if cont.n_points == 0:
+        raise FigureError(f"{run.path}: the continuation holds no orbit ({cont.end_reason})")
+    return cont
+
+
+def _check_comparable(run: Run, cont: Continuation, over: Run, sweep: Sweep) -> None:
+    """A sweep drawn under a continuation: the same parameter, chain and section."""
+    if sweep.parameter != cont.parameter:
+        raise FigureError(f"{over.path}: a sweep over {sweep.parameter}, the continuation "
+                          f"follows {cont.parameter}")
+    if over.params.n != run.params.n or over.params.boundary != run.params.boundary:
+        raise FigureError(f"{over.path}: a chain of {over.params.n} oscillators with "
+                          f"{over.params.boundary} ends, the continuation's has "
+                          f"{run.params.n} with {run.params.boundary} ends")
+    differ = [f"{name} ({getattr(over.params, name):g}, not {getattr(run.params, name):g})"
+              for name in ("amplitude", "omega", "damping", "restitution")
+              if name != cont.parameter
+              and getattr(over.params, name) != getattr(run.params, name)]
+    if cont.parameter != "spacing" and not np.array_equal(over.params.spacing,
+                                                          run.params.spacing):
+        differ.append("spacing")
+    if over.params.phase != cont.phase:
+        differ.append(f"section phase ({over.params.phase:g}, not {cont.phase:g})")
+    if differ:
+        raise FigureError(f"{over.path}: the sweep differs from the continuation in "
+                          + ", ".join(differ))
+
+
+def _stability_runs(cont: Continuation) -> list[tuple[int, bool, np.ndarray]]:
+    """(branch, stable, point indices) of each line: the points split where the branch or
+    the stability changes. A run that follows one of the same branch starts at that run's
+    last point, so that a change of stability does not break the line."""
+    runs = []
+    start = 0
+    for end in range(1, cont.n_points + 1):
+        if (end < cont.n_points and cont.branch[end] == cont.branch[start]
+                and cont.stable[end] == cont.stable[start]):
+            continue
+        first = start - 1 if start and cont.branch[start - 1] == cont.branch[start] else start
+        runs.append((int(cont.branch[start]), bool(cont.stable[start]), np.arange(first, end)))
+        start = end
+    return runs
+
+
+def _branch_line(ax: Axes, x: np.ndarray, y: np.ndarray, branch: int, stable: bool) -> None:
+    ax.plot(x, y, color=BRANCH_COLOURS[branch % len(BRANCH_COLOURS)], linewidth=1.2,
+            linestyle="-" if stable else "--", marker="." if x.size == 1 else "",
+            gid=f"branch-{branch}-{'stable' if stable else 'unstable'}")
+
+
+def _specials(cont: Continuation) -> list[tuple[str, list[tuple[int, int]]]]:
+    """(kind, [(special point j, its point index i), ...]) of each kind present."""
+    found = []
+    for kind in SPECIAL_KINDS:
+        chosen = [(j, int(i)) for j, (i, k) in enumerate(zip(cont.special_index,
+                                                             cont.special_kind)) if k == kind]
+        if chosen:
+            found.append((kind, chosen))
+    return found
+
+
+def _special_markers(ax: Axes, kind: str, x: np.ndarray, y: np.ndarray) -> None:
+    label, marker, colour = SPECIAL_STYLES[kind]
+    ax.scatter(x, y, marker=marker, s=36, color=colour, edgecolors="k", linewidths=0.5,
+               zorder=3, label=label, gid=f"special-{kind}")
+
+
+def _stability_handles(cont: Continuation) -> list[Line2D]:
+    styles = [("stable", "-")] if cont.stable.any() else []
+    if not cont.stable.all():
+        styles.append(("unstable", "--"))
+    return [Line2D([], [], color="k", linestyle=style, label=label) for label, style in styles]
+
+
+def _special_handles(cont: Continuation) -> list[Line2D]:
+    handles = []
+    for kind, _ in _specials(cont):
+        label, marker, colour = SPECIAL_STYLES[kind]
+        handles.append(Line2D([], [], linestyle="none", marker=marker, color=colour,
+                              markeredgecolor="k", markeredgewidth=0.5, label=label))
+    return handles
+
+
+def _continuation_summary(cont: Continuation) -> str:
+    count = len(np.unique(cont.branch))
+    return (f"{cont.n_points} orbits on {count} branch{'es' if count > 1 else ''}; "
+            f"stopped: {cont.end_reason}")
 
 
 # -------------------------------------------------------------------------------- helpers

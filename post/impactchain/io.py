@@ -18,6 +18,9 @@ HDF5 path                 dataclass field         shape (h5py / numpy order)
 /sweep                    ``Run.sweep``           ``x`` (n_points, cycles, n), ``period``
                                                   (n_points, n), ``exponents`` (n_points,
                                                   k), ``ky_dimension`` (n_points,)
+/continuation             ``Run.continuation``    ``values`` (P,), ``x`` (P, n),
+                                                  ``strobe_x`` (P, L, n), ``multipliers_re``
+                                                  (P, 2n), ``special_index`` (S,), ...
 ========================  ======================  ===================================
 
 Version 2 (README "Output") is netCDF-4 readable: every group carries its dimensions and
@@ -25,9 +28,12 @@ coordinates (``xarray.open_dataset(path, engine="h5netcdf", group="strobe")``), 
 stores its parameter values as the coordinates ``/sweep/point`` (and ``point2``), a 2-D
 sweep's per-point datasets as (point, point2, ...), and ``/params`` lacks the swept
 parameters (``NaN`` in :class:`Params`; ``drive_period`` too in an omega sweep, whose
-``Sweep.drive_period`` has it per point). This module returns both versions in the same
-dataclasses, a 2-D sweep's points flattened in version 1's order (the first parameter
-varying fastest), so nothing downstream depends on the version.
+``Sweep.drive_period`` has it per point). A continuation file (periodic orbits followed in
+one parameter) is laid out the same way: ``/continuation`` with the dimensions ``point``,
+``oscillator``, ``multiplier``, ``iterate`` and ``special``, and ``/params`` without the
+continued parameter. This module returns both versions in the same dataclasses, a 2-D
+sweep's points flattened in version 1's order (the first parameter varying fastest), so
+nothing downstream depends on the version.
 
 Every group except ``/params`` is optional; a figure states what it needs through
 ``read_run(path, require=...)`` and gets a :class:`SchemaError` naming the missing
@@ -66,9 +72,12 @@ __all__ = [
     "Stats",
     "Lyapunov",
     "Sweep",
+    "SPECIAL_KINDS",
+    "Continuation",
     "Run",
     "FILE_UNITS",
     "read_run",
+    "read_continuation",
     "run_from_api",
     "run_from_sweep",
     "is_sweep_dataset",
@@ -110,13 +119,21 @@ FILE_UNITS: Mapping[str, str] = MappingProxyType({
     "sweep/exponents": "bits per drive cycle",
     "sweep/stderr": "bits per drive cycle",
     "sweep/ky_dimension": "1",
+    "continuation/x": "length",
+    "continuation/v": "length/time",
+    "continuation/strobe_x": "length",
+    "continuation/period": "drive cycles",
+    "continuation/min_gap": "length",
+    "continuation/min_impact_speed": "length/time",
+    "continuation/impacts_per_period": "impacts per period",
 })
 """The unit of each dataset in the model's reduced units (docs/model.md section 1.5): a
 version-2 file's ``model_units`` attribute (its ``units`` are UDUNITS', ``1`` for these),
 a version-1 file's ``units``; the units of a run made in memory (:func:`run_from_api`) and
 the defaults of the figures' axis labels."""
 
-OPTIONAL_GROUPS = ("initial", "final", "strobe", "events", "stats", "lyapunov", "sweep")
+OPTIONAL_GROUPS = ("initial", "final", "strobe", "events", "stats", "lyapunov", "sweep",
+                   "continuation")
 
 _HINTS = {
     "strobe": "the run recorded no strobe snapshots",
@@ -125,7 +142,11 @@ _HINTS = {
     "sweep": "this is not a parameter-sweep file",
     "sweep/exponents": "the sweep did not compute Lyapunov exponents",
     "sweep/ky_dimension": "the sweep did not compute Lyapunov exponents",
+    "continuation": "this is not a continuation file",
 }
+
+SPECIAL_KINDS = ("fold", "period-doubling", "neimark-sacker", "grazing")
+"""``/continuation/special_kind``: the special points a continuation locates."""
 
 
 class SchemaError(ValueError):
@@ -274,6 +295,59 @@ class Sweep:
 
 
 @dataclass(frozen=True, eq=False)
+class Continuation:
+    """Periodic orbits continued in one parameter (``/continuation``), one per point.
+
+    Point ``i`` is a period-``period[i]`` orbit of the stroboscopic map at ``parameter =
+    values[i]``, on branch ``branch[i]`` (0: the first; 1, 2, ...: branches switched to at
+    period doublings). Special points (folds, period doublings, Neimark-Sacker points,
+    grazings) are stored as points too: ``values[special_index[j]] == special_value[j]``.
+    """
+
+    parameter: str  # amplitude, omega, damping, restitution or spacing
+    phase: float  # drive phase of the section, rad
+    end_reason: str  # why the continuation stopped
+    values: np.ndarray  # (P,) the continued parameter at each point
+    x: np.ndarray  # (P, n) the orbit's state on the section
+    v: np.ndarray  # (P, n)
+    strobe_x: np.ndarray  # (P, L, n) the p section crossings (iterate 1 = x), NaN beyond p
+    period: np.ndarray  # (P,) drive cycles per period of the orbit
+    branch: np.ndarray  # (P,)
+    multipliers_re: np.ndarray  # (P, 2n) Floquet multipliers
+    multipliers_im: np.ndarray  # (P, 2n)
+    stable: np.ndarray  # (P,) bool: every |multiplier| < 1
+    min_gap: np.ndarray  # (P,) smallest gap at a local minimum over a period (inf: none)
+    min_impact_speed: np.ndarray  # (P,) inf: the orbit has no impacts
+    impacts_per_period: np.ndarray  # (P,)
+    residual: np.ndarray  # (P,) Newton's last residual
+    iterations: np.ndarray  # (P,) Newton's steps
+    special_index: np.ndarray  # (S,) 0-based index of the special point into the points
+    special_kind: np.ndarray  # (S,) str, one of SPECIAL_KINDS
+    special_value: np.ndarray  # (S,) the parameter at the special point
+
+    @property
+    def n_points(self) -> int:
+        """Number of points, P."""
+        return int(self.values.shape[0])
+
+    @property
+    def multipliers(self) -> np.ndarray:
+        """The Floquet multipliers as complex numbers, (P, 2n)."""
+        return self.multipliers_re + 1j * self.multipliers_im
+
+    @property
+    def max_multiplier(self) -> np.ndarray:
+        """The largest modulus of the multipliers at each point, (P,)."""
+        return np.max(np.abs(self.multipliers), axis=1)
+
+    @property
+    def special_points(self) -> list[tuple[int, str, float]]:
+        """The special points as (index into the points, kind, parameter value)."""
+        return [(int(i), str(kind), float(value)) for i, kind, value
+                in zip(self.special_index, self.special_kind, self.special_value)]
+
+
+@dataclass(frozen=True, eq=False)
 class Run:
     """One impactchain output file."""
 
@@ -290,6 +364,7 @@ class Run:
     stats: Stats | None = None
     lyapunov: Lyapunov | None = None
     sweep: Sweep | None = None
+    continuation: Continuation | None = None
     units: Mapping[str, str] = field(default_factory=dict)
     resolved_namelist: str = ""  # every key as used; '' for an older file
 
@@ -342,6 +417,14 @@ def read_run(
         raise SchemaError(f"{path}: cannot read HDF5 file ({exc})") from exc
     except KeyError as exc:
         raise SchemaError(f"{path}: malformed file ({exc})") from exc
+
+
+def read_continuation(path: str | os.PathLike[str]) -> Continuation:
+    """The ``/continuation`` group of a continuation file (:class:`SchemaError` when the file
+    has none); ``read_run(path).continuation`` with the rest of the file."""
+    run = read_run(path, require=("continuation",), groups=("continuation",))
+    assert run.continuation is not None
+    return run.continuation
 
 
 def _check_file(path: str) -> None:
@@ -402,6 +485,7 @@ def _read(f: h5py.File, path: str, wanted: set[str]) -> Run:
         "stats": lambda g: _read_stats(g, path, n),
         "lyapunov": lambda g: _read_lyapunov(g, path),
         "sweep": lambda g: _read_sweep(g, path, n),
+        "continuation": lambda g: _read_continuation(g, path, n),
     }
     parts: dict[str, Any] = {}
     for name, reader in readers.items():
@@ -422,8 +506,11 @@ def _read(f: h5py.File, path: str, wanted: set[str]) -> Run:
 
 def _read_params(f: h5py.File, path: str) -> Params:
     g = f["params"]
-    # a version-2 sweep leaves out what differs from point to point
+    # a version-2 sweep leaves out what differs from point to point, a continuation its
+    # parameter
     swept = set(_swept(f, path)) if "sweep" in f and _version(f, path) >= 2 else set()
+    if "continuation" in f:
+        swept.add(_str(_attr(f["continuation"], path, "parameter")))
     if "omega" in swept:
         swept.add("drive_period")
     attrs = {name: math.nan if name in swept and name not in g.attrs else _attr(g, path, name)
@@ -612,6 +699,53 @@ def _read_sweep_v2(g: h5py.Group, path: str, n: int) -> Sweep:
         stderr=per_point("stderr", (k,), float) if "stderr" in g else None,
         ky_dimension=per_point("ky_dimension", (), float) if "ky_dimension" in g else None,
         drive_period=drive_period,
+    )
+
+
+def _read_continuation(g: h5py.Group, path: str, n: int) -> Continuation:
+    values = _dataset(g, path, "values", (None,), float)
+    p = values.shape[0]
+    period = _dataset(g, path, "period", (p,), int)
+    if p and period.min() < 1:
+        raise SchemaError(f"{path}: {g.name}/period holds {period.min()}; periods are >= 1")
+    strobe_x = _dataset(g, path, "strobe_x", (p, None, n), float)
+    if p and strobe_x.shape[1] < period.max():
+        raise SchemaError(f"{path}: {g.name}/strobe_x has {strobe_x.shape[1]} iterates, "
+                          f"fewer than the largest period {period.max()}")
+    stable = _dataset(g, path, "stable", (p,), int)
+    if not np.isin(stable, (0, 1)).all():
+        raise SchemaError(f"{path}: {g.name}/stable holds values other than 0 and 1")
+    special_index = _dataset(g, path, "special_index", (None,), int)
+    s = special_index.shape[0]
+    if s and (special_index.min() < 0 or special_index.max() >= p):
+        raise SchemaError(f"{path}: {g.name}/special_index holds values outside 0..{p - 1} "
+                          f"(found {special_index.min()}..{special_index.max()})")
+    special_kind = _strings(g, path, "special_kind", (s,))
+    unknown = sorted({str(kind) for kind in special_kind} - set(SPECIAL_KINDS))
+    if unknown:
+        raise SchemaError(f"{path}: {g.name}/special_kind holds {', '.join(map(repr, unknown))}"
+                          f" (known: {', '.join(SPECIAL_KINDS)})")
+    return Continuation(
+        parameter=_str(_attr(g, path, "parameter")),
+        phase=_float(_attr(g, path, "phase"), path, f"{g.name}/phase"),
+        end_reason=_str(_attr(g, path, "end_reason")),
+        values=values,
+        x=_dataset(g, path, "x", (p, n), float),
+        v=_dataset(g, path, "v", (p, n), float),
+        strobe_x=strobe_x,
+        period=period,
+        branch=_dataset(g, path, "branch", (p,), int),
+        multipliers_re=_dataset(g, path, "multipliers_re", (p, 2 * n), float),
+        multipliers_im=_dataset(g, path, "multipliers_im", (p, 2 * n), float),
+        stable=_frozen(stable == 1),
+        min_gap=_dataset(g, path, "min_gap", (p,), float),
+        min_impact_speed=_dataset(g, path, "min_impact_speed", (p,), float),
+        impacts_per_period=_dataset(g, path, "impacts_per_period", (p,), int),
+        residual=_dataset(g, path, "residual", (p,), float),
+        iterations=_dataset(g, path, "iterations", (p,), int),
+        special_index=special_index,
+        special_kind=special_kind,
+        special_value=_dataset(g, path, "special_value", (s,), float),
     )
 
 
@@ -939,6 +1073,22 @@ def _dataset(
     else:
         _check_shape(data.shape, shape, path, where)
     out = np.array(data, dtype=np.float64 if dtype is float else np.int64)
+    out.setflags(write=False)
+    return out
+
+
+def _strings(g: h5py.Group, path: str, name: str, shape: tuple[int | None, ...]) -> np.ndarray:
+    """Read the string dataset ``g/name`` (variable- or fixed-length) as a read-only array
+    of str, checking its shape."""
+    where = f"{g.name}/{name}"
+    if name not in g:
+        raise SchemaError(f"{path}: no {where} dataset")
+    obj = g[name]
+    if not isinstance(obj, h5py.Dataset) or obj.dtype.kind not in "SUO":
+        raise SchemaError(f"{path}: {where} is not a dataset of strings")
+    data = np.asarray(obj[()], dtype=object)
+    _check_shape(data.shape, shape, path, where)
+    out = np.array([_str(item) for item in data.reshape(-1)], dtype=str).reshape(data.shape)
     out.setflags(write=False)
     return out
 
