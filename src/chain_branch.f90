@@ -414,7 +414,7 @@ contains
                 failure = "the orbit sticks on a wall (rest): not supported"
             else if (pass%collapse) then
                 failure = "the cluster rule acts on the orbit: not supported"
-            else if (pass%residual > 4*previous .and. iterations >= 2) then
+            else if (pass%residual/4 > previous .and. iterations >= 2) then
                 failure = "Newton diverges (residual "//fmt_real(pass%residual)//")"
             end if
             if (len(failure) > 0) return

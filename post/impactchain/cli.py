@@ -192,10 +192,10 @@ def _no_options(parser: argparse.ArgumentParser) -> None:
 # ----------------------------------------------------------------------------- commands
 
 
-def _branches(run: Run, args: argparse.Namespace) -> Figure:
-    """The branches of a continuation, over the sweep of --over if given."""
+def _branches(runs: list[Run], args: argparse.Namespace) -> Figure:
+    """The branches of one or more continuations, over the sweep of --over if given."""
     over = None if args.over is None else _read(args.over, ("sweep",), (), "branches --over")
-    return figures.branches(run, over=over, site=args.site)
+    return figures.branches(runs, over=over, site=args.site)
 
 
 COMMANDS: dict[str, Command] = {
@@ -239,8 +239,7 @@ COMMANDS: dict[str, Command] = {
         Command("branches",
                 "continued periodic orbits against the parameter, stable and unstable, "
                 "with their special points (continuation file)",
-                ("continuation",), (), False, _branches_options,
-                lambda runs, a: _branches(runs[0], a)),
+                ("continuation",), (), True, _branches_options, _branches),
         Command("multipliers",
                 "largest Floquet multiplier of the continued orbits against the parameter "
                 "(continuation file)",

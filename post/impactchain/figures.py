@@ -1006,7 +1006,7 @@ def _running_axis(run: Run) -> tuple[np.ndarray, str]:
 # --------------------------------------------------------------------------- continuation
 
 
-def branches(run: RunLike, over: RunLike | None = None, site: int = 1,
+def branches(run: RunLike | Sequence[RunLike], over: RunLike | None = None, site: int = 1,
              ax: Axes | None = None) -> Figure:
     """Continued periodic orbits: the positions of oscillator ``site`` (1-based) at the p
     section crossings of each period-p orbit against the continued parameter.
@@ -1014,43 +1014,60 @@ def branches(run: RunLike, over: RunLike | None = None, site: int = 1,
     Stable orbits are solid lines, unstable ones dashed; each branch (``Continuation.branch``)
     has its colour, and a line ends where the branch or the stability changes (a change of
     stability within a branch keeps the line unbroken). Special points are marked at every
-    crossing of their orbit, one marker per kind, with a legend. ``over``: a 1-D sweep of the
-    same parameter, on the same chain and section, drawn first in grey as the brute-force
-    bifurcation diagram. ``ax``: one Axes.
+    crossing of their orbit, one marker per kind, with a legend. ``run``: one continuation, or
+    several of the same chain and parameter (branches followed from different starts), whose
+    branches are coloured in turn. ``over``: a 1-D sweep of the same parameter, on the same
+    chain and section, drawn first in grey as the brute-force bifurcation diagram. ``ax``:
+    one Axes.
     """
-    run = as_run(run, ("continuation",), "branches")
-    cont = _continuation(run)
-    _check_site(site, run.params.n)
-    shown = [run]
+    runs = _as_runs(run, ("continuation",), "branches")
+    conts = [_continuation(r) for r in runs]
+    first, cont0 = runs[0], conts[0]
+    _check_site(site, first.params.n)
+    for other, cont in zip(runs[1:], conts[1:]):
+        if cont.parameter != cont0.parameter or other.params.n != first.params.n:
+            raise FigureError(f"{other.path}: another parameter or chain than {first.path}")
+    shown = list(runs)
     sweep = None
     if over is not None:
         over_run = as_run(over, ("sweep",), "branches")
         sweep = _sweep_1d(over_run)
-        _check_comparable(run, cont, over_run, sweep)
+        for r, cont in zip(runs, conts):
+            _check_comparable(r, cont, over_run, sweep)
         shown.append(over_run)
     fig, ax = _one_axes(ax, 7.5, 5.0, "branches")
     if sweep is not None:
         _bifurcation_points(ax, sweep, site, colour=OVER_COLOUR)
-    positions = cont.strobe_x[:, :, site - 1]
-    for branch, stable, points in _stability_runs(cont):
-        for strand in positions[points].T:
-            if np.isfinite(strand).any():
-                _branch_line(ax, cont.values[points], strand, branch, stable)
-    for kind, chosen in _specials(cont):
-        x = np.concatenate([np.full(cont.period[i], cont.special_value[j]) for j, i in chosen])
-        y = np.concatenate([positions[i, :cont.period[i]] for _, i in chosen])
-        _special_markers(ax, kind, x, y)
-    handles = _stability_handles(cont)
+    offset = 0
+    handles: list[Line2D] = []
+    specials: list[Line2D] = []
+    for cont in conts:
+        positions = cont.strobe_x[:, :, site - 1]
+        for branch, stable, points in _stability_runs(cont):
+            for strand in positions[points].T:
+                if np.isfinite(strand).any():
+                    _branch_line(ax, cont.values[points], strand, branch + offset, stable)
+        for kind, chosen in _specials(cont):
+            x = np.concatenate([np.full(cont.period[i], cont.special_value[j])
+                                for j, i in chosen])
+            y = np.concatenate([positions[i, :cont.period[i]] for _, i in chosen])
+            _special_markers(ax, kind, x, y)
+        offset += int(cont.branch.max()) + 1 if cont.n_points else 0
+        labels = [h.get_label() for h in handles]
+        handles += [h for h in _stability_handles(cont) if h.get_label() not in labels]
+        labels = [h.get_label() for h in specials]
+        specials += [h for h in _special_handles(cont) if h.get_label() not in labels]
     if sweep is not None:
         handles.insert(0, Line2D([], [], linestyle="none", marker=".", color=OVER_COLOUR,
                                  label="sweep"))
-    ax.legend(handles=handles + _special_handles(cont), loc="best", fontsize="small",
-              framealpha=0.9)
-    ax.set_xlabel(_parameter_label(cont.parameter))
-    ax.set_ylabel(_label("displacement at the section", _unit(run, "continuation/strobe_x"),
+    ax.legend(handles=handles + specials, loc="best", fontsize="small", framealpha=0.9)
+    ax.set_xlabel(_parameter_label(cont0.parameter))
+    ax.set_ylabel(_label("displacement at the section", _unit(first, "continuation/strobe_x"),
                          f"x_{{{site}}}"))
-    ax.set_title(f"{_title(run, skip=cont.parameter)}\noscillator {site}; "
-                 f"{_continuation_summary(cont)}", fontsize="medium")
+    summary = (_continuation_summary(cont0) if len(conts) == 1 else
+               f"{sum(c.n_points for c in conts)} orbits from {len(conts)} starts")
+    ax.set_title(f"{_title(first, skip=cont0.parameter)}\noscillator {site}; {summary}",
+                 fontsize="medium")
     _record_sources(fig, shown)
     return fig
 
