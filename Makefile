@@ -134,7 +134,8 @@ SWEEPS := fig10 fig11_b005 fig11_b010 fig11_b015 fig12_K08 fig12_K06 fig12_K04 f
 FIGURES := $(foreach f,fig1a fig1b fig1c fig1d fig2a fig2b fig2c fig2d fig2e fig2f,figures/$(f).png) \
            figures/fig3.png figures/fig4.png figures/fig5.png figures/fig6.png \
            figures/fig7.png figures/fig8.png figures/fig10.png figures/fig11.png \
-           figures/fig12_damping.png figures/fig12_restitution.png figures/fig13.png
+           figures/fig12_damping.png figures/fig12_restitution.png figures/fig13.png \
+           figures/fig10_branches.png
 
 .PHONY: figures figure-files
 .SECONDARY:
@@ -168,6 +169,9 @@ figures/fig8.png: $(RUNS)/fig4_7.h5
 	$(POST) poincare $< --site 1 --cycles 50 -o $@ $(GALLERY)
 figures/fig10.png: $(RUNS)/fig10.h5
 	$(POST) bifurcation $< -o $@ $(GALLERY)
+figures/fig10_branches.png: $(RUNS)/fig10_branches.h5 $(RUNS)/fig10_free.h5 $(RUNS)/fig10.h5
+	$(POST) branches $(RUNS)/fig10_branches.h5 $(RUNS)/fig10_free.h5 --over $(RUNS)/fig10.h5 \
+		-o $@ $(GALLERY)
 figures/fig11.png: $(RUNS)/fig11_b005.h5 $(RUNS)/fig11_b010.h5 $(RUNS)/fig11_b015.h5
 	$(POST) lyapunov $^ --k 10 --with-bifurcation -o $@ $(GALLERY)
 figures/fig12_damping.png: $(RUNS)/fig11_b005.h5 $(RUNS)/fig11_b010.h5 $(RUNS)/fig11_b015.h5
