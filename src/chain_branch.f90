@@ -78,7 +78,7 @@ module chain_branch
         type(orbit_t) :: orbit
         integer, allocatable :: impacts(:)   !! impacts per bond 0..n over one period
         real(wp) :: det_plus = 0             !! det(J + I)
-        integer :: unstable_pairs = 0        !! complex multipliers outside the unit circle
+        integer :: unstable_pairs = 0        !! complex pairs outside the unit circle
     end type cursor_t
 
     !> Fixed things of one branch.
@@ -508,7 +508,10 @@ contains
     !> Between `here` and `next` (arclength h apart): a fold where the tangent's parameter
     !> component changes sign, a period doubling where det(J + I) does, a Neimark-Sacker
     !> point where the number of complex multipliers outside the unit circle changes. Each
-    !> is located and stored as a point (in the order of arclength).
+    !> is located and, when the located orbit confirms it (a multiplier within 1e-6 of +1,
+    !> of -1, or a complex pair within 1e-6 of the unit circle: a complex pair that leaves
+    !> the circle by turning real is no Neimark-Sacker point), stored as a point (in the
+    !> order of arclength).
     subroutine locate_specials(set, here, h, next, res, err)
         type(setting_t), intent(in) :: set
         type(cursor_t), intent(in) :: here, next
@@ -518,17 +521,20 @@ contains
         type(cursor_t) :: found(3)
         real(wp) :: at(3)
         logical :: seen(3)
-        integer :: k, j, m
+        integer :: k, j, m, rank
 
         m = size(here%y) - 1
         seen(1) = here%tangent(m + 1)*next%tangent(m + 1) < 0
         seen(2) = (here%det_plus < 0) .neqv. (next%det_plus < 0)
         seen(3) = here%unstable_pairs /= next%unstable_pairs
         at = huge(1.0_wp)
+        ! (the first pair to cross: pairs of a symmetric chain come twice and cross together)
+        rank = min(here%unstable_pairs, next%unstable_pairs) + 1
         do k = 1, 3
             if (.not. seen(k)) cycle
-            call locate(set, here, h, k, found(k), at(k), err)
+            call locate(set, here, h, k, rank, found(k), at(k), err)
             if (allocated(err)) return
+            seen(k) = confirmed(found(k)%orbit, k)
         end do
         do j = 1, count(seen)
             k = minloc(at, 1, mask=seen)
@@ -542,11 +548,11 @@ contains
     !> The zero of test function `kind` (1 fold, 2 period doubling, 3 Neimark-Sacker) on the
     !> branch between arclength 0 (`here`) and h, by regula falsi (Illinois) on the arclength,
     !> each trial corrected onto the branch; to 1e-11 in the parameter or a bracket of 1e-9.
-    subroutine locate(set, here, h, kind, found, s_found, err)
+    subroutine locate(set, here, h, kind, rank, found, s_found, err)
         type(setting_t), intent(in) :: set
         type(cursor_t), intent(in) :: here
         real(wp), intent(in) :: h
-        integer, intent(in) :: kind
+        integer, intent(in) :: kind, rank
         type(cursor_t), intent(out) :: found
         real(wp), intent(out) :: s_found
         type(error_t), allocatable, intent(out) :: err
@@ -558,12 +564,12 @@ contains
 
         m = size(here%y) - 1
         s_lo = 0
-        f_lo = test_value(here, kind, here%tangent)
+        f_lo = test_value(here, kind, rank, here%tangent)
         mu_lo = here%y(m + 1)
         s_hi = h
         call correct(set, here, h, trial, ok, iterations, failure, err)
         if (allocated(err)) return
-        f_hi = test_value(trial, kind, here%tangent)
+        f_hi = test_value(trial, kind, rank, here%tangent)
         mu_hi = trial%y(m + 1)
         found = trial
         s_found = h
@@ -576,7 +582,7 @@ contains
             call correct(set, here, s, trial, ok, iterations, failure, err)
             if (allocated(err)) return
             if (.not. ok) exit
-            f = test_value(trial, kind, here%tangent)
+            f = test_value(trial, kind, rank, here%tangent)
             found = trial
             s_found = s
             if (f == 0) exit
@@ -597,12 +603,14 @@ contains
     end subroutine locate
 
     !> The test function `kind` at c: the tangent's parameter component (fold), det(J + I)
-    !> (period doubling), or the product of |mu|**2 - 1 over the complex multipliers of
-    !> positive imaginary part (Neimark-Sacker).
-    pure real(wp) function test_value(c, kind, reference) result(f)
+    !> (period doubling), or |mu| - 1 of the complex pair of rank `rank` by modulus (the first
+    !> that crosses when the count outside the circle goes up from rank - 1, or down to it;
+    !> -1 when c has fewer complex pairs) (Neimark-Sacker).
+    pure real(wp) function test_value(c, kind, rank, reference) result(f)
         type(cursor_t), intent(in) :: c
-        integer, intent(in) :: kind
+        integer, intent(in) :: kind, rank
         real(wp), intent(in) :: reference(:)
+        real(wp), allocatable :: moduli(:)
         integer :: j
 
         select case (kind)
@@ -613,14 +621,36 @@ contains
         case (2)
             f = c%det_plus
         case default
-            f = 1
             associate (re => c%orbit%multipliers_re, im => c%orbit%multipliers_im)
-                do j = 1, size(re)
-                    if (im(j) > 0) f = f*(re(j)**2 + im(j)**2 - 1)
-                end do
+                moduli = pack(hypot(re, im), im > 0)
             end associate
+            f = -1
+            if (size(moduli) < rank) return
+            do j = 1, rank
+                f = maxval(moduli)
+                moduli(maxloc(moduli, 1)) = -1
+            end do
+            f = f - 1
         end select
     end function test_value
+
+    !> The located orbit has the multiplier of special point `kind` to 1e-6.
+    pure logical function confirmed(orbit, kind)
+        type(orbit_t), intent(in) :: orbit
+        integer, intent(in) :: kind
+        real(wp), parameter :: within = 1.0e-6_wp
+
+        associate (re => orbit%multipliers_re, im => orbit%multipliers_im)
+            select case (kind)
+            case (1)
+                confirmed = minval(hypot(re - 1, im)) < within
+            case (2)
+                confirmed = minval(hypot(re + 1, im)) < within
+            case default
+                confirmed = minval(abs(hypot(re, im) - 1), mask=im /= 0) < within
+            end select
+        end associate
+    end function confirmed
 
     !> The impacts change within arclength h of `here`: bisection on the arclength for the
     !> last orbit with the impacts of `here` (a trial where Newton fails counts as changed),
@@ -637,7 +667,7 @@ contains
         real(wp), parameter :: vanishing = 1.0e-4_wp
         type(cursor_t) :: trial, last_same
         character(len=:), allocatable :: failure
-        real(wp) :: s_lo, s_hi, s, mu_lo, mu_hi
+        real(wp) :: s_lo, s_hi, s, mu_lo, mu_hi, value
         integer :: k, iterations, m
         logical :: ok
 
@@ -667,10 +697,39 @@ contains
             grazed = min(last_same%orbit%min_gap, last_same%orbit%min_impact_speed) < vanishing
             if (.not. grazed) return
         end if
+        value = grazing_value(here, last_same)
         call store(set, last_same, res, err)
-        if (.not. allocated(err)) call add_special(res, res%n_points, 'grazing', &
-                                                   last_same%y(m + 1))
+        if (.not. allocated(err)) call add_special(res, res%n_points, 'grazing', value)
     end subroutine locate_grazing
+
+    !> Where the grazing monitor of the last orbit with the old impacts (its smallest gap or
+    !> impact speed, whichever is smaller) reaches zero, by the secant through it and the
+    !> branch's point before the bisection: as an impact vanishes its saltation grows as
+    !> 1 / speed, and Newton stops converging before the speed is zero, so the last orbit
+    !> stands some 1e-5 short of the grazing. The orbit's own parameter when the secant does
+    !> not apply (a monitor that did not decrease, or a root farther than the two points'
+    !> distance).
+    pure real(wp) function grazing_value(before, last) result(value)
+        type(cursor_t), intent(in) :: before, last
+        real(wp) :: g_last, g_before, mu_last, mu_before
+        integer :: m
+
+        m = size(last%y) - 1
+        mu_last = last%y(m + 1)
+        mu_before = before%y(m + 1)
+        value = mu_last
+        if (last%orbit%min_impact_speed < last%orbit%min_gap) then
+            g_last = last%orbit%min_impact_speed
+            g_before = before%orbit%min_impact_speed
+        else
+            g_last = last%orbit%min_gap
+            g_before = before%orbit%min_gap
+        end if
+        if (.not. (g_before > g_last .and. g_last >= 0 .and. g_before < huge(1.0_wp))) return
+        if (abs(g_last*(mu_last - mu_before)/(g_last - g_before)) > abs(mu_last - mu_before)) &
+            return
+        value = mu_last - g_last*(mu_last - mu_before)/(g_last - g_before)
+    end function grazing_value
 
     !> Why a branch ended at the grazing just stored.
     function grazing_reason(set, res) result(reason)
@@ -735,7 +794,8 @@ contains
                 else
                     c%det_plus = c%det_plus*hypot(1 + o%multipliers_re(j), &
                                                   o%multipliers_im(j))
-                    if (hypot(o%multipliers_re(j), o%multipliers_im(j)) > 1) &
+                    if (o%multipliers_im(j) > 0 .and. &
+                        hypot(o%multipliers_re(j), o%multipliers_im(j)) > 1) &
                         c%unstable_pairs = c%unstable_pairs + 1
                 end if
             end do

@@ -44,6 +44,7 @@ contains
         call non_impacting_branch(t)
         call impacting_branch(t, impacting)
         call period_doubling(t)
+        call two_starts(t)
     end subroutine run_branch_tests
 
     !> Figure 10's chain at amplitude A (a = 1, fixed walls).
@@ -318,5 +319,50 @@ contains
             end if
         end do
     end subroutine sweep_across
+
+    !> Figure 10's six-impact period-1 orbit followed down from A = 2.6 and from 2.7 (two
+    !> different starts, two different sets of points): one Neimark-Sacker point (two pairs of
+    !> the mirror-symmetric chain cross the unit circle together; the pairs that turn real
+    !> outside it later are no Neimark-Sacker point), then a grazing where an impact's speed
+    !> vanishes. Both runs must locate both at the same amplitude: the Neimark-Sacker point to
+    !> 1e-9 and the grazing (extrapolated from where Newton still converges) to 1e-8.
+    subroutine two_starts(t)
+        type(tally_t), intent(inout) :: t
+        type(branches_t) :: res(2)
+        type(branch_options_t) :: opt
+        type(orbit_t) :: start
+        type(error_t), allocatable :: err
+        real(wp) :: amplitude(2)
+        integer :: r
+
+        amplitude = [2.6_wp, 2.7_wp]
+        opt%parameter = 'amplitude'
+        opt%stop = 1
+        opt%step = -0.02_wp
+        opt%max_points = 400
+        do r = 1, 2
+            call settle(fig10(amplitude(r)), 500_i8, 1, start)
+            call follow_branches(fig10(amplitude(r)), 0.0_wp, 1, start%x, start%v, opt, res(r), &
+                                 err)
+            call check(t, .not. allocated(err), 'two starts: followed')
+            if (allocated(err)) return
+            print '(a)', '    '//res(r)%end_reason
+        end do
+        call check(t, all(res%n_specials == 2), 'two starts: two special points each')
+        if (any(res%n_specials /= 2)) return
+        call check(t, res(1)%specials(1)%kind == 'neimark-sacker' .and. &
+                   res(2)%specials(1)%kind == 'neimark-sacker' .and. &
+                   res(1)%specials(2)%kind == 'grazing' .and. &
+                   res(2)%specials(2)%kind == 'grazing', &
+                   'two starts: a Neimark-Sacker point, then a grazing')
+        write (*, '(a,2es22.14)') '    two starts: Neimark-Sacker at ', &
+            res(1)%specials(1)%value, res(2)%specials(1)%value
+        write (*, '(a,2es22.14)') '    two starts: grazing at ', res(1)%specials(2)%value, &
+            res(2)%specials(2)%value
+        call check_close(t, res(1)%specials(1)%value, res(2)%specials(1)%value, &
+                         'two starts: the same Neimark-Sacker point', 1.0e-9_wp)
+        call check_close(t, res(1)%specials(2)%value, res(2)%specials(2)%value, &
+                         'two starts: the same grazing', 1.0e-8_wp)
+    end subroutine two_starts
 
 end module test_branch

@@ -64,7 +64,8 @@ def test_schema_lists_exactly_the_namelist_keys():
     schema = {}
     for group, key in re.findall(r"key_spec_t\('(\w+)', '(\w+)'", source):
         schema.setdefault(group, []).append(key)
-    assert set(statements) == {"chain", "initial", "run", "lyapunov", "output", "sweep"}
+    assert set(statements) == {"chain", "initial", "run", "lyapunov", "output", "sweep",
+                               "continuation"}
     assert statements == schema
 
 
