@@ -1,0 +1,108 @@
+"""The command line's continuation runs (`&continuation`): bad input named with its key and the
+allowed range, exit 1 and no file; a Newton failure written as a result; the /continuation
+group's layout; an existing output never overwritten."""
+from __future__ import annotations
+
+import h5py
+import numpy as np
+import pytest
+import xarray as xr
+
+from simulator import impactchain_exe, run_namelist  # noqa: F401 (fixture)
+
+CHAIN = ("&chain n = 8, spacing = 1.0, damping = 0.05, restitution = 0.5, amplitude = 1.0, "
+         "omega = 1.9 /\n&run transient = 5 /\n")
+
+BAD = {
+    "unknown parameter": ("parameter = 'mass', stop = 2, step = 0.1",
+                          ["parameter = 'mass' is not one of amplitude, omega, damping, "
+                           "restitution, spacing"]),
+    "step of the wrong sign": ("parameter = 'amplitude', stop = 2, step = -0.1",
+                               ["step = -0.1", "sign of stop - start"]),
+    "zero step": ("parameter = 'amplitude', stop = 2, step = 0", ["step = 0", "nonzero"]),
+    "stop at the start": ("parameter = 'amplitude', stop = 1, step = 0.1",
+                          ["stop = 1", "differ from the start"]),
+    "step beyond stop": ("parameter = 'amplitude', stop = 1.5, step = 1",
+                         ["|step| = 1", "larger than |stop - start|"]),
+    "period": ("parameter = 'amplitude', stop = 2, step = 0.1, period = 0",
+               ["period = 0", "1..10000"]),
+    "max_points": ("parameter = 'amplitude', stop = 2, step = 0.1, max_points = 0",
+                   ["max_points = 0", ">= 1"]),
+    "doublings": ("parameter = 'amplitude', stop = 2, step = 0.1, doublings = -1",
+                  ["doublings = -1", "0..8"]),
+    "stop out of range": ("parameter = 'restitution', stop = 1.5, step = 0.1",
+                          ["&continuation: stop = 1.5", "restitution"]),
+    "stop and step missing": ("parameter = 'amplitude'", ["stop and step are required"]),
+}
+
+
+@pytest.mark.parametrize("case", sorted(BAD))
+def test_bad_continuation_input_is_refused(impactchain_exe, tmp_path, case):
+    keys, needles = BAD[case]
+    text = CHAIN + f"&continuation {keys} /\n&output file = 'bad.h5' /\n"
+    result = run_namelist(impactchain_exe, text, tmp_path, check=False)
+    assert result.returncode == 1
+    for needle in needles:
+        assert needle in result.stderr, result.stderr
+    assert not list(tmp_path.glob("*.h5*"))
+
+
+def test_continuation_with_a_sweep_is_refused(impactchain_exe, tmp_path):
+    text = (CHAIN + "&continuation parameter = 'amplitude', stop = 2, step = 0.1 /\n"
+            "&sweep parameter = 'amplitude', start = 1, stop = 2, step = 0.5 /\n"
+            "&output file = 'bad.h5' /\n")
+    result = run_namelist(impactchain_exe, text, tmp_path, check=False)
+    assert result.returncode == 1
+    assert "cannot be combined with &sweep" in result.stderr
+    assert not list(tmp_path.glob("*.h5*"))
+
+
+def test_grazing_branch_file(impactchain_exe, tmp_path):
+    """The non-impacting branch of figure 10's chain: its file, read as netCDF by xarray,
+    holds the forced response at every point but the last, and ends at the grazing
+    A = sqrt((1 - w^2)^2 + (2 b w)^2) (docs/model.md section 12)."""
+    text = (CHAIN + "&continuation parameter = 'amplitude', stop = 3.5, step = 0.1 /\n"
+            "&output file = 'branch.h5' /\n")
+    result = run_namelist(impactchain_exe, text, tmp_path)
+    assert "grazing at" in result.stdout
+    ds = xr.open_dataset(tmp_path / "branch.h5", engine="h5netcdf", group="continuation")
+    assert ds.attrs["parameter"] == "amplitude"
+    assert "grazing" in ds.attrs["end_reason"]
+    w, b = 1.9, 0.05
+    d2 = (1 - w**2) ** 2 + (2 * b * w) ** 2
+    assert list(ds.special_kind.values.astype(str)) == ["grazing"]
+    assert abs(float(ds.special_value[0]) - np.sqrt(d2)) < 1e-9
+    amplitude = ds["values"].values
+    xp = -2 * b * w * amplitude / d2           # the forced response at phase 0: Q
+    assert np.allclose(ds.x.values[:-1], xp[:-1, None], atol=1e-12, rtol=0)
+    assert (ds.stable.values == 1).all()
+    assert (ds.impacts_per_period.values == 0).all()
+    assert np.isinf(ds.min_impact_speed.values).all()
+    assert ds.x.dims == ("point", "oscillator")
+    assert ds.multipliers_re.dims == ("point", "multiplier")
+    with h5py.File(tmp_path / "branch.h5") as f:
+        assert "amplitude" not in f["params"].attrs    # it varies along the branch
+
+
+def test_newton_failure_is_a_result(impactchain_exe, tmp_path):
+    """A start from which Newton cannot converge (figure 10's chain at A = 6, where the
+    attractor is not period 1) writes a file with no points and the reason."""
+    text = CHAIN.replace("amplitude = 1.0", "amplitude = 6.0").replace("transient = 5",
+                                                                        "transient = 250")
+    text += ("&continuation parameter = 'amplitude', stop = 5, step = -0.05 /\n"
+             "&output file = 'none.h5' /\n")
+    result = run_namelist(impactchain_exe, text, tmp_path)
+    assert "Newton failed at the start" in result.stdout
+    with h5py.File(tmp_path / "none.h5") as f:
+        assert f["continuation/values"].shape == (0,)
+        assert "Newton failed" in f["continuation"].attrs["end_reason"]
+
+
+def test_existing_output_is_kept(impactchain_exe, tmp_path):
+    (tmp_path / "keep.h5").write_bytes(b"mine")
+    text = (CHAIN + "&continuation parameter = 'amplitude', stop = 2, step = 0.1 /\n"
+            "&output file = 'keep.h5' /\n")
+    result = run_namelist(impactchain_exe, text, tmp_path, check=False)
+    assert result.returncode == 1
+    assert "exists" in result.stderr
+    assert (tmp_path / "keep.h5").read_bytes() == b"mine"
