@@ -1,5 +1,5 @@
 !> Watching a long computation from outside: after each unit of work (a transient cycle, a
-!> strobe record, a sweep point) the library tells a monitor how far it is, and the monitor may
+!> strobe record, a sweep point, a census sample) the library tells a monitor how far it is, and the monitor may
 !> ask it to stop. The command line shows progress and stops on a signal, the Python layer
 !> shares a flag with the interpreter (Ctrl-C, progress bars), the MPI driver ends its rounds.
 !> Infrastructure, no model section.
@@ -14,11 +14,12 @@ module chain_monitor
     implicit none
     private
     public :: monitor_t, signal_monitor_t
-    public :: stage_transient, stage_records, stage_points, stage_name
+    public :: stage_transient, stage_records, stage_points, stage_samples, stage_name
 
     integer, parameter :: stage_transient = 1 !! drive cycles of the transient (nothing recorded)
     integer, parameter :: stage_records = 2   !! strobe records of a run
     integer, parameter :: stage_points = 3    !! finished points of a sweep
+    integer, parameter :: stage_samples = 4   !! finished samples of a census (all its points)
 
     type, abstract :: monitor_t
     contains
@@ -59,7 +60,7 @@ contains
         keep_going = now < monitor%deadline
     end function signal_keep_going
 
-    !> What a stage counts, for progress lines: 'transient cycle', 'cycle', 'point'.
+    !> What a stage counts, for progress lines: 'transient cycle', 'cycle', 'point', 'sample'.
     pure function stage_name(stage) result(name)
         integer, intent(in) :: stage
         character(len=:), allocatable :: name
@@ -69,6 +70,8 @@ contains
             name = 'transient cycle'
         case (stage_records)
             name = 'cycle'
+        case (stage_samples)
+            name = 'sample'
         case default
             name = 'point'
         end select
