@@ -382,7 +382,10 @@ contains
         res%fraction_stderr = sqrt(res%fraction*(1 - res%fraction)/res%n_samples)
     end subroutine classify_census
 
-    !> The attractor that sample s of point p founds, with it as the representative.
+    !> The attractor that sample s of point p founds, with it as the representative. When its
+    !> state cannot be run again as a fresh chain (chain_at_section refuses it), the orbit is
+    !> its own state alone: copies at another cycle offset, and mirror images, then found
+    !> attractors of their own.
     subroutine new_attractor(point, res, s, p, kind, period, sites, attractor, err)
         type(config_t), intent(in) :: point
         type(census_result_t), intent(in) :: res
@@ -405,6 +408,11 @@ contains
         call orbit_states(point%model, point%record%phase, attractor%x, attractor%v, period, &
                           attractor%orbit_x, attractor%orbit_v, attractor%half_x, &
                           attractor%half_v, err)
+        if (.not. allocated(err)) return
+        deallocate (err)
+        attractor%orbit_x = reshape(attractor%x, [size(attractor%x), 1])
+        attractor%orbit_v = reshape(attractor%v, [size(attractor%v), 1])
+        allocate (attractor%half_x(size(attractor%x), 0), attractor%half_v(size(attractor%x), 0))
     end subroutine new_attractor
 
     !> The states of a period-p orbit through (x, v) on the section (drive phase `phase`):
