@@ -2,9 +2,10 @@
 !> library, without the CLI. Suite `census`: the rules on hand-made states; each sample's
 !> start from its own stream; figure 3's chain, whose two known period-8 patterns (the starts
 !> of its seeds 1 and 3) are mirror images, counted as two attractors with their fractions
-!> (mirror = 'separate') or as one with a flag ('merge'); a sample rerun alone from its stored
-!> start; a phase-shifted copy of an orbit; 1 and 2 threads, and a census stopped and resumed,
-!> equal bit for bit; a census along a sweep; bad input named with its key and range.
+!> (mirror = 'separate') or as one with a flag ('merge', also with the section past half a
+!> cycle); a sample rerun alone from its stored start; a phase-shifted copy of an orbit; 1 and
+!> 2 threads, and a census stopped and resumed, equal bit for bit; a census along a sweep; bad
+!> input named with its key and range.
 module test_census
     use, intrinsic :: iso_fortran_env, only: output_unit
     !$ use omp_lib, only: omp_set_num_threads
@@ -51,6 +52,7 @@ contains
         call test_rules(t)
         call test_streams(t)
         call test_two_attractors(t)
+        call test_mirror_late_section(t)
         call test_threads_and_resume(t)
         call test_sweep_census(t)
         call test_bad_input(t)
@@ -231,6 +233,31 @@ contains
                        'the copy is one cycle ahead (offset 1)')
         end associate
     end subroutine test_two_attractors
+
+    !> With the section at phase 4 (past half a cycle, where half a period later is in the
+    !> next cycle) figure 3's two patterns are still found mirror images.
+    subroutine test_mirror_late_section(t)
+        type(tally_t), intent(inout) :: t
+        type(config_t) :: cfg
+        type(census_result_t) :: res
+        type(chain_state_t) :: one, three
+        type(error_t), allocatable :: err
+
+        call config_text(cfg, fig3//"&initial kind = 'random', seed = 1, x_amp = 0.3, "// &
+                         "v_amp = 1.0 /"//new_line('a')//"&census samples = 2 /", 'late')
+        cfg%record%phase = 4
+        call initial_state(cfg, one, err)
+        cfg%seed = 3
+        call initial_state(cfg, three, err)
+        call census_result_init(res, cfg)
+        res%x0(:, :, 1) = reshape([one%x, three%x], [cfg%model%n, 2])
+        res%v0(:, :, 1) = reshape([one%v, three%v], [cfg%model%n, 2])
+        call run_census_samples(cfg, res, err)
+        if (.not. allocated(err)) call classify_census(cfg, res, err)
+        call check(t, .not. allocated(err) .and. res%n_attractors == 1 .and. &
+                   all(res%mirrored(:, 1) .eqv. [.false., .true.]), &
+                   'section at phase 4: the mirror image found half a period on')
+    end subroutine test_mirror_late_section
 
     !> The run of `plain` (a validated explicit start) ends at (x, v) bit for bit, with the
     !> periods given.
