@@ -126,7 +126,7 @@ contains
                 im(:, j) = o%multipliers_im
                 min_gap(j) = finite_or_inf(o%min_gap)
                 min_speed(j) = finite_or_inf(o%min_impact_speed)
-                residual(j) = o%residuals(size(o%residuals))
+                residual(j) = o%residuals(ubound(o%residuals, 1))
             end associate
         end do
         call write_run_header(out, cfg, err)

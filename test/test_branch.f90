@@ -2,9 +2,10 @@
 !> exact parameter column of the map against central differences in every parameter, on an
 !> impacting and on a non-impacting orbit; the non-impacting branch against the linear
 !> response and its grazing against the closed form A = a sqrt((1 - w**2)**2 + (2 b w)**2);
-!> the impacting branch of figure 10's chain down to its fold, the fold against Newton's
-!> failure on either side; a period doubling against a brute-force sweep of the simulator, and
-!> the branch switched to there against the simulator's period-2p orbit.
+!> the impacting branch of figure 10's chain down to its fold (a multiplier +1 there); a period
+!> doubling against the simulator on either side of it, and the branch switched to there (its
+!> own doubling, the product of its multipliers); one branch from two starts, its special
+!> points located at the same parameter.
 module test_branch
     use chain_kinds, only: wp, i8, two_pi
     use chain_error, only: error_t
