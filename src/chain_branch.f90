@@ -196,6 +196,14 @@ contains
         stopped = .false.
         m = 2*set%model%n
         call cursor_from_orbit(set, model_parameter(set%model, set%opt%parameter), start, here)
+        if (set%opt%max_points == 1) then
+            ! Newton only: no tangent (it need not exist, at a fold)
+            call store(set, here, res, err)
+            if (.not. allocated(err)) call add_reason(res, "branch 0 (period "// &
+                                                      fmt_int(set%cycles)//"): max_points "// &
+                                                      "= 1: the orbit only, no continuation")
+            return
+        end if
         ! the first tangent: the null vector of [J - I, dP/dmu] with dmu of the step's sign
         allocate (direction(m + 1))
         direction = 0
