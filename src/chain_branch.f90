@@ -107,7 +107,8 @@ contains
         class(monitor_t), intent(inout), optional :: monitor
         type(setting_t) :: set
         type(orbit_t) :: start
-        integer :: level, first, last, s, branches
+        integer, allocatable :: level(:)
+        integer :: depth, first, last, s
         logical :: stopped
 
         call check_options(model, opt, err)
@@ -133,15 +134,16 @@ contains
         call follow_one(set, start, res, stopped, err, monitor)
         res%stopped = stopped
         if (allocated(err) .or. stopped) return
-        branches = 1
+        ! level(b): how many doublings branch b is away from the first
+        level = [0]
         first = 1
-        do level = 1, opt%doublings
+        do depth = 1, opt%doublings
             last = res%n_specials
             do s = first, last
                 if (res%specials(s)%kind /= 'period-doubling') cycle
-                if (res%points(res%specials(s)%point)%branch /= level - 1) cycle
-                set%branch = branches
-                branches = branches + 1
+                if (level(res%points(res%specials(s)%point)%branch + 1) /= depth - 1) cycle
+                set%branch = size(level)
+                level = [level, depth]
                 call switch_at_doubling(set, res, res%specials(s)%point, stopped, err, monitor)
                 res%stopped = stopped
                 if (allocated(err) .or. stopped) return
@@ -194,6 +196,14 @@ contains
         stopped = .false.
         m = 2*set%model%n
         call cursor_from_orbit(set, model_parameter(set%model, set%opt%parameter), start, here)
+        if (set%opt%max_points == 1) then
+            ! Newton only: no tangent (it need not exist, at a fold)
+            call store(set, here, res, err)
+            if (.not. allocated(err)) call add_reason(res, "branch 0 (period "// &
+                                                      fmt_int(set%cycles)//"): max_points "// &
+                                                      "= 1: the orbit only, no continuation")
+            return
+        end if
         ! the first tangent: the null vector of [J - I, dP/dmu] with dmu of the step's sign
         allocate (direction(m + 1))
         direction = 0

@@ -4,7 +4,7 @@
 module chain_branch_file
     use chain_kinds, only: wp, i8
     use chain_error, only: error_t
-    use chain_model, only: model_parameter
+    use chain_model, only: model_parameter, parameter_units
     use chain_engine, only: chain_t, chain_positions, chain_velocities
     use chain_event_log, only: event_log_t, event_log_init
     use chain_section, only: section_target, advance_to_point
@@ -126,7 +126,7 @@ contains
                 im(:, j) = o%multipliers_im
                 min_gap(j) = finite_or_inf(o%min_gap)
                 min_speed(j) = finite_or_inf(o%min_impact_speed)
-                residual(j) = o%residuals(size(o%residuals))
+                residual(j) = o%residuals(ubound(o%residuals, 1))
             end associate
         end do
         call write_run_header(out, cfg, err)
@@ -188,14 +188,7 @@ contains
         type(error_t), allocatable, intent(inout) :: err
         character(len=:), allocatable :: unit
 
-        select case (parameter)
-        case ('amplitude', 'spacing')
-            unit = 'length'
-        case ('omega', 'damping')
-            unit = '1/time'
-        case default
-            unit = ''
-        end select
+        unit = parameter_units(parameter)
         call describe('values', parameter//' (the continued parameter) at the point', unit, &
                       'point')
         call describe('x', "displacement from equilibrium on the section, the orbit's "// &

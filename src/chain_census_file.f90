@@ -5,6 +5,7 @@ module chain_census_file
     use chain_kinds, only: wp
     use chain_error, only: error_t, set_error, fmt_real
     use chain_config, only: config_t
+    use chain_model, only: parameter_units
     use chain_sim, only: write_run_header
     use chain_sweep, only: checkpoint_path, validate_sweep_points, plan_sweep, remove_file
     use chain_census, only: census_result_t, census_result_init, run_census_samples, &
@@ -179,22 +180,14 @@ contains
         type(config_t), intent(in) :: cfg
         type(census_result_t), intent(in) :: res
         type(error_t), allocatable, intent(inout) :: err
-        character(len=:), allocatable :: unit
 
         if (allocated(err)) return
         if (cfg%sweep) then
-            select case (cfg%sweep_parameter)
-            case ('amplitude', 'spacing')
-                unit = 'length'
-            case ('omega', 'damping')
-                unit = '1/time'
-            case default
-                unit = ''
-            end select
             call h5_write(out%file, 'census/point', res%values, '1', err)
             call h5_set_scale(out%file, 'census/point', err)
             if (.not. allocated(err)) call output_describe(out, 'census/point', &
-                cfg%sweep_parameter//' (the swept parameter) at the point', unit, '', err)
+                cfg%sweep_parameter//' (the swept parameter) at the point', &
+                parameter_units(cfg%sweep_parameter), '', err)
         else
             call output_index(out, 'census/point', 0, 1, 'point index (a census at one '// &
                               'parameter point)', err)

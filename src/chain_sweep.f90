@@ -24,7 +24,7 @@ module chain_sweep
     use chain_kinds, only: wp, i8, two_pi
     use chain_error, only: error_t, set_error, fmt_real, fmt_int
     use chain_engine, only: chain_t, chain_init
-    use chain_model, only: set_model_parameter
+    use chain_model, only: set_model_parameter, parameter_units
     use chain_state, only: chain_state_t, moving_state
     use chain_config, only: config_t, validate_config, lyapunov_vectors, check_size
     use chain_record, only: memory_sink_t, record_result_t, record_cycles
@@ -565,14 +565,7 @@ contains
         real(wp), allocatable :: coordinates(:) ! (values may be strided: a contiguous copy)
 
         if (allocated(err)) return
-        select case (parameter)
-        case ('amplitude', 'spacing')
-            unit = 'length'
-        case ('omega', 'damping')
-            unit = '1/time'
-        case default
-            unit = ''
-        end select
+        unit = parameter_units(parameter)
         coordinates = values
         call h5_write(out%file, name, coordinates, '1', err)
         call h5_set_scale(out%file, name, err)

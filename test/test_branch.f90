@@ -2,9 +2,10 @@
 !> exact parameter column of the map against central differences in every parameter, on an
 !> impacting and on a non-impacting orbit; the non-impacting branch against the linear
 !> response and its grazing against the closed form A = a sqrt((1 - w**2)**2 + (2 b w)**2);
-!> the impacting branch of figure 10's chain down to its fold, the fold against Newton's
-!> failure on either side; a period doubling against a brute-force sweep of the simulator, and
-!> the branch switched to there against the simulator's period-2p orbit.
+!> the impacting branch of figure 10's chain down to its fold (a multiplier +1 there); a period
+!> doubling against the simulator on either side of it, and the branch switched to there (its
+!> own doubling, the product of its multipliers); one branch from two starts, its special
+!> points located at the same parameter.
 module test_branch
     use chain_kinds, only: wp, i8, two_pi
     use chain_error, only: error_t
@@ -16,7 +17,7 @@ module test_branch
     use chain_orbit, only: orbit_t, find_orbit, interleave
     use chain_parameter, only: map_parameter_derivative
     use chain_branch, only: branch_options_t, branches_t, follow_branches
-    use test_chains, only: model_of
+    use test_chains, only: model_of, fig10_model
     use testing, only: tally_t, check, check_close
     implicit none
     private
@@ -29,13 +30,13 @@ contains
         type(orbit_t) :: impacting, free
         type(model_t) :: model
 
-        model = fig10(3.0_wp)
+        model = fig10_model(3.0_wp)
         call settle(model, 5_i8, 1, impacting)
         call check(t, impacting%converged .and. impacting%impacts > 0, &
                    'fig. 10 A = 3: an impacting period-1 orbit')
         if (impacting%converged) call derivative_by_differences(t, model, impacting, &
                                                                 'impacting fig. 10 A = 3')
-        model = fig10(1.0_wp)
+        model = fig10_model(1.0_wp)
         call settle(model, 5_i8, 1, free)
         call check(t, free%converged .and. free%impacts == 0, &
                    'fig. 10 A = 1: a period-1 orbit without impacts')
@@ -46,16 +47,6 @@ contains
         call period_doubling(t)
         call two_starts(t)
     end subroutine run_branch_tests
-
-    !> Figure 10's chain at amplitude A (a = 1, fixed walls).
-    function fig10(amplitude) result(model)
-        real(wp), intent(in) :: amplitude
-        type(model_t) :: model
-        integer :: i
-
-        model = model_of(make_flow(0.05_wp, amplitude, 1.9_wp), 0.5_wp, [(1.0_wp, i=0, 8)], &
-                         .true., 1.0e-9_wp)
-    end function fig10
 
     !> Newton for a period-p orbit from the state `transient` cycles after a start at rest.
     subroutine settle(model, transient, cycles, orbit)
@@ -138,7 +129,7 @@ contains
         real(wp) :: xp, vp, worst, grazing
         integer :: j
 
-        model = fig10(1.0_wp)
+        model = fig10_model(1.0_wp)
         opt%parameter = 'amplitude'
         opt%stop = 3
         opt%step = 0.1_wp
@@ -188,7 +179,7 @@ contains
         opt%parameter = 'amplitude'
         opt%stop = 2
         opt%step = -0.05_wp
-        call follow_branches(fig10(3.0_wp), 0.0_wp, 1, start%x, start%v, opt, res, err)
+        call follow_branches(fig10_model(3.0_wp), 0.0_wp, 1, start%x, start%v, opt, res, err)
         call check(t, .not. allocated(err), 'impacting branch: followed')
         if (allocated(err)) return
         print '(a)', '    '//res%end_reason
@@ -341,8 +332,8 @@ contains
         opt%step = -0.02_wp
         opt%max_points = 400
         do r = 1, 2
-            call settle(fig10(amplitude(r)), 500_i8, 1, start)
-            call follow_branches(fig10(amplitude(r)), 0.0_wp, 1, start%x, start%v, opt, res(r), &
+            call settle(fig10_model(amplitude(r)), 500_i8, 1, start)
+            call follow_branches(fig10_model(amplitude(r)), 0.0_wp, 1, start%x, start%v, opt, res(r), &
                                  err)
             call check(t, .not. allocated(err), 'two starts: followed')
             if (allocated(err)) return

@@ -11,9 +11,20 @@ module test_chains
     use chain_engine, only: chain_t, chain_init, chain_model
     implicit none
     private
-    public :: init_chain, model_of, flow_of
+    public :: init_chain, model_of, flow_of, fig10_model
 
 contains
+
+    !> Figure 10's chain at amplitude A: n = 8, w = 1.9, b = 0.05, K = 0.5, a = 1, fixed walls
+    !> (the periodic-orbit suites' reference chain).
+    function fig10_model(amplitude) result(model)
+        real(wp), intent(in) :: amplitude
+        type(model_t) :: model
+        integer :: i
+
+        model = model_of(make_flow(0.05_wp, amplitude, 1.9_wp), 0.5_wp, [(1.0_wp, i=0, 8)], &
+                         .true., 1.0e-9_wp)
+    end function fig10_model
 
     !> The model of a chain with this flow (b, A, w), restitution, spacings a(0:n), boundary
     !> and stick speed.

@@ -18,7 +18,7 @@ module test_orbit
     use chain_lapack, only: solve_linear
     use chain_orbit, only: orbit_t, orbit_options_t, find_orbit, interleave
     use test_engine, only: make_chain
-    use test_chains, only: model_of
+    use test_chains, only: model_of, fig10_model
     use testing, only: tally_t, check, check_close
     implicit none
     private
@@ -35,38 +35,28 @@ contains
         ! A = 3 from 5 cycles after rest; at A = 2.2 the attractor is not periodic and an
         ! unstable period-1 orbit (a complex pair of multipliers outside the unit circle) is
         ! found from a state on it after 2000 cycles or more
-        call converge(t, fig10(3.0_wp), 5_i8, 'stable fig. 10 A = 3', stable)
+        call converge(t, fig10_model(3.0_wp), 5_i8, 'stable fig. 10 A = 3', stable)
         call check(t, maxval(hypot(stable%multipliers_re, stable%multipliers_im)) < 1, &
                    'stable fig. 10 A = 3: multipliers inside the unit circle')
-        call converge(t, fig10(2.2_wp), 2000_i8, 'unstable fig. 10 A = 2.2', unstable)
+        call converge(t, fig10_model(2.2_wp), 2000_i8, 'unstable fig. 10 A = 2.2', unstable)
         call check(t, maxval(hypot(unstable%multipliers_re, unstable%multipliers_im)) > 1.1_wp, &
                    'unstable fig. 10 A = 2.2: a multiplier outside the unit circle')
         ! figure 2's chain (n = 15, w = 1.5, b = 0.05, K = 0.7) at A = 2.22: a saddle (a real
         ! multiplier 4.5) found from a state after 3000 cycles or more of its aperiodic attractor
         call converge(t, fig2(2.22_wp), 3000_i8, 'saddle fig. 2 A = 2.22', saddle, .true.)
         call check(t, real_saddle(saddle), 'saddle fig. 2 A = 2.22: a real multiplier > 1')
-        call multipliers_by_differences(t, fig10(3.0_wp), stable, 'stable fig. 10')
-        call multipliers_by_differences(t, fig10(2.2_wp), unstable, 'unstable fig. 10')
+        call multipliers_by_differences(t, fig10_model(3.0_wp), stable, 'stable fig. 10')
+        call multipliers_by_differences(t, fig10_model(2.2_wp), unstable, 'unstable fig. 10')
         call multipliers_by_differences(t, fig2(2.22_wp), saddle, 'saddle fig. 2')
-        call returns_and_grows(t, fig10(2.2_wp), unstable, 'unstable fig. 10')
+        call returns_and_grows(t, fig10_model(2.2_wp), unstable, 'unstable fig. 10')
         call returns_and_grows(t, fig2(2.22_wp), saddle, 'saddle fig. 2')
-        call multiplier_product(t, fig10(3.0_wp), stable, 'stable fig. 10')
-        call multiplier_product(t, fig10(2.2_wp), unstable, 'unstable fig. 10')
+        call multiplier_product(t, fig10_model(3.0_wp), stable, 'stable fig. 10')
+        call multiplier_product(t, fig10_model(2.2_wp), unstable, 'unstable fig. 10')
         call multiplier_product(t, fig2(2.22_wp), saddle, 'saddle fig. 2')
-        call gap_by_sampling(t, fig10(3.0_wp), stable, 'stable fig. 10')
-        call gap_by_sampling(t, fig10(2.2_wp), unstable, 'unstable fig. 10')
+        call gap_by_sampling(t, fig10_model(3.0_wp), stable, 'stable fig. 10')
+        call gap_by_sampling(t, fig10_model(2.2_wp), unstable, 'unstable fig. 10')
         call failures(t)
     end subroutine run_orbit_tests
-
-    !> Figure 10's chain at amplitude A (a = 1, fixed walls).
-    function fig10(amplitude) result(model)
-        real(wp), intent(in) :: amplitude
-        type(model_t) :: model
-        integer :: i
-
-        model = model_of(make_flow(0.05_wp, amplitude, 1.9_wp), 0.5_wp, [(1.0_wp, i=0, 8)], &
-                         .true., 1.0e-9_wp)
-    end function fig10
 
     !> Figure 2's chain at amplitude A (a = 1, fixed walls).
     function fig2(amplitude) result(model)
@@ -368,13 +358,13 @@ contains
         call event_log_init(events, .false., 0)
         call advance_to_point(chain, 5_i8, 0.0_wp, events, err)
         options%max_iterations = 2
-        call find_orbit(fig10(3.0_wp), 0.0_wp, 1, chain_positions(chain), &
+        call find_orbit(fig10_model(3.0_wp), 0.0_wp, 1, chain_positions(chain), &
                         chain_velocities(chain), orbit, err, options)
         call check(t, .not. allocated(err) .and. .not. orbit%converged .and. &
                    orbit%reason == 'did not converge in 2 iterations' .and. &
                    size(orbit%residuals) == 3, 'failure: did not converge in 2 iterations')
         options%max_iterations = 3
-        call find_orbit(fig10(3.0_wp), 0.0_wp, 3, [(0.4_wp*(-1)**i, i=1, 8)], &
+        call find_orbit(fig10_model(3.0_wp), 0.0_wp, 3, [(0.4_wp*(-1)**i, i=1, 8)], &
                         [(0.3_wp*i, i=1, 8)], orbit, err, options)
         call check(t, .not. allocated(err) .and. .not. orbit%converged .and. &
                    len(orbit%reason) > 0 .and. orbit%iterations <= 3, &
@@ -386,7 +376,7 @@ contains
         call check(t, .not. allocated(err) .and. .not. orbit%converged .and. &
                    index(orbit%reason, 'sticks on a wall') > 0, &
                    'failure: an orbit with a rest: '//orbit%reason)
-        call find_orbit(fig10(3.0_wp), 0.0_wp, 1, [(2.0_wp, i=1, 8)], [(0.0_wp, i=1, 8)], &
+        call find_orbit(fig10_model(3.0_wp), 0.0_wp, 1, [(2.0_wp, i=1, 8)], [(0.0_wp, i=1, 8)], &
                         orbit, err)
         call check(t, allocated(err), 'an overlapping guess is an error')
     end subroutine failures

@@ -301,7 +301,9 @@ class Continuation:
     Point ``i`` is a period-``period[i]`` orbit of the stroboscopic map at ``parameter =
     values[i]``, on branch ``branch[i]`` (0: the first; 1, 2, ...: branches switched to at
     period doublings). Special points (folds, period doublings, Neimark-Sacker points,
-    grazings) are stored as points too: ``values[special_index[j]] == special_value[j]``.
+    grazings) are stored as points too: ``values[special_index[j]] == special_value[j]``,
+    except at a grazing where an impact's speed vanishes (``special_value`` is then where the
+    speed extrapolates to zero, a little past the last orbit Newton converged on).
     """
 
     parameter: str  # amplitude, omega, damping, restitution or spacing

@@ -76,6 +76,7 @@ def test_grazing_branch_file(impactchain_exe, tmp_path):
     xp = -2 * b * w * amplitude / d2           # the forced response at phase 0: Q
     assert np.allclose(ds.x.values[:-1], xp[:-1, None], atol=1e-12, rtol=0)
     assert (ds.stable.values == 1).all()
+    assert ((ds.residual.values >= 0) & (ds.residual.values <= 1e-11)).all()
     assert (ds.impacts_per_period.values == 0).all()
     assert np.isinf(ds.min_impact_speed.values).all()
     assert ds.x.dims == ("point", "oscillator")
