@@ -16,13 +16,13 @@ module chain_census
     use chain_kinds, only: wp, i8
     use chain_error, only: error_t, set_error, fmt_real, fmt_int
     use chain_engine, only: chain_t, chain_init, chain_positions, chain_velocities, chain_period
-    use chain_state, only: moving_state
-    use chain_config, only: config_t, validate_config
-    use chain_model, only: model_t
+    use chain_state, only: chain_state_t, moving_state
+    use chain_config, only: config_t, validate_config, plane_coordinate
+    use chain_model, only: model_t, bond_gaps
     use chain_record, only: memory_sink_t, record_result_t, record_cycles
     use chain_section, only: chain_at_section, advance_to_point
     use chain_event_log, only: event_log_t, event_log_init
-    use chain_sim, only: uniform
+    use chain_sim, only: uniform, initial_state
     use chain_sweep, only: sweep_plan_t, plan_sweep, sweep_point_config, checkpoint_every
     use chain_attractor, only: attractor_t, kind_periodic, orbit_period, sample_kind, &
                                site_fractions, mirror_symmetric, match_attractor
@@ -32,6 +32,7 @@ module chain_census
     private
     public :: census_result_t, census_result_init, census_points, census_point_config
     public :: sample_seed, sample_start, run_sample, run_census_samples, classify_census
+    public :: census_starts, plane_starts, plane_value
     public :: orbit_states, save_census_checkpoint, load_census_checkpoint
     public :: census_checkpoint_monitor_t
 
@@ -129,6 +130,89 @@ contains
         allocate (res%attractors(0), res%fraction(0, res%n_points))
         allocate (res%fraction_stderr(0, res%n_points))
     end subroutine census_result_init
+
+    !> An empty census of cfg with its starts: random (census_result_init), or on the grid
+    !> of a census plane (plane_starts) around the state &initial gives.
+    subroutine census_starts(res, cfg, err)
+        type(census_result_t), intent(out) :: res
+        type(config_t), intent(in) :: cfg
+        type(error_t), allocatable, intent(out) :: err
+        type(chain_state_t) :: fixed
+        integer :: p
+
+        call census_result_init(res, cfg)
+        if (cfg%census_plane_points == 0) return
+        call initial_state(cfg, fixed, err)
+        if (allocated(err)) then
+            err%message = "&census: the plane's fixed state (&initial): "//err%message
+            return
+        end if
+        call plane_starts(cfg, fixed%x, fixed%v, res%x0(:, :, 1), res%v0(:, :, 1), err)
+        if (allocated(err)) return
+        do p = 2, res%n_points
+            res%x0(:, :, p) = res%x0(:, :, 1)
+            res%v0(:, :, p) = res%v0(:, :, 1)
+        end do
+    end subroutine census_starts
+
+    !> The starts of a census plane (cfg%census_plane, validated): every sample at the fixed
+    !> state (x, v) but for the plane's two coordinates; sample s = 1 + i + m j (i, j in
+    !> 0..m-1, m = plane_points) at grid value i of the first and j of the second
+    !> (plane_value). No start may make a gap negative (an oscillator through a neighbour or
+    !> a wall).
+    subroutine plane_starts(cfg, x, v, x0, v0, err)
+        type(config_t), intent(in) :: cfg
+        real(wp), intent(in) :: x(:), v(:)
+        real(wp), intent(out) :: x0(:, :), v0(:, :)  !! (n, plane_points**2)
+        type(error_t), allocatable, intent(out) :: err
+        logical :: velocity(2)
+        integer :: coordinate(2), m, s, k, grid(2)
+        real(wp) :: value
+
+        m = cfg%census_plane_points
+        do k = 1, 2
+            call plane_coordinate(cfg%census_plane(k), cfg%model%n, velocity(k), coordinate(k))
+        end do
+        do s = 1, m*m
+            x0(:, s) = x
+            v0(:, s) = v
+            grid = [modulo(s - 1, m), (s - 1)/m]
+            do k = 1, 2
+                value = plane_value(cfg%census_plane_range(2*k - 1), &
+                                    cfg%census_plane_range(2*k), grid(k), m)
+                if (velocity(k)) then
+                    v0(coordinate(k), s) = value
+                else
+                    x0(coordinate(k), s) = value
+                end if
+            end do
+            if (any(bond_gaps(cfg%model%spacing, cfg%model%walls, x0(:, s)) < 0)) then
+                call set_error(err, "&census: the plane's start "//fmt_int(s)//" ("// &
+                               trim(cfg%census_plane(1))//" = "// &
+                               fmt_real(plane_value(cfg%census_plane_range(1), &
+                                                    cfg%census_plane_range(2), grid(1), m))// &
+                               ", "//trim(cfg%census_plane(2))//" = "// &
+                               fmt_real(plane_value(cfg%census_plane_range(3), &
+                                                    cfg%census_plane_range(4), grid(2), m))// &
+                               ") puts an oscillator through a neighbour or a wall; "// &
+                               "narrow plane_range")
+                return
+            end if
+        end do
+    end subroutine plane_starts
+
+    !> Grid value k (0..m-1) of m from lo to hi: lo + k (hi - lo) / (m - 1), from the index
+    !> (never by accumulating steps), and hi itself at k = m - 1.
+    pure real(wp) function plane_value(lo, hi, k, m) result(value)
+        real(wp), intent(in) :: lo, hi
+        integer, intent(in) :: k, m
+
+        if (k == m - 1) then
+            value = hi
+        else
+            value = lo + k*((hi - lo)/(m - 1))
+        end if
+    end function plane_value
 
     !> The generator state of sample s's stream: (seed, s) mixed by a 32-bit integer hash
     !> (h <- h xor (h >> 16), h <- h * 0x45d9f3b mod 2^32, three times over), first of the

@@ -8,7 +8,7 @@ module chain_census_file
     use chain_model, only: parameter_units
     use chain_sim, only: write_run_header
     use chain_sweep, only: checkpoint_path, validate_sweep_points, plan_sweep, remove_file
-    use chain_census, only: census_result_t, census_result_init, run_census_samples, &
+    use chain_census, only: census_result_t, census_starts, run_census_samples, &
                             classify_census, save_census_checkpoint, load_census_checkpoint, &
                             census_checkpoint_monitor_t, census_points
     use chain_attractor, only: kind_names, classification_rule, site_distance_limit, &
@@ -43,8 +43,8 @@ contains
         call output_begin(out, cfg%output_file, cfg%overwrite, err)
         if (allocated(err)) return
         checkpoint = checkpoint_path(cfg)
-        call census_result_init(res, cfg)
-        call load_census_checkpoint(checkpoint, cfg, res, err)
+        call census_starts(res, cfg, err)
+        if (.not. allocated(err)) call load_census_checkpoint(checkpoint, cfg, res, err)
         if (allocated(err)) then
             call output_abort(out)
             return
@@ -149,7 +149,8 @@ contains
     end subroutine write_census_file
 
     !> /census attributes: the &census keys, the swept parameter ('' at one point) and the
-    !> classification rule in words.
+    !> classification rule in words; with a plane, its coordinates (blank-separated, as
+    !> written), range and points per side.
     subroutine census_attributes(out, cfg, err)
         type(output_t), intent(inout) :: out
         type(config_t), intent(in) :: cfg
@@ -169,6 +170,12 @@ contains
             call h5_write_attr(f, 'census', 'site_distance_limit', site_distance_limit, err)
             call h5_write_attr(f, 'census', 'chaos_sigmas', chaos_sigmas, err)
             call h5_write_attr(f, 'census', 'rule', classification_rule, err)
+            if (cfg%census_plane_points > 0) then
+                call h5_write_attr(f, 'census', 'plane', trim(cfg%census_plane(1))//' '// &
+                                   trim(cfg%census_plane(2)), err)
+                call h5_write_attr(f, 'census', 'plane_range', cfg%census_plane_range, err)
+                call h5_write_attr(f, 'census', 'plane_points', cfg%census_plane_points, err)
+            end if
         end associate
     end subroutine census_attributes
 

@@ -22,6 +22,7 @@ module chain_config
     private
     public :: config_t, read_config, validate_config, config_summary, lyapunov_vectors
     public :: max_list, fmt_real, fmt_int, sweep_parameters, set_boundary, check_size
+    public :: plane_coordinate
 
     !> Longest explicit list in a namelist (spacing, x0, v0); longer chains use a file start.
     integer, parameter :: max_list = 100001
@@ -32,6 +33,8 @@ module chain_config
          'continuation', 'census']
     !> Most samples of a census (per point).
     integer, parameter :: max_samples = 10000000
+    !> Most points along each side of a census plane (max_plane_points**2 <= max_samples).
+    integer, parameter :: max_plane_points = 3162
     !> Every key of every group with its type: what the namelist statements of the read_*
     !> procedures below declare (test/python/test_namelist_errors.py checks the two agree).
     type(key_spec_t), parameter :: input_keys(*) = [ &
@@ -85,7 +88,10 @@ module chain_config
         key_spec_t('census', 'x_amp', key_real, .false.), &
         key_spec_t('census', 'v_amp', key_real, .false.), &
         key_spec_t('census', 'tolerance', key_real, .false.), &
-        key_spec_t('census', 'mirror', key_string, .false.)]
+        key_spec_t('census', 'mirror', key_string, .false.), &
+        key_spec_t('census', 'plane', key_string, .true.), &
+        key_spec_t('census', 'plane_range', key_real, .true.), &
+        key_spec_t('census', 'plane_points', key_integer, .false.)]
     character(len=*), parameter :: sweep_parameters(*) = model_parameters
 
     type :: config_t
@@ -119,6 +125,12 @@ module chain_config
         real(wp) :: census_x_amp = 0.3_wp, census_v_amp = 0.3_wp
         real(wp) :: census_tolerance = 1.0e-6_wp
         character(len=:), allocatable :: census_mirror   !! 'merge' or 'separate'
+        !> A census on a plane of two initial coordinates ('x<i>' or 'v<i>'; '' without a
+        !> plane): plane_points**2 starts on a grid over plane_range (first coordinate's
+        !> min, max, then the second's), the other coordinates those of &initial.
+        character(len=16) :: census_plane(2) = ''
+        real(wp) :: census_plane_range(4) = 0
+        integer :: census_plane_points = 0
         ! the input as read
         character(len=:), allocatable :: input_text
     end type config_t
@@ -596,23 +608,60 @@ contains
         integer, intent(in) :: u
         type(config_t), intent(inout) :: cfg
         type(error_t), allocatable, intent(out) :: err
-        integer :: samples, seed, ios
-        real(wp) :: x_amp, v_amp, tolerance
+        integer, parameter :: unset_int = -huge(1)
+        integer :: samples, seed, plane_points, ios
+        real(wp) :: x_amp, v_amp, tolerance, plane_range(4)
         character(len=64) :: mirror
+        character(len=16) :: plane(2)
         character(len=512) :: msg
-        namelist /census/ samples, seed, x_amp, v_amp, tolerance, mirror
+        namelist /census/ samples, seed, x_amp, v_amp, tolerance, mirror, plane, plane_range, &
+            plane_points
 
-        samples = cfg%census_samples
+        samples = unset_int
         seed = cfg%census_seed
         x_amp = cfg%census_x_amp
         v_amp = cfg%census_v_amp
         tolerance = cfg%census_tolerance
         mirror = 'merge'
+        plane = ''
+        plane_range = unset
+        plane_points = unset_int
         rewind (u)
         read (u, nml=census, iostat=ios, iomsg=msg)
         if (ios /= 0) then
             call group_error(err, 'census', ios, msg)
             return
+        end if
+        if (all(plane == '')) then
+            if (plane_points /= unset_int .or. any(plane_range /= unset)) then
+                call set_error(err, "&census: plane_range and plane_points need a plane "// &
+                               "(plane = 'x<i>', 'v<j>')")
+                return
+            end if
+            if (samples == unset_int) samples = cfg%census_samples
+        else
+            if (any(plane_range == unset)) then
+                call set_error(err, "&census: a plane needs plane_range = min, max of the "// &
+                               "first coordinate, min, max of the second")
+                return
+            end if
+            if (plane_points == unset_int) plane_points = 100
+            ! samples follow from the grid; an out-of-range plane_points is named by
+            ! validate_census
+            if (plane_points >= 1 .and. plane_points <= max_plane_points) then
+                if (samples /= unset_int .and. samples /= plane_points**2) then
+                    call set_error(err, "&census: samples = "//fmt_int(samples)//" with a "// &
+                                   "plane must be left out or equal plane_points**2 = "// &
+                                   fmt_int(plane_points**2))
+                    return
+                end if
+                samples = plane_points**2
+            else if (samples == unset_int) then
+                samples = cfg%census_samples
+            end if
+            cfg%census_plane = plane
+            cfg%census_plane_range = plane_range
+            cfg%census_plane_points = plane_points
         end if
         cfg%census = .true.
         cfg%census_samples = samples
@@ -915,7 +964,78 @@ contains
             call set_error(err, "&census runs at one point or along one parameter: a &sweep "// &
                            "with parameter2 is not supported")
         end if
+        if (.not. allocated(err) .and. any(cfg%census_plane /= '')) call validate_plane(cfg, err)
     end subroutine validate_census
+
+    !> A census plane: two distinct coordinates of the chain, a grid of 2 .. max_plane_points
+    !> points along each with samples = plane_points**2, over finite ranges min < max.
+    subroutine validate_plane(cfg, err)
+        type(config_t), intent(in) :: cfg
+        type(error_t), allocatable, intent(out) :: err
+        logical :: velocity
+        integer :: k, i
+        character(len=*), parameter :: sides(2) = [character(len=6) :: 'first', 'second']
+
+        do k = 1, 2
+            call plane_coordinate(cfg%census_plane(k), cfg%model%n, velocity, i)
+            if (i == 0) then
+                call set_error(err, "&census: plane = '"//trim(cfg%census_plane(k))// &
+                               "' is not a coordinate 'x<i>' or 'v<i>' with i in 1.."// &
+                               fmt_int(cfg%model%n))
+                return
+            end if
+        end do
+        if (lower(trim(adjustl(cfg%census_plane(1)))) == &
+            lower(trim(adjustl(cfg%census_plane(2))))) then
+            call set_error(err, "&census: plane = '"//trim(cfg%census_plane(1))//"', '"// &
+                           trim(cfg%census_plane(2))//"' names one coordinate twice")
+            return
+        end if
+        if (cfg%census_plane_points < 2 .or. cfg%census_plane_points > max_plane_points) then
+            call set_error(err, "&census: plane_points = "//fmt_int(cfg%census_plane_points)// &
+                           " is outside [2, "//fmt_int(max_plane_points)//"]")
+            return
+        end if
+        if (cfg%census_samples /= cfg%census_plane_points**2) then
+            call set_error(err, "&census: samples = "//fmt_int(cfg%census_samples)// &
+                           " with a plane must equal plane_points**2 = "// &
+                           fmt_int(cfg%census_plane_points**2))
+            return
+        end if
+        do k = 1, 2
+            associate (lo => cfg%census_plane_range(2*k - 1), hi => cfg%census_plane_range(2*k))
+                if (.not. (ieee_is_finite(lo) .and. ieee_is_finite(hi)) .or. .not. lo < hi) then
+                    call set_error(err, "&census: plane_range of the "//trim(sides(k))// &
+                                   " coordinate ("//trim(cfg%census_plane(k))//") = "// &
+                                   fmt_real(lo)//", "//fmt_real(hi)//" must be finite "// &
+                                   "with min < max")
+                    return
+                end if
+            end associate
+        end do
+    end subroutine validate_plane
+
+    !> The coordinate a census plane names: 'x<i>' (velocity false) or 'v<i>' (true), i in
+    !> 1..n, any case, blanks around ignored; i = 0 when `name` is none of these.
+    pure subroutine plane_coordinate(name, n, velocity, i)
+        character(len=*), intent(in) :: name
+        integer, intent(in) :: n
+        logical, intent(out) :: velocity
+        integer, intent(out) :: i
+        character(len=:), allocatable :: text
+        integer :: k
+
+        i = 0
+        velocity = .false.
+        text = lower(trim(adjustl(name)))
+        if (len(text) < 2 .or. len(text) > 10) return
+        if (text(1:1) /= 'x' .and. text(1:1) /= 'v') return
+        if (verify(text(2:), '0123456789') /= 0) return
+        velocity = text(1:1) == 'v'
+        k = 0
+        read (text(2:), *) k
+        if (k >= 1 .and. k <= n) i = k
+    end subroutine plane_coordinate
 
     subroutine check_axis(err, suffix, start, stop, step)
         type(error_t), allocatable, intent(out) :: err
@@ -972,7 +1092,12 @@ contains
         text = "&census samples = "//fmt_int(cfg%census_samples)//", seed = "// &
                fmt_int(cfg%census_seed)//", x_amp = "//exact(cfg%census_x_amp)//", v_amp = "// &
                exact(cfg%census_v_amp)//", tolerance = "//exact(cfg%census_tolerance)// &
-               ", mirror = '"//cfg%census_mirror//"' /"//new_line('a')
+               ", mirror = '"//cfg%census_mirror//"'"
+        if (any(cfg%census_plane /= '')) text = text//", plane = '"// &
+            trim(cfg%census_plane(1))//"', '"//trim(cfg%census_plane(2))// &
+            "', plane_range = "//exact_list(cfg%census_plane_range)//", plane_points = "// &
+            fmt_int(cfg%census_plane_points)
+        text = text//" /"//new_line('a')
     end function census_group
 
     function continuation_group(cfg) result(text)

@@ -100,7 +100,7 @@ module chain_hdf5
     !> Attribute `name` of object `obj` ('/' for the root, 'params' for /params), one value.
     interface h5_write_attr
         module procedure write_attr_string, write_attr_int, write_attr_int8, write_attr_real, &
-            write_attr_int_1d
+            write_attr_int_1d, write_attr_real_1d
     end interface h5_write_attr
 
     interface h5_read_attr
@@ -425,6 +425,17 @@ contains
         call write_attr_raw(file, obj, name, H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, scalar, &
                             c_loc(value), err)
     end subroutine write_attr_real
+
+    !> A real attribute, a list (64-bit IEEE little-endian in the file).
+    subroutine write_attr_real_1d(file, obj, name, values, err)
+        type(h5_file_t), intent(in) :: file
+        character(len=*), intent(in) :: obj, name
+        real(wp), intent(in), target, contiguous :: values(:)
+        type(error_t), allocatable, intent(inout) :: err
+
+        call write_attr_raw(file, obj, name, H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, &
+                            shape(values, hsize_t), c_loc(values), err)
+    end subroutine write_attr_real_1d
 
     !> A 64-bit integer attribute, a scalar.
     subroutine write_attr_int8(file, obj, name, value, err)

@@ -5,7 +5,7 @@
 !> (mirror = 'separate') or as one with a flag ('merge', also with the section past half a
 !> cycle); a sample rerun alone from its stored start; a phase-shifted copy of an orbit; 1 and
 !> 2 threads, and a census stopped and resumed, equal bit for bit; a census along a sweep; bad
-!> input named with its key and range.
+!> input named with its key and range; the starts of a census plane exactly its grid.
 module test_census
     use, intrinsic :: iso_fortran_env, only: output_unit
     !$ use omp_lib, only: omp_set_num_threads
@@ -22,7 +22,7 @@ module test_census
                                states_close, orbit_offset, match_attractor, site_fractions
     use chain_census, only: census_result_t, census_result_init, census_point_config, &
                             run_census_samples, classify_census, save_census_checkpoint, &
-                            load_census_checkpoint
+                            load_census_checkpoint, census_starts, plane_value
     use chain_monitor, only: monitor_t, stage_samples
     use testing, only: tally_t, check, check_close
     implicit none
@@ -56,6 +56,8 @@ contains
         call test_threads_and_resume(t)
         call test_sweep_census(t)
         call test_bad_input(t)
+        call test_plane(t)
+        call test_bad_plane(t)
     end subroutine run_census_tests
 
     !> The rules on hand-made numbers: periods, kinds, closeness, the cycle offset, mirror
@@ -387,6 +389,126 @@ contains
                                            err%message)
         end do
     end subroutine test_bad_input
+
+    !> A census plane (x3, v5) around an explicit state: plane_points**2 samples, sample
+    !> 1 + i + m j at grid value i of x3 and j of v5, the ends of each range exact, the steps
+    !> even, every other coordinate the fixed state's bit for bit; every point of a sweep
+    !> alike. Then the same plane from &initial rest: the other coordinates zero.
+    subroutine test_plane(t)
+        type(tally_t), intent(inout) :: t
+        type(config_t) :: cfg
+        type(census_result_t) :: res
+        type(error_t), allocatable :: err
+        integer, parameter :: m = 7
+        real(wp), parameter :: x_lo = -0.35_wp, x_hi = 0.3_wp, v_lo = -1.1_wp, v_hi = 0.9_wp
+        real(wp) :: fixed_x(15), fixed_v(15), grid_x(m), grid_v(m)
+        integer :: i, j, s, k
+        logical :: grid_ok, others_ok
+        character(len=:), allocatable :: state
+
+        do k = 1, 15
+            fixed_x(k) = 0.01_wp*k - 0.07_wp
+            fixed_v(k) = 0.1_wp - 0.02_wp*k
+        end do
+        state = "&initial kind = 'explicit', x0 = "//list(fixed_x)//", v0 = "// &
+                list(fixed_v)//" /"//new_line('a')
+        call config_text(cfg, fig3//state//"&census plane = 'x3', 'V5', plane_range = "// &
+                         "-0.35, 0.3, -1.1, 0.9, plane_points = 7 /"//new_line('a')// &
+                         "&sweep parameter = 'amplitude', start = 2.2, stop = 2.3, "// &
+                         "step = 0.1 /", 'plane')
+        call check(t, cfg%census_samples == m*m, 'samples = plane_points**2 when left out')
+        call census_starts(res, cfg, err)
+        call check(t, .not. allocated(err), 'the plane starts are made')
+        if (allocated(err)) return
+        grid_x = [(plane_value(x_lo, x_hi, i, m), i=0, m - 1)]
+        grid_v = [(plane_value(v_lo, v_hi, i, m), i=0, m - 1)]
+        call check(t, grid_x(1) == x_lo .and. grid_x(m) == x_hi .and. grid_v(1) == v_lo .and. &
+                   grid_v(m) == v_hi, 'the grid ends are the range ends, exactly')
+        call check_close(t, maxval(grid_x(2:) - grid_x(:m - 1)), (x_hi - x_lo)/(m - 1), &
+                         'even steps in x3 (largest)', abs_tol=4*epsilon(1.0_wp))
+        call check_close(t, minval(grid_v(2:) - grid_v(:m - 1)), (v_hi - v_lo)/(m - 1), &
+                         'even steps in v5 (smallest)', abs_tol=4*epsilon(1.0_wp))
+        grid_ok = .true.
+        others_ok = .true.
+        do j = 0, m - 1
+            do i = 0, m - 1
+                s = 1 + i + m*j
+                grid_ok = grid_ok .and. res%x0(3, s, 1) == grid_x(i + 1) .and. &
+                          res%v0(5, s, 1) == grid_v(j + 1)
+                others_ok = others_ok .and. all(res%x0([1, 2, (k, k=4, 15)], s, 1) == &
+                                                fixed_x([1, 2, (k, k=4, 15)])) .and. &
+                            all(res%v0([(k, k=1, 4), (k, k=6, 15)], s, 1) == &
+                                fixed_v([(k, k=1, 4), (k, k=6, 15)]))
+            end do
+        end do
+        call check(t, grid_ok, 'sample 1 + i + m j at grid value i of x3 and j of v5')
+        call check(t, others_ok, 'every other coordinate the explicit state, bit for bit')
+        call check(t, all(res%x0(:, :, 2) == res%x0(:, :, 1)) .and. &
+                   all(res%v0(:, :, 2) == res%v0(:, :, 1)), 'every point gets the same plane')
+        call config_text(cfg, fig3//"&census plane = 'v1', 'x15', plane_range = -1, 1, "// &
+                         "-0.2, 0.2, plane_points = 3, samples = 9 /", 'plane_rest')
+        call census_starts(res, cfg, err)
+        call check(t, .not. allocated(err), 'a plane from rest')
+        if (allocated(err)) return
+        call check(t, all(res%v0(1, :, 1) == [-1, 0, 1, -1, 0, 1, -1, 0, 1]) .and. &
+                   all(res%x0(15, :, 1) == [-0.2_wp, -0.2_wp, -0.2_wp, 0.0_wp, 0.0_wp, &
+                                           0.0_wp, 0.2_wp, 0.2_wp, 0.2_wp]) .and. &
+                   all(res%x0(:14, :, 1) == 0) .and. all(res%v0(2:, :, 1) == 0), &
+                   'v1 fastest, then x15; the rest at rest')
+    contains
+        function list(values) result(text)
+            real(wp), intent(in) :: values(:)
+            character(len=:), allocatable :: text
+            character(len=32) :: item
+            integer :: q
+
+            text = ''
+            do q = 1, size(values)
+                write (item, '(es24.17)') values(q)
+                text = text//trim(adjustl(item))
+                if (q < size(values)) text = text//', '
+            end do
+        end function list
+    end subroutine test_plane
+
+    !> Each bad plane refused, naming what is wrong.
+    subroutine test_bad_plane(t)
+        type(tally_t), intent(inout) :: t
+        character(len=*), parameter :: cases(8) = [character(len=120) :: &
+            "plane = 'x3', 'v3', plane_range = -0.1, 0.1, -1, 1, samples = 50", &
+            "plane = 'x3', 'x3', plane_range = -0.1, 0.1, -1, 1", &
+            "plane = 'x16', 'v3', plane_range = -0.1, 0.1, -1, 1", &
+            "plane = 'y3', 'v3', plane_range = -0.1, 0.1, -1, 1", &
+            "plane = 'x3', 'v3'", "plane_points = 10", &
+            "plane = 'x3', 'v3', plane_range = -0.1, 0.1, 1, -1", &
+            "plane = 'x3', 'v3', plane_range = -0.1, 0.1, -1, 1, plane_points = 1"]
+        character(len=*), parameter :: needles(8) = [character(len=72) :: &
+            "samples = 50 with a plane must be left out or equal plane_points**2 = 10000", &
+            "names one coordinate twice", "plane = 'x16' is not a coordinate", &
+            "plane = 'y3' is not a coordinate", "a plane needs plane_range", &
+            "plane_range and plane_points need a plane", &
+            "second coordinate (v3) = 1.0000000, -1.0000000 must be finite with min < max", &
+            "plane_points = 1 is outside [2, 3162]"]
+        type(config_t) :: cfg
+        type(census_result_t) :: res
+        type(error_t), allocatable :: err
+        integer :: j
+
+        do j = 1, size(cases)
+            call read_text_config(fig3//"&census "//trim(cases(j))//" /", 'bad_plane', cfg, err)
+            call check(t, allocated(err), 'refused: '//trim(cases(j)))
+            if (allocated(err)) call check(t, index(err%message, trim(needles(j))) > 0, &
+                                           'the message says why: '//err%message)
+        end do
+        ! a start through the neighbour: found when the starts are made, before any run
+        call config_text(cfg, fig3//"&census plane = 'x3', 'x4', plane_range = -0.6, 0.6, "// &
+                         "-0.6, 0.6, plane_points = 3 /", 'plane_overlap')
+        call census_starts(res, cfg, err)
+        call check(t, allocated(err), 'a start overlapping its neighbour is refused')
+        if (allocated(err)) call check(t, index(err%message, "x3 = 0.60000000, x4 = "// &
+                                                "-0.60000000) puts an oscillator through") > 0, &
+                                       'the message names the start: '//err%message)
+    end subroutine test_bad_plane
 
     logical function stop_after_three(monitor, stage, done, total) result(keep_going)
         class(stop_after_three_t), intent(inout) :: monitor
