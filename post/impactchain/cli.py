@@ -179,6 +179,22 @@ def _branches_options(parser: argparse.ArgumentParser) -> None:
     _site_option(parser)
 
 
+def _plane_options(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--point", type=_non_negative_int, default=0, metavar="P",
+                        help="the point (0-based) of a census along a swept parameter "
+                             "(default: 0)")
+
+
+def _non_negative_int(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not an integer") from None
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"{value} must be >= 0")
+    return value
+
+
 def _all_options(parser: argparse.ArgumentParser) -> None:
     _cycles_option(parser)
     _panel_options(parser)
@@ -245,6 +261,16 @@ COMMANDS: dict[str, Command] = {
                 "(continuation file)",
                 ("continuation",), (), False, _no_options,
                 lambda runs, a: figures.multipliers(runs[0])),
+        Command("basin-fractions",
+                "basin fraction of each attractor of a census, stacked against the swept "
+                "parameter or as bars at one point (census file)",
+                ("census",), (), False, _no_options,
+                lambda runs, a: figures.basin_fractions(runs[0])),
+        Command("basin-plane",
+                "basin picture: the attractor each start on a census plane reached "
+                "(census file with &census plane)",
+                ("census",), (), False, _plane_options,
+                lambda runs, a: figures.basin_plane(runs[0], a.point)),
     )
 }
 
@@ -337,6 +363,10 @@ def _all_figures(run: Run, args: argparse.Namespace) -> Iterator[tuple[str, Figu
     if run.continuation is not None and run.continuation.n_points:
         yield "branches", figures.branches(run)
         yield "multipliers", figures.multipliers(run)
+    if run.census is not None and run.census.n_attractors:
+        yield "basin-fractions", figures.basin_fractions(run)
+        if run.census.plane is not None:
+            yield "basin-plane", figures.basin_plane(run)
 
 
 def _read(path: str, require: tuple[str, ...], optional: tuple[str, ...] | None,

@@ -21,6 +21,10 @@ HDF5 path                 dataclass field         shape (h5py / numpy order)
 /continuation             ``Run.continuation``    ``values`` (P,), ``x`` (P, n),
                                                   ``strobe_x`` (P, L, n), ``multipliers_re``
                                                   (P, 2n), ``special_index`` (S,), ...
+/census                   ``Run.census``          ``x0``, ``v0`` (P, N, n),
+                                                  ``sample_attractor`` (P, N),
+                                                  ``attractor_period`` (A, n),
+                                                  ``fraction`` (P, A), ...
 ========================  ======================  ===================================
 
 Version 2 (README "Output") is netCDF-4 readable: every group carries its dimensions and
@@ -31,9 +35,11 @@ parameters (``NaN`` in :class:`Params`; ``drive_period`` too in an omega sweep, 
 ``Sweep.drive_period`` has it per point). A continuation file (periodic orbits followed in
 one parameter) is laid out the same way: ``/continuation`` with the dimensions ``point``,
 ``oscillator``, ``multiplier``, ``iterate`` and ``special``, and ``/params`` without the
-continued parameter. This module returns both versions in the same dataclasses, a 2-D
-sweep's points flattened in version 1's order (the first parameter varying fastest), so
-nothing downstream depends on the version.
+continued parameter; so is a census file (attractors and their basin fractions, at one point
+or along a swept parameter): ``/census`` with ``point``, ``sample``, ``oscillator``,
+``attractor`` and ``bond``, and ``/params`` without the swept parameter. This module
+returns both versions in the same dataclasses, a 2-D sweep's points flattened in version 1's
+order (the first parameter varying fastest), so nothing downstream depends on the version.
 
 Every group except ``/params`` is optional; a figure states what it needs through
 ``read_run(path, require=...)`` and gets a :class:`SchemaError` naming the missing
@@ -74,10 +80,14 @@ __all__ = [
     "Sweep",
     "SPECIAL_KINDS",
     "Continuation",
+    "ATTRACTOR_KINDS",
+    "Census",
+    "period_pattern",
     "Run",
     "FILE_UNITS",
     "read_run",
     "read_continuation",
+    "read_census",
     "run_from_api",
     "run_from_sweep",
     "is_sweep_dataset",
@@ -126,6 +136,14 @@ FILE_UNITS: Mapping[str, str] = MappingProxyType({
     "continuation/min_gap": "length",
     "continuation/min_impact_speed": "length/time",
     "continuation/impacts_per_period": "impacts per period",
+    "census/x0": "length",
+    "census/v0": "length/time",
+    "census/lambda1": "bits per drive cycle",
+    "census/attractor_period": "drive cycles",
+    "census/attractor_lambda1": "bits per drive cycle",
+    "census/attractor_lambda1_stderr": "bits per drive cycle",
+    "census/attractor_x": "length",
+    "census/attractor_v": "length/time",
 })
 """The unit of each dataset in the model's reduced units (docs/model.md section 1.5): a
 version-2 file's ``model_units`` attribute (its ``units`` are UDUNITS', ``1`` for these),
@@ -133,7 +151,7 @@ a version-1 file's ``units``; the units of a run made in memory (:func:`run_from
 the defaults of the figures' axis labels."""
 
 OPTIONAL_GROUPS = ("initial", "final", "strobe", "events", "stats", "lyapunov", "sweep",
-                   "continuation")
+                   "continuation", "census")
 
 _HINTS = {
     "strobe": "the run recorded no strobe snapshots",
@@ -143,10 +161,14 @@ _HINTS = {
     "sweep/exponents": "the sweep did not compute Lyapunov exponents",
     "sweep/ky_dimension": "the sweep did not compute Lyapunov exponents",
     "continuation": "this is not a continuation file",
+    "census": "this is not a census file (no &census in its input)",
 }
 
 SPECIAL_KINDS = ("fold", "period-doubling", "neimark-sacker", "grazing")
 """``/continuation/special_kind``: the special points a continuation locates."""
+
+ATTRACTOR_KINDS = ("periodic", "chaotic", "aperiodic-nonchaotic")
+"""``/census/attractor_kind``: what a census's attractor is (docs/model.md section 13.2)."""
 
 
 class SchemaError(ValueError):
@@ -349,6 +371,113 @@ class Continuation:
                 in zip(self.special_index, self.special_kind, self.special_value)]
 
 
+def period_pattern(periods: Iterable[int]) -> str:
+    """The oscillators' periods left to right, runs of one period written ``p×count``:
+    ``'1×8 2×8'`` for eight period-1 oscillators then eight period-2 ones; ``0`` is aperiodic
+    (``'0×16'``)."""
+    runs: list[list[int]] = []
+    for p in (int(p) for p in periods):
+        if runs and runs[-1][0] == p:
+            runs[-1][1] += 1
+        else:
+            runs.append([p, 1])
+    return " ".join(f"{p}×{count}" for p, count in runs)
+
+
+@dataclass(frozen=True, eq=False)
+class Census:
+    """An attractor census (``/census``, docs/model.md section 13): the attractors reached
+    from ``samples`` starts at each of P points, and each one's basin fraction.
+
+    Attractor ``a`` (0-based, ids in the order found) belongs to point
+    ``attractor_point[a]``; sample ``s`` (0-based here, sample ``s + 1`` of the file's
+    ``sample`` axis) of point ``p`` reached ``sample_attractor[p, s]``, its mirror image
+    when ``mirrored[p, s]``. ``values`` holds the swept parameter at each point (a census
+    along a ``&sweep``), or the point index 0 at one point (``parameter == ''``). A census on a
+    plane of starts has ``plane`` (two coordinates such as ``('x3', 'v3')``), ``plane_range``
+    and ``plane_points``; its sample ``1 + i + m j`` sits at grid point ``i`` of the first
+    coordinate and ``j`` of the second (:meth:`plane_grid`).
+    """
+
+    parameter: str  # the swept parameter, '' at one point
+    samples: int
+    seed: int
+    x_amp: float
+    v_amp: float
+    tolerance: float
+    mirror: str  # 'merge' or 'separate'
+    rule: str  # the classification in words
+    values: np.ndarray  # (P,) the swept parameter at each point (index 0 at one point)
+    x0: np.ndarray  # (P, N, n) each sample's start
+    v0: np.ndarray  # (P, N, n)
+    sample_attractor: np.ndarray  # (P, N) the attractor (id) each sample reached
+    mirrored: np.ndarray  # (P, N) bool: it reached the attractor's mirror image
+    lambda1: np.ndarray  # (P, N) each sample's largest exponent, bits/cycle
+    attractor_kind: np.ndarray  # (A,) str, one of ATTRACTOR_KINDS
+    attractor_period: np.ndarray  # (A, n) the oscillators' periods, 0 = aperiodic
+    attractor_lambda1: np.ndarray  # (A,) the representative's largest exponent
+    attractor_lambda1_stderr: np.ndarray  # (A,)
+    attractor_x: np.ndarray  # (A, n) the representative's state at its last record
+    attractor_v: np.ndarray  # (A, n)
+    attractor_point: np.ndarray  # (A,) the point (0-based) where it was found
+    attractor_sample: np.ndarray  # (A,) its representative, the first sample (1-based)
+    attractor_sites: np.ndarray  # (A, n+1) fraction of its impacts on each bond
+    fraction: np.ndarray  # (P, A) basin fraction at each point (0 at other points)
+    fraction_stderr: np.ndarray  # (P, A) binomial sqrt(f (1 - f) / N)
+    plane: tuple[str, str] | None = None  # the two coordinates of a plane of starts
+    plane_range: np.ndarray | None = None  # (4,) min, max of the first, then the second
+    plane_points: int = 0  # grid points along each coordinate (0: random starts)
+
+    @property
+    def n_points(self) -> int:
+        """Number of points, P."""
+        return int(self.values.shape[0])
+
+    @property
+    def n_attractors(self) -> int:
+        """Number of attractors, A (over all points)."""
+        return int(self.attractor_kind.shape[0])
+
+    @property
+    def swept(self) -> bool:
+        """True for a census along a swept parameter."""
+        return bool(self.parameter)
+
+    def pattern(self, a: int) -> str:
+        """Attractor ``a``'s period pattern (:func:`period_pattern`)."""
+        return period_pattern(self.attractor_period[a])
+
+    def label(self, a: int) -> str:
+        """``'periodic 1×8 2×8'``, ``'chaotic'``, ...: attractor ``a``'s kind, with its
+        period pattern when periodic."""
+        kind = str(self.attractor_kind[a])
+        return f"{kind} {self.pattern(a)}" if kind == "periodic" else kind
+
+    def attractors_at(self, point: int) -> np.ndarray:
+        """The ids of the attractors found at ``point`` (0-based)."""
+        return np.flatnonzero(self.attractor_point == point)
+
+    def count(self, point: int, a: int) -> int:
+        """How many of ``point``'s samples reached attractor ``a``."""
+        return int(np.count_nonzero(self.sample_attractor[point] == a))
+
+    def plane_grid(self, point: int = 0) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """A plane census's grid at ``point``: the first coordinate's values (m,), the
+        second's (m,), and the attractor ids (m, m) indexed [j, i] (second, first), as the
+        starts hold them."""
+        if self.plane is None:
+            raise ValueError("this census has random starts, not a plane of starts")
+        m = self.plane_points
+        starts = {"x": self.x0[point], "v": self.v0[point]}
+
+        def column(name: str) -> np.ndarray:
+            return starts[name[0]][:, int(name[1:]) - 1]
+
+        first, second = (column(name).reshape(m, m) for name in self.plane)
+        ids = self.sample_attractor[point].reshape(m, m)
+        return first[0, :].copy(), second[:, 0].copy(), ids.copy()
+
+
 @dataclass(frozen=True, eq=False)
 class Run:
     """One impactchain output file."""
@@ -367,6 +496,7 @@ class Run:
     lyapunov: Lyapunov | None = None
     sweep: Sweep | None = None
     continuation: Continuation | None = None
+    census: Census | None = None
     units: Mapping[str, str] = field(default_factory=dict)
     resolved_namelist: str = ""  # every key as used; '' for an older file
 
@@ -429,6 +559,14 @@ def read_continuation(path: str | os.PathLike[str]) -> Continuation:
     return run.continuation
 
 
+def read_census(path: str | os.PathLike[str]) -> Census:
+    """The ``/census`` group of a census file (:class:`SchemaError` when the file has
+    none); ``read_run(path).census`` with the rest of the file."""
+    run = read_run(path, require=("census",), groups=("census",))
+    assert run.census is not None
+    return run.census
+
+
 def _check_file(path: str) -> None:
     if not os.path.exists(path):
         raise SchemaError(f"{path}: no such file")
@@ -488,6 +626,7 @@ def _read(f: h5py.File, path: str, wanted: set[str]) -> Run:
         "lyapunov": lambda g: _read_lyapunov(g, path),
         "sweep": lambda g: _read_sweep(g, path, n),
         "continuation": lambda g: _read_continuation(g, path, n),
+        "census": lambda g: _read_census(g, path, n),
     }
     parts: dict[str, Any] = {}
     for name, reader in readers.items():
@@ -513,6 +652,8 @@ def _read_params(f: h5py.File, path: str) -> Params:
     swept = set(_swept(f, path)) if "sweep" in f and _version(f, path) >= 2 else set()
     if "continuation" in f:
         swept.add(_str(_attr(f["continuation"], path, "parameter")))
+    if "census" in f and _str(f["census"].attrs.get("parameter", "")):
+        swept.add(_str(f["census"].attrs["parameter"]))
     if "omega" in swept:
         swept.add("drive_period")
     attrs = {name: math.nan if name in swept and name not in g.attrs else _attr(g, path, name)
@@ -748,6 +889,83 @@ def _read_continuation(g: h5py.Group, path: str, n: int) -> Continuation:
         special_index=special_index,
         special_kind=special_kind,
         special_value=_dataset(g, path, "special_value", (s,), float),
+    )
+
+
+def _read_census(g: h5py.Group, path: str, n: int) -> Census:
+    values = _dataset(g, path, "point", (None,), float)
+    p = values.shape[0]
+    x0 = _dataset(g, path, "x0", (p, None, n), float)
+    s = x0.shape[1]
+    samples = _int(_attr(g, path, "samples"), path, f"{g.name}/samples")
+    if s != samples:
+        raise SchemaError(f"{path}: {g.name}/x0 holds {s} samples, its 'samples' attribute "
+                          f"{samples}")
+    kinds = _strings(g, path, "attractor_kind", (None,))
+    a = kinds.shape[0]
+    unknown = sorted({str(kind) for kind in kinds} - set(ATTRACTOR_KINDS))
+    if unknown:
+        raise SchemaError(f"{path}: {g.name}/attractor_kind holds "
+                          f"{', '.join(map(repr, unknown))} (known: {', '.join(ATTRACTOR_KINDS)})")
+    ids = _dataset(g, path, "sample_attractor", (p, s), int)
+    if ids.size and (ids.min() < 0 or ids.max() >= a):
+        raise SchemaError(f"{path}: {g.name}/sample_attractor holds ids outside 0..{a - 1}")
+    point = _dataset(g, path, "attractor_point", (a,), int)
+    if a and (point.min() < 0 or point.max() >= p):
+        raise SchemaError(f"{path}: {g.name}/attractor_point holds points outside "
+                          f"0..{p - 1}")
+    mirrored = _dataset(g, path, "mirrored", (p, s), int)
+    if not np.isin(mirrored, (0, 1)).all():
+        raise SchemaError(f"{path}: {g.name}/mirrored holds values other than 0 and 1")
+    plane = None
+    plane_range = None
+    plane_points = 0
+    if "plane" in g.attrs:
+        names = tuple(_str(g.attrs["plane"]).split())
+        bad = [name for name in names if not re.fullmatch(r"[xv][0-9]+", name)
+               or not 1 <= int(name[1:]) <= n]
+        if len(names) != 2 or bad:
+            raise SchemaError(f"{path}: {g.name} attribute 'plane' = "
+                              f"{_str(g.attrs['plane'])!r} is not two coordinates x<i> or "
+                              f"v<i>, i in 1..{n}")
+        plane = (names[0], names[1])
+        plane_range = _frozen(np.asarray(_attr(g, path, "plane_range"), dtype=float))
+        if plane_range.shape != (4,):
+            raise SchemaError(f"{path}: {g.name} attribute 'plane_range' has "
+                              f"{plane_range.size} values, expected 4")
+        plane_points = _int(_attr(g, path, "plane_points"), path, f"{g.name}/plane_points")
+        if plane_points**2 != s:
+            raise SchemaError(f"{path}: {g.name}: plane_points = {plane_points} does not "
+                              f"square to the {s} samples")
+    return Census(
+        parameter=_str(_attr(g, path, "parameter")),
+        samples=samples,
+        seed=_int(_attr(g, path, "seed"), path, f"{g.name}/seed"),
+        x_amp=_float(_attr(g, path, "x_amp"), path, f"{g.name}/x_amp"),
+        v_amp=_float(_attr(g, path, "v_amp"), path, f"{g.name}/v_amp"),
+        tolerance=_float(_attr(g, path, "tolerance"), path, f"{g.name}/tolerance"),
+        mirror=_str(_attr(g, path, "mirror")),
+        rule=_str(g.attrs.get("rule", "")),
+        values=values,
+        x0=x0,
+        v0=_dataset(g, path, "v0", (p, s, n), float),
+        sample_attractor=ids,
+        mirrored=_frozen(mirrored == 1),
+        lambda1=_dataset(g, path, "lambda1", (p, s), float),
+        attractor_kind=kinds,
+        attractor_period=_dataset(g, path, "attractor_period", (a, n), int),
+        attractor_lambda1=_dataset(g, path, "attractor_lambda1", (a,), float),
+        attractor_lambda1_stderr=_dataset(g, path, "attractor_lambda1_stderr", (a,), float),
+        attractor_x=_dataset(g, path, "attractor_x", (a, n), float),
+        attractor_v=_dataset(g, path, "attractor_v", (a, n), float),
+        attractor_point=point,
+        attractor_sample=_dataset(g, path, "attractor_sample", (a,), int),
+        attractor_sites=_dataset(g, path, "attractor_sites", (a, n + 1), float),
+        fraction=_dataset(g, path, "fraction", (p, a), float),
+        fraction_stderr=_dataset(g, path, "fraction_stderr", (p, a), float),
+        plane=plane,
+        plane_range=plane_range,
+        plane_points=plane_points,
     )
 
 
