@@ -79,7 +79,7 @@ run: build
 	$(PY) -m impactchain all $(DEFAULT_RUN) -o runs/default
 	@echo "impactchain: figures written next to $(DEFAULT_RUN) (runs/default_*.png)"
 
-# the MPI sweep driver (optional for users; built and run by make test)
+# the MPI driver of sweeps and censuses (optional for users; built and run by make test)
 mpi: build
 	cd mpi && $(FPM) build $(RELEASE) --compiler mpifort
 

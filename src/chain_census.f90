@@ -33,6 +33,7 @@ module chain_census
     public :: census_result_t, census_result_init, census_points, census_point_config
     public :: sample_seed, sample_start, run_sample, run_census_samples, classify_census
     public :: census_starts, plane_starts, plane_value
+    public :: sample_record_sizes, pack_sample, unpack_sample
     public :: orbit_states, save_census_checkpoint, load_census_checkpoint
     public :: census_checkpoint_monitor_t
 
@@ -318,12 +319,15 @@ contains
 
     !> Run every sample not yet done (all points) with OpenMP threads into `res`; the first
     !> error met, if any, is returned after all threads stop. `monitor` is told every finished
-    !> sample and may ask to stop (samples running in other threads finish first).
-    subroutine run_census_samples(cfg, res, err, monitor)
+    !> sample and may ask to stop (samples running in other threads finish first). `mine`
+    !> (points x samples, task order: sample s of point p is task s + samples (p - 1)) runs
+    !> only the tasks it marks (the share of one MPI rank); all when absent.
+    subroutine run_census_samples(cfg, res, err, monitor, mine)
         type(config_t), intent(in) :: cfg
         type(census_result_t), intent(inout) :: res
         type(error_t), allocatable, intent(out) :: err
         class(monitor_t), intent(inout), optional :: monitor
+        logical, intent(in), optional :: mine(:)
         type(error_t), allocatable :: task_err
         character(len=:), allocatable :: first_message
         logical :: stop_now
@@ -332,6 +336,9 @@ contains
         stop_now = .false.
         !$omp parallel do schedule(dynamic) private(task_err) shared(stop_now, res)
         do t = 1, res%n_points*res%n_samples
+            if (present(mine)) then
+                if (.not. mine(t)) cycle
+            end if
             call run_task(cfg, t, res, stop_now, task_err, monitor)
             if (allocated(task_err)) then
                 !$omp critical (census_results)
@@ -397,6 +404,53 @@ contains
         end if
         !$omp end critical (census_results)
     end subroutine run_task
+
+    !> One sample's record as pack_sample lays it out: nr reals and ni 64-bit integers for a
+    !> chain of n oscillators.
+    pure subroutine sample_record_sizes(n, nr, ni)
+        integer, intent(in) :: n
+        integer, intent(out) :: nr, ni
+
+        nr = 2 + 2*n   ! lambda1, stderr1, x(n), v(n)
+        ni = 2 + 2*n   ! done, periods(n), sites(n+1)
+    end subroutine sample_record_sizes
+
+    !> Sample s of point p's results as plain numbers (sent between MPI ranks): values as they
+    !> are, so unpack_sample restores them bit for bit.
+    pure subroutine pack_sample(res, s, p, reals, ints)
+        type(census_result_t), intent(in) :: res
+        integer, intent(in) :: s, p
+        real(wp), intent(out) :: reals(:)
+        integer(i8), intent(out) :: ints(:)
+        integer :: n
+
+        n = size(res%x, 1)
+        reals(1) = res%lambda1(s, p)
+        reals(2) = res%stderr1(s, p)
+        reals(3:2 + n) = res%x(:, s, p)
+        reals(3 + n:2 + 2*n) = res%v(:, s, p)
+        ints(1) = merge(1_i8, 0_i8, res%done(s, p))
+        ints(2:1 + n) = int(res%periods(:, s, p), i8)
+        ints(2 + n:2 + 2*n) = res%sites(:, s, p)
+    end subroutine pack_sample
+
+    !> The inverse of pack_sample: sample s of point p takes the record's results.
+    pure subroutine unpack_sample(reals, ints, s, p, res)
+        real(wp), intent(in) :: reals(:)
+        integer(i8), intent(in) :: ints(:)
+        integer, intent(in) :: s, p
+        type(census_result_t), intent(inout) :: res
+        integer :: n
+
+        n = size(res%x, 1)
+        res%lambda1(s, p) = reals(1)
+        res%stderr1(s, p) = reals(2)
+        res%x(:, s, p) = reals(3:2 + n)
+        res%v(:, s, p) = reals(3 + n:2 + 2*n)
+        res%done(s, p) = ints(1) == 1
+        res%periods(:, s, p) = int(ints(2:1 + n))
+        res%sites(:, s, p) = ints(2 + n:2 + 2*n)
+    end subroutine unpack_sample
 
     !> " at point p (parameter = value)" for a sweep, else nothing.
     function point_text(cfg, res, p) result(text)

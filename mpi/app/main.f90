@@ -3,6 +3,13 @@
 !> driver). Every point is computed exactly as in the threaded driver, so the file is the same
 !> as a serial run's, whatever the number of ranks and threads.
 !>
+!> A namelist with &census (at one point or along a &sweep) is an attractor census instead:
+!> its samples are distributed over the ranks (task t = sample s of point p, t = s + samples
+!> (p - 1), on rank mod(t - 1, ranks)); rank 0 gathers them and, when all are done,
+!> classifies them in sample order as the threaded driver does, so the /census group is the
+!> same bit for bit. Rounds, checkpoints (the census checkpoint of the threaded driver),
+!> signals and resumption as for a sweep.
+!>
 !> The ranks work in rounds of `checkpoint_every` seconds (IMPACTCHAIN_CHECKPOINT_SECONDS
 !> overrides it): after each round the finished points and, for continuation branches, the
 !> state each branch resumes from are gathered on rank 0, which writes `file.h5.ckpt`, the
@@ -19,6 +26,10 @@ program impactchain_mpi
                        MPI_Allreduce, MPI_Gatherv, MPI_COMM_WORLD, MPI_MAX, &
                        MPI_DOUBLE_PRECISION, MPI_INTEGER, MPI_INTEGER8, MPI_IN_PLACE, &
                        MPI_THREAD_FUNNELED
+    use impactchain, only: census_result_t, census_starts, check_census_size, &
+                           run_census_samples, classify_census, write_census_file, &
+                           save_census_checkpoint, load_census_checkpoint, sample_record_sizes, &
+                           pack_sample, unpack_sample, kind_names
     use impactchain, only: wp, i8, error_t, config_t, read_config, sweep_plan_t, &
                            sweep_result_t, chain_state_t, plan_sweep, sweep_result_init, &
                            validate_sweep_points, checkpoint_path, run_sweep_branches, &
@@ -32,6 +43,7 @@ program impactchain_mpi
     type(sweep_plan_t) :: plan
     type(sweep_result_t) :: res
     type(chain_state_t), allocatable :: starts(:)
+    type(census_result_t) :: census
     type(output_t) :: out
     type(error_t), allocatable :: err
     integer :: rank, ranks, provided, failed, left, stopping, resumed
@@ -45,25 +57,35 @@ program impactchain_mpi
     call MPI_Init_thread(MPI_THREAD_FUNNELED, provided)
     call MPI_Comm_rank(MPI_COMM_WORLD, rank)
     call MPI_Comm_size(MPI_COMM_WORLD, ranks)
-    call start_sweep()
-    call catch_interrupts()
-    call system_clock(clock_start, clock_rate)
-    do
-        call run_round()
-        if (left == 0) exit
-        if (stopping /= 0) call stop_interrupted()
-    end do
-    call finish_sweep()
+    call read_input()
+    if (cfg%census) then
+        call start_census()
+        call catch_interrupts()
+        call system_clock(clock_start, clock_rate)
+        do
+            call census_round()
+            if (left == 0) exit
+            if (stopping /= 0) call stop_interrupted('census', 'samples', size(census%done))
+        end do
+        call finish_census()
+    else
+        call start_sweep()
+        call catch_interrupts()
+        call system_clock(clock_start, clock_rate)
+        do
+            call run_round()
+            if (left == 0) exit
+            if (stopping /= 0) call stop_interrupted('sweep', 'points', plan%n_points)
+        end do
+        call finish_sweep()
+    end if
     call MPI_Finalize()
     if (failed /= 0) stop 1, quiet=.true.
 
 contains
 
-    !> Read and check the input, refuse an existing output (rank 0) and load the checkpoint
-    !> (every rank, so that every rank can own any branch).
-    subroutine start_sweep()
-        integer :: b
-
+    !> Read the input (every rank): a sweep or a census.
+    subroutine read_input()
         cli = parse_command_line()
         if (cli%action /= cli_run) call stop_all('usage: impactchain-mpi [options] input.nml '// &
                                                   '(the options of impactchain --help)')
@@ -71,12 +93,17 @@ contains
         quiet = cli%quiet
         call read_config(input, cfg, err, cli%overrides)
         if (allocated(err)) call stop_all(err%message)
-        if (.not. cfg%sweep) &
-            call stop_all(input//': impactchain-mpi runs sweeps; add a &sweep group')
-        if (cfg%census) &
-            call stop_all(input//': impactchain-mpi does not run a &census yet; run it with '// &
-                          'impactchain (OpenMP threads)')
+        if (.not. (cfg%sweep .or. cfg%census)) &
+            call stop_all(input//': impactchain-mpi runs sweeps and censuses; add a &sweep '// &
+                          'or a &census group')
         round_seconds = round_length()
+    end subroutine read_input
+
+    !> Check the sweep, refuse an existing output (rank 0) and load the checkpoint
+    !> (every rank, so that every rank can own any branch).
+    subroutine start_sweep()
+        integer :: b
+
         plan = plan_sweep(cfg)
         ! every point is checked before any work (every rank alike)
         call validate_sweep_points(cfg, plan, err)
@@ -131,11 +158,14 @@ contains
     end subroutine run_round
 
     !> After a signal: the checkpoint is written; say how to resume and exit with status 3.
-    subroutine stop_interrupted()
+    subroutine stop_interrupted(what, units, total)
+        character(len=*), intent(in) :: what, units
+        integer, intent(in) :: total
+
         if (rank == 0) then
             call output_abort(out)
-            write (error_unit, '(a,i0,a,i0,a)') 'impactchain-mpi: the sweep was stopped '// &
-                'after ', plan%n_points - left, ' of ', plan%n_points, ' points; run the '// &
+            write (error_unit, '(a,i0,a,i0,a)') 'impactchain-mpi: the '//what//' was '// &
+                'stopped after ', total - left, ' of ', total, ' '//units//'; run the '// &
                 'same command again to resume from '//checkpoint
         end if
         call MPI_Finalize()
@@ -229,6 +259,178 @@ contains
         write (error_unit, '(a,i0,a,i0,a,es9.2,a,f9.1,a)') 'impactchain-mpi: point ', done, &
             ' / ', plan%n_points, ', ', rate, ' points/s, ', left/max(rate, 1.0e-9_wp), ' s left'
     end subroutine report_progress
+
+    ! ---- a census ------------------------------------------------------------------------
+
+    !> Check the census, refuse an existing output (rank 0), make the starts and load the
+    !> checkpoint (every rank alike).
+    subroutine start_census()
+        integer :: t
+
+        if (cfg%sweep) call validate_sweep_points(cfg, plan_sweep(cfg), err)
+        if (.not. allocated(err)) call check_census_size(cfg, err)
+        if (allocated(err)) call stop_all(err%message)
+        if (cli%check) then
+            if (rank == 0) write (output_unit, '(a)', advance='no') config_summary(cfg)
+            call MPI_Finalize()
+            stop
+        end if
+        failed = 0
+        if (rank == 0) then
+            call output_begin(out, cfg%output_file, cfg%overwrite, err)
+            if (allocated(err)) failed = 1
+        end if
+        call MPI_Bcast(failed, 1, MPI_INTEGER, 0, MPI_COMM_WORLD)
+        if (failed /= 0) call stop_all(err_text(err))
+        call census_starts(census, cfg, err)
+        call agree_or_stop(err)
+        checkpoint = checkpoint_path(cfg)
+        call load_census_checkpoint(checkpoint, cfg, census, err)
+        call agree_or_stop(err)
+        resumed = count(census%done)
+        census%resumed = resumed
+        mine = [(modulo(t - 1, ranks) == rank, t=1, size(census%done))]
+    end subroutine start_census
+
+    !> One round of a census: every rank runs its samples until the round ends, rank 0
+    !> gathers them and (unless every sample is done) writes the checkpoint. Sets `left`
+    !> (samples not done) and `stopping`.
+    subroutine census_round()
+        type(signal_monitor_t) :: round
+
+        call system_clock(clock_round)
+        round%deadline = clock_round + int(round_seconds*clock_rate, int64)
+        call run_census_samples(cfg, census, err, round, mine)
+        call agree_or_stop(err)
+        call collect_samples_on_root()
+        left = count(.not. census%done)
+        call MPI_Bcast(left, 1, MPI_INTEGER, 0, MPI_COMM_WORLD)
+        if (left == 0) return
+        stopping = merge(1, 0, interrupted())
+        call MPI_Allreduce(MPI_IN_PLACE, stopping, 1, MPI_INTEGER, MPI_MAX, MPI_COMM_WORLD)
+        if (rank == 0) then
+            call save_census_checkpoint(checkpoint, cfg, census, err)
+            if (allocated(err)) write (error_unit, '(a)') 'impactchain-mpi: warning: '// &
+                err%message
+            call report_census_progress()
+        end if
+    end subroutine census_round
+
+    !> Rank 0 receives every rank's samples (done or not; a rank's own are its to report), in
+    !> the layout of pack_sample. Values travel as they are, so bit for bit.
+    subroutine collect_samples_on_root()
+        real(wp), allocatable :: rsend(:), rrecv(:)
+        integer(i8), allocatable :: isend(:), irecv(:)
+        integer :: nr, ni, r, c, t, tasks, rcounts(0:ranks - 1), icounts(0:ranks - 1)
+        integer :: rdispl(0:ranks - 1), idispl(0:ranks - 1), owned(0:ranks - 1)
+
+        call sample_record_sizes(cfg%model%n, nr, ni)
+        tasks = size(census%done)
+        owned = [((tasks - r + ranks - 1)/ranks, r=0, ranks - 1)]
+        rcounts = owned*nr
+        icounts = owned*ni
+        rdispl(0) = 0
+        idispl(0) = 0
+        do r = 1, ranks - 1
+            rdispl(r) = rdispl(r - 1) + rcounts(r - 1)
+            idispl(r) = idispl(r - 1) + icounts(r - 1)
+        end do
+        allocate (rsend(rcounts(rank)), isend(icounts(rank)))
+        c = 0
+        do t = rank + 1, tasks, ranks
+            call pack_sample(census, sample_of(t), point_of(t), rsend(c*nr + 1:(c + 1)*nr), &
+                             isend(c*ni + 1:(c + 1)*ni))
+            c = c + 1
+        end do
+        if (rank == 0) then
+            allocate (rrecv(sum(rcounts)), irecv(sum(icounts)))
+        else
+            allocate (rrecv(1), irecv(1))
+        end if
+        call MPI_Gatherv(rsend, rcounts(rank), MPI_DOUBLE_PRECISION, rrecv, rcounts, rdispl, &
+                         MPI_DOUBLE_PRECISION, 0, MPI_COMM_WORLD)
+        call MPI_Gatherv(isend, icounts(rank), MPI_INTEGER8, irecv, icounts, idispl, &
+                         MPI_INTEGER8, 0, MPI_COMM_WORLD)
+        if (rank /= 0) return
+        do r = 0, ranks - 1
+            c = 0
+            do t = r + 1, tasks, ranks
+                call unpack_sample(rrecv(rdispl(r) + c*nr + 1:rdispl(r) + (c + 1)*nr), &
+                                   irecv(idispl(r) + c*ni + 1:idispl(r) + (c + 1)*ni), &
+                                   sample_of(t), point_of(t), census)
+                c = c + 1
+            end do
+        end do
+    end subroutine collect_samples_on_root
+
+    pure integer function sample_of(t)
+        integer, intent(in) :: t
+
+        sample_of = modulo(t - 1, census%n_samples) + 1
+    end function sample_of
+
+    pure integer function point_of(t)
+        integer, intent(in) :: t
+
+        point_of = (t - 1)/census%n_samples + 1
+    end function point_of
+
+    !> Rank 0 classifies every sample (in sample order, as the threaded driver), writes the
+    !> one HDF5 file and deletes the checkpoint; every rank learns whether that failed.
+    subroutine finish_census()
+        if (rank == 0) then
+            call classify_census(cfg, census, err)
+            if (.not. allocated(err)) call write_census_file(out, cfg, census, err)
+            if (.not. allocated(err)) call output_end(out, .true., err)
+            if (allocated(err)) then
+                call output_abort(out)
+                write (error_unit, '(a)') 'impactchain-mpi: error: '//err%message
+            else
+                call remove_file(checkpoint)
+                call report_census()
+            end if
+        end if
+        failed = merge(1, 0, allocated(err))
+        call MPI_Bcast(failed, 1, MPI_INTEGER, 0, MPI_COMM_WORLD)
+    end subroutine finish_census
+
+    !> The attractors found, as the threaded driver reports them.
+    subroutine report_census()
+        integer :: a, p
+
+        write (output_unit, '(a)') 'impactchain-mpi: wrote '//cfg%output_file
+        write (output_unit, '(a,i0,a,i0,a,i0,a,i0,a,i0,a)') '  samples ', census%n_samples, &
+            ' at ', census%n_points, ' point(s) on ', ranks, &
+            ' ranks (resumed from a checkpoint: ', resumed, '), attractors ', &
+            census%n_attractors, ''
+        do a = 1, census%n_attractors
+            associate (t => census%attractors(a))
+                p = t%point
+                write (output_unit, '(a,i0,a,i0,3a,i0,a,f0.4,a,f0.4)') '  attractor ', a - 1, &
+                    ' (point ', p - 1, '): ', trim(kind_names(t%kind)), ', period ', &
+                    t%period, ', fraction ', census%fraction(a, p), ' +- ', &
+                    census%fraction_stderr(a, p)
+            end associate
+        end do
+    end subroutine report_census
+
+    !> Samples done / total, rate and time left (rank 0, stderr; at most once a round).
+    subroutine report_census_progress()
+        integer(int64) :: now
+        real(wp) :: elapsed, rate
+        integer :: done
+
+        if (quiet) return
+        call system_clock(now)
+        elapsed = real(now - clock_start, wp)/clock_rate
+        done = size(census%done) - left
+        rate = (done - resumed)/max(elapsed, 1.0e-9_wp)
+        write (error_unit, '(a,i0,a,i0,a,es9.2,a,f9.1,a)') 'impactchain-mpi: sample ', done, &
+            ' / ', size(census%done), ', ', rate, ' samples/s, ', left/max(rate, 1.0e-9_wp), &
+            ' s left'
+    end subroutine report_census_progress
+
+    ! ---- shared ----------------------------------------------------------------------------
 
     !> Seconds per round: checkpoint_every, or IMPACTCHAIN_CHECKPOINT_SECONDS when set.
     real(wp) function round_length() result(seconds)

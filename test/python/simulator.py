@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import os
+import shutil
 import subprocess
 from pathlib import Path
 
@@ -36,3 +37,31 @@ def run_namelist(exe: Path, text: str, workdir: Path, name: str = "input.nml",
     if check and result.returncode != 0:
         raise AssertionError(f"impactchain failed: {result.stderr}")
     return result
+
+
+@pytest.fixture(scope="session")
+def mpi_exe() -> Path | None:
+    """The MPI build of the sweep and census driver (mpi/), or None when mpifort is not
+    installed."""
+    if shutil.which("mpifort") is None:
+        return None
+    flags = os.environ.get("IMPACTCHAIN_FPM_FLAGS")   # the same build as impactchain_exe
+    profile = ["--flag", flags] if flags else ["--profile", "release"]
+    out = subprocess.run([str(FPM), "run", *profile, "--compiler", "mpifort",
+                          "--runner", "echo"], cwd=ROOT / "mpi", capture_output=True,
+                         text=True, check=True)
+    return ROOT / "mpi" / out.stdout.strip().splitlines()[-1]
+
+
+def child_pids(pid: int) -> list[int]:
+    """Processes whose parent is pid (Linux /proc)."""
+    found = []
+    for entry in Path("/proc").iterdir():
+        if entry.name.isdigit():
+            try:
+                stat = (entry / "stat").read_text()
+            except OSError:
+                continue
+            if int(stat.rsplit(")", 1)[1].split()[1]) == pid:
+                found.append(int(entry.name))
+    return found

@@ -1,10 +1,13 @@
 """The command line's attractor censuses (`&census`): bad input named with its key and the
 allowed range, exit 1 and no file; the /census group read by xarray (figure 3's chain: its two
 mirror-image period-8 patterns merged or kept apart, fractions summing to one); a census along
-a sweep; the same file with 1 and 2 threads, and after an interrupted census is resumed."""
+a sweep; the same file with 1 and 2 threads, and after an interrupted census is resumed; the
+same file from the MPI driver on 2 ranks, also after a stop by SIGTERM resumed on 3 ranks or by
+the threaded driver."""
 from __future__ import annotations
 
 import os
+import shutil
 import signal
 import subprocess
 import time
@@ -15,7 +18,8 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from simulator import impactchain_exe, run_namelist  # noqa: F401 (fixture)
+from simulator import (child_pids, impactchain_exe, mpi_exe,  # noqa: F401 (fixtures)
+                       run_namelist)
 
 FIG3 = ("&chain n = 15, amplitude = 2.2, omega = 1.5, damping = 0.05, restitution = 0.7 /\n"
         "&run transient = 2000, cycles = 48, max_period = 8 /\n")
@@ -105,8 +109,10 @@ def assert_same_census(a: Path, b: Path) -> None:
         for key in fa["census"]:
             np.testing.assert_array_equal(fa["census"][key][()], fb["census"][key][()],
                                           err_msg=key)
+        assert sorted(fa["census"].attrs) == sorted(fb["census"].attrs)
         for key in fa["census"].attrs:
-            assert fa["census"].attrs[key] == fb["census"].attrs[key], key
+            np.testing.assert_array_equal(fa["census"].attrs[key], fb["census"].attrs[key],
+                                          err_msg=key)
 
 
 LONG = ("&chain n = 15, amplitude = 2.2, omega = 1.5, damping = 0.05, restitution = 0.7 /\n"
@@ -149,3 +155,86 @@ def test_interrupted_census_resumes_to_the_same_file(impactchain_exe, tmp_path):
     assert 0 < resumed < samples
     assert not (tmp_path / "part.h5.ckpt").exists()
     assert_same_census(tmp_path / "whole.h5", tmp_path / "part.h5")
+
+
+MPIRUN = ["mpirun", "--allow-run-as-root", "--oversubscribe"]
+
+SWEEP = ("&chain n = 15, amplitude = 2.2, omega = 1.5, damping = 0.05, restitution = 0.7 /\n"
+         "&run transient = 300, cycles = 32, max_period = 8 /\n"
+         "&census samples = 11, seed = 5, x_amp = 0.3, v_amp = 1.0 /\n"
+         "&sweep parameter = 'amplitude', start = 2.2, stop = 2.3, step = 0.1 /\n"
+         "&output file = '{out}' /\n")
+
+PLANE = ("&chain n = 15, amplitude = 2.2, omega = 1.5, damping = 0.05, restitution = 0.7 /\n"
+         "&initial kind = 'explicit', x0 = 15*0.02, v0 = 15*0.1 /\n"
+         "&run transient = 300, cycles = 32, max_period = 8 /\n"
+         "&census plane = 'x4', 'v12', plane_range = -0.3, 0.3, -1, 1, plane_points = 3 /\n"
+         "&output file = '{out}' /\n")
+
+
+def run_mpi(exe: Path, tmp_path: Path, text: str, name: str, ranks: int = 2,
+            env: dict[str, str] | None = None) -> subprocess.CompletedProcess:
+    (tmp_path / name).write_text(text)
+    result = subprocess.run([*MPIRUN, "-np", str(ranks), str(exe), name], cwd=tmp_path,
+                            capture_output=True, text=True, timeout=300,
+                            env=env or dict(os.environ, OMP_NUM_THREADS="1"))
+    assert result.returncode == 0, result.stdout + result.stderr
+    return result
+
+
+@pytest.mark.parametrize("case", ["sweep", "plane"])
+def test_ranks_give_the_threaded_census(impactchain_exe, mpi_exe, tmp_path, case):
+    """11 samples at each of 2 points (tasks split unevenly over 2 ranks), or a 3 x 3 plane:
+    the MPI driver's /census equals the threaded driver's bit for bit."""
+    if mpi_exe is None:
+        pytest.skip("mpifort is not installed: the MPI comparison needs openmpi")
+    text = SWEEP if case == "sweep" else PLANE
+    run_threads(impactchain_exe, tmp_path, text.format(out="one.h5"), 2, "one.nml")
+    result = run_mpi(mpi_exe, tmp_path, text.format(out="mpi.h5"), "mpi.nml")
+    assert "impactchain-mpi: wrote mpi.h5" in result.stdout
+    assert "on 2 ranks" in result.stdout and "attractor 0 (point 0)" in result.stdout
+    assert_same_census(tmp_path / "one.h5", tmp_path / "mpi.h5")
+    with h5py.File(tmp_path / "mpi.h5") as f:
+        assert f.attrs["complete"] == 1
+        assert f["census/x0"].shape == ((2, 11, 15) if case == "sweep" else (1, 9, 15))
+    assert not (tmp_path / "mpi.h5.ckpt").exists()
+
+
+def test_mpi_census_stopped_by_sigterm_resumes(impactchain_exe, mpi_exe, tmp_path):
+    """A stop by SIGTERM to every rank leaves the census checkpoint; the same command on 3
+    ranks resumes it, and so does the threaded driver (the same checkpoint): both files equal
+    an uninterrupted census's."""
+    if mpi_exe is None:
+        pytest.skip("mpifort is not installed: the MPI test needs openmpi")
+    samples = 400
+    run_threads(impactchain_exe, tmp_path, LONG.format(samples=samples, out="whole.h5"), 2,
+                "whole.nml")
+    (tmp_path / "part.nml").write_text(LONG.format(samples=samples, out="part.h5"))
+    env = dict(os.environ, OMP_NUM_THREADS="1", IMPACTCHAIN_CHECKPOINT_SECONDS="0.2")
+    proc = subprocess.Popen([*MPIRUN, "-np", "2", str(mpi_exe), "part.nml"], cwd=tmp_path,
+                            env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    ckpt = tmp_path / "part.h5.ckpt"
+    deadline = time.monotonic() + 60
+    while not ckpt.exists() and time.monotonic() < deadline and proc.poll() is None:
+        time.sleep(0.05)
+    ranks = child_pids(proc.pid)
+    assert ranks, "no MPI ranks found under mpirun"
+    for pid in ranks:
+        os.kill(pid, signal.SIGTERM)
+    out, err = proc.communicate(timeout=120)
+    assert proc.returncode != 0, out + err
+    assert "the census was stopped after" in err, out + err
+    assert ckpt.exists() and not (tmp_path / "part.h5").exists()
+    threaded = tmp_path / "threaded"
+    threaded.mkdir()
+    shutil.copy(ckpt, threaded / "part.h5.ckpt")
+    result = run_mpi(mpi_exe, tmp_path, LONG.format(samples=samples, out="part.h5"),
+                     "part.nml", ranks=3, env=env)
+    resumed = int(result.stdout.split("resumed from a checkpoint: ")[1].split(")")[0])
+    assert 0 < resumed < samples
+    assert not ckpt.exists()
+    assert_same_census(tmp_path / "whole.h5", tmp_path / "part.h5")
+    result = run_namelist(impactchain_exe, LONG.format(samples=samples, out="part.h5"),
+                          threaded, "part.nml")
+    assert f"resumed from a checkpoint: {resumed}" in result.stdout
+    assert_same_census(tmp_path / "whole.h5", threaded / "part.h5")

@@ -14,7 +14,8 @@ import h5py
 import numpy as np
 import pytest
 
-from simulator import FPM, ROOT, impactchain_exe, run_namelist  # noqa: F401 (fixture)
+from simulator import (child_pids, impactchain_exe, mpi_exe,  # noqa: F401 (fixtures)
+                       run_namelist)
 
 GRID = """
 &chain n = 6, amplitude = 2.0, omega = 1.5 /
@@ -43,19 +44,6 @@ def assert_same_sweep(a: Path, b: Path) -> None:
             np.testing.assert_array_equal(fa["sweep"][key][:], fb["sweep"][key][:], err_msg=key)
         for key in ("parameter", "parameter2", "mode"):
             assert fa["sweep"].attrs[key] == fb["sweep"].attrs[key]
-
-
-@pytest.fixture(scope="session")
-def mpi_exe() -> Path | None:
-    """The MPI build of the sweep driver (mpi/), or None when mpifort is not installed."""
-    if shutil.which("mpifort") is None:
-        return None
-    flags = os.environ.get("IMPACTCHAIN_FPM_FLAGS")   # the same build as impactchain_exe
-    profile = ["--flag", flags] if flags else ["--profile", "release"]
-    out = subprocess.run([str(FPM), "run", *profile, "--compiler", "mpifort",
-                          "--runner", "echo"], cwd=ROOT / "mpi", capture_output=True,
-                         text=True, check=True)
-    return ROOT / "mpi" / out.stdout.strip().splitlines()[-1]
 
 
 @pytest.mark.parametrize("mode", ["continuation", "independent"])
@@ -153,20 +141,6 @@ GRID2 = """
 """
 
 
-def _children(pid: int) -> list[int]:
-    """Processes whose parent is pid (Linux /proc)."""
-    found = []
-    for entry in Path("/proc").iterdir():
-        if entry.name.isdigit():
-            try:
-                stat = (entry / "stat").read_text()
-            except OSError:
-                continue
-            if int(stat.rsplit(")", 1)[1].split()[1]) == pid:
-                found.append(int(entry.name))
-    return found
-
-
 def test_mpi_sweep_stopped_by_sigterm_resumes(impactchain_exe, mpi_exe, tmp_path):
     """A Slurm-like stop (SIGTERM to every rank) leaves the checkpoint; the same command resumes it
     (also with another number of ranks), and so does the threaded driver: the same checkpoint
@@ -184,7 +158,7 @@ def test_mpi_sweep_stopped_by_sigterm_resumes(impactchain_exe, mpi_exe, tmp_path
     while not ckpt.exists() and time.monotonic() < deadline and proc.poll() is None:
         time.sleep(0.05)
     # like scancel, signal every task (mpirun itself forwards SIGTERM only after a delay)
-    ranks = _children(proc.pid)
+    ranks = child_pids(proc.pid)
     assert ranks, "no MPI ranks found under mpirun"
     for pid in ranks:
         os.kill(pid, signal.SIGTERM)
