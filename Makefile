@@ -36,6 +36,7 @@ help:
 	@echo "make run      set up, build, run namelists/default.nml, draw its figures"
 	@echo "make test     set up, build, run fpm test and pytest"
 	@echo "make figures  regenerate every figure of the paper into figures/"
+	@echo "make census-figures  only the attractor censuses' figures (minutes)"
 	@echo "make bench    build with the release profile and run the benchmark table"
 	@echo "make recipe-checksums  rewrite test/recipes/checksums.json (results meant to change)"
 	@echo "make api-docs the API reference (Fortran and Python) into docs/api/"
@@ -135,9 +136,15 @@ FIGURES := $(foreach f,fig1a fig1b fig1c fig1d fig2a fig2b fig2c fig2d fig2e fig
            figures/fig3.png figures/fig4.png figures/fig5.png figures/fig6.png \
            figures/fig7.png figures/fig8.png figures/fig10.png figures/fig11.png \
            figures/fig12_damping.png figures/fig12_restitution.png figures/fig13.png \
-           figures/fig10_branches.png
+           figures/fig10_branches.png $(CENSUS_FIGURES)
+# Attractor censuses at the paper's disputed figures (README, Basin fractions): their inputs
+# live in gallery/census/, not namelists/, because test/python/test_recipes.py reruns every
+# recipe in namelists/ in CI and these take minutes (about 18 on 2 threads, all six).
+CENSUS := gallery/census
+CENSUS_FIGURES := $(foreach f,fig1a fig1b fig1d fig2 fig3,figures/census_$(f).png) \
+                  figures/census_fig3_plane.png
 
-.PHONY: figures figure-files
+.PHONY: figures figure-files census-figures
 .SECONDARY:
 figures: build
 	@mkdir -p $(RUNS)
@@ -147,9 +154,23 @@ figures: build
 
 figure-files: $(FIGURES)
 
+# only the censuses' figures (a part of `make figures`)
+census-figures: build
+	@mkdir -p $(RUNS)
+	$(MAKE) --no-print-directory figure-files FIGURES="$(CENSUS_FIGURES)"
+
 $(RUNS)/%.h5: namelists/%.nml
 	@echo "impactchain: running $<"
 	$(SIM) $<
+
+$(RUNS)/census_%.h5: $(CENSUS)/census_%.nml
+	@echo "impactchain: running $<"
+	$(SIM) $<
+
+figures/census_fig3_plane.png: $(RUNS)/census_fig3_plane.h5
+	$(POST) basin-plane $< -o $@ $(GALLERY)
+figures/census_%.png: $(RUNS)/census_%.h5
+	$(POST) basin-fractions $< -o $@ $(GALLERY)
 
 figures/fig1%.png: $(RUNS)/fig1%.h5
 	$(POST) space-amplitude $< -o $@ $(FIG1_Y) $(GALLERY)

@@ -1345,7 +1345,7 @@ def basin_plane(run: RunLike, point: int = 0, ax: Axes | None = None) -> Figure:
         colours += [tuple(base), tuple(light)]
         fraction = census.fraction[point, a]
         handles.append(Patch(facecolor=tuple(base),
-                             label=f"{a}: {census.label(int(a))}, {100 * fraction:.1f} %"))
+                             label=f"{a}: {census.label(int(a))}, {100 * fraction:.3g} %"))
     cmap = ListedColormap(colours, name="attractor")
     norm = BoundaryNorm(np.arange(-0.5, len(colours)), cmap.N)
     fig, ax = _one_axes(ax, 8.5, 5.5, "basin-plane")

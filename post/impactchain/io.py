@@ -449,9 +449,10 @@ class Census:
 
     def label(self, a: int) -> str:
         """``'periodic 1×8 2×8'``, ``'chaotic'``, ...: attractor ``a``'s kind, with its
-        period pattern when periodic."""
+        period pattern when any oscillator has a period (``'aperiodic-nonchaotic 8×1 0×14'``:
+        the first oscillator periodic, the others not)."""
         kind = str(self.attractor_kind[a])
-        return f"{kind} {self.pattern(a)}" if kind == "periodic" else kind
+        return f"{kind} {self.pattern(a)}" if self.attractor_period[a].any() else kind
 
     def attractors_at(self, point: int) -> np.ndarray:
         """The ids of the attractors found at ``point`` (0-based)."""

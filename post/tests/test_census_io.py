@@ -220,6 +220,8 @@ def test_labels_and_period_patterns(make_census: MakeCensus) -> None:
     assert [census.label(a) for a in range(5)] == [
         "periodic 1×4", "periodic 2×2 1×2", "chaotic", "periodic 1×4", "aperiodic-nonchaotic"]
     assert census.pattern(2) == "0×4"
+    partly = read_census(make_census("partly.h5", periods=PERIODS[:4] + ((8, 0, 0, 0),)))
+    assert partly.label(4) == "aperiodic-nonchaotic 8×1 0×3"
     assert period_pattern([8] * 15) == "8×15"
     assert period_pattern([1, 2, 1]) == "1×1 2×1 1×1"
     assert period_pattern([]) == ""
