@@ -68,7 +68,7 @@ module chain_clv
         integer(i8), allocatable :: block_len(:)
         real(wp), allocatable :: vectors(:, :, :)   !! vectors(2n, k, r)
         integer(i8), allocatable :: saved_cycle(:)
-        real(wp), allocatable :: record(:), r_s(:, :), r_log(:), v(:, :), flat(:) !! work
+        real(wp), allocatable :: record(:), r_s(:, :), r_log(:), v(:, :) !! work
     end type clv_pass_t
 
 contains
@@ -92,8 +92,7 @@ contains
         if (allocated(err)) return
         call scratch_open(pass%frames, 2*n*k, err)
         if (allocated(err)) return
-        allocate (pass%record(factor_width(k)), pass%r_s(k, k), pass%r_log(k), pass%v(2*n, k), &
-                  pass%flat(2*n*k))
+        allocate (pass%record(factor_width(k)), pass%r_s(k, k), pass%r_log(k), pass%v(2*n, k))
     end subroutine clv_start
 
     !> Bytes of the scratch files of such a run (docs/model.md section 14.3).
@@ -118,7 +117,8 @@ contains
     subroutine clv_forward(pass, j, cycle, r_factor, r_log, frame, err)
         type(clv_pass_t), intent(inout) :: pass
         integer(i8), intent(in) :: j, cycle
-        real(wp), intent(in) :: r_factor(:, :), r_log(:), frame(:, :)
+        real(wp), intent(in) :: r_factor(:, :), r_log(:)
+        real(wp), intent(in), contiguous :: frame(:, :)
         type(error_t), allocatable, intent(out) :: err
         integer :: i, p
 
@@ -135,7 +135,7 @@ contains
         end do
         call scratch_append(pass%factors, pass%record, err)
         if (allocated(err) .or. j > pass%kept) return
-        call scratch_append(pass%frames, reshape(frame, [size(frame)]), err)
+        call scratch_append(pass%frames, frame, err)
     end subroutine clv_forward
 
     !> Start the backward pass at the last record, with the first `unstable` vectors taken to
@@ -203,13 +203,12 @@ contains
         integer(i8) :: s
         integer :: l
 
-        call scratch_read(pass%frames, pass%at, pass%flat, err)
+        call scratch_read(pass%frames, pass%at, pass%v, err)
         if (allocated(err)) return
-        pass%v = reshape(pass%flat, [2*pass%n, pass%k])
         if (allocated(err)) return
         call times_upper(pass%v, pass%c)
         do l = 1, pass%k
-            pass%v(:, l) = pass%v(:, l)/norm2(pass%v(:, l))
+            pass%v(:, l) = pass%v(:, l)/sqrt(sum(pass%v(:, l)**2))
             w = site_weights(pass%v(:, l))
             rows%ipr(l, i) = sum(w**2)
             if (l <= pass%m) rows%site_weight(:, l, i) = w
@@ -256,17 +255,16 @@ contains
         real(wp), intent(in) :: r_s(:, :), r_log(:)
         real(wp), intent(inout) :: c(:, :)
         real(wp), intent(out) :: growth(:)
-        real(wp) :: low, length
-        integer :: i, j
+        real(wp) :: low, length, scale(size(c, 1))
+        integer :: j
 
         call solve_upper(r_s, c)
         ! R^-1 = exp(-low) diag(exp(-(r_log - low))) r_s^-1, each factor <= 1
         low = minval(r_log)
-        do i = 1, size(c, 1)
-            c(i, :) = c(i, :)*exp(low - r_log(i))
-        end do
+        scale = exp(low - r_log)
         do j = 1, size(c, 2)
-            length = norm2(c(1:j, j))
+            c(1:j, j) = c(1:j, j)*scale(1:j)
+            length = sqrt(sum(c(1:j, j)**2))
             c(1:j, j) = c(1:j, j)/length
             growth(j) = low - log(length)
         end do
@@ -377,7 +375,7 @@ contains
         if (u < 1 .or. u >= size(c, 2)) return
         angle = huge(1.0_wp)
         do s = u + 1, size(c, 2)
-            angle = min(angle, atan2(norm2(c(u + 1:s, s)), norm2(c(1:u, s))))
+            angle = min(angle, atan2(sqrt(sum(c(u + 1:s, s)**2)), sqrt(sum(c(1:u, s)**2))))
         end do
     end function unstable_angle
 

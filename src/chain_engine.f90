@@ -121,6 +121,7 @@ module chain_engine
         !> P = R_m ... R_1 = r_product diag(exp(r_product_log)), r_product(k, k) upper
         !> triangular with unit columns; the QR step multiplies its own R by it.
         logical :: keep_r_factors = .false.
+        logical :: r_folded = .false.   !! P /= I: a re-orthonormalisation since
         real(wp), allocatable :: r_product(:, :), r_product_log(:)
         type(qr_workspace_t) :: qr
         !> Tangent rows hit at the current instant are kept in the coordinates of now (not of

@@ -85,9 +85,14 @@ contains
             r_factor = 0
             r_log = 0
             if (chain%keep_r_factors .and. info == 0 .and. size(chain%tangent, 2) == k) then
-                r_factor = chain%r_product
                 r_log = chain%r_product_log + chain%tangent_scale_bits*log(2.0_wp)
-                call fold_upper(qr_last_r(acc%qr, k), r_factor, r_log)
+                if (chain%r_folded) then
+                    r_factor = chain%r_product
+                    call fold_upper(qr_last_r(acc%qr, k), r_factor, r_log)
+                else
+                    ! (P = I: the step's own R, as it is)
+                    r_factor = qr_last_r(acc%qr, k)
+                end if
             end if
         end if
         ! (the step may have dropped collapsed directions)
@@ -149,6 +154,7 @@ contains
             chain%r_product(j, j) = 1
         end do
         chain%r_product_log = 0
+        chain%r_folded = .false.
     end subroutine reset_r_product
 
     !> The first impact of an instant takes M^-1 S M on rows still in the coordinates of the
@@ -321,8 +327,11 @@ contains
         do j = 1, chain%n_vectors
             chain%tangent_log(j) = chain%tangent_log(j) + log(abs(chain%r_diag(j)))
         end do
-        if (chain%keep_r_factors) call fold_upper(qr_last_r(chain%qr, chain%n_vectors), &
-                                                  chain%r_product, chain%r_product_log)
+        if (chain%keep_r_factors) then
+            call fold_upper(qr_last_r(chain%qr, chain%n_vectors), chain%r_product, &
+                            chain%r_product_log)
+            chain%r_folded = .true.
+        end if
     end subroutine orthonormalise_tangent
 
     !> Impacts at nearly zero approach speed (the last steps of an inelastic collapse) have

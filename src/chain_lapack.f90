@@ -11,6 +11,9 @@ module chain_lapack
     public :: qr_orthonormalise, qr_workspace_t, general_eigenvalues
     public :: solve_linear, qr_last_r, solve_upper, times_upper, general_eigenvectors
 
+    !> Triangular matrices of at most this order are solved and multiplied in plain loops.
+    integer, parameter :: small_triangle = 40
+
     !> Arrays qr_orthonormalise needs, kept by its caller between calls of the same shape
     !> (a Lyapunov run re-orthonormalises its frame every cycle).
     type :: qr_workspace_t
@@ -243,22 +246,47 @@ contains
         end do
     end function qr_last_r
 
-    !> b := R^-1 b for the upper triangle R of r (k x k), by LAPACK's dtrsm.
+    !> b := R^-1 b for the upper triangle R of r (k x k), by LAPACK's dtrsm, or for at most
+    !> `small_triangle` columns by the same back substitution in plain loops (on matrices
+    !> this small the library's per-call work costs more than the arithmetic).
     subroutine solve_upper(r, b)
         real(wp), intent(in) :: r(:, :)
         real(wp), intent(inout) :: b(:, :)
+        integer :: c, l
 
-        call dtrsm('L', 'U', 'N', 'N', size(b, 1), size(b, 2), 1.0_wp, r, size(r, 1), b, &
-                   size(b, 1))
+        if (size(r, 1) > small_triangle) then
+            call dtrsm('L', 'U', 'N', 'N', size(b, 1), size(b, 2), 1.0_wp, r, size(r, 1), b, &
+                       size(b, 1))
+            return
+        end if
+        do c = 1, size(b, 2)
+            do l = size(b, 1), 1, -1
+                if (b(l, c) == 0) cycle
+                b(l, c) = b(l, c)/r(l, l)
+                b(1:l - 1, c) = b(1:l - 1, c) - b(l, c)*r(1:l - 1, l)
+            end do
+        end do
     end subroutine solve_upper
 
-    !> a := a C for the upper triangle C of c (k x k, k the columns of a), by dtrmm.
+    !> a := a C for the upper triangle C of c (k x k, k the columns of a), by dtrmm, or in
+    !> plain loops for at most `small_triangle` columns.
     subroutine times_upper(a, c)
         real(wp), intent(inout) :: a(:, :)
         real(wp), intent(in) :: c(:, :)
+        integer :: j, l
 
-        call dtrmm('R', 'U', 'N', 'N', size(a, 1), size(a, 2), 1.0_wp, c, size(c, 1), a, &
-                   size(a, 1))
+        if (size(c, 1) > small_triangle) then
+            call dtrmm('R', 'U', 'N', 'N', size(a, 1), size(a, 2), 1.0_wp, c, size(c, 1), a, &
+                       size(a, 1))
+            return
+        end if
+        ! (from the last column: each new column needs the old columns before it)
+        do j = size(a, 2), 1, -1
+            a(:, j) = a(:, j)*c(j, j)
+            do l = 1, j - 1
+                a(:, j) = a(:, j) + a(:, l)*c(l, j)
+            end do
+        end do
     end subroutine times_upper
 
     !> Eigenvalues wr + i wi and right eigenvectors of a general square matrix (a is

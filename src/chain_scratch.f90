@@ -59,10 +59,11 @@ contains
         allocate (file%buffer(width, scratch_block(width)))
     end subroutine scratch_open
 
-    !> Append one record (`width` reals) after the last. Appending after a read is an error.
+    !> Append one record (`width` reals, of an array of any rank) after the last. Appending
+    !> after a read is an error.
     subroutine scratch_append(file, values, err)
         type(scratch_records_t), intent(inout) :: file
-        real(wp), intent(in) :: values(:)
+        real(wp), intent(in) :: values(file%width)
         type(error_t), allocatable, intent(out) :: err
 
         if (file%reading) then
@@ -78,11 +79,12 @@ contains
         file%count = file%count + 1
     end subroutine scratch_append
 
-    !> Record j (1 .. count) into `values`. The first read writes out what is still buffered.
+    !> Record j (1 .. count) into `values` (an array of any rank, `width` reals). The first
+    !> read writes out what is still buffered.
     subroutine scratch_read(file, j, values, err)
         type(scratch_records_t), intent(inout) :: file
         integer(i8), intent(in) :: j
-        real(wp), intent(out) :: values(:)
+        real(wp), intent(out) :: values(file%width)
         type(error_t), allocatable, intent(out) :: err
         character(len=512) :: msg
         integer(i8) :: block
