@@ -17,6 +17,7 @@ module chain_clv
     use chain_lapack, only: solve_upper, times_upper
     use chain_scratch, only: scratch_records_t, scratch_open, scratch_append, scratch_read, &
                              scratch_close
+    use chain_blocking, only: blocking_t, blocking_start, blocking_add, blocking_error
     use, intrinsic :: ieee_arithmetic, only: ieee_value, ieee_quiet_nan
     implicit none
     private
@@ -25,8 +26,6 @@ module chain_clv
     public :: clv_close, clv_scratch_bytes
     public :: fold_upper, initial_c, site_weights, unstable_angle, backward_step
 
-    !> Blocks of the standard error of the vectors' exponents (as docs/model.md section 7.4).
-    integer, parameter :: max_blocks = 20
     !> Most bytes of one block of per-record numbers.
     integer(i8), parameter :: rows_bytes = 4_i8*1024*1024
 
@@ -48,7 +47,8 @@ module chain_clv
         integer :: transient = 0                   !! records at the end without
         integer :: unstable = 0                    !! vectors spanning the unstable subspace
         real(wp), allocatable :: exponents(:)      !! bits per drive cycle, in vector order
-        real(wp), allocatable :: stderr(:)         !! their standard errors (20 blocks)
+        real(wp), allocatable :: stderr(:)         !! their standard errors (blocking plateau)
+        integer(i8), allocatable :: stderr_block(:) !! records per block at the plateau
         real(wp), allocatable :: vectors(:, :, :)  !! vectors(2n, k, r) at the last r records
         integer(i8), allocatable :: saved_cycle(:) !! drive cycle of each of those records
     end type clv_result_t
@@ -64,8 +64,7 @@ module chain_clv
         integer :: unstable = 0
         real(wp), allocatable :: c(:, :)            !! c(k, k), upper triangular, unit columns
         real(wp), allocatable :: total(:)           !! growth of each vector (nats), kept steps
-        real(wp), allocatable :: block_sum(:, :)    !! block_sum(k, blocks)
-        integer(i8), allocatable :: block_len(:)
+        type(blocking_t) :: blocks                  !! the growths of the kept steps, blocked
         real(wp), allocatable :: vectors(:, :, :)   !! vectors(2n, k, r)
         integer(i8), allocatable :: saved_cycle(:)
         real(wp), allocatable :: record(:), r_s(:, :), r_log(:), v(:, :) !! work
@@ -144,7 +143,6 @@ contains
         type(clv_pass_t), intent(inout) :: pass
         integer, intent(in) :: unstable
         type(error_t), allocatable, intent(out) :: err
-        integer :: blocks
 
         if (pass%factors%count /= pass%records) then
             call set_error(err, "clv: the backward pass needs every record of the forward pass")
@@ -153,11 +151,9 @@ contains
         pass%unstable = unstable
         pass%c = initial_c(pass%k)
         pass%at = pass%records
-        blocks = int(max(1_i8, min(int(max_blocks, i8), pass%kept)))
-        allocate (pass%total(pass%k), pass%block_sum(pass%k, blocks), pass%block_len(blocks))
+        allocate (pass%total(pass%k))
         pass%total = 0
-        pass%block_sum = 0
-        pass%block_len = 0
+        call blocking_start(pass%blocks, pass%k, pass%kept)
         allocate (pass%vectors(2*pass%n, pass%k, pass%r), pass%saved_cycle(pass%r))
     end subroutine clv_backward_begin
 
@@ -225,7 +221,7 @@ contains
         integer(i8), intent(out) :: cycle
         type(error_t), allocatable, intent(out) :: err
         real(wp) :: growth(pass%k)
-        integer :: i, p, b
+        integer :: i, p
 
         call scratch_read(pass%factors, pass%at, pass%record, err)
         if (allocated(err)) return
@@ -239,11 +235,8 @@ contains
         end do
         call backward_step(pass%r_s, pass%r_log, pass%c, growth)
         if (pass%at <= pass%kept) then
-            ! (the block of step at, as docs/model.md section 7.4 places a step)
-            b = int(1 + (pass%at - 1)*size(pass%block_len)/pass%kept)
             pass%total = pass%total + growth
-            pass%block_sum(:, b) = pass%block_sum(:, b) + growth
-            pass%block_len(b) = pass%block_len(b) + 1
+            call blocking_add(pass%blocks, growth)
         end if
         pass%at = pass%at - 1
     end subroutine step_back
@@ -270,32 +263,19 @@ contains
         end do
     end subroutine backward_step
 
-    !> The exponents, their standard errors and the saved vectors, once the backward pass is
-    !> done.
+    !> The exponents, their standard errors (by blocking the per-record growths, at the block
+    !> size where the error levels off) and the saved vectors, once the backward pass is done.
     pure function clv_result(pass) result(res)
         type(clv_pass_t), intent(in) :: pass
         type(clv_result_t) :: res
-        real(wp) :: mean(pass%k), err(pass%k)
-        integer :: b, nb
+        real(wp) :: err(pass%k)
 
         res%kept = pass%kept
         res%transient = int(pass%records - pass%kept)
         res%unstable = pass%unstable
         res%exponents = pass%total/max(1_i8, pass%kept)/log(2.0_wp)
-        err = 0
-        nb = count(pass%block_len > 0)
-        if (nb > 1) then
-            mean = 0
-            do b = 1, size(pass%block_len)
-                if (pass%block_len(b) > 0) mean = mean + pass%block_sum(:, b)/pass%block_len(b)
-            end do
-            mean = mean/nb
-            do b = 1, size(pass%block_len)
-                if (pass%block_len(b) > 0) &
-                    err = err + (pass%block_sum(:, b)/pass%block_len(b) - mean)**2
-            end do
-            err = sqrt(err/(nb - 1)/nb)
-        end if
+        allocate (res%stderr_block(pass%k))
+        call blocking_error(pass%blocks, err, res%stderr_block)
         res%stderr = err/log(2.0_wp)
         res%vectors = pass%vectors
         res%saved_cycle = pass%saved_cycle

@@ -502,15 +502,15 @@ contains
         end associate
     end subroutine output_clv_rows
 
-    !> The rest of /clv, after its per-record datasets: the vectors' growth rates and their
-    !> standard errors, the vectors at the last records (vectors(2n, k, r), at drive cycles
+    !> The rest of /clv, after its per-record datasets: the vectors' growth rates, their
+    !> standard errors and the records per block these were read at, the vectors at the last records (vectors(2n, k, r), at drive cycles
     !> saved_cycle(r)), and as attributes the records without vectors at the end and the
     !> number of vectors spanning the unstable subspace.
-    subroutine output_clv(out, exponents, stderr, vectors, saved_cycle, transient, unstable, &
-                          err)
+    subroutine output_clv(out, exponents, stderr, stderr_block, vectors, saved_cycle, &
+                          transient, unstable, err)
         type(output_t), intent(inout) :: out
         real(wp), intent(in), contiguous :: exponents(:), stderr(:), vectors(:, :, :)
-        integer(i8), intent(in), contiguous :: saved_cycle(:)
+        integer(i8), intent(in), contiguous :: stderr_block(:), saved_cycle(:)
         integer, intent(in) :: transient, unstable
         type(error_t), allocatable, intent(out) :: err
 
@@ -519,8 +519,12 @@ contains
             call describe(f, 'clv/exponents', 'growth rate of the covariant vector', &
                           'bits per drive cycle', 'vector', err)
             call h5_write(f, 'clv/stderr', stderr, 'bit', err)
-            call describe(f, 'clv/stderr', 'standard error of the growth rate (20 block '// &
-                          'averages)', 'bits per drive cycle', 'vector', err)
+            call describe(f, 'clv/stderr', 'standard error of the growth rate (blocking, '// &
+                          'where it levels off with the block size)', 'bits per drive cycle', &
+                          'vector', err)
+            call h5_write(f, 'clv/stderr_block', stderr_block, '1', err)
+            call describe(f, 'clv/stderr_block', 'records per block at which stderr was '// &
+                          'read off', 'drive cycles', 'vector', err)
             if (size(saved_cycle) > 0) then
                 call index_coordinate(f, 'clv/component', 1, size(vectors, 1), 'state '// &
                                       'component: 2i - 1 is x(i), 2i is v(i)', err)

@@ -353,8 +353,8 @@ contains
         end if
         if (res%has_clv) then
             associate (c => res%clv)
-                call output_clv(out, c%exponents, c%stderr, c%vectors, c%saved_cycle, &
-                                c%transient, c%unstable, err)
+                call output_clv(out, c%exponents, c%stderr, c%stderr_block, c%vectors, &
+                                c%saved_cycle, c%transient, c%unstable, err)
             end associate
             if (allocated(err)) return
         end if

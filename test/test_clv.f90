@@ -25,6 +25,7 @@ module test_clv
                              scratch_close, scratch_block
     use test_engine, only: make_chain
     use test_chains, only: model_of, flow_of
+    use chain_blocking, only: blocking_t, blocking_start, blocking_add, blocking_error
     use testing, only: tally_t, check, check_close
     implicit none
     private
@@ -46,6 +47,8 @@ contains
         call folded_factors(t)
         call scratch_round_trip(t)
         call angle_by_projection(t)
+        call blocking_plateau(t, 0.0_wp)
+        call blocking_plateau(t, 0.9_wp)
     end subroutine run_clv_tests
 
     !> A run of `cycles` records with k covariant vectors (0: all 2n).
@@ -428,5 +431,52 @@ contains
         call check_close(t, sum(site_weights(v(:, 1))), 1.0_wp, 'clv weights sum to 1', &
                          10*epsilon(1.0_wp))
     end subroutine angle_by_projection
+
+    !> The standard error by blocking of the mean of an AR(1) series x(i) = phi x(i-1) + e(i)
+    !> (unit Gaussian innovations, 2**16 values) is that of its closed form,
+    !> 1 / ((1 - phi) sqrt(N)) for large N, to 15 % (the estimate's scatter, and for phi = 0.9
+    !> the bias of blocks not much longer than the correlation time: 10 % here); for phi = 0
+    !> (white noise) it is read off at blocks of at most 4 values, and for phi = 0.9
+    !> (correlation time (1 + phi) / (1 - phi) = 19 values) at blocks of at least 16.
+    !> Memory: one level per power of two of the length.
+    subroutine blocking_plateau(t, phi)
+        type(tally_t), intent(inout) :: t
+        real(wp), intent(in) :: phi
+        integer(i8), parameter :: values = 2_i8**16
+        type(blocking_t) :: b
+        real(wp) :: x(1), err(1), u1, u2, want
+        integer(i8) :: i, block(1), state
+        character(len=8) :: label
+
+        write (label, '(f3.1)') phi
+        call blocking_start(b, 1, values)
+        state = 12345
+        x = 0
+        do i = 1, values
+            u1 = next_uniform(state)
+            u2 = next_uniform(state)
+            ! (a large constant mean: the sums must not cancel it)
+            x = phi*x + sqrt(-2*log(u1))*cos(8*atan(1.0_wp)*u2)
+            call blocking_add(b, x + 1000)
+        end do
+        call blocking_error(b, err, block)
+        want = 1/((1 - phi)*sqrt(real(values, wp)))
+        call check_close(t, err(1), want, 'clv blocking: AR(1) phi = '//trim(label)// &
+                         ', the standard error of the mean', rel_tol=0.15_wp)
+        if (phi == 0) then
+            call check(t, block(1) <= 4, 'clv blocking: white noise needs no blocks')
+        else
+            call check(t, block(1) >= 16, 'clv blocking: AR(1) phi = '//trim(label)// &
+                       ', blocks longer than its correlation time')
+        end if
+        call check(t, size(b%count) == 17, 'clv blocking: one level per power of two')
+    contains
+        real(wp) function next_uniform(s)
+            integer(i8), intent(inout) :: s
+
+            s = modulo(48271_i8*s, 2147483647_i8)
+            next_uniform = real(s, wp)/2147483647.0_wp
+        end function next_uniform
+    end subroutine blocking_plateau
 
 end module test_clv

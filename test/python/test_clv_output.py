@@ -46,6 +46,7 @@ def test_clv_group_layout_and_invariants(impactchain_exe, tmp_path):
                                    rtol=1e-12)
         gap = np.abs(g["exponents"][:] - f["lyapunov/exponents"][:])
         assert np.all(gap <= 3 * np.hypot(g["stderr"][:], f["lyapunov/stderr"][:]))
+        assert np.all(g["stderr_block"][:] >= 1) and np.all(g["stderr"][:] > 0)
         assert g["exponents"].attrs["units"] == "bit"
         assert g["min_angle"].attrs["units"] == "radian"
 
