@@ -23,6 +23,7 @@ module impactchain
     use chain_event_log, only: event_log_t
     use chain_record, only: record_sink_t, memory_sink_t, record_result_t, record_cycles, &
                             record_spec_t
+    use chain_clv, only: clv_rows_t, clv_result_t
     use chain_monitor, only: monitor_t, signal_monitor_t, stage_transient, stage_records, &
                              stage_points, stage_name
     use chain_section, only: advance_to_point
@@ -56,7 +57,7 @@ module impactchain
     public :: record_sink_t, memory_sink_t, record_result_t, record_cycles
     public :: monitor_t, signal_monitor_t, stage_transient, stage_records, stage_points
     public :: stage_name
-    public :: record_spec_t
+    public :: record_spec_t, clv_rows_t, clv_result_t
     public :: advance_to_point, poincare_jacobian, simulate_to_file, start_chain, initial_state
     public :: chain_on_section, restart_chain
     public :: orbit_t, orbit_options_t, find_orbit, orbit_gap_minimum
