@@ -19,7 +19,7 @@ module chain_branch_file
     implicit none
     private
     public :: continuation_guess, continuation_options, run_continuation
-    public :: continuation_to_file, write_continuation
+    public :: continuation_to_file, write_continuation, finite_or_inf
 
 contains
 
@@ -82,7 +82,7 @@ contains
         call output_begin(out, cfg%output_file, cfg%overwrite, err)
         if (allocated(err)) return
         call run_continuation(cfg, res, err, monitor)
-        if (.not. allocated(err) .and. .not. res%stopped) call write_continuation(out, cfg, res, err)
+        if (.not. (allocated(err) .or. res%stopped)) call write_continuation(out, cfg, res, err)
         if (allocated(err) .or. res%stopped) then
             call output_abort(out)
             return

@@ -5,7 +5,8 @@
 !> the impacting branch of figure 10's chain down to its fold (a multiplier +1 there); a period
 !> doubling against the simulator on either side of it, and the branch switched to there (its
 !> own doubling, the product of its multipliers); one branch from two starts, its special
-!> points located at the same parameter.
+!> points located at the same parameter. Newton's result from the guess is kept, converged
+!> (the first point) or not (no point, the reason said).
 module test_branch
     use chain_kinds, only: wp, i8, two_pi
     use chain_error, only: error_t
@@ -14,7 +15,7 @@ module test_branch
     use chain_engine, only: chain_t, chain_positions, chain_velocities
     use chain_event_log, only: event_log_t, event_log_init
     use chain_section, only: advance_to_point, chain_at_section
-    use chain_orbit, only: orbit_t, find_orbit, interleave
+    use chain_orbit, only: orbit_t, find_orbit, interleave, impact_bonds
     use chain_parameter, only: map_parameter_derivative
     use chain_branch, only: branch_options_t, branches_t, follow_branches
     use test_chains, only: model_of, fig10_model
@@ -34,6 +35,8 @@ contains
         call settle(model, 5_i8, 1, impacting)
         call check(t, impacting%converged .and. impacting%impacts > 0, &
                    'fig. 10 A = 3: an impacting period-1 orbit')
+        call check(t, size(impact_bonds(impacting)) == impacting%impacts, &
+                   'fig. 10 A = 3: one bond per impact')
         if (impacting%converged) call derivative_by_differences(t, model, impacting, &
                                                                 'impacting fig. 10 A = 3')
         model = fig10_model(1.0_wp)
@@ -46,6 +49,7 @@ contains
         call impacting_branch(t, impacting)
         call period_doubling(t)
         call two_starts(t)
+        call failed_start(t)
     end subroutine run_branch_tests
 
     !> Newton for a period-p orbit from the state `transient` cycles after a start at rest.
@@ -141,6 +145,13 @@ contains
             return
         end if
         print '(a)', '    '//res%end_reason
+        call check(t, res%start%converged .and. res%n_points > 0, &
+                   'non-impacting branch: the start converged')
+        if (res%n_points > 0) call check(t, all(res%start%x == res%points(1)%orbit%x) .and. &
+                                         all(res%start%v == res%points(1)%orbit%v) .and. &
+                                         all(res%start%residuals == &
+                                             res%points(1)%orbit%residuals), &
+                                         'non-impacting branch: the start is the first point')
         worst = 0
         ! (the last point, located at the grazing, sees a touch: the map is not smooth there)
         do j = 1, res%n_points - 1
@@ -355,5 +366,28 @@ contains
         call check_close(t, res(1)%specials(2)%value, res(2)%specials(2)%value, &
                          'two starts: the same grazing', 1.0e-8_wp)
     end subroutine two_starts
+
+    !> A guess from which Newton fails (test_corners' chain, resting on the left wall once
+    !> per cycle): no point, Newton's result kept with its reason, which the end reason says.
+    subroutine failed_start(t)
+        type(tally_t), intent(inout) :: t
+        type(model_t) :: model
+        type(branches_t) :: res
+        type(branch_options_t) :: opt
+        type(error_t), allocatable :: err
+
+        model = model_of(make_flow(0.1_wp, 1.0_wp, 0.4_wp), 0.5_wp, [0.5_wp, 0.5_wp, 3.0_wp], &
+                         .true., 1.0e-9_wp)
+        opt%parameter = 'amplitude'
+        opt%max_points = 1
+        call follow_branches(model, 0.0_wp, 1, [0.0_wp, 0.0_wp], [0.0_wp, 0.0_wp], opt, res, err)
+        call check(t, .not. allocated(err) .and. res%n_points == 0 .and. &
+                   .not. res%start%converged, 'failed start: no point, not converged')
+        if (allocated(err) .or. res%start%converged) return
+        call check(t, index(res%start%reason, 'sticks on a wall') > 0 .and. &
+                   index(res%end_reason, res%start%reason) > 0 .and. &
+                   size(res%start%residuals) == res%start%iterations + 1, &
+                   'failed start: the reason kept and said: '//res%end_reason)
+    end subroutine failed_start
 
 end module test_branch
