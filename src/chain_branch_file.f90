@@ -7,7 +7,7 @@ module chain_branch_file
     use chain_model, only: model_parameter, parameter_units
     use chain_engine, only: chain_t, chain_positions, chain_velocities
     use chain_event_log, only: event_log_t, event_log_init
-    use chain_section, only: section_target, advance_to_point
+    use chain_section, only: section_target, advance_to_point, advance_cycles
     use chain_config, only: config_t
     use chain_sim, only: start_chain, write_run_header
     use chain_branch, only: branch_options_t, branches_t, follow_branches
@@ -24,20 +24,28 @@ module chain_branch_file
 contains
 
     !> The guess for the first orbit: the state on the section (&run phase) after &run
-    !> transient cycles from &initial.
-    subroutine continuation_guess(cfg, x, v, err)
+    !> transient cycles from &initial. `monitor` is told the transient's cycles and may stop
+    !> it there (`stopped`; x and v are then not set).
+    subroutine continuation_guess(cfg, x, v, err, monitor, stopped)
         type(config_t), intent(in) :: cfg
         real(wp), allocatable, intent(out) :: x(:), v(:)
         type(error_t), allocatable, intent(out) :: err
+        class(monitor_t), intent(inout), optional :: monitor
+        logical, intent(out), optional :: stopped
         type(chain_t) :: chain
         type(event_log_t) :: log
         integer(i8) :: cycle
         real(wp) :: s
+        logical :: halted
 
+        if (present(stopped)) stopped = .false.
         call start_chain(cfg, chain, err)
         if (allocated(err)) return
         call event_log_init(log, .false., 0)
         call section_target(chain, cfg%record%transient, cfg%record%phase, 0_i8, cycle, s)
+        call advance_cycles(chain, cycle, log, err, monitor=monitor, stopped=halted)
+        if (present(stopped)) stopped = halted
+        if (allocated(err) .or. halted) return
         call advance_to_point(chain, cycle, s, log, err)
         if (allocated(err)) return
         x = chain_positions(chain)
@@ -56,7 +64,8 @@ contains
         opt%doublings = cfg%cont_doublings
     end function continuation_options
 
-    !> The branches the input asks for, from its guess.
+    !> The branches the input asks for, from its guess. `monitor` is told the transient's
+    !> cycles, then the points found, and may stop the work (res%stopped).
     subroutine run_continuation(cfg, res, err, monitor)
         type(config_t), intent(in) :: cfg
         type(branches_t), intent(out) :: res
@@ -64,8 +73,8 @@ contains
         class(monitor_t), intent(inout), optional :: monitor
         real(wp), allocatable :: x(:), v(:)
 
-        call continuation_guess(cfg, x, v, err)
-        if (allocated(err)) return
+        call continuation_guess(cfg, x, v, err, monitor, res%stopped)
+        if (allocated(err) .or. res%stopped) return
         call follow_branches(cfg%model, cfg%record%phase, cfg%cont_period, x, v, &
                              continuation_options(cfg), res, err, monitor)
     end subroutine run_continuation

@@ -7,6 +7,8 @@
 !> own doubling, the product of its multipliers); one branch from two starts, its special
 !> points located at the same parameter. Newton's result from the guess is kept, converged
 !> (the first point) or not (no point, the reason said).
+!> A continuation run tells its monitor the transient's cycles, then its points, and stops
+!> when asked.
 module test_branch
     use chain_kinds, only: wp, i8, two_pi
     use chain_error, only: error_t
@@ -18,11 +20,25 @@ module test_branch
     use chain_orbit, only: orbit_t, find_orbit, interleave, impact_bonds
     use chain_parameter, only: map_parameter_derivative
     use chain_branch, only: branch_options_t, branches_t, follow_branches
+    use chain_config, only: config_t
+    use chain_monitor, only: monitor_t, stage_transient, stage_points
+    use chain_branch_file, only: run_continuation
     use test_chains, only: model_of, fig10_model
     use testing, only: tally_t, check, check_close
     implicit none
     private
     public :: run_branch_tests
+
+    !> Records what it is told and asks to stop at a given count of one stage.
+    type, extends(monitor_t) :: counting_monitor_t
+        integer :: stop_stage = 0
+        integer(i8) :: stop_at = 0
+        integer :: transient_calls = 0, point_calls = 0
+        logical :: in_order = .true.  !! cycles 1, 2, ... of the total, then points 1, 2, ...
+        integer(i8) :: transient_total = 0
+    contains
+        procedure :: keep_going => counting_keep_going
+    end type counting_monitor_t
 
 contains
 
@@ -50,6 +66,7 @@ contains
         call period_doubling(t)
         call two_starts(t)
         call failed_start(t)
+        call monitored_run(t)
     end subroutine run_branch_tests
 
     !> Newton for a period-p orbit from the state `transient` cycles after a start at rest.
@@ -389,5 +406,61 @@ contains
                    size(res%start%residuals) == res%start%iterations + 1, &
                    'failed start: the reason kept and said: '//res%end_reason)
     end subroutine failed_start
+
+    !> Figure 10's chain at A = 1 from rest after 50 transient cycles, continued in A up to
+    !> three points: the monitor sees every transient cycle, then every point; a stop asked
+    !> in the transient or at the first point ends the run there, stopped.
+    subroutine monitored_run(t)
+        type(tally_t), intent(inout) :: t
+        type(config_t) :: cfg
+        type(branches_t) :: res
+        type(error_t), allocatable :: err
+        type(counting_monitor_t) :: watch
+
+        cfg%model = fig10_model(1.0_wp)
+        cfg%initial_kind = 'rest'
+        cfg%initial_file = ''
+        allocate (cfg%x0(0), cfg%v0(0))
+        cfg%record%transient = 50
+        cfg%continuation = .true.
+        cfg%cont_parameter = 'amplitude'
+        cfg%cont_stop = 2
+        cfg%cont_step = 0.1_wp
+        cfg%cont_max_points = 3
+        call run_continuation(cfg, res, err, watch)
+        call check(t, .not. allocated(err) .and. .not. res%stopped .and. res%n_points == 3 .and. &
+                   watch%transient_calls == 50 .and. watch%transient_total == 50 .and. &
+                   watch%point_calls == 3 .and. watch%in_order, &
+                   'continuation run: the monitor is told 50 transient cycles, then 3 points')
+        watch = counting_monitor_t(stop_stage=stage_transient, stop_at=7)
+        call run_continuation(cfg, res, err, watch)
+        call check(t, .not. allocated(err) .and. res%stopped .and. res%n_points == 0 .and. &
+                   watch%transient_calls == 7 .and. watch%point_calls == 0, &
+                   'continuation run: stopped in the transient')
+        watch = counting_monitor_t(stop_stage=stage_points, stop_at=1)
+        call run_continuation(cfg, res, err, watch)
+        call check(t, .not. allocated(err) .and. res%stopped .and. res%n_points == 1 .and. &
+                   watch%point_calls == 1, 'continuation run: stopped at the first point')
+    end subroutine monitored_run
+
+    logical function counting_keep_going(monitor, stage, done, total) result(keep_going)
+        class(counting_monitor_t), intent(inout) :: monitor
+        integer, intent(in) :: stage
+        integer(i8), intent(in) :: done, total
+
+        select case (stage)
+        case (stage_transient)
+            monitor%transient_calls = monitor%transient_calls + 1
+            monitor%transient_total = total
+            monitor%in_order = monitor%in_order .and. monitor%point_calls == 0 .and. &
+                               done == monitor%transient_calls
+        case (stage_points)
+            monitor%point_calls = monitor%point_calls + 1
+            monitor%in_order = monitor%in_order .and. done == monitor%point_calls
+        case default
+            monitor%in_order = .false.
+        end select
+        keep_going = .not. (stage == monitor%stop_stage .and. done == monitor%stop_at)
+    end function counting_keep_going
 
 end module test_branch
