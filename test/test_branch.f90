@@ -22,7 +22,7 @@ module test_branch
     use chain_branch, only: branch_options_t, branches_t, follow_branches
     use chain_config, only: config_t
     use chain_monitor, only: monitor_t, stage_transient, stage_points
-    use chain_branch_file, only: run_continuation
+    use chain_branch_file, only: run_continuation, continuation_table_t, continuation_table
     use test_chains, only: model_of, fig10_model
     use testing, only: tally_t, check, check_close
     implicit none
@@ -416,6 +416,7 @@ contains
         type(branches_t) :: res
         type(error_t), allocatable :: err
         type(counting_monitor_t) :: watch
+        type(continuation_table_t) :: table
 
         cfg%model = fig10_model(1.0_wp)
         cfg%initial_kind = 'rest'
@@ -432,6 +433,15 @@ contains
                    watch%transient_calls == 50 .and. watch%transient_total == 50 .and. &
                    watch%point_calls == 3 .and. watch%in_order, &
                    'continuation run: the monitor is told 50 transient cycles, then 3 points')
+        if (res%n_points /= 3) return
+        call continuation_table(8, res, table)
+        call check(t, table%residual(1) == res%start%residuals(res%start%iterations) .and. &
+                   all(table%residual <= 100*1.0e-11_wp) .and. all(table%residual >= 0), &
+                   "continuation table: every point's last residual, the first one's from Newton")
+        call check(t, all(shape(table%strobe_x) == [8, 1, 3]) .and. &
+                   all(table%strobe_x(:, 1, :) == table%x) .and. all(table%stable == 1) .and. &
+                   size(table%special_kind) == 0 .and. all(table%min_impact_speed > huge(1.0_wp)), &
+                   'continuation table: shapes, strobe = state for period 1, no impacts: inf')
         watch = counting_monitor_t(stop_stage=stage_transient, stop_at=7)
         call run_continuation(cfg, res, err, watch)
         call check(t, .not. allocated(err) .and. res%stopped .and. res%n_points == 0 .and. &
