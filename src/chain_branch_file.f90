@@ -20,7 +20,7 @@ module chain_branch_file
     private
     public :: continuation_guess, continuation_options, run_continuation
     public :: continuation_to_file, write_continuation, continuation_table_t
-    public :: continuation_table
+    public :: continuation_table, finite_or_inf
 
     !> /continuation's datasets (continuation_table): arrays of the file's shapes in Fortran
     !> order, n oscillators, np points, ns special points.
@@ -278,7 +278,7 @@ contains
         end subroutine describe
     end subroutine describe_all
 
-    !> `value`, or +inf where it stands for none (huge).
+    !> `value`, or +inf where it stands for none (huge): the file's grazing monitors.
     pure real(wp) function finite_or_inf(value)
         real(wp), intent(in) :: value
 

@@ -32,7 +32,7 @@ module impactchain
                             follow_branches
     use chain_branch_file, only: continuation_guess, continuation_options, run_continuation, &
                                  continuation_to_file, write_continuation, &
-                                 continuation_table_t, continuation_table
+                                 continuation_table_t, continuation_table, finite_or_inf
     use chain_sim, only: simulate_to_file, start_chain, initial_state, chain_on_section, &
                          restart_chain
     use chain_sweep, only: run_sweep, sweep_summary_t, plan_sweep, sweep_plan_t, &
@@ -70,7 +70,7 @@ module impactchain
     public :: branch_options_t, branch_point_t, special_point_t, branches_t, follow_branches
     public :: continuation_guess, continuation_options, run_continuation
     public :: continuation_to_file, write_continuation, continuation_table_t
-    public :: continuation_table
+    public :: continuation_table, finite_or_inf
     public :: run_sweep, sweep_summary_t, plan_sweep, sweep_plan_t, sweep_result_t
     public :: sweep_result_init, sweep_point_config, run_sweep_branches
     public :: write_sweep_file, save_checkpoint, load_checkpoint, remove_file, checkpoint_every
