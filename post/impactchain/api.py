@@ -113,9 +113,10 @@ _POLL_SECONDS = 0.05  # how often the calling thread looks at a running kernel
 _STAGES = {1: ("transient", "cycle"), 2: ("records", "cycle"), 3: ("sweep", "point")}
 #: The same for a continuation, whose unit of progress is an orbit found on a branch
 _CONTINUATION_STAGES = {**_STAGES, 3: ("orbits", "orbit")}
-#: Units of the parameters a sweep can run over
-_PARAMETER_UNITS = {"amplitude": "length", "omega": "1/time", "damping": "1",
-                    "restitution": "1", "spacing": "length"}
+#: Reduced units of the parameters a sweep or a continuation varies, as the files give them
+#: (chain_model's parameter_units; None: dimensionless, no model_units attribute)
+_PARAMETER_UNITS = {"amplitude": "length", "omega": "1/time", "damping": "1/time",
+                    "restitution": None, "spacing": "length"}
 _MAX_N = 10_000_000  # chain_config's max_n: only used to phrase errors for n beyond int32
 _INT32 = (-(2**31), 2**31 - 1)
 _INT64 = (-(2**63), 2**63 - 1)
@@ -959,9 +960,7 @@ def _continuation_dataset(xr: Any, out: dict[str, Any], cfg: dict[str, Any],
     dimensions, coordinates, variables, their attributes (chain_branch_file's describe_all)
     and the group's attributes."""
     parameter = _text(args["parameter"])
-    # (the reduced unit of the continued parameter, as the file gives it)
-    unit = {"amplitude": "length", "spacing": "length", "omega": "1/time",
-            "damping": "1/time"}.get(parameter)
+    unit = _PARAMETER_UNITS[parameter]
     points = out["values"].size
     n = cfg["n"]
 
