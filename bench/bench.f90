@@ -32,7 +32,8 @@ program bench
     implicit none
 
     character(len=*), parameter :: case_names(20) = [character(len=16) :: &
-        'default', 'default-lyap', 'default-adaptive', 'heavy-16', 'heavy-1024', 'heavy-16384', 'n1024-lyap10', &
+        'default', 'default-lyap', 'default-adaptive', 'heavy-16', 'heavy-1024', 'heavy-16384', &
+        'n1024-lyap10', &
         'n64-full', 'n256-full', 'n1024-full', 'n4096-lyap10', 'n4096-lyap64', 'n4096-lyap256', &
         'fig10-sweep', 'fig13-scan', 'strobe', 'strobe-record', 'orbit-n16', 'orbit-n64-p8', &
         'census-fig3']

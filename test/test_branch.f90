@@ -361,8 +361,8 @@ contains
         opt%max_points = 400
         do r = 1, 2
             call settle(fig10_model(amplitude(r)), 500_i8, 1, start)
-            call follow_branches(fig10_model(amplitude(r)), 0.0_wp, 1, start%x, start%v, opt, res(r), &
-                                 err)
+            call follow_branches(fig10_model(amplitude(r)), 0.0_wp, 1, start%x, start%v, opt, &
+                                 res(r), err)
             call check(t, .not. allocated(err), 'two starts: followed')
             if (allocated(err)) return
             print '(a)', '    '//res(r)%end_reason
