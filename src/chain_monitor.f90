@@ -1,7 +1,8 @@
 !> Watching a long computation from outside: after each unit of work (a transient cycle, a
 !> strobe record, a sweep point, a census sample) the library tells a monitor how far it is,
-!> and the monitor may ask it to stop. The command line shows progress and stops on a signal, the Python layer
-!> shares a flag with the interpreter (Ctrl-C, progress bars), the MPI driver ends its rounds.
+!> and the monitor may ask it to stop. The command line shows progress and stops on a signal,
+!> the Python layer shares a flag with the interpreter (Ctrl-C, progress bars), the MPI driver
+!> ends its rounds.
 !> Infrastructure, no model section.
 !>
 !> A monitor is an object, not a procedure argument: a procedure that needs the caller's
