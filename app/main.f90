@@ -10,13 +10,14 @@ program main
                            catch_interrupts, cli_t, parse_command_line, cli_run, &
                            cli_help, cli_version, cli_usage, code_version, config_summary, &
                            plan_sweep, validate_sweep_points, branches_t, &
-                           continuation_to_file
+                           continuation_to_file, census_result_t, census_to_file, kind_names
     use stderr_monitor, only: stderr_monitor_t, close_progress
     implicit none
     type(config_t) :: cfg
     type(record_result_t) :: summary
     type(sweep_summary_t) :: sweep_summary
     type(branches_t) :: branches
+    type(census_result_t) :: census
     type(error_t), allocatable :: err
     type(cli_t) :: cli
     type(stderr_monitor_t) :: monitor
@@ -56,6 +57,12 @@ program main
             stop 3, quiet=.true.
         end if
         call report_branches(branches, cfg%output_file)
+    else if (cfg%census) then
+        call census_to_file(cfg, census, err, monitor)
+        call close_progress(monitor)
+        if (allocated(err)) call fail(err%message)
+        call report_census(census, cfg%output_file, checkpoint_path(cfg))
+        if (.not. all(census%done)) stop 3, quiet=.true.
     else if (cfg%sweep) then
         call run_sweep(cfg, sweep_summary, err, monitor)
         call close_progress(monitor)
@@ -131,6 +138,36 @@ contains
                 'command again to resume from '//checkpoint
         end if
     end subroutine report_sweep
+
+    !> The attractors found, each with its kind, periods and basin fraction at its point
+    !> (and how many samples reached its mirror image).
+    subroutine report_census(res, output_file, checkpoint)
+        type(census_result_t), intent(in) :: res
+        character(len=*), intent(in) :: output_file, checkpoint
+        integer :: a, p
+
+        if (.not. all(res%done)) then
+            write (error_unit, '(a,i0,a,i0,a)') 'impactchain: the census was stopped after ', &
+                count(res%done), ' of ', size(res%done), ' samples; run the same command '// &
+                'again to resume from '//checkpoint
+            return
+        end if
+        write (output_unit, '(a)') 'impactchain: wrote '//output_file
+        write (output_unit, '(a,i0,a,i0,a,i0,a,i0,a)') '  samples ', res%n_samples, &
+            ' at ', res%n_points, ' point(s) (resumed from a checkpoint: ', res%resumed, &
+            '), attractors ', res%n_attractors, ''
+        do a = 1, res%n_attractors
+            associate (t => res%attractors(a))
+                p = t%point
+                write (output_unit, '(a,i0,a,i0,3a,i0,a,f0.4,a,f0.4,a,es11.3,a,i0,a)') &
+                    '  attractor ', a - 1, ' (point ', p - 1, '): ', trim(kind_names(t%kind)), &
+                    ', period ', t%period, ', fraction ', res%fraction(a, p), ' +- ', &
+                    res%fraction_stderr(a, p), ', lambda1 ', t%lambda1, &
+                    ' bits/cycle, mirror images ', count(res%attractor(:, p) == a .and. &
+                                                         res%mirrored(:, p)), ''
+            end associate
+        end do
+    end subroutine report_census
 
     !> Points and special points found, and why each branch ended (a Newton failure is a
     !> result: the file then says so too).

@@ -134,13 +134,14 @@ contains
             row%label//tab//trim(adjustl(baseline))
     end subroutine print_row_tsv
 
-    !> Rate of the row's units: points per second, or ns per oscillator snapshot.
+    !> Rate of the row's units: points or census samples per second, or ns per oscillator
+    !> snapshot.
     function rate_text(row) result(text)
         type(row_t), intent(in) :: row
         character(len=:), allocatable :: text
 
-        if (row%unit_name == 'points') then
-            text = real_text(per(real(row%units, wp), row%seconds))//' points/s'
+        if (row%unit_name == 'points' .or. row%unit_name == 'samples') then
+            text = real_text(per(real(row%units, wp), row%seconds))//' '//row%unit_name//'/s'
         else
             text = real_text(1.0e9_wp*per(row%seconds, real(row%units, wp)))//' ns per '// &
                    row%unit_name

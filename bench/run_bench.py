@@ -292,8 +292,8 @@ def table(rows: list[Row], baselines: list[dict], quick: bool) -> list[str]:
                       f"{100 * r.min_bond_share:.0f}% of the mean rate")
         if r.reps == 1 and not quick:
             label += f" ({r.cycles} cycle{'s' if r.cycles > 1 else ''} timed, once)"
-        if r.unit_name == "points":
-            label += f"; **{num(r.units_per_second)} points/s**"
+        if r.unit_name in ("points", "samples"):
+            label += f"; **{num(r.units_per_second)} {r.unit_name}/s**"
         elif r.units:
             label += f"; **{num(r.ns_per_unit)} ns per {r.unit_name}**"
         out.append(f"| {label} | {r.n} | {num(r.per_cycle)} | {num(r.us_per_cycle)} | "
@@ -315,7 +315,7 @@ def ratio_table(rows: list[Row], y: Yardsticks) -> list[str]:
            "|---|---:|---:|---:|---:|---:|---:|---:|---:|"]
     s_ns = y.sincos_exp_ns
     for r in rows:
-        if not r.cycles or r.unit_name == "points":
+        if not r.cycles or r.unit_name in ("points", "samples"):
             continue
         qr = (f"{r.qr_flops / 1e9:.3g} | "
               f"{num(r.seconds / r.cycles / y.dgemm_equivalent(r.qr_flops))}"

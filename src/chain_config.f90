@@ -2,11 +2,11 @@
 !> group, the key, the value and the allowed range.
 !>
 !> Groups: &chain (the model, required), &initial, &run, &lyapunov, &output, &sweep,
-!> &continuation (optional).
+!> &continuation, &census (optional).
 !> Every key is documented in the README. A group may appear at most once; an unknown group or
 !> key is an error, never silently ignored.
 !> The model's parameters are those of docs/model.md section 1; run, Lyapunov and sweep keys
-!> those of sections 6-8.
+!> those of sections 6-8; &census those of section 13.
 module chain_config
     use, intrinsic :: iso_fortran_env, only: iostat_end
     use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
@@ -28,9 +28,11 @@ module chain_config
     integer, parameter :: max_list = 100001
     integer, parameter :: max_n = 10000000
     real(wp), parameter :: unset = -huge(1.0_wp)
-    character(len=*), parameter :: group_names(7) = &
+    character(len=*), parameter :: group_names(8) = &
         [character(len=12) :: 'chain', 'initial', 'run', 'lyapunov', 'output', 'sweep', &
-         'continuation']
+         'continuation', 'census']
+    !> Most samples of a census (per point).
+    integer, parameter :: max_samples = 10000000
     !> Every key of every group with its type: what the namelist statements of the read_*
     !> procedures below declare (test/python/test_namelist_errors.py checks the two agree).
     type(key_spec_t), parameter :: input_keys(*) = [ &
@@ -82,7 +84,13 @@ module chain_config
         key_spec_t('continuation', 'step', key_real, .false.), &
         key_spec_t('continuation', 'period', key_integer, .false.), &
         key_spec_t('continuation', 'max_points', key_integer, .false.), &
-        key_spec_t('continuation', 'doublings', key_integer, .false.)]
+        key_spec_t('continuation', 'doublings', key_integer, .false.), &
+        key_spec_t('census', 'samples', key_integer, .false.), &
+        key_spec_t('census', 'seed', key_integer, .false.), &
+        key_spec_t('census', 'x_amp', key_real, .false.), &
+        key_spec_t('census', 'v_amp', key_real, .false.), &
+        key_spec_t('census', 'tolerance', key_real, .false.), &
+        key_spec_t('census', 'mirror', key_string, .false.)]
     character(len=*), parameter :: sweep_parameters(*) = model_parameters
 
     type :: config_t
@@ -110,6 +118,12 @@ module chain_config
         character(len=:), allocatable :: cont_parameter
         real(wp) :: cont_stop = 0, cont_step = 0
         integer :: cont_period = 1, cont_max_points = 200, cont_doublings = 0
+        ! &census: the attractors reached from random starts (chain_census)
+        logical :: census = .false.
+        integer :: census_samples = 100, census_seed = 1
+        real(wp) :: census_x_amp = 0.3_wp, census_v_amp = 0.3_wp
+        real(wp) :: census_tolerance = 1.0e-6_wp
+        character(len=:), allocatable :: census_mirror   !! 'merge' or 'separate'
         ! the input as read
         character(len=:), allocatable :: input_text
     end type config_t
@@ -160,6 +174,7 @@ contains
         if (.not. allocated(err) .and. present_groups(5)) call read_output(u, cfg, err)
         if (.not. allocated(err) .and. present_groups(6)) call read_sweep(u, cfg, err)
         if (.not. allocated(err) .and. present_groups(7)) call read_continuation(u, cfg, err)
+        if (.not. allocated(err) .and. present_groups(8)) call read_census(u, cfg, err)
         close (u)
         if (allocated(err)) return
         if (.not. allocated(cfg%initial_kind)) cfg%initial_kind = 'rest'
@@ -169,6 +184,7 @@ contains
         if (.not. allocated(cfg%sweep_parameter)) cfg%sweep_parameter = ''
         if (.not. allocated(cfg%sweep_parameter2)) cfg%sweep_parameter2 = ''
         if (.not. allocated(cfg%cont_parameter)) cfg%cont_parameter = ''
+        if (.not. allocated(cfg%census_mirror)) cfg%census_mirror = 'merge'
         if (.not. allocated(cfg%x0)) allocate (cfg%x0(0))
         if (.not. allocated(cfg%v0)) allocate (cfg%v0(0))
         call validate_config(cfg, err)
@@ -591,6 +607,37 @@ contains
         cfg%cont_doublings = doublings
     end subroutine read_continuation
 
+    subroutine read_census(u, cfg, err)
+        integer, intent(in) :: u
+        type(config_t), intent(inout) :: cfg
+        type(error_t), allocatable, intent(out) :: err
+        integer :: samples, seed, ios
+        real(wp) :: x_amp, v_amp, tolerance
+        character(len=64) :: mirror
+        character(len=512) :: msg
+        namelist /census/ samples, seed, x_amp, v_amp, tolerance, mirror
+
+        samples = cfg%census_samples
+        seed = cfg%census_seed
+        x_amp = cfg%census_x_amp
+        v_amp = cfg%census_v_amp
+        tolerance = cfg%census_tolerance
+        mirror = 'merge'
+        rewind (u)
+        read (u, nml=census, iostat=ios, iomsg=msg)
+        if (ios /= 0) then
+            call group_error(err, 'census', ios, msg)
+            return
+        end if
+        cfg%census = .true.
+        cfg%census_samples = samples
+        cfg%census_seed = seed
+        cfg%census_x_amp = x_amp
+        cfg%census_v_amp = v_amp
+        cfg%census_tolerance = tolerance
+        cfg%census_mirror = lower(trim(adjustl(mirror)))
+    end subroutine read_census
+
     !> Check every value against its allowed range (also used for values given from Python),
     !> group by group; the first value out of range is the error.
     subroutine validate_config(cfg, err)
@@ -604,6 +651,7 @@ contains
         if (.not. allocated(err)) call validate_output(cfg, err)
         if (.not. allocated(err) .and. cfg%sweep) call validate_sweep(cfg, err)
         if (.not. allocated(err) .and. cfg%continuation) call validate_continuation(cfg, err)
+        if (.not. allocated(err) .and. cfg%census) call validate_census(cfg, err)
     end subroutine validate_config
 
     subroutine validate_chain(cfg, err)
@@ -749,9 +797,9 @@ contains
         associate (r => cfg%record)
             if (.not. r%lyapunov) then
                 call set_error(err, "&lyapunov: covariant = .true. needs enabled = .true.")
-            else if (cfg%sweep) then
+            else if (cfg%sweep .or. cfg%census) then
                 call set_error(err, "&lyapunov: covariant = .true. is for a single run, not "// &
-                               "a &sweep")
+                               "a &sweep or a &census")
             else if (r%qr_every > 1) then
                 call set_error(err, "&lyapunov: covariant = .true. takes a QR step at every "// &
                                "record: qr_every = "//fmt_int(r%qr_every)//" must be 0 or 1")
@@ -887,6 +935,40 @@ contains
                                           ": "//err%message
     end subroutine validate_continuation
 
+    !> A census's starts must not overlap (as &initial random's), and it runs at one point
+    !> or along one swept parameter.
+    subroutine validate_census(cfg, err)
+        type(config_t), intent(in) :: cfg
+        type(error_t), allocatable, intent(out) :: err
+        real(wp) :: half
+
+        if (cfg%census_samples < 1 .or. cfg%census_samples > max_samples) then
+            call set_error(err, "&census: samples = "//fmt_int(cfg%census_samples)// &
+                           " is outside [1, "//fmt_int(max_samples)//"]")
+            return
+        end if
+        half = 0.5_wp*minval(cfg%model%spacing)
+        call check_range(err, 'census', 'x_amp', cfg%census_x_amp, 0.0_wp, half, &
+                         '[0, half the smallest spacing = '//fmt_real(half)// &
+                         ') so that no start overlaps', open_high=.true.)
+        if (allocated(err)) return
+        call check_range(err, 'census', 'v_amp', cfg%census_v_amp, 0.0_wp, 1.0e6_wp, '[0, 1e6]')
+        if (allocated(err)) return
+        call check_range(err, 'census', 'tolerance', cfg%census_tolerance, tiny(1.0_wp), &
+                         1.0_wp, '(0, 1)', open_high=.true.)
+        if (allocated(err)) return
+        if (cfg%census_mirror /= 'merge' .and. cfg%census_mirror /= 'separate') then
+            call set_error(err, "&census: mirror = '"//cfg%census_mirror//"' is not one of "// &
+                           "'merge', 'separate'")
+        else if (cfg%continuation) then
+            call set_error(err, "&census cannot be combined with &continuation (run them as "// &
+                           "two inputs)")
+        else if (cfg%sweep .and. len(cfg%sweep_parameter2) > 0) then
+            call set_error(err, "&census runs at one point or along one parameter: a &sweep "// &
+                           "with parameter2 is not supported")
+        end if
+    end subroutine validate_census
+
     subroutine check_axis(err, suffix, start, stop, step)
         type(error_t), allocatable, intent(out) :: err
         character(len=*), intent(in) :: suffix
@@ -932,7 +1014,18 @@ contains
                lyapunov_group(cfg)//output_group(cfg)
         if (cfg%sweep) text = text//sweep_group(cfg)
         if (cfg%continuation) text = text//continuation_group(cfg)
+        if (cfg%census) text = text//census_group(cfg)
     end function config_summary
+
+    function census_group(cfg) result(text)
+        type(config_t), intent(in) :: cfg
+        character(len=:), allocatable :: text
+
+        text = "&census samples = "//fmt_int(cfg%census_samples)//", seed = "// &
+               fmt_int(cfg%census_seed)//", x_amp = "//exact(cfg%census_x_amp)//", v_amp = "// &
+               exact(cfg%census_v_amp)//", tolerance = "//exact(cfg%census_tolerance)// &
+               ", mirror = '"//cfg%census_mirror//"' /"//new_line('a')
+    end function census_group
 
     function continuation_group(cfg) result(text)
         type(config_t), intent(in) :: cfg

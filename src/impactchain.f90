@@ -2,7 +2,7 @@
 !> driver (mpi/), the Python layer (f2py/) and the benchmark (bench/) use. Configuration,
 !> runs and their results, sweeps (including the pieces a distributed driver needs), the
 !> Poincare-map Jacobian of a state, periodic orbits (Newton shooting) and their branches
-!> (continuation), the shared command
+!> (continuation), attractor censuses, the shared command
 !> line, interrupt flag and monitors.
 !> A chain is an opaque `chain_t`: it is started from a configuration, run to a point or through
 !> recorded cycles, restarted under other parameters, and read (its clock, state, contacts
@@ -25,14 +25,15 @@ module impactchain
                             record_spec_t
     use chain_clv, only: clv_rows_t, clv_result_t
     use chain_monitor, only: monitor_t, signal_monitor_t, stage_transient, stage_records, &
-                             stage_points, stage_name
+                             stage_points, stage_samples, stage_name
     use chain_section, only: advance_to_point
     use chain_floquet, only: poincare_jacobian
-    use chain_orbit, only: orbit_t, orbit_options_t, find_orbit, orbit_gap_minimum
+    use chain_orbit, only: orbit_t, orbit_options_t, find_orbit, orbit_gap_minimum, impact_bonds
     use chain_branch, only: branch_options_t, branch_point_t, special_point_t, branches_t, &
                             follow_branches
     use chain_branch_file, only: continuation_guess, continuation_options, run_continuation, &
-                                 continuation_to_file, write_continuation
+                                 continuation_to_file, write_continuation, &
+                                 continuation_table_t, continuation_table, finite_or_inf
     use chain_sim, only: simulate_to_file, start_chain, initial_state, chain_on_section, &
                          restart_chain
     use chain_sweep, only: run_sweep, sweep_summary_t, plan_sweep, sweep_plan_t, &
@@ -41,6 +42,11 @@ module impactchain
                            save_checkpoint, load_checkpoint, remove_file, checkpoint_every, &
                            validate_sweep_points, checkpoint_path, branch_record_sizes, &
                            pack_branch, unpack_branch
+    use chain_attractor, only: attractor_t, kind_names
+    use chain_census, only: census_result_t, census_result_init, census_points, &
+                            census_point_config, sample_start, run_sample, run_census_samples, &
+                            classify_census, save_census_checkpoint, load_census_checkpoint
+    use chain_census_file, only: census_to_file, write_census_file
     use chain_output, only: code_version, output_t, output_begin, output_end, output_abort
     use chain_cli, only: cli_t, parse_command_line, cli_run, cli_help, cli_version, cli_usage, &
                          cli_error
@@ -56,19 +62,25 @@ module impactchain
     public :: chain_velocities, chain_copy_state, chain_contacts, chain_counts
     public :: record_sink_t, memory_sink_t, record_result_t, record_cycles
     public :: monitor_t, signal_monitor_t, stage_transient, stage_records, stage_points
+    public :: stage_samples
     public :: stage_name
     public :: record_spec_t, clv_rows_t, clv_result_t
     public :: advance_to_point, poincare_jacobian, simulate_to_file, start_chain, initial_state
     public :: chain_on_section, restart_chain
-    public :: orbit_t, orbit_options_t, find_orbit, orbit_gap_minimum
+    public :: orbit_t, orbit_options_t, find_orbit, orbit_gap_minimum, impact_bonds
     public :: branch_options_t, branch_point_t, special_point_t, branches_t, follow_branches
     public :: continuation_guess, continuation_options, run_continuation
-    public :: continuation_to_file, write_continuation
+    public :: continuation_to_file, write_continuation, continuation_table_t
+    public :: continuation_table, finite_or_inf
     public :: run_sweep, sweep_summary_t, plan_sweep, sweep_plan_t, sweep_result_t
     public :: sweep_result_init, sweep_point_config, run_sweep_branches
     public :: write_sweep_file, save_checkpoint, load_checkpoint, remove_file, checkpoint_every
     public :: validate_sweep_points, checkpoint_path, branch_record_sizes, pack_branch
     public :: unpack_branch
+    public :: attractor_t, kind_names, census_result_t, census_result_init, census_points
+    public :: census_point_config, sample_start, run_sample, run_census_samples
+    public :: classify_census, save_census_checkpoint, load_census_checkpoint
+    public :: census_to_file, write_census_file
     public :: code_version, output_t, output_begin, output_end, output_abort
     public :: cli_t, parse_command_line, cli_run, cli_help, cli_version, cli_usage, cli_error
     public :: catch_interrupts, interrupted

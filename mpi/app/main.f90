@@ -73,6 +73,9 @@ contains
         if (allocated(err)) call stop_all(err%message)
         if (.not. cfg%sweep) &
             call stop_all(input//': impactchain-mpi runs sweeps; add a &sweep group')
+        if (cfg%census) &
+            call stop_all(input//': impactchain-mpi does not run a &census yet; run it with '// &
+                          'impactchain (OpenMP threads)')
         round_seconds = round_length()
         plan = plan_sweep(cfg)
         ! every point is checked before any work (every rank alike)

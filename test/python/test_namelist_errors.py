@@ -65,7 +65,7 @@ def test_schema_lists_exactly_the_namelist_keys():
     for group, key in re.findall(r"key_spec_t\('(\w+)', '(\w+)'", source):
         schema.setdefault(group, []).append(key)
     assert set(statements) == {"chain", "initial", "run", "lyapunov", "output", "sweep",
-                               "continuation"}
+                               "continuation", "census"}
     assert statements == schema
 
 

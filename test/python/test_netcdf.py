@@ -1,7 +1,8 @@
 """The simulator's files are netCDF-4 (schema version 2): every group of a run, a Lyapunov run
-with the Jacobian, a stopped run (its /resume), a 1-D and a 2-D sweep opens in xarray through
-h5netcdf with named dimensions and coordinates and no warning (pytest turns warnings into
-errors); every variable has long_name and UDUNITS units; coded integers carry flags."""
+with the Jacobian, a stopped run (its /resume), a 1-D and a 2-D sweep and a census opens in
+xarray through h5netcdf with named dimensions and coordinates and no warning (pytest turns
+warnings into errors); every variable has long_name and UDUNITS units; coded integers carry
+flags."""
 from __future__ import annotations
 
 import signal
@@ -145,6 +146,22 @@ def test_a_1d_sweep_is_netcdf(impactchain_exe, tmp_path):
     assert not {"omega", "drive_period"} & set(groups["params"].attrs)
     assert groups["params"].attrs["amplitude"] == 1.7
     assert sweep.sel(point=1.5, method="nearest")["x"].shape == (6, 5)
+
+
+@pytest.mark.parametrize("sweep", [False, True])
+def test_a_census_is_netcdf(impactchain_exe, tmp_path, sweep):
+    text = (CHAIN + "&run transient = 20, cycles = 20 /\n&census samples = 4 /\n"
+            "&output file = 'c.h5' /\n")
+    if sweep:
+        text += "&sweep parameter = 'omega', start = 1.4, stop = 1.5, step = 0.1 /\n"
+    run_namelist(impactchain_exe, text, tmp_path)
+    groups = _groups(tmp_path / "c.h5")
+    _check_described(groups)
+    census = groups["census"]
+    assert census["x0"].dims == ("point", "sample", "oscillator")
+    assert census["x0"].shape == (2 if sweep else 1, 4, 5)
+    assert census["attractor_x"].dims == ("attractor", "oscillator")
+    assert ("omega" in groups["params"].attrs) is not sweep
 
 
 def test_a_2d_sweep_is_netcdf(impactchain_exe, tmp_path):
