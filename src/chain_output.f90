@@ -503,9 +503,10 @@ contains
     end subroutine output_clv_rows
 
     !> The rest of /clv, after its per-record datasets: the vectors' growth rates, their
-    !> standard errors and the records per block these were read at, the vectors at the last records (vectors(2n, k, r), at drive cycles
-    !> saved_cycle(r)), and as attributes the records without vectors at the end and the
-    !> number of vectors spanning the unstable subspace.
+    !> standard errors and the records per block these were read at, the vectors at the last
+    !> records (vectors(2n, k, r), at drive cycles saved_cycle(r)), and as attributes the
+    !> records without vectors at the end and the number of vectors spanning the unstable
+    !> subspace.
     subroutine output_clv(out, exponents, stderr, stderr_block, vectors, saved_cycle, &
                           transient, unstable, err)
         type(output_t), intent(inout) :: out
