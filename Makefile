@@ -190,9 +190,10 @@ figures/fig8.png: $(RUNS)/fig4_7.h5
 	$(POST) poincare $< --site 1 --cycles 50 -o $@ $(GALLERY)
 figures/fig10.png: $(RUNS)/fig10.h5
 	$(POST) bifurcation $< -o $@ $(GALLERY)
-figures/fig10_branches.png: $(RUNS)/fig10_branches.h5 $(RUNS)/fig10_free.h5 $(RUNS)/fig10.h5
-	$(POST) branches $(RUNS)/fig10_branches.h5 $(RUNS)/fig10_free.h5 --over $(RUNS)/fig10.h5 \
-		-o $@ $(GALLERY)
+figures/fig10_branches.png: $(RUNS)/fig10_branches.h5 $(RUNS)/fig10_fold.h5 \
+                            $(RUNS)/fig10_free.h5 $(RUNS)/fig10.h5
+	$(POST) branches $(RUNS)/fig10_branches.h5 $(RUNS)/fig10_fold.h5 $(RUNS)/fig10_free.h5 \
+		--over $(RUNS)/fig10.h5 -o $@ $(GALLERY)
 figures/fig11.png: $(RUNS)/fig11_b005.h5 $(RUNS)/fig11_b010.h5 $(RUNS)/fig11_b015.h5
 	$(POST) lyapunov $^ --k 10 --with-bifurcation -o $@ $(GALLERY)
 figures/fig12_damping.png: $(RUNS)/fig11_b005.h5 $(RUNS)/fig11_b010.h5 $(RUNS)/fig11_b015.h5

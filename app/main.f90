@@ -73,7 +73,7 @@ program main
         call simulate_to_file(cfg, summary, err, monitor)
         call close_progress(monitor)
         if (allocated(err)) call fail(err%message)
-        call report(summary, cfg%output_file)
+        call report(summary, cfg%output_file, cfg%record%covariant)
         if (.not. summary%complete) stop 3, quiet=.true.
     end if
 
@@ -97,9 +97,10 @@ contains
             '  --version              the code version'
     end subroutine usage
 
-    subroutine report(summary, output_file)
+    subroutine report(summary, output_file, covariant)
         type(record_result_t), intent(in) :: summary
         character(len=*), intent(in) :: output_file
+        logical, intent(in) :: covariant
 
         write (output_unit, '(a)') 'impactchain: wrote '//output_file
         if (summary%cycles_continued > 0) write (output_unit, '(a,i0,a)') &
@@ -110,7 +111,14 @@ contains
         if (summary%has_lyapunov) write (output_unit, '(a,es12.4,a,f0.3)') &
             '  largest Lyapunov exponent ', summary%lyapunov%bits_per_cycle(1), &
             ' bits/cycle, Kaplan-Yorke dimension ', summary%lyapunov%ky_dimension
-        if (.not. summary%complete) write (error_unit, '(a)') &
+        if (summary%has_clv) write (output_unit, '(a,i0,a,i0,a)') &
+            '  covariant Lyapunov vectors at ', summary%clv%kept, ' records (the last ', &
+            summary%clv%transient, ' without)'
+        if (.not. summary%complete .and. covariant) write (error_unit, '(a)') &
+            'impactchain: the run was stopped early; the file holds the finished records '// &
+            'and is marked complete = 0, without covariant vectors, which need a complete '// &
+            'run: run the command again with --overwrite'
+        if (.not. summary%complete .and. .not. covariant) write (error_unit, '(a)') &
             'impactchain: the run was stopped early; the file holds the finished records '// &
             'and is marked complete = 0; run the same command again to continue it'
     end subroutine report

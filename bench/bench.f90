@@ -31,11 +31,12 @@ program bench
     use bench_yardsticks, only: transcendental_ns, dgemm_gflops
     implicit none
 
-    character(len=*), parameter :: case_names(20) = [character(len=16) :: &
-        'default', 'default-lyap', 'default-adaptive', 'heavy-16', 'heavy-1024', 'heavy-16384', 'n1024-lyap10', &
+    character(len=*), parameter :: case_names(22) = [character(len=16) :: &
+        'default', 'default-lyap', 'default-adaptive', 'heavy-16', 'heavy-1024', 'heavy-16384', &
+        'n1024-lyap10', &
         'n64-full', 'n256-full', 'n1024-full', 'n4096-lyap10', 'n4096-lyap64', 'n4096-lyap256', &
         'fig10-sweep', 'fig13-scan', 'strobe', 'strobe-record', 'orbit-n16', 'orbit-n64-p8', &
-        'census-fig3']
+        'census-fig3', 'clv-default', 'clv-n64']
     character(len=:), allocatable :: only
     logical :: tsv, quick, yardsticks_only
     real(wp) :: min_time, budget
@@ -110,6 +111,10 @@ contains
             call case_orbit(row, 64, 8)
         case ('census-fig3')
             call case_census(row)
+        case ('clv-default')
+            call case_covariant(row, 16, 2000_i8)
+        case ('clv-n64')
+            call case_covariant(row, 64, 1000_i8)
         end select
         row%peak_kib = peak_memory_kib()
         if (tsv) then
@@ -313,6 +318,58 @@ contains
         call case_chain(row, row%label, n, 1.7_wp, 1.5_wp, 0.05_wp, 0.7_wp, 0.3_wp, 0.3_wp, &
                         transient, k)
     end subroutine case_spectrum
+
+    !> Covariant Lyapunov vectors (docs/model.md section 14) of the full spectrum at the paper's
+    !> default parameters against the spectrum alone on the same cycles: from the same state
+    !> (after 200 cycles without exponents) `cycles` records, the last 200 without vectors
+    !> (clv_transient), with covariant vectors (QR every record, the factors to scratch
+    !> files, the backward pass with its per-record numbers kept in memory) and with the
+    !> spectrum alone (adaptive QR, the default), timed alternately (a loaded machine slows
+    !> both alike), the best of each. The row is the covariant run's; the spectrum's time is
+    !> its baseline, and the label gives their ratio.
+    subroutine case_covariant(row, n, cycles)
+        type(row_t), intent(inout) :: row
+        integer, intent(in) :: n
+        integer(int64), intent(in) :: cycles
+        type(config_t) :: cfg
+        type(chain_t) :: chain, copy
+        type(record_result_t) :: res
+        real(wp) :: seconds
+        integer(int64) :: records
+        integer :: r
+
+        row%n = n
+        row%vectors = 2*n
+        cfg = make_config(n, 1.7_wp, 1.5_wp, 0.05_wp, 0.7_wp, 0.3_wp, 0.3_wp)
+        chain = new_chain(cfg)
+        call run_block(cfg, chain, 200_int64, seconds, res)
+        cfg%record%lyapunov = .true.
+        cfg%record%vectors = 2*n
+        cfg%record%qr_every = 0
+        cfg%record%clv_transient = 200
+        records = cycles
+        if (quick) then
+            records = 250
+            cfg%record%clv_transient = 50
+        end if
+        row%seconds = huge(1.0_wp)
+        row%baseline_seconds = huge(1.0_wp)
+        do r = 1, reps
+            copy = chain
+            cfg%record%covariant = .false.
+            call run_block(cfg, copy, records, seconds, res)
+            row%baseline_seconds = min(row%baseline_seconds, seconds)
+            copy = chain
+            cfg%record%covariant = .true.
+            call run_block(cfg, copy, records, seconds, res)
+            call keep_best(row, seconds, res)
+        end do
+        row%label = 'paper default, covariant vectors of all '//itoa(2*n)//' exponents ('// &
+                    itoa(int(records))//' records, the last '// &
+                    itoa(cfg%record%clv_transient)//' without vectors); '// &
+                    trim(real_fmt(row%seconds/row%baseline_seconds))//' x the spectrum '// &
+                    'alone (adaptive QR) on the same records'
+    end subroutine case_covariant
 
     !> The yardsticks of bench_yardsticks, each measured here: ns per sin + cos + exp and the
     !> dgemm rate at n = 256 and 512.

@@ -26,6 +26,9 @@ module bench_kit
         real(wp) :: min_bond_share = -1         !! least-colliding bond over the mean (-1: n/a)
         integer :: vectors = 0                  !! Lyapunov exponents computed (0: none)
         integer :: reps = 0                     !! repetitions timed (the best is reported)
+        !> wall time of the same cycles without the work the row is about, timed alternately
+        !> with it (covariant vectors: the spectrum alone; 0: none)
+        real(wp) :: baseline_seconds = 0
     end type row_t
 
 contains
@@ -115,18 +118,20 @@ contains
     end subroutine print_row_markdown
 
     !> row, name, n, cycles, collisions, seconds, units, unit name, peak KiB, bond share,
-    !> vectors, repetitions, label
+    !> vectors, repetitions, label, baseline seconds
     subroutine print_row_tsv(row)
         type(row_t), intent(in) :: row
-        character(len=32) :: sec, share
+        character(len=32) :: sec, share, baseline
         character, parameter :: tab = achar(9)
 
         write (sec, '(es24.16)') row%seconds
         write (share, '(es12.4)') row%min_bond_share
+        write (baseline, '(es24.16)') row%baseline_seconds
         write (output_unit, '(a)') 'row'//tab//row%name//tab//itoa(row%n)//tab// &
             itoa(row%cycles)//tab//itoa(row%collisions)//tab//trim(adjustl(sec))//tab// &
             itoa(row%units)//tab//row%unit_name//tab//itoa(row%peak_kib)//tab// &
-            trim(adjustl(share))//tab//itoa(row%vectors)//tab//itoa(row%reps)//tab//row%label
+            trim(adjustl(share))//tab//itoa(row%vectors)//tab//itoa(row%reps)//tab// &
+            row%label//tab//trim(adjustl(baseline))
     end subroutine print_row_tsv
 
     !> Rate of the row's units: points or census samples per second, or ns per oscillator

@@ -73,6 +73,13 @@ TARGET_HEAVY_ISSUE_S = 10
 #: (c) full spectra at n >= 256 run their QR and frame work at >= 25 % of G: the whole drive
 #: cycle (events included, so conservative) at most 4 times its QR flops at G
 TARGET_FULL_QR_DGEMM = 4.0
+# Covariant Lyapunov vectors (issue #20 item 7):
+#: the covariant pass (QR every record, scratch files, backward pass) costs at most this many
+#: times the spectrum alone (adaptive QR) on the same records, timed alternately
+TARGET_CLV_OVER_SPECTRUM = 3.0
+#: the covariant-vector rows: their cost is not the frame's QR alone (the scaling fit and the
+#: QR targets leave them out)
+CLV = ("clv-default", "clv-n64")
 
 
 @dataclass
@@ -89,6 +96,7 @@ class Row:
     vectors: int
     reps: int
     label: str
+    baseline_seconds: float = 0.0
 
     @property
     def per_cycle(self) -> float:
@@ -187,7 +195,8 @@ def run_case(exe: Path, case: str, quick: bool) -> tuple[Row, list[float] | None
         f = line.split("\t")
         if f[0] == "row":
             row = Row(f[1], int(f[2]), int(f[3]), int(f[4]), float(f[5]), int(f[6]), f[7],
-                      int(f[8]), float(f[9]), int(f[10]), int(f[11]), f[12])
+                      int(f[8]), float(f[9]), int(f[10]), int(f[11]), f[12],
+                      float(f[13]) if len(f) > 13 else 0.0)
         elif f[0] == "state":
             state = [float(z) for z in f[1:]]
         elif f[0] == "machine":
@@ -337,6 +346,11 @@ def targets(rows: dict[str, Row], y: Yardsticks, baselines: list[dict]) -> list[
         got = r.ns_per_collision / s_ns
         add(f"(b) collision-heavy n = {r.n}: <= {TARGET_HEAVY_ISSUE_S} S per collision",
             f"{num(got)} S ({num(r.ns_per_collision)} ns)", got <= TARGET_HEAVY_ISSUE_S)
+    for r in [rows[c] for c in CLV if c in rows]:
+        got = r.seconds / r.baseline_seconds if r.baseline_seconds else float("inf")
+        add(f"(d) covariant vectors, n = {r.n}, all {r.vectors}: <= "
+            f"{TARGET_CLV_OVER_SPECTRUM:g} x the spectrum alone (adaptive QR, same records)",
+            f"{got:.2f} x", got <= TARGET_CLV_OVER_SPECTRUM)
     for r in rows.values():
         if r.vectors and r.vectors == 2 * r.n and r.n >= 256:
             got = r.seconds / r.cycles / y.dgemm_equivalent(r.qr_flops)
@@ -379,7 +393,7 @@ def targets(rows: dict[str, Row], y: Yardsticks, baselines: list[dict]) -> list[
         add(f"strobe snapshot: <= {TARGET_STROBE_S} S per oscillator",
             f"{got:.3f} S ({num(r.ns_per_unit)} ns)", got <= TARGET_STROBE_S)
     for r in rows.values():
-        if r.vectors and r.n >= 64:
+        if r.vectors and r.n >= 64 and r.name not in CLV:
             want = TARGET_QR_DGEMM if r.vectors >= 64 else TARGET_QR_DGEMM_THIN
             got = r.seconds / r.cycles / y.dgemm_equivalent(r.qr_flops)
             kind = "full spectrum" if r.vectors == 2 * r.n else f"{r.vectors} exponents"
@@ -402,7 +416,7 @@ def scaling_fit(rows: list[Row]) -> list[str]:
     the few collisions at the walls, is the cost), least squares in logs; and the one-variable
     slopes that the rows allow: the full spectrum (k = 2n) in n, n = 4096 in k, and the
     collision-heavy rows in n."""
-    lyap = [r for r in rows if r.vectors and r.n >= 64 and r.cycles]
+    lyap = [r for r in rows if r.vectors and r.n >= 64 and r.cycles and r.name not in CLV]
     out: list[str] = []
     if lyap:
         n = np.array([r.n for r in lyap], float)

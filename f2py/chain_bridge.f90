@@ -14,7 +14,8 @@ module chain_bridge
     !$ use omp_lib, only: omp_set_num_threads
     implicit none
     private
-    public :: array_sink_t, shared_monitor_t, make_config, set_sweep, put_message
+    public :: array_sink_t, shared_monitor_t, make_config, set_sweep, set_continuation
+    public :: put_message, put_text
     public :: run_sizes_ok, put_run_results, use_threads, call_ended
     public :: status_ok, status_invalid, status_failed, status_capacity, status_internal
     public :: status_stopped, message_capacity
@@ -117,6 +118,23 @@ contains
             cfg%sweep_step2 = step2
         end if
     end subroutine set_sweep
+
+    !> Add the &continuation group with these values (the parameter's name as byte values,
+    !> lower case) to a configuration made by make_config.
+    subroutine set_continuation(cfg, parameter, stop, step, period, max_points, doublings)
+        type(config_t), intent(inout) :: cfg
+        integer(c_int), intent(in) :: parameter(:)
+        real(wp), intent(in) :: stop, step
+        integer, intent(in) :: period, max_points, doublings
+
+        cfg%continuation = .true.
+        cfg%cont_parameter = text_of(parameter)
+        cfg%cont_stop = stop
+        cfg%cont_step = step
+        cfg%cont_period = period
+        cfg%cont_max_points = max_points
+        cfg%cont_doublings = doublings
+    end subroutine set_continuation
 
     !> Byte values 0..255 as text.
     pure function text_of(bytes) result(text)
@@ -253,15 +271,24 @@ contains
         integer(c_int), intent(in) :: code
         integer(c_int), intent(out) :: status, msg_len
         integer(c_int), intent(out) :: message(:)  !! byte values 0..255
-        integer :: j
 
         status = code
         msg_len = int(min(len(text), size(message)), c_int)
-        message = 0
-        do j = 1, msg_len
-            message(j) = iachar(text(j:j))
-        end do
+        call put_text(text, message)
     end subroutine put_message
+
+    !> `text` as byte values 0..255 at the start of `bytes` (the rest 0); the caller made
+    !> room for all of it.
+    pure subroutine put_text(text, bytes)
+        character(len=*), intent(in) :: text
+        integer(c_int), intent(out) :: bytes(:)
+        integer :: j
+
+        bytes = 0
+        do j = 1, min(len(text), size(bytes))
+            bytes(j) = iachar(text(j:j))
+        end do
+    end subroutine put_text
 
     subroutine array_put_strobe(sink, n_records, first, x, v, cycle, err)
         class(array_sink_t), intent(inout) :: sink

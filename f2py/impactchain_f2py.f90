@@ -1,23 +1,26 @@
 !> The thin layer wrapped by f2py into `impactchain._kernels` (SHTOOLS' PythonWrapper
 !> pattern): plain external subroutines with explicit-shape c_double / c_int / c_int64_t
-!> arrays. Only these four routines cross into Python; `impactchain.api`
+!> arrays. Only these five routines cross into Python; `impactchain.api`
 !> (post/impactchain/api.py) is the interface people use.
 !>
 !> Each routine builds the `config_t` a namelist with the same values would give, checks
 !> it with the library's `validate_config` (so errors carry the CLI's messages), and calls the
 !> same kernels as the CLI: `start_chain` and `record_cycles` (what `simulate_to_file` runs, with a
-!> sink writing into the caller's arrays instead of an HDF5 file) or `poincare_jacobian`.
+!> sink writing into the caller's arrays instead of an HDF5 file), `poincare_jacobian`, the
+!> sweep's `run_sweep_branches` or the continuation's `run_continuation`.
 !>
 !> Protocol (every routine):
 !> - `status` = 0 ok, 1 bad argument (ValueError), 2 the run failed (RuntimeError), 3 the event
-!>   buffer was too small, 4 the caller broke this protocol, 5 stopped at the caller's request;
+!>   buffer (or a continuation's capacities) was too small, 4 the caller broke this protocol,
+!>   5 stopped at the caller's request;
 !>   `message(1:msg_len)` holds the library's message as byte values when status /= 0.
 !>   Nothing is printed, nothing stops.
-!> - Long routines (`ic_run`, `ic_sweep`) share `control(4)` (int64, intent(inout): f2py passes
-!>   the caller's buffer itself) with the caller, who polls it from another thread while the
-!>   routine runs with the GIL released: the caller sets control(1) /= 0 to ask for a stop
-!>   (seen at the next transient cycle, record or sweep point); the routine keeps control(2:4)
-!>   = stage (1 transient, 2 records, 3 sweep points), units done, their total.
+!> - Long routines (`ic_run`, `ic_sweep`, `ic_continuation`) share `control(4)` (int64,
+!>   intent(inout): f2py passes the caller's buffer itself) with the caller, who polls it from
+!>   another thread while the routine runs with the GIL released: the caller sets control(1)
+!>   /= 0 to ask for a stop (seen at the next transient cycle, record, sweep point or orbit);
+!>   the routine keeps control(2:4) = stage (1 transient, 2 records, 3 sweep points or orbits
+!>   of a branch), units done, their total.
 !> - Booleans are c_int 0 / 1. No strings cross: `boundary` (the lower-cased name) and
 !>   `message` are c_int arrays of byte values 0..255 (f2py 2.x cannot declare c_int8_t).
 !> - Sizes of outputs are caller-given. With `dry_run = 1` a routine only validates (`ic_run`
@@ -239,8 +242,9 @@ end subroutine ic_random_start
 !> in the library's order, point p = i + (j - 1) n1 for index i along `parameter`, j along
 !> `parameter2`. A dry run validates every point and returns sizes = (n1, n2, k); then the
 !> caller gives nf = n, nc = cycles, npts = n1 n2, kcap = k, and x of that shape (of shape
-!> (1, 1, 1) with nf = nc = npts = 1 for the dry run: f2py refuses a size 0 there). Names are lower-case byte values;
-!> parameter2 empty for a 1-D sweep. Events and the Jacobian are not kept (as in a sweep file).
+!> (1, 1, 1) with nf = nc = npts = 1 for the dry run: f2py refuses a size 0 there). Names are
+!> lower-case byte values; parameter2 empty for a 1-D sweep. Events and the Jacobian are not
+!> kept (as in a sweep file).
 subroutine ic_sweep(n, nsp, spacing, damping, restitution, amplitude, omega, nb, boundary, &
                     explicit, nx0, x0, nv0, v0, transient, cycles, phase, stick_speed, &
                     max_size_mb, lyapunov, vectors, qr_every, npar, parameter, start, stop, &
@@ -324,3 +328,177 @@ subroutine ic_sweep(n, nsp, spacing, damping, restitution, amplitude, omega, nb,
     stderr_bits = res%stderr
     ky = res%ky
 end subroutine ic_sweep
+
+!> A continuation of periodic orbits, as `fpm run` on a namelist with this &continuation group
+!> (chain_branch_file's run_continuation: Newton from the state on the section after
+!> `transient` cycles, then the branches), kept in memory: the datasets of the file's
+!> /continuation as continuation_table builds them for the file, and Newton's result from
+!> the guess (start_*, converged or not). `parameter` is a lower-case name as byte values.
+!>
+!> Sizes: sizes = (points, special points, longest period, length of end_reason, start
+!> converged 0/1, start residuals (iterations + 1), start impacts, length of start_reason).
+!> The caller gives nf = n and capacities: npcap points, nlong crossings per period, nscap
+!> special points, ntext bytes of each text, nrcap residuals, nbcap impacts (each >= 1: f2py
+!> refuses a size 0 for strobe_x). When a capacity is too small, status = 3 and only sizes is
+!> set: the caller calls again with room for them (the run repeats itself exactly). A dry run
+!> validates and returns.
+!>
+!> Per point (of npcap, the first sizes(1) set): values, x, v, strobe_x (NaN beyond the point's
+!> period), periods, branch, mult_re, mult_im, stable (0/1), min_gap and min_impact_speed
+!> (+inf: none), impacts, residual, iterations; per special point: special_index (0-based),
+!> special_kind (the kind's name as bytes, then zeros), special_value. Newton's start: x, v,
+!> the Jacobian (2n x 2n), the multipliers (when converged), residuals, the bonds of the
+!> impacts of one period in time order, the grazing monitors (+inf: none) and the reason it
+!> failed ('' when converged).
+subroutine ic_continuation(n, nsp, spacing, damping, restitution, amplitude, omega, nb, &
+                           boundary, explicit, nx0, x0, nv0, v0, transient, phase, stick_speed, &
+                           npar, parameter, stop, step, period, max_points, doublings, dry_run, &
+                           nf, npcap, nlong, nscap, ntext, nrcap, nbcap, sizes, values, x, v, &
+                           strobe_x, periods, branch, mult_re, mult_im, stable, min_gap, &
+                           min_impact_speed, impacts, residual, iterations, special_index, &
+                           special_kind, special_value, end_reason, start_x, start_v, &
+                           start_jac, start_mult_re, start_mult_im, start_residuals, &
+                           start_bonds, start_min_gap, start_min_impact_speed, start_reason, &
+                           control, status, msg_len, message)
+    use, intrinsic :: iso_c_binding, only: c_int, c_int64_t, c_double
+    use impactchain, only: i8, error_t, config_t, validate_config, branches_t, &
+                           run_continuation, continuation_table_t, continuation_table, &
+                           impact_bonds, finite_or_inf
+    use chain_bridge, only: shared_monitor_t, make_config, set_continuation, put_message, &
+                            put_text, call_ended, status_ok, status_invalid, status_capacity, &
+                            status_internal
+    implicit none
+    !f2py threadsafe
+    integer(c_int), intent(in) :: n, nsp, nb, nx0, nv0, explicit, npar, period, max_points
+    integer(c_int), intent(in) :: doublings, dry_run, nf, npcap, nlong, nscap, ntext, nrcap
+    integer(c_int), intent(in) :: nbcap
+    integer(c_int64_t), intent(in) :: transient
+    real(c_double), intent(in) :: spacing(nsp), damping, restitution, amplitude, omega
+    real(c_double), intent(in) :: x0(nx0), v0(nv0), phase, stick_speed, stop, step
+    integer(c_int), intent(in) :: boundary(nb), parameter(npar)
+    integer(c_int), intent(out) :: sizes(8)
+    real(c_double), intent(out) :: values(npcap), x(nf, npcap), v(nf, npcap)
+    real(c_double), intent(inout) :: strobe_x(nf, nlong, npcap) ! caller-allocated
+    integer(c_int), intent(out) :: periods(npcap), branch(npcap), stable(npcap)
+    integer(c_int), intent(out) :: impacts(npcap), iterations(npcap)
+    real(c_double), intent(out) :: mult_re(2*nf, npcap), mult_im(2*nf, npcap)
+    real(c_double), intent(out) :: min_gap(npcap), min_impact_speed(npcap), residual(npcap)
+    integer(c_int), intent(out) :: special_index(nscap), special_kind(16, nscap)
+    real(c_double), intent(out) :: special_value(nscap)
+    integer(c_int), intent(out) :: end_reason(ntext), start_reason(ntext)
+    real(c_double), intent(out) :: start_x(nf), start_v(nf), start_jac(2*nf, 2*nf)
+    real(c_double), intent(out) :: start_mult_re(2*nf), start_mult_im(2*nf)
+    real(c_double), intent(out) :: start_residuals(nrcap), start_min_gap
+    real(c_double), intent(out) :: start_min_impact_speed
+    integer(c_int), intent(out) :: start_bonds(nbcap)
+    integer(c_int64_t), intent(inout), target :: control(4)
+    integer(c_int), intent(out) :: status, msg_len
+    integer(c_int), intent(out) :: message(1024)
+    type(config_t) :: cfg
+    type(branches_t) :: res
+    type(continuation_table_t) :: table
+    type(shared_monitor_t) :: monitor
+    type(error_t), allocatable :: err
+    integer, allocatable :: bonds(:)
+    integer :: np, ns, j
+
+    call put_message('', status_ok, status, msg_len, message)
+    sizes = 0
+    values = 0
+    x = 0
+    v = 0
+    periods = 0
+    branch = 0
+    mult_re = 0
+    mult_im = 0
+    stable = 0
+    min_gap = 0
+    min_impact_speed = 0
+    impacts = 0
+    residual = 0
+    iterations = 0
+    special_index = 0
+    special_kind = 0
+    special_value = 0
+    end_reason = 0
+    start_reason = 0
+    start_x = 0
+    start_v = 0
+    start_jac = 0
+    start_mult_re = 0
+    start_mult_im = 0
+    start_residuals = 0
+    start_bonds = 0
+    start_min_gap = 0
+    start_min_impact_speed = 0
+    call make_config(cfg, int(n), spacing, damping, restitution, amplitude, omega, boundary, &
+                     explicit /= 0, x0, v0, int(transient, i8), 1_i8, phase, stick_speed, &
+                     4096.0_c_double, .false., .false., 0, 1, .false., 1, err)
+    if (.not. allocated(err)) then
+        call set_continuation(cfg, parameter, stop, step, int(period), int(max_points), &
+                              int(doublings))
+        call validate_config(cfg, err)
+    end if
+    if (allocated(err)) then
+        call put_message(err%message, status_invalid, status, msg_len, message)
+        return
+    end if
+    if (dry_run /= 0) return
+    if (nf /= n) then
+        call put_message("python layer: output sizes do not match the configuration", &
+                         status_internal, status, msg_len, message)
+        return
+    end if
+
+    monitor%control => control
+    call run_continuation(cfg, res, err, monitor)
+    if (call_ended(control, err, status, msg_len, message)) return
+    call continuation_table(cfg%model%n, res, table)
+    np = res%n_points
+    ns = res%n_specials
+    bonds = impact_bonds(res%start)
+    sizes = [np, ns, table%longest, len(res%end_reason), merge(1, 0, res%start%converged), &
+             size(res%start%residuals), size(bonds), len(res%start%reason)]
+    if (np > npcap .or. ns > nscap .or. table%longest > nlong .or. sizes(4) > ntext .or. &
+        sizes(6) > nrcap .or. sizes(7) > nbcap .or. sizes(8) > ntext) then
+        call put_message("python layer: more results than the capacities", status_capacity, &
+                         status, msg_len, message)
+        return
+    end if
+
+    values(:np) = table%values
+    x(:, :np) = table%x
+    v(:, :np) = table%v
+    strobe_x(:, :table%longest, :np) = table%strobe_x
+    periods(:np) = table%period
+    branch(:np) = table%branch
+    mult_re(:, :np) = table%multipliers_re
+    mult_im(:, :np) = table%multipliers_im
+    stable(:np) = table%stable
+    min_gap(:np) = table%min_gap
+    min_impact_speed(:np) = table%min_impact_speed
+    impacts(:np) = table%impacts
+    residual(:np) = table%residual
+    iterations(:np) = table%iterations
+    special_index(:ns) = table%special_index
+    do j = 1, ns
+        call put_text(trim(table%special_kind(j)), special_kind(:, j))
+    end do
+    special_value(:ns) = table%special_value
+    call put_text(res%end_reason, end_reason)
+
+    associate (o => res%start)
+        start_x = o%x
+        start_v = o%v
+        start_jac = o%jacobian
+        if (o%converged) then
+            start_mult_re = o%multipliers_re
+            start_mult_im = o%multipliers_im
+        end if
+        start_residuals(:sizes(6)) = o%residuals
+        start_bonds(:sizes(7)) = bonds
+        start_min_gap = finite_or_inf(o%min_gap)
+        start_min_impact_speed = finite_or_inf(o%min_impact_speed)
+        call put_text(o%reason, start_reason)
+    end associate
+end subroutine ic_continuation

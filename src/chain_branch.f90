@@ -68,6 +68,8 @@ module chain_branch
         type(special_point_t), allocatable :: specials(:)
         character(len=:), allocatable :: end_reason !! of every branch, one line each
         logical :: stopped = .false. !! the monitor stopped the work: the result is partial
+        !> Newton's result from the guess, converged or not (converged: the first point's orbit)
+        type(orbit_t) :: start
     end type branches_t
 
     !> Where the continuation stands: a point on the branch and its unit tangent.
@@ -125,6 +127,7 @@ contains
         set%high = max(model_parameter(model, opt%parameter), opt%stop)
         call find_orbit(model, phase, cycles, x, v, start, err, opt%newton)
         if (allocated(err)) return
+        res%start = start
         if (.not. start%converged) then
             call add_reason(res, "branch 0: Newton failed at the start ("//opt%parameter// &
                             " = "//fmt_real(model_parameter(model, opt%parameter))//"): "// &

@@ -7,10 +7,10 @@ module chain_branch_file
     use chain_model, only: model_parameter, parameter_units
     use chain_engine, only: chain_t, chain_positions, chain_velocities
     use chain_event_log, only: event_log_t, event_log_init
-    use chain_section, only: section_target, advance_to_point
+    use chain_section, only: section_target, advance_to_point, advance_cycles
     use chain_config, only: config_t
     use chain_sim, only: start_chain, write_run_header
-    use chain_branch, only: branch_options_t, branches_t, follow_branches
+    use chain_branch, only: branch_options_t, branches_t, follow_branches, special_kinds
     use chain_output, only: output_t, output_begin, output_group, output_end, output_abort, &
                             output_describe, output_index, output_unset_param
     use chain_hdf5, only: h5_write, h5_write_attr, h5_write_strings
@@ -19,25 +19,53 @@ module chain_branch_file
     implicit none
     private
     public :: continuation_guess, continuation_options, run_continuation
-    public :: continuation_to_file, write_continuation
+    public :: continuation_to_file, write_continuation, continuation_table_t
+    public :: continuation_table, finite_or_inf
+
+    !> /continuation's datasets (continuation_table): arrays of the file's shapes in Fortran
+    !> order, n oscillators, np points, ns special points.
+    type :: continuation_table_t
+        integer :: longest = 1 !! the longest period: the size of strobe_x's iterate axis
+        real(wp), allocatable :: values(:)                !! (np) the continued parameter
+        real(wp), allocatable :: x(:, :), v(:, :)         !! (n, np) the orbit's state
+        real(wp), allocatable :: strobe_x(:, :, :)        !! (n, longest, np), NaN-padded
+        integer, allocatable :: period(:), branch(:)      !! (np)
+        real(wp), allocatable :: multipliers_re(:, :), multipliers_im(:, :) !! (2n, np)
+        integer, allocatable :: stable(:)                 !! (np) 1 stable, 0 not
+        real(wp), allocatable :: min_gap(:), min_impact_speed(:) !! (np) +inf: none
+        integer, allocatable :: impacts(:)                !! (np) impacts per period
+        real(wp), allocatable :: residual(:)              !! (np) Newton's last residual
+        integer, allocatable :: iterations(:)             !! (np)
+        integer, allocatable :: special_index(:)          !! (ns) the point, 0-based
+        character(len=len(special_kinds)), allocatable :: special_kind(:) !! (ns)
+        real(wp), allocatable :: special_value(:)         !! (ns) the parameter there
+    end type continuation_table_t
 
 contains
 
     !> The guess for the first orbit: the state on the section (&run phase) after &run
-    !> transient cycles from &initial.
-    subroutine continuation_guess(cfg, x, v, err)
+    !> transient cycles from &initial. `monitor` is told the transient's cycles and may stop
+    !> it there (`stopped`; x and v are then not set).
+    subroutine continuation_guess(cfg, x, v, err, monitor, stopped)
         type(config_t), intent(in) :: cfg
         real(wp), allocatable, intent(out) :: x(:), v(:)
         type(error_t), allocatable, intent(out) :: err
+        class(monitor_t), intent(inout), optional :: monitor
+        logical, intent(out), optional :: stopped
         type(chain_t) :: chain
         type(event_log_t) :: log
         integer(i8) :: cycle
         real(wp) :: s
+        logical :: halted
 
+        if (present(stopped)) stopped = .false.
         call start_chain(cfg, chain, err)
         if (allocated(err)) return
         call event_log_init(log, .false., 0)
         call section_target(chain, cfg%record%transient, cfg%record%phase, 0_i8, cycle, s)
+        call advance_cycles(chain, cycle, log, err, monitor=monitor, stopped=halted)
+        if (present(stopped)) stopped = halted
+        if (allocated(err) .or. halted) return
         call advance_to_point(chain, cycle, s, log, err)
         if (allocated(err)) return
         x = chain_positions(chain)
@@ -56,7 +84,8 @@ contains
         opt%doublings = cfg%cont_doublings
     end function continuation_options
 
-    !> The branches the input asks for, from its guess.
+    !> The branches the input asks for, from its guess. `monitor` is told the transient's
+    !> cycles, then the points found, and may stop the work (res%stopped).
     subroutine run_continuation(cfg, res, err, monitor)
         type(config_t), intent(in) :: cfg
         type(branches_t), intent(out) :: res
@@ -64,8 +93,8 @@ contains
         class(monitor_t), intent(inout), optional :: monitor
         real(wp), allocatable :: x(:), v(:)
 
-        call continuation_guess(cfg, x, v, err)
-        if (allocated(err)) return
+        call continuation_guess(cfg, x, v, err, monitor, res%stopped)
+        if (allocated(err) .or. res%stopped) return
         call follow_branches(cfg%model, cfg%record%phase, cfg%cont_period, x, v, &
                              continuation_options(cfg), res, err, monitor)
     end subroutine run_continuation
@@ -82,7 +111,7 @@ contains
         call output_begin(out, cfg%output_file, cfg%overwrite, err)
         if (allocated(err)) return
         call run_continuation(cfg, res, err, monitor)
-        if (.not. allocated(err) .and. .not. res%stopped) call write_continuation(out, cfg, res, err)
+        if (.not. (allocated(err) .or. res%stopped)) call write_continuation(out, cfg, res, err)
         if (allocated(err) .or. res%stopped) then
             call output_abort(out)
             return
@@ -90,50 +119,76 @@ contains
         call output_end(out, .true., err)
     end subroutine continuation_to_file
 
+    !> /continuation's datasets of the branches `res` of a chain of n oscillators, as the file
+    !> holds them: per point (in the order found, branch after branch) the parameter, the
+    !> orbit's state and section crossings (NaN beyond its period), period, branch, multipliers,
+    !> stability (1 or 0), grazing monitors (+inf: none), impacts and Newton's last residual
+    !> and iterations; per special point its point (0-based), kind and parameter.
+    pure subroutine continuation_table(n, res, table)
+        integer, intent(in) :: n
+        type(branches_t), intent(in) :: res
+        type(continuation_table_t), intent(out) :: table
+        integer :: np, ns, j, p
+
+        np = res%n_points
+        ns = res%n_specials
+        table%longest = 1
+        if (np > 0) table%longest = maxval([(res%points(j)%orbit%cycles, j=1, np)])
+        allocate (table%x(n, np), table%v(n, np), table%strobe_x(n, table%longest, np))
+        allocate (table%multipliers_re(2*n, np), table%multipliers_im(2*n, np))
+        allocate (table%min_gap(np), table%min_impact_speed(np), table%residual(np))
+        table%strobe_x = ieee_value(1.0_wp, ieee_quiet_nan)
+        do j = 1, np
+            associate (o => res%points(j)%orbit)
+                table%x(:, j) = o%x
+                table%v(:, j) = o%v
+                p = o%cycles
+                table%strobe_x(:, :p, j) = res%points(j)%strobe_x
+                table%multipliers_re(:, j) = o%multipliers_re
+                table%multipliers_im(:, j) = o%multipliers_im
+                table%min_gap(j) = finite_or_inf(o%min_gap)
+                table%min_impact_speed(j) = finite_or_inf(o%min_impact_speed)
+                ! (the residuals' bounds are 0:iterations from Newton, 1:1 from a corrector)
+                table%residual(j) = o%residuals(ubound(o%residuals, 1))
+            end associate
+        end do
+        associate (pts => res%points(:np), specials => res%specials(:ns))
+            table%values = pts%value
+            table%period = [(pts(j)%orbit%cycles, j=1, np)]
+            table%branch = pts%branch
+            table%stable = merge(1, 0, pts%stable)
+            table%impacts = [(pts(j)%orbit%impacts, j=1, np)]
+            table%iterations = [(pts(j)%orbit%iterations, j=1, np)]
+            table%special_index = specials%point - 1
+            allocate (table%special_kind(ns))
+            do j = 1, ns
+                table%special_kind(j) = specials(j)%kind
+            end do
+            table%special_value = specials%value
+        end associate
+    end subroutine continuation_table
+
     !> The run's header (without the continued parameter, which /params cannot hold as one
-    !> number) and /continuation: per point (in the order found, branch after branch) the
-    !> parameter, the orbit's state and section crossings, period, branch, multipliers,
-    !> stability, grazing monitors, impacts and Newton's last residual; the special points.
+    !> number) and /continuation: the datasets of continuation_table, the group's attributes
+    !> (the parameter, the section's phase, the parameter's start, stop and step, why the
+    !> branches ended) and every dataset's names, units and dimensions.
     subroutine write_continuation(out, cfg, res, err)
         type(output_t), intent(inout) :: out
         type(config_t), intent(in) :: cfg
         type(branches_t), intent(in) :: res
         type(error_t), allocatable, intent(out) :: err
-        real(wp), allocatable :: x(:, :), v(:, :), strobe(:, :, :), re(:, :), im(:, :)
-        real(wp), allocatable :: min_gap(:), min_speed(:), residual(:)
-        character(len=15), allocatable :: kinds(:)
-        integer :: n, np, ns, longest, j, p
+        type(continuation_table_t) :: table
+        integer :: n, np, ns
 
         n = cfg%model%n
         np = res%n_points
         ns = res%n_specials
-        longest = 1
-        if (np > 0) longest = maxval([(res%points(j)%orbit%cycles, j=1, np)])
-        allocate (x(n, np), v(n, np), strobe(n, longest, np), re(2*n, np), im(2*n, np))
-        allocate (min_gap(np), min_speed(np), residual(np))
-        strobe = ieee_value(1.0_wp, ieee_quiet_nan)
-        allocate (kinds(ns))
-        do j = 1, ns
-            kinds(j) = res%specials(j)%kind
-        end do
-        do j = 1, np
-            associate (o => res%points(j)%orbit)
-                x(:, j) = o%x
-                v(:, j) = o%v
-                p = o%cycles
-                strobe(:, :p, j) = res%points(j)%strobe_x
-                re(:, j) = o%multipliers_re
-                im(:, j) = o%multipliers_im
-                min_gap(j) = finite_or_inf(o%min_gap)
-                min_speed(j) = finite_or_inf(o%min_impact_speed)
-                residual(j) = o%residuals(ubound(o%residuals, 1))
-            end associate
-        end do
+        call continuation_table(n, res, table)
         call write_run_header(out, cfg, err)
         if (.not. allocated(err)) call output_unset_param(out, cfg%cont_parameter, err)
         if (.not. allocated(err)) call output_group(out, 'continuation', err)
         if (allocated(err)) return
-        associate (f => out%file, pts => res%points(:np))
+        associate (f => out%file, t => table)
             call h5_write_attr(f, 'continuation', 'parameter', cfg%cont_parameter, err)
             call h5_write_attr(f, 'continuation', 'phase', cfg%record%phase, err)
             call h5_write_attr(f, 'continuation', 'start', &
@@ -149,33 +204,28 @@ contains
             if (.not. allocated(err)) call output_index(out, 'continuation/multiplier', 1, &
                                                         2*n, 'multiplier index', err)
             if (.not. allocated(err)) call output_index(out, 'continuation/iterate', 1, &
-                                                        longest, 'section crossing of '// &
+                                                        t%longest, 'section crossing of '// &
                                                         'the period', err)
             if (.not. allocated(err)) call output_index(out, 'continuation/special', 0, ns, &
                                                         'special point index', err)
             if (allocated(err)) return
-            call h5_write(f, 'continuation/values', [(pts(j)%value, j=1, np)], '1', err)
-            call h5_write(f, 'continuation/x', x, '1', err)
-            call h5_write(f, 'continuation/v', v, '1', err)
-            call h5_write(f, 'continuation/strobe_x', strobe, '1', err)
-            call h5_write(f, 'continuation/period', [(pts(j)%orbit%cycles, j=1, np)], '1', err)
-            call h5_write(f, 'continuation/branch', [(pts(j)%branch, j=1, np)], '1', err)
-            call h5_write(f, 'continuation/multipliers_re', re, '1', err)
-            call h5_write(f, 'continuation/multipliers_im', im, '1', err)
-            call h5_write(f, 'continuation/stable', [(merge(1, 0, pts(j)%stable), j=1, np)], &
-                          '1', err)
-            call h5_write(f, 'continuation/min_gap', min_gap, '1', err)
-            call h5_write(f, 'continuation/min_impact_speed', min_speed, '1', err)
-            call h5_write(f, 'continuation/impacts_per_period', &
-                          [(pts(j)%orbit%impacts, j=1, np)], '1', err)
-            call h5_write(f, 'continuation/residual', residual, '1', err)
-            call h5_write(f, 'continuation/iterations', [(pts(j)%orbit%iterations, j=1, np)], &
-                          '1', err)
-            call h5_write(f, 'continuation/special_index', &
-                          [(res%specials(j)%point - 1, j=1, ns)], '1', err)
-            call h5_write_strings(f, 'continuation/special_kind', kinds, '1', err)
-            call h5_write(f, 'continuation/special_value', [(res%specials(j)%value, j=1, ns)], &
-                          '1', err)
+            call h5_write(f, 'continuation/values', t%values, '1', err)
+            call h5_write(f, 'continuation/x', t%x, '1', err)
+            call h5_write(f, 'continuation/v', t%v, '1', err)
+            call h5_write(f, 'continuation/strobe_x', t%strobe_x, '1', err)
+            call h5_write(f, 'continuation/period', t%period, '1', err)
+            call h5_write(f, 'continuation/branch', t%branch, '1', err)
+            call h5_write(f, 'continuation/multipliers_re', t%multipliers_re, '1', err)
+            call h5_write(f, 'continuation/multipliers_im', t%multipliers_im, '1', err)
+            call h5_write(f, 'continuation/stable', t%stable, '1', err)
+            call h5_write(f, 'continuation/min_gap', t%min_gap, '1', err)
+            call h5_write(f, 'continuation/min_impact_speed', t%min_impact_speed, '1', err)
+            call h5_write(f, 'continuation/impacts_per_period', t%impacts, '1', err)
+            call h5_write(f, 'continuation/residual', t%residual, '1', err)
+            call h5_write(f, 'continuation/iterations', t%iterations, '1', err)
+            call h5_write(f, 'continuation/special_index', t%special_index, '1', err)
+            call h5_write_strings(f, 'continuation/special_kind', t%special_kind, '1', err)
+            call h5_write(f, 'continuation/special_value', t%special_value, '1', err)
         end associate
         if (allocated(err)) return
         call describe_all(out, cfg%cont_parameter, err)
@@ -228,7 +278,7 @@ contains
         end subroutine describe
     end subroutine describe_all
 
-    !> `value`, or +inf where it stands for none (huge).
+    !> `value`, or +inf where it stands for none (huge): the file's grazing monitors.
     pure real(wp) function finite_or_inf(value)
         real(wp), intent(in) :: value
 

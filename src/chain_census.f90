@@ -23,11 +23,11 @@ module chain_census
     use chain_section, only: chain_at_section, advance_to_point
     use chain_event_log, only: event_log_t, event_log_init
     use chain_sim, only: uniform, initial_state
-    use chain_sweep, only: sweep_plan_t, plan_sweep, sweep_point_config, checkpoint_every
+    use chain_sweep, only: sweep_plan_t, plan_sweep, sweep_point_config
     use chain_attractor, only: attractor_t, kind_periodic, orbit_period, sample_kind, &
                                site_fractions, mirror_symmetric, match_attractor
     use chain_files, only: rename_file, close_checked
-    use chain_monitor, only: monitor_t, stage_samples
+    use chain_monitor, only: monitor_t, stage_samples, saving_monitor_t
     implicit none
     private
     public :: census_result_t, census_result_init, census_points, census_point_config
@@ -67,15 +67,12 @@ module chain_census
     !> The census's monitor: the caller's, and a checkpoint every few seconds. It is told
     !> inside run_task's critical section, with `res` consistent. A checkpoint that cannot be
     !> written stops the census with that error (`err`).
-    type, extends(monitor_t) :: census_checkpoint_monitor_t
-        class(monitor_t), pointer :: outer => null()  !! the caller's monitor, if any
+    type, extends(saving_monitor_t) :: census_checkpoint_monitor_t
         type(config_t) :: cfg
         type(census_result_t), pointer :: res => null()
         character(len=:), allocatable :: path          !! of the checkpoint
-        integer(i8) :: clock_last = 0, clock_rate = 1  !! system_clock counts
-        type(error_t), allocatable :: err              !! a checkpoint that failed
     contains
-        procedure :: keep_going => checkpoint_keep_going
+        procedure :: save => save_census_progress
     end type census_checkpoint_monitor_t
 
 contains
@@ -690,20 +687,10 @@ contains
         call move_alloc(got%v, res%v)
     end subroutine load_census_checkpoint
 
-    logical function checkpoint_keep_going(monitor, stage, done, total) result(keep_going)
+    subroutine save_census_progress(monitor)
         class(census_checkpoint_monitor_t), intent(inout) :: monitor
-        integer, intent(in) :: stage
-        integer(i8), intent(in) :: done, total
-        integer(i8) :: now
 
-        keep_going = .true.
-        if (associated(monitor%outer)) keep_going = monitor%outer%keep_going(stage, done, total)
-        call system_clock(now)
-        if (now - monitor%clock_last < checkpoint_every*monitor%clock_rate .or. &
-            allocated(monitor%err)) return
         call save_census_checkpoint(monitor%path, monitor%cfg, monitor%res, monitor%err)
-        monitor%clock_last = now
-        if (allocated(monitor%err)) keep_going = .false.
-    end function checkpoint_keep_going
+    end subroutine save_census_progress
 
 end module chain_census

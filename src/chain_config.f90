@@ -16,6 +16,7 @@ module chain_config
                            set_model_parameter
     use chain_record, only: record_spec_t, vector_count
     use chain_lyapunov, only: running_rows
+    use chain_clv, only: clv_scratch_bytes
     use chain_namelist, only: key_spec_t, key_integer, key_real, key_logical, key_string, &
                               check_namelist, apply_override, groups_in, lower
     implicit none
@@ -65,6 +66,10 @@ module chain_config
         key_spec_t('lyapunov', 'align', key_integer, .false.), &
         key_spec_t('lyapunov', 'jacobian', key_logical, .false.), &
         key_spec_t('lyapunov', 'jacobian_cycles', key_integer, .false.), &
+        key_spec_t('lyapunov', 'covariant', key_logical, .false.), &
+        key_spec_t('lyapunov', 'clv_transient', key_integer, .false.), &
+        key_spec_t('lyapunov', 'clv_store', key_integer, .false.), &
+        key_spec_t('lyapunov', 'clv_save', key_integer, .false.), &
         key_spec_t('output', 'file', key_string, .false.), &
         key_spec_t('output', 'overwrite', key_logical, .false.), &
         key_spec_t('output', 'max_size_mb', key_real, .false.), &
@@ -468,10 +473,12 @@ contains
         integer, intent(in) :: u
         type(config_t), intent(inout) :: cfg
         type(error_t), allocatable, intent(out) :: err
-        logical :: enabled, jacobian
+        logical :: enabled, jacobian, covariant
         integer :: vectors, qr_every, align, jacobian_cycles, ios
+        integer :: clv_transient, clv_store, clv_save
         character(len=512) :: msg
-        namelist /lyapunov/ enabled, vectors, qr_every, align, jacobian, jacobian_cycles
+        namelist /lyapunov/ enabled, vectors, qr_every, align, jacobian, jacobian_cycles, &
+            covariant, clv_transient, clv_store, clv_save
 
         enabled = .true.
         vectors = cfg%record%vectors
@@ -479,6 +486,10 @@ contains
         align = cfg%record%align
         jacobian = cfg%record%jacobian
         jacobian_cycles = cfg%record%jacobian_cycles
+        covariant = cfg%record%covariant
+        clv_transient = cfg%record%clv_transient
+        clv_store = cfg%record%clv_store
+        clv_save = cfg%record%clv_save
         rewind (u)
         read (u, nml=lyapunov, iostat=ios, iomsg=msg)
         if (ios /= 0) then
@@ -491,6 +502,10 @@ contains
         cfg%record%align = align
         cfg%record%jacobian = jacobian
         cfg%record%jacobian_cycles = jacobian_cycles
+        cfg%record%covariant = covariant
+        cfg%record%clv_transient = clv_transient
+        cfg%record%clv_store = clv_store
+        cfg%record%clv_save = clv_save
     end subroutine read_lyapunov
 
     subroutine read_output(u, cfg, err)
@@ -817,8 +832,45 @@ contains
         if (cfg%record%jacobian_cycles < 1 .or. cfg%record%jacobian_cycles > 1000) then
             call set_error(err, "&lyapunov: jacobian_cycles = "// &
                            fmt_int(cfg%record%jacobian_cycles)//" is outside [1, 1000]")
+            return
         end if
+        if (cfg%record%covariant) call validate_covariant(cfg, err)
     end subroutine validate_lyapunov
+
+    !> The keys of covariant Lyapunov vectors (docs/model.md section 14.5).
+    subroutine validate_covariant(cfg, err)
+        type(config_t), intent(in) :: cfg
+        type(error_t), allocatable, intent(out) :: err
+        integer(i8) :: kept
+
+        associate (r => cfg%record)
+            if (.not. r%lyapunov) then
+                call set_error(err, "&lyapunov: covariant = .true. needs enabled = .true.")
+            else if (cfg%sweep .or. cfg%census) then
+                call set_error(err, "&lyapunov: covariant = .true. is for a single run, not "// &
+                               "a &sweep or a &census")
+            else if (r%qr_every > 1) then
+                call set_error(err, "&lyapunov: covariant = .true. takes a QR step at every "// &
+                               "record: qr_every = "//fmt_int(r%qr_every)//" must be 0 or 1")
+            else if (r%clv_transient < 1 .or. r%clv_transient >= r%cycles) then
+                call set_error(err, "&lyapunov: clv_transient = "//fmt_int(r%clv_transient)// &
+                               " is outside [1, cycles - 1 = "//fmt_int8(r%cycles - 1)// &
+                               "] (the last records, without vectors, over which the "// &
+                               "backward pass converges)")
+            else if (r%clv_store < 0 .or. r%clv_store > lyapunov_vectors(cfg)) then
+                call set_error(err, "&lyapunov: clv_store = "//fmt_int(r%clv_store)// &
+                               " is outside [0, vectors = "//fmt_int(lyapunov_vectors(cfg))// &
+                               "] (the vectors whose per-oscillator weights are stored)")
+            else
+                kept = r%cycles - r%clv_transient
+                if (r%clv_save < 0 .or. r%clv_save > kept) &
+                    call set_error(err, "&lyapunov: clv_save = "//fmt_int(r%clv_save)// &
+                                   " is outside [0, cycles - clv_transient = "// &
+                                   fmt_int8(kept)//"] (the last records with vectors whose "// &
+                                   "vectors are stored)")
+            end if
+        end associate
+    end subroutine validate_covariant
 
     subroutine validate_output(cfg, err)
         type(config_t), intent(in) :: cfg
@@ -1165,7 +1217,11 @@ contains
             text = "&lyapunov enabled = "//fmt_logical(r%lyapunov)//", vectors = "// &
                    fmt_int(r%vectors)//", qr_every = "//fmt_int(r%qr_every)//", align = "// &
                    fmt_int(r%align)//", jacobian = "//fmt_logical(r%jacobian)// &
-                   ", jacobian_cycles = "//fmt_int(r%jacobian_cycles)//" /"//new_line('a')
+                   ", jacobian_cycles = "//fmt_int(r%jacobian_cycles)
+            if (r%covariant) text = text//", covariant = "//fmt_logical(r%covariant)// &
+                ", clv_transient = "//fmt_int(r%clv_transient)//", clv_store = "// &
+                fmt_int(r%clv_store)//", clv_save = "//fmt_int(r%clv_save)
+            text = text//" /"//new_line('a')
         end associate
     end function lyapunov_group
 
@@ -1370,8 +1426,40 @@ contains
                            fmt_real(mb)//" MB of memory, more than &output max_size_mb = "// &
                            fmt_real(cfg%max_size_mb)//"; lower vectors, leave jacobian off, "// &
                            "or raise max_size_mb")
+            return
         end if
+        if (cfg%record%lyapunov .and. cfg%record%covariant) call check_clv_size(cfg, k, err)
     end subroutine check_size
+
+    !> Covariant vectors: /clv in the file, and the scratch files of the forward pass
+    !> (docs/model.md section 14.3), each within max_size_mb.
+    subroutine check_clv_size(cfg, k, err)
+        type(config_t), intent(in) :: cfg
+        integer, intent(in) :: k
+        type(error_t), allocatable, intent(out) :: err
+        real(wp) :: mb
+        integer :: n
+
+        n = cfg%model%n
+        associate (r => cfg%record)
+            mb = (8.0_wp*(k + 2) + 8.0_wp*min(r%clv_store, k)*n)*(r%cycles - r%clv_transient)
+            mb = (mb + 8.0_wp*r%clv_save*k*2*n)/1.0e6_wp
+            if (mb > cfg%max_size_mb) then
+                call set_error(err, "&output: /clv of this run needs about "//fmt_real(mb)// &
+                               " MB, more than max_size_mb = "//fmt_real(cfg%max_size_mb)// &
+                               "; lower &run cycles, &lyapunov vectors, clv_store or "// &
+                               "clv_save, or raise max_size_mb")
+                return
+            end if
+            mb = clv_scratch_bytes(n, k, r%cycles, r%clv_transient)/1.0e6_wp
+            if (mb > cfg%max_size_mb) &
+                call set_error(err, "&lyapunov: the covariant vectors' scratch files need "// &
+                               "about "//fmt_real(mb)//" MB of disk (2n x vectors x 8 bytes "// &
+                               "per record), more than &output max_size_mb = "// &
+                               fmt_real(cfg%max_size_mb)//"; lower &run cycles or vectors, "// &
+                               "or raise max_size_mb")
+        end associate
+    end subroutine check_clv_size
 
     !> `run.nml` -> `run.h5` in the current directory.
     pure function default_output(path) result(out)

@@ -116,6 +116,13 @@ module chain_engine
         real(wp) :: jumps_volume = 0 !! ln |det| of the jumps since the frame was orthonormal
         real(wp), allocatable :: tangent_log(:)
         real(wp), allocatable :: r_diag(:)
+        !> For covariant Lyapunov vectors (docs/model.md section 14.2): the whole R factors of
+        !> those re-orthonormalisations, multiplied up since the frame was last orthonormal,
+        !> P = R_m ... R_1 = r_product diag(exp(r_product_log)), r_product(k, k) upper
+        !> triangular with unit columns; the QR step multiplies its own R by it.
+        logical :: keep_r_factors = .false.
+        logical :: r_folded = .false.   !! P /= I: a re-orthonormalisation since
+        real(wp), allocatable :: r_product(:, :), r_product_log(:)
         type(qr_workspace_t) :: qr
         !> Tangent rows hit at the current instant are kept in the coordinates of now (not of
         !> the epoch) until the instant ends: the saltation matrices of a collapse cascade are
@@ -204,11 +211,12 @@ module chain_engine
 
     ! --------------------------------------------------------------- chain_engine_tangent
     interface
-        !> Start carrying a tangent frame (columns of `frame`, shape (2n, k)) from now.
-        module subroutine chain_set_tangent(chain, frame, orthonormalise_jumps)
+        !> Start carrying a tangent frame (columns of `frame`, shape (2n, k)) from now; with
+        !> `keep_r_factors` (and orthonormalise_jumps) the QR steps can give their whole R.
+        module subroutine chain_set_tangent(chain, frame, orthonormalise_jumps, keep_r_factors)
             type(chain_t), intent(inout) :: chain
             real(wp), intent(in) :: frame(:, :)
-            logical, intent(in), optional :: orthonormalise_jumps
+            logical, intent(in), optional :: orthonormalise_jumps, keep_r_factors
         end subroutine chain_set_tangent
 
         !> Number of tangent vectors carried (0: none).
@@ -224,12 +232,16 @@ module chain_engine
         end function chain_tangent_frame
 
         !> One QR step of the tangent frame into `acc`, closing an interval of `cycles` drive
-        !> cycles; the engine's bookkeeping restarts.
-        module subroutine chain_qr_step(chain, acc, cycles, err)
+        !> cycles; the engine's bookkeeping restarts. With keep_r_factors, `r_factor` and
+        !> `r_log` (k x k, k) get the R of the whole interval, r_factor diag(exp(r_log)): the
+        !> frame at the last step times it is the tangent map applied to the frame before
+        !> (not when the step dropped collapsed directions: both are then zero).
+        module subroutine chain_qr_step(chain, acc, cycles, err, r_factor, r_log)
             type(chain_t), intent(inout) :: chain
             type(lyapunov_acc_t), intent(inout) :: acc
             integer, intent(in) :: cycles
             type(error_t), allocatable, intent(out) :: err
+            real(wp), intent(out), optional :: r_factor(:, :), r_log(:)
         end subroutine chain_qr_step
 
         !> Re-orthonormalise the tangent frame without averaging (while it aligns); `growth`,

@@ -10,8 +10,9 @@
 !> instant are kept in the coordinates of now until the instant ends.
 submodule(chain_engine) chain_engine_tangent
     use chain_error, only: set_error, fmt_int
-    use chain_lapack, only: qr_orthonormalise
+    use chain_lapack, only: qr_orthonormalise, qr_last_r
     use chain_lyapunov, only: lyapunov_step
+    use chain_clv, only: fold_upper
     use, intrinsic :: ieee_arithmetic, only: ieee_value, ieee_negative_inf
     use chain_state, only: contact_free
     implicit none
@@ -32,6 +33,14 @@ contains
 
         chain%orthonormalise_jumps = .false.
         if (present(orthonormalise_jumps)) chain%orthonormalise_jumps = orthonormalise_jumps
+        chain%keep_r_factors = .false.
+        if (present(keep_r_factors)) chain%keep_r_factors = keep_r_factors
+        if (allocated(chain%r_product)) deallocate (chain%r_product, chain%r_product_log)
+        if (chain%keep_r_factors) then
+            allocate (chain%r_product(size(frame, 2), size(frame, 2)), &
+                      chain%r_product_log(size(frame, 2)))
+            call reset_r_product(chain)
+        end if
         chain%tangent_log = [(0.0_wp, i=1, size(frame, 2))]
         chain%jumps_volume = 0
         chain%n_vectors = 0
@@ -63,11 +72,29 @@ contains
     !> The growth the engine kept (power-of-two scaling, re-orthonormalisations after large
     !> jumps) is added, directions removed by singular jumps are dropped (chain_lyapunov's
     !> lyapunov_step), and the engine's bookkeeping starts afresh.
+    !> The R of the interval is the step's own times the product of those of the
+    !> re-orthonormalisations in between (and the power-of-two scaling): the frame was
+    !> J Q P^-1 2**-bits = Q' R', so J Q = Q' (R' P 2**bits).
     module procedure chain_qr_step
-        integer :: info, i
+        integer :: info, i, k
 
+        k = size(chain%tangent, 2)
         call lyapunov_step(acc, chain%tangent, info, chain%tangent_scale_bits, &
                            chain%tangent_log, chain%rank_losses > 0, cycles)
+        if (present(r_factor)) then
+            r_factor = 0
+            r_log = 0
+            if (chain%keep_r_factors .and. info == 0 .and. size(chain%tangent, 2) == k) then
+                r_log = chain%r_product_log + chain%tangent_scale_bits*log(2.0_wp)
+                if (chain%r_folded) then
+                    r_factor = chain%r_product
+                    call fold_upper(qr_last_r(acc%qr, k), r_factor, r_log)
+                else
+                    ! (P = I: the step's own R, as it is)
+                    r_factor = qr_last_r(acc%qr, k)
+                end if
+            end if
+        end if
         ! (the step may have dropped collapsed directions)
         chain%n_vectors = size(chain%tangent, 2)
         chain%tangent_log = [(0.0_wp, i=1, chain%n_vectors)]
@@ -114,7 +141,21 @@ contains
         chain%tangent_scale_bits = 0
         chain%rank_losses = 0
         chain%jumps_volume = 0
+        if (chain%keep_r_factors) call reset_r_product(chain)
     end subroutine restart_bookkeeping
+
+    !> No re-orthonormalisation since the frame was orthonormal: P = I.
+    pure subroutine reset_r_product(chain)
+        type(chain_t), intent(inout) :: chain
+        integer :: j
+
+        chain%r_product = 0
+        do j = 1, size(chain%r_product, 2)
+            chain%r_product(j, j) = 1
+        end do
+        chain%r_product_log = 0
+        chain%r_folded = .false.
+    end subroutine reset_r_product
 
     !> The first impact of an instant takes M^-1 S M on rows still in the coordinates of the
     !> epoch: one pass over them instead of three (to now, S, back when the instant ends), if
@@ -286,6 +327,11 @@ contains
         do j = 1, chain%n_vectors
             chain%tangent_log(j) = chain%tangent_log(j) + log(abs(chain%r_diag(j)))
         end do
+        if (chain%keep_r_factors) then
+            call fold_upper(qr_last_r(chain%qr, chain%n_vectors), chain%r_product, &
+                            chain%r_product_log)
+            chain%r_folded = .true.
+        end if
     end subroutine orthonormalise_tangent
 
     !> Impacts at nearly zero approach speed (the last steps of an inelastic collapse) have

@@ -127,8 +127,8 @@ module chain_hdf5
 
     !> `values` written at `offset` into a dataset, first grown to hold them when `grow`.
     interface h5_write_slab
-        module procedure write_slab_real_1d, write_slab_real_2d, write_slab_int_1d, &
-            write_slab_int8_1d
+        module procedure write_slab_real_1d, write_slab_real_2d, write_slab_real_3d, &
+            write_slab_int_1d, write_slab_int8_1d
     end interface h5_write_slab
 
     !> `values` read from a dataset at `offset`.
@@ -1198,6 +1198,18 @@ contains
         call transfer_slab(file, name, int(offset, hsize_t), shape(values, hsize_t), h5_real, &
                            c_loc(values), .true., grow, err)
     end subroutine write_slab_real_2d
+
+    subroutine write_slab_real_3d(file, name, offset, values, grow, err)
+        type(h5_file_t), intent(in) :: file
+        character(len=*), intent(in) :: name
+        integer(i8), intent(in) :: offset(3)
+        real(wp), intent(in), target, contiguous :: values(:, :, :)
+        logical, intent(in) :: grow
+        type(error_t), allocatable, intent(inout) :: err
+
+        call transfer_slab(file, name, int(offset, hsize_t), shape(values, hsize_t), h5_real, &
+                           c_loc(values), .true., grow, err)
+    end subroutine write_slab_real_3d
 
     subroutine write_slab_int_1d(file, name, offset, values, grow, err)
         type(h5_file_t), intent(in) :: file

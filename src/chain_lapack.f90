@@ -1,13 +1,18 @@
 !> The few LAPACK routines impactchain needs, with explicit interfaces:
-!> QR factorisation (Lyapunov re-orthonormalisation) and the nonsymmetric eigenproblem
-!> (Floquet multipliers).
-!> The factorisations of docs/model.md sections 7.2 (QR) and 7.9 (multipliers).
+!> QR factorisation (Lyapunov re-orthonormalisation), the nonsymmetric eigenproblem
+!> (Floquet multipliers, eigenvectors) and products and solves with upper triangular matrices
+!> (covariant Lyapunov vectors).
+!> The factorisations of docs/model.md sections 7.2 (QR), 7.9 (multipliers) and 14 (the
+!> triangular factors of covariant vectors).
 module chain_lapack
     use chain_kinds, only: wp
     implicit none
     private
     public :: qr_orthonormalise, qr_workspace_t, general_eigenvalues
-    public :: solve_linear
+    public :: solve_linear, qr_last_r, solve_upper, times_upper, general_eigenvectors
+
+    !> Triangular matrices of at most this order are solved and multiplied in plain loops.
+    integer, parameter :: small_triangle = 40
 
     !> Arrays qr_orthonormalise needs, kept by its caller between calls of the same shape
     !> (a Lyapunov run re-orthonormalises its frame every cycle).
@@ -52,6 +57,14 @@ module chain_lapack
             real(wp), intent(in) :: alpha, a(lda, *)
             real(wp), intent(inout) :: b(ldb, *)
         end subroutine dtrsm
+        subroutine dtrmm(side, uplo, transa, diag, m, n, alpha, a, lda, b, ldb)
+            import :: wp
+            implicit none
+            character(len=1), intent(in) :: side, uplo, transa, diag
+            integer, intent(in) :: m, n, lda, ldb
+            real(wp), intent(in) :: alpha, a(lda, *)
+            real(wp), intent(inout) :: b(ldb, *)
+        end subroutine dtrmm
         subroutine dgeev(jobvl, jobvr, n, a, lda, wr, wi, vl, ldvl, vr, ldvr, work, lwork, info)
             import :: wp
             implicit none
@@ -217,6 +230,81 @@ contains
         end do
         unit_columns = .true.
     end function unit_columns
+
+    !> The R factor (k x k, zeros below the diagonal) of the last qr_orthonormalise on `ws`,
+    !> a frame of k columns: that frame was Q R, Q the frame it was replaced by.
+    pure function qr_last_r(ws, k) result(r)
+        type(qr_workspace_t), intent(in) :: ws
+        integer, intent(in) :: k
+        real(wp), allocatable :: r(:, :)
+        integer :: j
+
+        allocate (r(k, k))
+        r = 0
+        do j = 1, k
+            r(1:j, j) = ws%r(1:j, j)
+        end do
+    end function qr_last_r
+
+    !> b := R^-1 b for the upper triangle R of r (k x k), by LAPACK's dtrsm, or for at most
+    !> `small_triangle` columns by the same back substitution in plain loops (on matrices
+    !> this small the library's per-call work costs more than the arithmetic).
+    subroutine solve_upper(r, b)
+        real(wp), intent(in) :: r(:, :)
+        real(wp), intent(inout) :: b(:, :)
+        integer :: c, l
+
+        if (size(r, 1) > small_triangle) then
+            call dtrsm('L', 'U', 'N', 'N', size(b, 1), size(b, 2), 1.0_wp, r, size(r, 1), b, &
+                       size(b, 1))
+            return
+        end if
+        do c = 1, size(b, 2)
+            do l = size(b, 1), 1, -1
+                if (b(l, c) == 0) cycle
+                b(l, c) = b(l, c)/r(l, l)
+                b(1:l - 1, c) = b(1:l - 1, c) - b(l, c)*r(1:l - 1, l)
+            end do
+        end do
+    end subroutine solve_upper
+
+    !> a := a C for the upper triangle C of c (k x k, k the columns of a), by dtrmm, or in
+    !> plain loops for at most `small_triangle` columns.
+    subroutine times_upper(a, c)
+        real(wp), intent(inout) :: a(:, :)
+        real(wp), intent(in) :: c(:, :)
+        integer :: j, l
+
+        if (size(c, 1) > small_triangle) then
+            call dtrmm('R', 'U', 'N', 'N', size(a, 1), size(a, 2), 1.0_wp, c, size(c, 1), a, &
+                       size(a, 1))
+            return
+        end if
+        ! (from the last column: each new column needs the old columns before it)
+        do j = size(a, 2), 1, -1
+            a(:, j) = a(:, j)*c(j, j)
+            do l = 1, j - 1
+                a(:, j) = a(:, j) + a(:, l)*c(l, j)
+            end do
+        end do
+    end subroutine times_upper
+
+    !> Eigenvalues wr + i wi and right eigenvectors of a general square matrix (a is
+    !> overwritten), in LAPACK's dgeev form: for a real eigenvalue j, vr(:, j) is its unit
+    !> eigenvector; for a pair j, j + 1 (wi(j) > 0), vr(:, j) +- i vr(:, j + 1).
+    subroutine general_eigenvectors(a, wr, wi, vr, info)
+        real(wp), intent(inout) :: a(:, :)
+        real(wp), intent(out) :: wr(:), wi(:), vr(:, :)
+        integer, intent(out) :: info
+        real(wp), allocatable :: work(:)
+        real(wp) :: query(1), dummy(1, 1)
+        integer :: n
+
+        n = size(a, 1)
+        call dgeev('N', 'V', n, a, n, wr, wi, dummy, 1, vr, n, query, -1, info)
+        allocate (work(max(1, int(query(1)))))
+        call dgeev('N', 'V', n, a, n, wr, wi, dummy, 1, vr, n, work, size(work), info)
+    end subroutine general_eigenvectors
 
     !> Eigenvalues wr + i wi of a general square matrix (a is overwritten).
     subroutine general_eigenvalues(a, wr, wi, info)

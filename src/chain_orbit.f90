@@ -25,7 +25,7 @@ module chain_orbit
     implicit none
     private
     public :: orbit_t, orbit_options_t, find_orbit, orbit_gap_minimum, interleave
-    public :: orbit_pass_t, orbit_pass, describe_orbit
+    public :: orbit_pass_t, orbit_pass, describe_orbit, impact_bonds
 
     !> How Newton is run.
     type :: orbit_options_t
@@ -232,9 +232,7 @@ contains
             orbit%event_time = log%time(:log%count)
             orbit%event_speed = log%speed(:log%count)
         end associate
-        ! what counts as an impact: section 5.8
-        impact = orbit%event_kind == event_impact .or. &
-                 (orbit%event_kind == event_stick .and. orbit%event_speed > 0)
+        impact = counts_as_impact(orbit%event_kind, orbit%event_speed)
         orbit%impacts = count(impact)
         if (orbit%impacts > 0) orbit%min_impact_speed = minval(orbit%event_speed, mask=impact)
         if (.not. orbit%converged) return
@@ -248,6 +246,23 @@ contains
         call orbit_gap_minimum(model, orbit%phase, orbit%cycles, orbit%x, orbit%v, &
                                orbit%min_gap, orbit%min_gap_bond, orbit%min_gap_time, err)
     end subroutine describe_orbit
+
+    !> What counts as an impact among an orbit's events (section 5.8): an ordinary impact, or
+    !> one that ends chatter at a nonzero speed.
+    elemental logical function counts_as_impact(kind, speed)
+        integer, intent(in) :: kind
+        real(wp), intent(in) :: speed
+
+        counts_as_impact = kind == event_impact .or. (kind == event_stick .and. speed > 0)
+    end function counts_as_impact
+
+    !> The bonds of the orbit's impacts over one period, in time order (orbit%impacts of them).
+    pure function impact_bonds(orbit) result(bonds)
+        type(orbit_t), intent(in) :: orbit
+        integer, allocatable :: bonds(:)
+
+        bonds = pack(orbit%event_bond, counts_as_impact(orbit%event_kind, orbit%event_speed))
+    end function impact_bonds
 
     ! ------------------------------------------------------------------ the gap monitor
 

@@ -36,6 +36,7 @@ module chain_output
     private
     public :: output_t, output_begin, output_header, output_strobe_write, output_events_append
     public :: output_final, output_stats, output_periods, output_lyapunov, output_jacobian
+    public :: output_clv_rows, output_clv
     public :: output_end, output_abort, read_final_state, output_group
     public :: schema_version, code_version, output_truncate_strobe
     public :: resume_data_t, output_resume, read_resume, output_inspect, output_continue
@@ -73,6 +74,7 @@ module chain_output
         integer :: n = 0
         integer(i8) :: n_events = 0
         logical :: events_created = .false.
+        logical :: clv_created = .false.   !! /clv's per-record datasets exist
     end type output_t
 
 contains
@@ -445,6 +447,101 @@ contains
             call h5_write_attr(f, 'lyapunov', 'collisions_per_cycle', collisions_per_cycle, err)
         end associate
     end subroutine output_lyapunov
+
+    !> /clv's per-record datasets (docs/model.md section 14.5), a block of records at a time:
+    !> records first .. first + m - 1 of the `total` records with covariant vectors, in any
+    !> order of blocks (the backward pass writes the last first); the first block written
+    !> creates them. ipr(k, m), site_weight(n, stored, m), min_angle(m), cycle(m).
+    subroutine output_clv_rows(out, first, total, cycle, ipr, site_weight, min_angle, err)
+        type(output_t), intent(inout) :: out
+        integer(i8), intent(in) :: first, total
+        integer(i8), intent(in), contiguous :: cycle(:)
+        real(wp), intent(in), contiguous :: ipr(:, :), site_weight(:, :, :), min_angle(:)
+        type(error_t), allocatable, intent(out) :: err
+        integer(i8) :: k, stored
+
+        k = size(ipr, 1)
+        stored = size(site_weight, 2)
+        associate (f => out%file)
+            if (.not. out%clv_created) then
+                call h5_create_group(f, 'clv', err)
+                call h5_create_growing(f, 'clv/cycle', h5_int8, [total], '1', err)
+                call h5_set_scale(f, 'clv/cycle', err)
+                call describe(f, 'clv/cycle', 'drive cycle of the record (as /strobe/cycle)', &
+                              'drive cycles', '', err)
+                call index_coordinate(f, 'clv/vector', 1, int(k), 'covariant vector index '// &
+                                      '(the columns of the QR frame: descending exponents)', err)
+                call oscillator_coordinate(f, 'clv', out%n, err)
+                call h5_create_growing(f, 'clv/ipr', h5_real, [k, total], '1', err)
+                call describe(f, 'clv/ipr', 'inverse participation ratio of the vector''s '// &
+                              'per-oscillator weight (1/n: spread evenly, 1: one oscillator)', &
+                              '', 'cycle vector', err)
+                call h5_create_growing(f, 'clv/min_angle', h5_real, [total], 'radian', err)
+                call describe(f, 'clv/min_angle', 'smallest angle between the span of the '// &
+                              'unstable vectors and any other vector (NaN: no such pair)', '', &
+                              'cycle', err)
+                if (stored > 0) then
+                    call index_coordinate(f, 'clv/leading_vector', 1, int(stored), &
+                                          'index of the vectors whose site weights are '// &
+                                          'stored (the first clv_store)', err)
+                    call h5_create_growing(f, 'clv/site_weight', h5_real, &
+                                           [int(out%n, i8), stored, total], '1', err)
+                    call describe(f, 'clv/site_weight', 'weight of the oscillator in the '// &
+                                  'vector, x**2 + v**2 of its components (summing to 1)', '', &
+                                  'cycle leading_vector oscillator', err)
+                end if
+                if (allocated(err)) return
+                out%clv_created = .true.
+            end if
+            call h5_write_slab(f, 'clv/cycle', [first - 1], cycle, grow=.false., err=err)
+            call h5_write_slab(f, 'clv/ipr', [0_i8, first - 1], ipr, grow=.false., err=err)
+            call h5_write_slab(f, 'clv/min_angle', [first - 1], min_angle, grow=.false., &
+                               err=err)
+            if (stored > 0) call h5_write_slab(f, 'clv/site_weight', [0_i8, 0_i8, first - 1], &
+                                               site_weight, grow=.false., err=err)
+        end associate
+    end subroutine output_clv_rows
+
+    !> The rest of /clv, after its per-record datasets: the vectors' growth rates, their
+    !> standard errors and the records per block these were read at, the vectors at the last
+    !> records (vectors(2n, k, r), at drive cycles saved_cycle(r)), and as attributes the
+    !> records without vectors at the end and the number of vectors spanning the unstable
+    !> subspace.
+    subroutine output_clv(out, exponents, stderr, stderr_block, vectors, saved_cycle, &
+                          transient, unstable, err)
+        type(output_t), intent(inout) :: out
+        real(wp), intent(in), contiguous :: exponents(:), stderr(:), vectors(:, :, :)
+        integer(i8), intent(in), contiguous :: stderr_block(:), saved_cycle(:)
+        integer, intent(in) :: transient, unstable
+        type(error_t), allocatable, intent(out) :: err
+
+        associate (f => out%file)
+            call h5_write(f, 'clv/exponents', exponents, 'bit', err)
+            call describe(f, 'clv/exponents', 'growth rate of the covariant vector', &
+                          'bits per drive cycle', 'vector', err)
+            call h5_write(f, 'clv/stderr', stderr, 'bit', err)
+            call describe(f, 'clv/stderr', 'standard error of the growth rate (blocking, '// &
+                          'where it levels off with the block size)', 'bits per drive cycle', &
+                          'vector', err)
+            call h5_write(f, 'clv/stderr_block', stderr_block, '1', err)
+            call describe(f, 'clv/stderr_block', 'records per block at which stderr was '// &
+                          'read off', 'drive cycles', 'vector', err)
+            if (size(saved_cycle) > 0) then
+                call index_coordinate(f, 'clv/component', 1, size(vectors, 1), 'state '// &
+                                      'component: 2i - 1 is x(i), 2i is v(i)', err)
+                call h5_write(f, 'clv/saved_cycle', saved_cycle, '1', err)
+                call h5_set_scale(f, 'clv/saved_cycle', err)
+                call describe(f, 'clv/saved_cycle', 'drive cycle of the record whose '// &
+                              'vectors are stored', 'drive cycles', '', err)
+                call h5_write(f, 'clv/vectors', vectors, '1', err)
+                call describe(f, 'clv/vectors', 'covariant Lyapunov vector (unit length; '// &
+                              'components x(1), v(1), x(2), ...)', '', &
+                              'saved_cycle vector component', err)
+            end if
+            call h5_write_attr(f, 'clv', 'clv_transient', transient, err)
+            call h5_write_attr(f, 'clv', 'unstable', unstable, err)
+        end associate
+    end subroutine output_clv
 
     subroutine output_jacobian(out, jacobian, re, im, cycles, err)
         type(output_t), intent(inout) :: out

@@ -3,7 +3,9 @@
 !> Poincare-map Jacobian. The CLI sends records to an HDF5 file, sweeps and the Python
 !> extension keep them in memory; all go through `record_cycles`, so their numbers agree bit for
 !> bit.
-!> Where the records are taken: chain_section; the Jacobian and multipliers: chain_floquet.
+!> Where the records are taken: chain_section; the Jacobian and multipliers: chain_floquet;
+!> covariant Lyapunov vectors (the factors kept at every record, the backward pass at the end,
+!> docs/model.md section 14): chain_clv.
 module chain_record
     use chain_kinds, only: wp, i8
     use chain_error, only: error_t, set_error, fmt_int8
@@ -20,6 +22,8 @@ module chain_record
     use chain_section, only: section_target, advance_to_point, advance_cycles
     use chain_floquet, only: floquet_result
     use chain_monitor, only: monitor_t, stage_records
+    use chain_clv, only: clv_pass_t, clv_rows_t, clv_result_t, clv_start, clv_forward, &
+                         clv_backward_begin, clv_backward_rows, clv_result, clv_close
     implicit none
     private
     public :: record_sink_t, memory_sink_t, record_result_t, record_cycles
@@ -45,6 +49,11 @@ module chain_record
         integer :: align = 100
         logical :: jacobian = .false.        !! the Poincare-map Jacobian at the end
         integer :: jacobian_cycles = 1       !! of this many drive cycles
+        !> covariant Lyapunov vectors (docs/model.md section 14): a QR step at every record
+        logical :: covariant = .false.
+        integer :: clv_transient = 200       !! last records without vectors (convergence)
+        integer :: clv_store = 4             !! vectors whose per-oscillator weights are kept
+        integer :: clv_save = 1              !! last records with vectors whose vectors are kept
     end type record_spec_t
 
     !> Where strobe records and events go, chunk by chunk.
@@ -52,6 +61,9 @@ module chain_record
     contains
         procedure(put_strobe_i), deferred :: put_strobe
         procedure(put_events_i), deferred :: put_events
+        !> per-record numbers of covariant vectors, a block at a time, last block first
+        !> (by default dropped)
+        procedure :: put_clv => discard_clv
     end type record_sink_t
 
     abstract interface
@@ -71,15 +83,20 @@ module chain_record
         end subroutine put_events_i
     end interface
 
-    !> Keeps every record in memory: x(n, cycles), v(n, cycles), and all events.
+    !> Keeps every record in memory: x(n, cycles), v(n, cycles), and all events; and the
+    !> per-record numbers of covariant vectors (records with vectors in order, clv_rows_t's
+    !> arrays whole).
     type, extends(record_sink_t) :: memory_sink_t
         logical :: keep_strobe = .true.
         real(wp), allocatable :: x(:, :), v(:, :)
         integer(i8), allocatable :: cycle(:)
         type(event_log_t) :: events
+        integer(i8), allocatable :: clv_cycle(:)
+        real(wp), allocatable :: clv_ipr(:, :), clv_site_weight(:, :, :), clv_min_angle(:)
     contains
         procedure :: put_strobe => memory_put_strobe
         procedure :: put_events => memory_put_events
+        procedure :: put_clv => memory_put_clv
     end type memory_sink_t
 
     !> Where record_cycles stands after a record, beyond the chain itself (which is then at that
@@ -104,6 +121,8 @@ module chain_record
         integer(i8), allocatable :: running_cycle(:) !! drive cycle of each running estimate
         real(wp), allocatable :: jacobian(:, :)    !! jacobian(2n, 2n) of the Poincare map
         real(wp), allocatable :: multipliers_re(:), multipliers_im(:)
+        logical :: has_clv = .false.               !! covariant vectors (a complete run)
+        type(clv_result_t) :: clv
     end type record_result_t
 
 contains
@@ -128,6 +147,11 @@ contains
     !> `monitor` is told every transient cycle and every record. Asked to stop at a record, the
     !> run ends there (res%complete = .false.) and can be continued from `state`; asked during
     !> the transient, where nothing is recorded yet, it returns an error saying so.
+    !>
+    !> With covariant vectors, a QR step comes at every record and its factors go to scratch
+    !> files; a complete run then makes the backward pass, whose per-record numbers go to
+    !> `sink` (put_clv) and the rest to res%clv. Such a run cannot be continued (its factors
+    !> were in scratch files), and a stopped one has no vectors.
     subroutine record_cycles(spec, chain, sink, res, err, monitor, state)
         type(record_spec_t), intent(in) :: spec
         type(chain_t), intent(inout) :: chain
@@ -138,6 +162,7 @@ contains
         type(record_state_t), intent(inout), optional :: state
         type(event_log_t) :: log
         type(record_state_t) :: st
+        type(clv_pass_t) :: clv
         real(wp), allocatable :: xbuf(:, :), vbuf(:, :)
         integer(i8), allocatable :: cbuf(:)
         integer(i8) :: j, target_cycle, first
@@ -151,6 +176,20 @@ contains
         if (st%cycles_done == 0) then
             call begin_records(spec, chain, st, err, monitor)
             if (allocated(err)) return
+        else if (spec%lyapunov .and. spec%covariant) then
+            call set_error(err, "&lyapunov: a run with covariant = .true. stopped early "// &
+                           "cannot be continued (the factors of its records were in scratch "// &
+                           "files); run it again from the start")
+            return
+        end if
+        if (spec%lyapunov .and. spec%covariant) then
+            call clv_start(clv, chain_size(chain), chain_vectors(chain), spec%cycles, &
+                           spec%clv_transient, min(spec%clv_store, chain_vectors(chain)), &
+                           spec%clv_save, err)
+            if (allocated(err)) then
+                call clv_close(clv)
+                return
+            end if
         end if
         call event_log_init(log, spec%record_events, 1024)
         res%cycles_continued = st%cycles_done
@@ -161,20 +200,23 @@ contains
         do j = st%cycles_done + 1, spec%cycles
             call section_target(chain, spec%transient, spec%phase, j, target_cycle, target_s)
             call advance_to_point(chain, target_cycle, target_s, log, err)
-            if (allocated(err)) return
+            if (allocated(err)) exit
             i = int(j - first) + 1
             call chain_copy_state(chain, xbuf(:, i), vbuf(:, i))
             cbuf(i) = chain_cycle(chain)
             w = int(modulo(j - 1, int(size(st%xwin, 2), i8))) + 1
             st%xwin(:, w) = xbuf(:, i)
             st%vwin(:, w) = vbuf(:, i)
-            if (spec%lyapunov) then
+            if (spec%lyapunov .and. spec%covariant) then
+                call covariant_step(chain, st%acc, clv, j, cbuf(i), err)
+                if (allocated(err)) exit
+            else if (spec%lyapunov) then
                 ! (adaptive steps also come at the first section after a rest or a collapse:
                 ! the step looks for the lost directions, as every cycle did)
                 if (lyapunov_due(st%acc, j, j == spec%cycles) .or. &
                     (spec%qr_every == 0 .and. chain_rank_lost(chain))) then
                     call chain_qr_step(chain, st%acc, int(j - st%acc%cycles), err)
-                    if (allocated(err)) return
+                    if (allocated(err)) exit
                 end if
             end if
             res%cycles_done = j
@@ -185,13 +227,21 @@ contains
             if (i == m .or. j == spec%cycles .or. log%count >= event_flush .or. stop_now) then
                 call sink%put_strobe(spec%cycles, first, xbuf(:, :i), vbuf(:, :i), cbuf(:i), err)
                 if (.not. allocated(err) .and. log%enabled) call sink%put_events(log, err)
-                if (allocated(err)) return
+                if (allocated(err)) exit
                 call event_log_clear(log)
                 first = j + 1
             end if
             if (stop_now) exit
         end do
+        if (allocated(err)) then
+            call clv_close(clv)
+            return
+        end if
         call summarise_run(spec, chain, st, res)
+        if (spec%lyapunov .and. spec%covariant .and. res%complete) &
+            call covariant_pass(clv, st%acc, sink, res, err)
+        call clv_close(clv)
+        if (allocated(err)) return
         if (present(state)) call move_state(st, state)
         if (spec%jacobian) call floquet_result(chain, spec%jacobian_cycles, res%jacobian, &
                                               res%multipliers_re, res%multipliers_im, err)
@@ -211,8 +261,9 @@ contains
         call transient_part(spec, chain, log, err, monitor)
         if (allocated(err)) return
         call chain_reset_counts(chain)
+        ! (covariant vectors: a QR step at every record)
         if (spec%lyapunov) call lyapunov_start(st%acc, chain_vectors(chain), spec%cycles, &
-                                              spec%qr_every)
+                                              merge(1, spec%qr_every, spec%covariant))
         nwin = int(min(spec%cycles, int(period_window(spec%max_period), i8)))
         allocate (st%xwin(chain_size(chain), nwin), st%vwin(chain_size(chain), nwin))
     end subroutine begin_records
@@ -327,8 +378,59 @@ contains
             call set_error(err, "lyapunov: cannot build the initial tangent frame")
             return
         end if
-        call chain_set_tangent(chain, frame, orthonormalise_jumps=.true.)
+        call chain_set_tangent(chain, frame, orthonormalise_jumps=.true., &
+                               keep_r_factors=spec%covariant)
     end subroutine start_tangent
+
+    !> The QR step of record j of a run with covariant vectors (docs/model.md section 14.2):
+    !> the R of the map from the last record's frame and the new frame go to the forward pass.
+    subroutine covariant_step(chain, acc, clv, j, cycle, err)
+        type(chain_t), intent(inout) :: chain
+        type(lyapunov_acc_t), intent(inout) :: acc
+        type(clv_pass_t), intent(inout) :: clv
+        integer(i8), intent(in) :: j, cycle
+        type(error_t), allocatable, intent(out) :: err
+        real(wp), allocatable :: r_factor(:, :), r_log(:)
+        integer :: k, collapsed
+
+        k = chain_vectors(chain)
+        allocate (r_factor(k, k), r_log(k))
+        collapsed = acc%collapsed
+        call chain_qr_step(chain, acc, 1, err, r_factor, r_log)
+        if (allocated(err)) return
+        if (acc%collapsed > collapsed) then
+            call set_error(err, "&lyapunov: covariant vectors need an invertible tangent "// &
+                           "map, but at record "//fmt_int8(j)//" a rest or a collapse "// &
+                           "removed a direction (docs/model.md section 7.8); run this chain "// &
+                           "with covariant = .false.")
+            return
+        end if
+        call clv_forward(clv, j, cycle, r_factor, r_log, chain_tangent_frame(chain), err)
+    end subroutine covariant_step
+
+    !> The backward pass of a complete run with covariant vectors: per-record numbers to the
+    !> sink, block by block, the rest to res%clv. The unstable subspace is spanned by as many
+    !> leading vectors as the run's QR exponents have positive ones.
+    subroutine covariant_pass(clv, acc, sink, res, err)
+        type(clv_pass_t), intent(inout) :: clv
+        type(lyapunov_acc_t), intent(in) :: acc
+        class(record_sink_t), intent(inout) :: sink
+        type(record_result_t), intent(inout) :: res
+        type(error_t), allocatable, intent(out) :: err
+        type(clv_rows_t) :: rows
+
+        call clv_backward_begin(clv, count(acc%total > 0), err)
+        if (allocated(err)) return
+        do
+            call clv_backward_rows(clv, rows, err)
+            if (allocated(err)) return
+            if (rows%count == 0) exit
+            call sink%put_clv(rows, err)
+            if (allocated(err)) return
+        end do
+        res%has_clv = .true.
+        res%clv = clv_result(clv)
+    end subroutine covariant_pass
 
     !> Hand a run state over (the windows moved, the accumulator, of bounded size, copied).
     subroutine move_state(from, to)
@@ -381,6 +483,32 @@ contains
         sink%v(:, first:last) = v
         sink%cycle(first:last) = cycle
     end subroutine memory_put_strobe
+
+    !> A sink that keeps no covariant vectors.
+    subroutine discard_clv(sink, rows, err)
+        class(record_sink_t), intent(inout) :: sink
+        type(clv_rows_t), intent(in) :: rows
+        type(error_t), allocatable, intent(out) :: err
+    end subroutine discard_clv
+
+    subroutine memory_put_clv(sink, rows, err)
+        class(memory_sink_t), intent(inout) :: sink
+        type(clv_rows_t), intent(in) :: rows
+        type(error_t), allocatable, intent(out) :: err
+        integer(i8) :: last
+
+        if (.not. allocated(sink%clv_cycle)) then
+            allocate (sink%clv_cycle(rows%total), sink%clv_min_angle(rows%total))
+            allocate (sink%clv_ipr(size(rows%ipr, 1), rows%total))
+            allocate (sink%clv_site_weight(size(rows%site_weight, 1), &
+                                           size(rows%site_weight, 2), rows%total))
+        end if
+        last = rows%first + rows%count - 1
+        sink%clv_cycle(rows%first:last) = rows%cycle
+        sink%clv_ipr(:, rows%first:last) = rows%ipr
+        sink%clv_site_weight(:, :, rows%first:last) = rows%site_weight
+        sink%clv_min_angle(rows%first:last) = rows%min_angle
+    end subroutine memory_put_clv
 
     subroutine memory_put_events(sink, log, err)
         class(memory_sink_t), intent(inout) :: sink

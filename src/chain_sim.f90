@@ -23,11 +23,13 @@ module chain_sim
     use chain_lyapunov, only: lyapunov_pack, lyapunov_unpack
     use chain_record, only: record_sink_t, record_result_t, record_cycles, record_state_t, &
                             set_window, period_window
+    use chain_clv, only: clv_rows_t
     use chain_monitor, only: monitor_t
     use chain_section, only: chain_at_section
     use chain_output, only: output_t, output_begin, output_header, output_strobe_write, &
                             output_events_append, output_final, output_stats, output_periods, &
                             output_lyapunov, output_jacobian, output_end, output_abort, &
+                            output_clv_rows, output_clv, &
                             read_final_state, output_truncate_strobe, resume_data_t, &
                             output_resume, read_resume, output_inspect, output_continue, &
                             file_continuable, file_other_input
@@ -42,6 +44,7 @@ module chain_sim
     contains
         procedure :: put_strobe => file_put_strobe
         procedure :: put_events => file_put_events
+        procedure :: put_clv => file_put_clv
     end type file_sink_t
 
 contains
@@ -209,7 +212,15 @@ contains
                            ".true. to replace it")
             return
         end if
-        if (found == file_continuable) then
+        if (found == file_continuable .and. cfg%record%covariant .and. .not. cfg%overwrite) &
+            then
+            call set_error(err, "&output: file = '"//cfg%output_file//"' is a run with "// &
+                           "covariant vectors stopped early, which cannot be continued (the "// &
+                           "factors of its records were in scratch files); set overwrite = "// &
+                           ".true. to run it again from the start")
+            return
+        end if
+        if (found == file_continuable .and. .not. cfg%record%covariant) then
             call continue_chain(cfg, chain, state, err)
             if (allocated(err)) return
             call output_continue(sink%out, cfg%output_file, cfg%model%n, cfg%record%cycles, err)
@@ -340,6 +351,13 @@ contains
             end associate
             if (allocated(err)) return
         end if
+        if (res%has_clv) then
+            associate (c => res%clv)
+                call output_clv(out, c%exponents, c%stderr, c%stderr_block, c%vectors, &
+                                c%saved_cycle, c%transient, c%unstable, err)
+            end associate
+            if (allocated(err)) return
+        end if
         if (allocated(res%jacobian)) call output_jacobian(out, res%jacobian, &
                                                           res%multipliers_re, &
                                                           res%multipliers_im, &
@@ -355,6 +373,15 @@ contains
 
         call output_strobe_write(sink%out, n_records, first, x, v, cycle, err)
     end subroutine file_put_strobe
+
+    subroutine file_put_clv(sink, rows, err)
+        class(file_sink_t), intent(inout) :: sink
+        type(clv_rows_t), intent(in) :: rows
+        type(error_t), allocatable, intent(out) :: err
+
+        call output_clv_rows(sink%out, rows%first, rows%total, rows%cycle, rows%ipr, &
+                             rows%site_weight, rows%min_angle, err)
+    end subroutine file_put_clv
 
     subroutine file_put_events(sink, log, err)
         class(file_sink_t), intent(inout) :: sink

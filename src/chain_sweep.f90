@@ -33,7 +33,7 @@ module chain_sweep
                             output_describe, output_index, output_unset_param
     use chain_hdf5, only: h5_write, h5_write_attr, h5_set_scale, h5_create_dimension
     use chain_files, only: rename_file, remove_file, close_checked
-    use chain_monitor, only: monitor_t, stage_points
+    use chain_monitor, only: monitor_t, stage_points, saving_monitor_t, checkpoint_every
     implicit none
     private
     public :: sweep_plan_t, sweep_result_t, plan_sweep, sweep_point_config, run_branch
@@ -48,7 +48,6 @@ module chain_sweep
     !> The checkpoint's first bytes; the number changes with the layout of pack_branch.
     character(len=8), parameter :: checkpoint_magic = 'ICSWEEP2'
     !> Seconds between checkpoints of a running sweep (and between MPI gathers in mpi/).
-    integer, parameter :: checkpoint_every = 10
 
     type :: sweep_summary_t
         integer :: n_points = 0
@@ -84,17 +83,14 @@ module chain_sweep
     !> inside run_branch's critical section, so one thread at a time, with `res` and `starts`
     !> consistent. A checkpoint that cannot be written stops the sweep with that error (`err`):
     !> going on would risk hours of points on a full disk.
-    type, extends(monitor_t) :: checkpoint_monitor_t
-        class(monitor_t), pointer :: outer => null()  !! the caller's monitor, if any
+    type, extends(saving_monitor_t) :: checkpoint_monitor_t
         type(config_t) :: cfg
         type(sweep_plan_t) :: plan
         type(sweep_result_t), pointer :: res => null()
         type(chain_state_t), pointer :: starts(:) => null()
         character(len=:), allocatable :: path          !! of the checkpoint
-        integer(i8) :: clock_last = 0, clock_rate = 1  !! system_clock counts
-        type(error_t), allocatable :: err              !! a checkpoint that failed
     contains
-        procedure :: keep_going => checkpoint_keep_going
+        procedure :: save => save_sweep_checkpoint
     end type checkpoint_monitor_t
 
 contains
@@ -364,22 +360,12 @@ contains
         if (.not. allocated(err)) call remove_file(checkpoint)
     end subroutine run_sweep
 
-    logical function checkpoint_keep_going(monitor, stage, done, total) result(keep_going)
+    subroutine save_sweep_checkpoint(monitor)
         class(checkpoint_monitor_t), intent(inout) :: monitor
-        integer, intent(in) :: stage
-        integer(i8), intent(in) :: done, total
-        integer(i8) :: now
 
-        keep_going = .true.
-        if (associated(monitor%outer)) keep_going = monitor%outer%keep_going(stage, done, total)
-        call system_clock(now)
-        if (now - monitor%clock_last < checkpoint_every*monitor%clock_rate .or. &
-            allocated(monitor%err)) return
         call save_checkpoint(monitor%path, monitor%cfg, monitor%plan, monitor%res, &
                              monitor%starts, monitor%err)
-        monitor%clock_last = now
-        if (allocated(monitor%err)) keep_going = .false.
-    end function checkpoint_keep_going
+    end subroutine save_sweep_checkpoint
 
     !> Validate every point before any work (an out-of-range point is an error up front).
     subroutine validate_sweep_points(cfg, plan, err)

@@ -23,15 +23,17 @@ module impactchain
     use chain_event_log, only: event_log_t
     use chain_record, only: record_sink_t, memory_sink_t, record_result_t, record_cycles, &
                             record_spec_t
+    use chain_clv, only: clv_rows_t, clv_result_t
     use chain_monitor, only: monitor_t, signal_monitor_t, stage_transient, stage_records, &
                              stage_points, stage_samples, stage_name
     use chain_section, only: advance_to_point
     use chain_floquet, only: poincare_jacobian
-    use chain_orbit, only: orbit_t, orbit_options_t, find_orbit, orbit_gap_minimum
+    use chain_orbit, only: orbit_t, orbit_options_t, find_orbit, orbit_gap_minimum, impact_bonds
     use chain_branch, only: branch_options_t, branch_point_t, special_point_t, branches_t, &
                             follow_branches
     use chain_branch_file, only: continuation_guess, continuation_options, run_continuation, &
-                                 continuation_to_file, write_continuation
+                                 continuation_to_file, write_continuation, &
+                                 continuation_table_t, continuation_table, finite_or_inf
     use chain_sim, only: simulate_to_file, start_chain, initial_state, chain_on_section, &
                          restart_chain
     use chain_sweep, only: run_sweep, sweep_summary_t, plan_sweep, sweep_plan_t, &
@@ -63,13 +65,14 @@ module impactchain
     public :: monitor_t, signal_monitor_t, stage_transient, stage_records, stage_points
     public :: stage_samples
     public :: stage_name
-    public :: record_spec_t
+    public :: record_spec_t, clv_rows_t, clv_result_t
     public :: advance_to_point, poincare_jacobian, simulate_to_file, start_chain, initial_state
     public :: chain_on_section, restart_chain
-    public :: orbit_t, orbit_options_t, find_orbit, orbit_gap_minimum
+    public :: orbit_t, orbit_options_t, find_orbit, orbit_gap_minimum, impact_bonds
     public :: branch_options_t, branch_point_t, special_point_t, branches_t, follow_branches
     public :: continuation_guess, continuation_options, run_continuation
-    public :: continuation_to_file, write_continuation
+    public :: continuation_to_file, write_continuation, continuation_table_t
+    public :: continuation_table, finite_or_inf
     public :: run_sweep, sweep_summary_t, plan_sweep, sweep_plan_t, sweep_result_t
     public :: sweep_result_init, sweep_point_config, run_sweep_branches
     public :: write_sweep_file, save_checkpoint, load_checkpoint, remove_file, checkpoint_every

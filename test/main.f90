@@ -13,6 +13,7 @@ program main
     use test_hdf5, only: run_hdf5_tests
     use test_orbit, only: run_orbit_tests
     use test_branch, only: run_branch_tests
+    use test_clv, only: run_clv_tests
     implicit none
     type(suite_runner_t) :: runner
 
@@ -28,5 +29,6 @@ program main
     call runner%run('hdf5', run_hdf5_tests)
     call runner%run('orbit', run_orbit_tests)
     call runner%run('branch', run_branch_tests)
+    call runner%run('clv', run_clv_tests)
     call runner%finish()
 end program main

@@ -23,7 +23,7 @@ module suites
     !> from this list.
     character(len=*), parameter :: suite_names(*) = [character(len=10) :: &
         'flow', 'gaps', 'impact', 'queue', 'engine', 'lyapunov', 'corners', & ! test/main.f90
-        'invariants', 'hdf5', 'orbit', 'branch', &
+        'invariants', 'hdf5', 'orbit', 'branch', 'clv', &
         'sweep', 'checkpoint', 'census'] ! test/sweeps.f90
 
     abstract interface

@@ -5,7 +5,10 @@
 !> the impacting branch of figure 10's chain down to its fold (a multiplier +1 there); a period
 !> doubling against the simulator on either side of it, and the branch switched to there (its
 !> own doubling, the product of its multipliers); one branch from two starts, its special
-!> points located at the same parameter.
+!> points located at the same parameter. Newton's result from the guess is kept, converged
+!> (the first point) or not (no point, the reason said).
+!> A continuation run tells its monitor the transient's cycles, then its points, and stops
+!> when asked.
 module test_branch
     use chain_kinds, only: wp, i8, two_pi
     use chain_error, only: error_t
@@ -14,14 +17,28 @@ module test_branch
     use chain_engine, only: chain_t, chain_positions, chain_velocities
     use chain_event_log, only: event_log_t, event_log_init
     use chain_section, only: advance_to_point, chain_at_section
-    use chain_orbit, only: orbit_t, find_orbit, interleave
+    use chain_orbit, only: orbit_t, find_orbit, interleave, impact_bonds
     use chain_parameter, only: map_parameter_derivative
     use chain_branch, only: branch_options_t, branches_t, follow_branches
+    use chain_config, only: config_t
+    use chain_monitor, only: monitor_t, stage_transient, stage_points
+    use chain_branch_file, only: run_continuation, continuation_table_t, continuation_table
     use test_chains, only: model_of, fig10_model
     use testing, only: tally_t, check, check_close
     implicit none
     private
     public :: run_branch_tests
+
+    !> Records what it is told and asks to stop at a given count of one stage.
+    type, extends(monitor_t) :: counting_monitor_t
+        integer :: stop_stage = 0
+        integer(i8) :: stop_at = 0
+        integer :: transient_calls = 0, point_calls = 0
+        logical :: in_order = .true.  !! cycles 1, 2, ... of the total, then points 1, 2, ...
+        integer(i8) :: transient_total = 0
+    contains
+        procedure :: keep_going => counting_keep_going
+    end type counting_monitor_t
 
 contains
 
@@ -34,6 +51,8 @@ contains
         call settle(model, 5_i8, 1, impacting)
         call check(t, impacting%converged .and. impacting%impacts > 0, &
                    'fig. 10 A = 3: an impacting period-1 orbit')
+        call check(t, size(impact_bonds(impacting)) == impacting%impacts, &
+                   'fig. 10 A = 3: one bond per impact')
         if (impacting%converged) call derivative_by_differences(t, model, impacting, &
                                                                 'impacting fig. 10 A = 3')
         model = fig10_model(1.0_wp)
@@ -46,6 +65,8 @@ contains
         call impacting_branch(t, impacting)
         call period_doubling(t)
         call two_starts(t)
+        call failed_start(t)
+        call monitored_run(t)
     end subroutine run_branch_tests
 
     !> Newton for a period-p orbit from the state `transient` cycles after a start at rest.
@@ -141,6 +162,13 @@ contains
             return
         end if
         print '(a)', '    '//res%end_reason
+        call check(t, res%start%converged .and. res%n_points > 0, &
+                   'non-impacting branch: the start converged')
+        if (res%n_points > 0) call check(t, all(res%start%x == res%points(1)%orbit%x) .and. &
+                                         all(res%start%v == res%points(1)%orbit%v) .and. &
+                                         all(res%start%residuals == &
+                                             res%points(1)%orbit%residuals), &
+                                         'non-impacting branch: the start is the first point')
         worst = 0
         ! (the last point, located at the grazing, sees a touch: the map is not smooth there)
         do j = 1, res%n_points - 1
@@ -333,8 +361,8 @@ contains
         opt%max_points = 400
         do r = 1, 2
             call settle(fig10_model(amplitude(r)), 500_i8, 1, start)
-            call follow_branches(fig10_model(amplitude(r)), 0.0_wp, 1, start%x, start%v, opt, res(r), &
-                                 err)
+            call follow_branches(fig10_model(amplitude(r)), 0.0_wp, 1, start%x, start%v, opt, &
+                                 res(r), err)
             call check(t, .not. allocated(err), 'two starts: followed')
             if (allocated(err)) return
             print '(a)', '    '//res(r)%end_reason
@@ -355,5 +383,94 @@ contains
         call check_close(t, res(1)%specials(2)%value, res(2)%specials(2)%value, &
                          'two starts: the same grazing', 1.0e-8_wp)
     end subroutine two_starts
+
+    !> A guess from which Newton fails (test_corners' chain, resting on the left wall once
+    !> per cycle): no point, Newton's result kept with its reason, which the end reason says.
+    subroutine failed_start(t)
+        type(tally_t), intent(inout) :: t
+        type(model_t) :: model
+        type(branches_t) :: res
+        type(branch_options_t) :: opt
+        type(error_t), allocatable :: err
+
+        model = model_of(make_flow(0.1_wp, 1.0_wp, 0.4_wp), 0.5_wp, [0.5_wp, 0.5_wp, 3.0_wp], &
+                         .true., 1.0e-9_wp)
+        opt%parameter = 'amplitude'
+        opt%max_points = 1
+        call follow_branches(model, 0.0_wp, 1, [0.0_wp, 0.0_wp], [0.0_wp, 0.0_wp], opt, res, err)
+        call check(t, .not. allocated(err) .and. res%n_points == 0 .and. &
+                   .not. res%start%converged, 'failed start: no point, not converged')
+        if (allocated(err) .or. res%start%converged) return
+        call check(t, index(res%start%reason, 'sticks on a wall') > 0 .and. &
+                   index(res%end_reason, res%start%reason) > 0 .and. &
+                   size(res%start%residuals) == res%start%iterations + 1, &
+                   'failed start: the reason kept and said: '//res%end_reason)
+    end subroutine failed_start
+
+    !> Figure 10's chain at A = 1 from rest after 50 transient cycles, continued in A up to
+    !> three points: the monitor sees every transient cycle, then every point; a stop asked
+    !> in the transient or at the first point ends the run there, stopped.
+    subroutine monitored_run(t)
+        type(tally_t), intent(inout) :: t
+        type(config_t) :: cfg
+        type(branches_t) :: res
+        type(error_t), allocatable :: err
+        type(counting_monitor_t) :: watch
+        type(continuation_table_t) :: table
+
+        cfg%model = fig10_model(1.0_wp)
+        cfg%initial_kind = 'rest'
+        cfg%initial_file = ''
+        allocate (cfg%x0(0), cfg%v0(0))
+        cfg%record%transient = 50
+        cfg%continuation = .true.
+        cfg%cont_parameter = 'amplitude'
+        cfg%cont_stop = 2
+        cfg%cont_step = 0.1_wp
+        cfg%cont_max_points = 3
+        call run_continuation(cfg, res, err, watch)
+        call check(t, .not. allocated(err) .and. .not. res%stopped .and. res%n_points == 3 .and. &
+                   watch%transient_calls == 50 .and. watch%transient_total == 50 .and. &
+                   watch%point_calls == 3 .and. watch%in_order, &
+                   'continuation run: the monitor is told 50 transient cycles, then 3 points')
+        if (res%n_points /= 3) return
+        call continuation_table(8, res, table)
+        call check(t, table%residual(1) == res%start%residuals(res%start%iterations) .and. &
+                   all(table%residual <= 100*1.0e-11_wp) .and. all(table%residual >= 0), &
+                   "continuation table: every point's last residual, the first one's from Newton")
+        call check(t, all(shape(table%strobe_x) == [8, 1, 3]) .and. &
+                   all(table%strobe_x(:, 1, :) == table%x) .and. all(table%stable == 1) .and. &
+                   size(table%special_kind) == 0 .and. all(table%min_impact_speed > huge(1.0_wp)), &
+                   'continuation table: shapes, strobe = state for period 1, no impacts: inf')
+        watch = counting_monitor_t(stop_stage=stage_transient, stop_at=7)
+        call run_continuation(cfg, res, err, watch)
+        call check(t, .not. allocated(err) .and. res%stopped .and. res%n_points == 0 .and. &
+                   watch%transient_calls == 7 .and. watch%point_calls == 0, &
+                   'continuation run: stopped in the transient')
+        watch = counting_monitor_t(stop_stage=stage_points, stop_at=1)
+        call run_continuation(cfg, res, err, watch)
+        call check(t, .not. allocated(err) .and. res%stopped .and. res%n_points == 1 .and. &
+                   watch%point_calls == 1, 'continuation run: stopped at the first point')
+    end subroutine monitored_run
+
+    logical function counting_keep_going(monitor, stage, done, total) result(keep_going)
+        class(counting_monitor_t), intent(inout) :: monitor
+        integer, intent(in) :: stage
+        integer(i8), intent(in) :: done, total
+
+        select case (stage)
+        case (stage_transient)
+            monitor%transient_calls = monitor%transient_calls + 1
+            monitor%transient_total = total
+            monitor%in_order = monitor%in_order .and. monitor%point_calls == 0 .and. &
+                               done == monitor%transient_calls
+        case (stage_points)
+            monitor%point_calls = monitor%point_calls + 1
+            monitor%in_order = monitor%in_order .and. done == monitor%point_calls
+        case default
+            monitor%in_order = .false.
+        end select
+        keep_going = .not. (stage == monitor%stop_stage .and. done == monitor%stop_at)
+    end function counting_keep_going
 
 end module test_branch

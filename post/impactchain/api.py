@@ -21,12 +21,18 @@ Python and the equivalent namelist / CLI output:
 - ``random_start(n, seed, x_amp, v_amp)``: ``&initial kind='random'``.
 - ``sweep(..., parameter='amplitude', start, stop, step, ...)``: ``&sweep``; the file's
   ``/sweep`` as an :class:`xarray.Dataset` with the same names (needs xarray).
+- ``continuation(..., parameter='amplitude', stop, step, ...)``: ``&continuation``; the
+  file's ``/continuation`` as an :class:`xarray.Dataset`, identical to the file's as xarray
+  reads it (needs xarray).
+- ``periodic_orbit(..., period=p)``: ``&continuation max_points = 1`` (Newton only): the
+  orbit of that file's one point, with Newton's history and the Jacobian.
 
-Long calls (:func:`simulate`, :func:`lyapunov`, :func:`floquet`, :func:`sweep`) run the
-Fortran in a worker thread with the GIL released while this thread watches it: Ctrl-C stops
-the computation at its next transient cycle, strobe record or sweep point (within a second
-unless one cycle alone takes longer) and raises :class:`KeyboardInterrupt`; nothing is
-returned from a stopped call. ``progress=True`` shows a tqdm progress bar (needs tqdm).
+Long calls (:func:`simulate`, :func:`lyapunov`, :func:`floquet`, :func:`sweep`,
+:func:`continuation`, :func:`periodic_orbit`) run the Fortran in a worker thread with the GIL
+released while this thread watches it: Ctrl-C stops the computation at its next transient
+cycle, strobe record, sweep point or orbit (within a second unless one cycle or one orbit
+alone takes longer) and raises :class:`KeyboardInterrupt`; nothing is returned from a stopped
+call. ``progress=True`` shows a tqdm progress bar (needs tqdm).
 
 Argument names are the namelist keys. ``x0 = v0 = None`` is a start at rest
 (``kind='rest'``); arrays are ``kind='explicit'`` (``v0 = None`` then means v = 0).
@@ -74,12 +80,15 @@ __all__ = [
     "Simulation",
     "Lyapunov",
     "Floquet",
+    "PeriodicOrbit",
     "simulate",
     "lyapunov",
     "floquet",
     "poincare_jacobian",
     "random_start",
     "sweep",
+    "continuation",
+    "periodic_orbit",
     "extension_available",
     "IMPACT",
     "STICK",
@@ -102,9 +111,12 @@ _STATUS_STOPPED = 5
 _POLL_SECONDS = 0.05  # how often the calling thread looks at a running kernel
 #: chain_monitor's stages, as (description, unit) of a progress bar
 _STAGES = {1: ("transient", "cycle"), 2: ("records", "cycle"), 3: ("sweep", "point")}
-#: Units of the parameters a sweep can run over
-_PARAMETER_UNITS = {"amplitude": "length", "omega": "1/time", "damping": "1",
-                    "restitution": "1", "spacing": "length"}
+#: The same for a continuation, whose unit of progress is an orbit found on a branch
+_CONTINUATION_STAGES = {**_STAGES, 3: ("orbits", "orbit")}
+#: Reduced units of the parameters a sweep or a continuation varies, as the files give them
+#: (chain_model's parameter_units; None: dimensionless, no model_units attribute)
+_PARAMETER_UNITS = {"amplitude": "length", "omega": "1/time", "damping": "1/time",
+                    "restitution": None, "spacing": "length"}
 _MAX_N = 10_000_000  # chain_config's max_n: only used to phrase errors for n beyond int32
 _INT32 = (-(2**31), 2**31 - 1)
 _INT64 = (-(2**63), 2**63 - 1)
@@ -122,6 +134,19 @@ SWEEP_OUTPUTS = (
     "sizes", "values", "collisions", "period", "exponents", "stderr_bits", "ky", "status",
     "msg_len", "message",
 )
+#: Outputs of ``_kernels.ic_continuation``, in f2py's order (checked by
+#: post/tests/test_api.py).
+CONTINUATION_OUTPUTS = (
+    "sizes", "values", "x", "v", "periods", "branch", "mult_re", "mult_im", "stable",
+    "min_gap", "min_impact_speed", "impacts", "residual", "iterations", "special_index",
+    "special_kind", "special_value", "end_reason", "start_x", "start_v", "start_jac",
+    "start_mult_re", "start_mult_im", "start_residuals", "start_bonds", "start_min_gap",
+    "start_min_impact_speed", "start_reason", "status", "msg_len", "message",
+)
+#: ic_continuation's sizes: points, special points, longest period, length of end_reason,
+#: start converged, start residuals, start impacts, length of start_reason
+_CONTINUATION_SIZES = ("npcap", "nscap", "nlong", "ntext", None, "nrcap", "nbcap", "ntext")
+_FIRST_CONTINUATION_BYTES = 64 << 20  # memory of the first guess of a continuation's points
 
 
 def extension_available() -> bool:
@@ -244,6 +269,43 @@ class Floquet:
     """(n,) displacement where the Jacobian was evaluated (the end of the run) [length]."""
     v: NDArray[np.float64]
     """(n,) velocity there [length/time]."""
+
+
+@dataclass(frozen=True, eq=False)
+class PeriodicOrbit:
+    """A period-p orbit of the stroboscopic map found by Newton shooting (docs/model.md
+    section 11), or Newton's last iterate when it did not converge. Arrays are read-only."""
+
+    converged: bool
+    """Whether Newton converged (|P^p(z) - z| <= 1e-11 (1 + |z|), maximum norms)."""
+    reason: str
+    """Why Newton stopped without converging ('' when it converged)."""
+    residuals: NDArray[np.float64]
+    """(iterations + 1,) |P^p(z) - z| / (1 + |z|) of each iterate, the guess first."""
+    x: NDArray[np.float64]
+    """(n,) displacement on the section: the orbit's (or the last iterate's) state
+    [length]."""
+    v: NDArray[np.float64]
+    """(n,) velocity on the section [length/time]."""
+    multipliers: NDArray[np.complex128]
+    """(2n,) Floquet multipliers, eigenvalues of ``jacobian`` (LAPACK dgeev order, as the
+    file's ``multipliers_re``, ``_im``); empty when Newton did not converge."""
+    impacts: int
+    """Impacts over one period."""
+    impact_bonds: NDArray[np.int32]
+    """(impacts,) the bond of each impact of one period, in time order: 0 the left wall |
+    oscillator 1, k oscillators k | k+1, n oscillator n | right wall."""
+    min_impact_speed: float
+    """Smallest impact speed over one period [length/time] (inf: no impacts)."""
+    min_gap: float
+    """Smallest gap at a local minimum over one period, other than a bond's own impacts
+    [length] (inf: none, or Newton did not converge): near 0 a new impact is about to
+    appear (grazing)."""
+    stable: bool
+    """Every multiplier inside the unit circle (False when Newton did not converge)."""
+    jacobian: NDArray[np.float64]
+    """(2n, 2n) Jacobian of P^p at ``x``, ``v``, the state interleaved as (x_1, v_1, ...,
+    x_n, v_n) (as :attr:`Floquet.jacobian`)."""
 
 
 # ---------------------------------------------------------------------------- functions
@@ -699,6 +761,272 @@ def _text(name: NDArray[np.int32]) -> str:
     return bytes(np.asarray(name).astype(np.uint8)).decode()
 
 
+def continuation(
+    n: int,
+    amplitude: float,
+    omega: float,
+    damping: float = 0.05,
+    restitution: float = 0.7,
+    spacing: float | ArrayLike = 1.0,
+    boundary: str = "fixed",
+    x0: ArrayLike | None = None,
+    v0: ArrayLike | None = None,
+    transient: int = 0,
+    *,
+    parameter: str,
+    stop: float,
+    step: float,
+    period: int = 1,
+    max_points: int = 200,
+    doublings: int = 0,
+    phase: float = 0.0,
+    stick_speed: float = 1.0e-9,
+    progress: bool = False,
+) -> Any:
+    """Branches of periodic orbits followed in one parameter: the CLI's ``&continuation``.
+
+    Newton finds the period-``period`` orbit from the state on the section (drive phase
+    ``phase``) after ``transient`` cycles from ``x0``, ``v0``; pseudo-arclength continuation
+    then follows its branch in ``parameter`` (``'amplitude'``, ``'omega'``, ``'damping'``,
+    ``'restitution'`` or ``'spacing'``, whose value among the arguments is the start) towards
+    ``stop``, first step ``step`` (its sign: the direction), at most ``max_points`` orbits per
+    branch, and ``doublings`` levels of the period-doubled branches born at its period
+    doublings (docs/model.md section 12). Folds, period doublings, Neimark-Sacker points and
+    grazings are located; a branch ends at a grazing, at a bound of the parameter, after
+    ``max_points`` or when Newton fails, and says why (``end_reason``). Other arguments as
+    :func:`simulate`. Ctrl-C stops the work at its next transient cycle or orbit
+    (:class:`KeyboardInterrupt`); ``progress=True`` shows a tqdm bar of them.
+
+    Returns:
+        An :class:`xarray.Dataset`, identical to the CLI file's ``/continuation`` group
+        (``xarray.open_dataset(path, engine="h5netcdf", group="continuation")``) for the
+        same input: dimensions ``point`` (the orbits, branch after branch), ``oscillator``,
+        ``multiplier``, ``iterate`` (section crossings of the longest period), ``special``;
+        variables ``values`` (the parameter), ``x``, ``v``, ``strobe_x`` (NaN beyond a
+        point's period), ``period``, ``branch``, ``multipliers_re``, ``multipliers_im``,
+        ``stable``, ``min_gap``, ``min_impact_speed`` (inf: none), ``impacts_per_period``,
+        ``residual``, ``iterations``, ``special_index`` (0-based point), ``special_kind``,
+        ``special_value``; attributes ``parameter``, ``phase``, ``start``, ``stop``,
+        ``step``, ``end_reason``. A failure of Newton at the start is a result: no point,
+        and ``end_reason`` says why.
+
+    Raises:
+        ImportError: xarray is missing. ValueError: a bad argument, with the CLI's message.
+        TypeError: an argument of the wrong type. RuntimeError: the engine failed.
+        KeyboardInterrupt: Ctrl-C.
+    """
+    try:
+        import xarray as xr
+    except ImportError:
+        raise ImportError("api.continuation returns an xarray.Dataset: pip install xarray"
+                          ) from None
+    cfg, args = _continuation_args(n, amplitude, omega, damping, restitution, spacing,
+                                   boundary, x0, v0, transient, phase, stick_speed, parameter,
+                                   stop, step, period, max_points, doublings)
+    out = _continue(args, progress)
+    return _continuation_dataset(xr, out, cfg, args)
+
+
+def periodic_orbit(
+    n: int,
+    amplitude: float,
+    omega: float,
+    damping: float = 0.05,
+    restitution: float = 0.7,
+    spacing: float | ArrayLike = 1.0,
+    boundary: str = "fixed",
+    x0: ArrayLike | None = None,
+    v0: ArrayLike | None = None,
+    transient: int = 0,
+    period: int = 1,
+    *,
+    phase: float = 0.0,
+    stick_speed: float = 1.0e-9,
+    progress: bool = False,
+) -> PeriodicOrbit:
+    """The period-``period`` orbit (p in 1..10000 drive cycles) that Newton shooting finds
+    from the state on the section (drive phase ``phase``) after ``transient`` cycles from
+    ``x0``, ``v0``: the CLI's ``&continuation max_points = 1`` run (the same Fortran call;
+    the orbit is that file's one point). Other arguments as :func:`simulate`.
+
+    Returns:
+        A :class:`PeriodicOrbit`. Newton's failure is a result, not an exception:
+        ``converged`` False and ``reason`` (an orbit that rests on a wall, no decrease of the
+        residual at a grazing, ...), with the last iterate's state, Jacobian and impacts.
+
+    Raises:
+        ValueError: a bad argument, with the CLI's message. TypeError: an argument of the
+        wrong type. RuntimeError: the engine failed. KeyboardInterrupt: Ctrl-C.
+    """
+    _, args = _continuation_args(n, amplitude, omega, damping, restitution, spacing,
+                                 boundary, x0, v0, transient, phase, stick_speed,
+                                 "amplitude", 0.0, 0.0, period, 1, 0)
+    out = _continue(args, progress)
+    converged = bool(out["sizes"][4])
+    multipliers = out["start_mult_re"] + 1j * out["start_mult_im"]
+    return PeriodicOrbit(
+        converged=converged,
+        reason=_text(out["start_reason"]),
+        residuals=_frozen(out["start_residuals"]),
+        x=_frozen(out["start_x"]),
+        v=_frozen(out["start_v"]),
+        multipliers=_frozen(multipliers if converged else np.zeros(0, dtype=np.complex128)),
+        impacts=int(out["start_bonds"].size),
+        impact_bonds=_frozen(out["start_bonds"]),
+        min_impact_speed=float(out["start_min_impact_speed"]),
+        min_gap=float(out["start_min_gap"]),
+        stable=bool(out["stable"][0]) if out["values"].size else False,
+        jacobian=_frozen(out["start_jac"]),
+    )
+
+
+def _continuation_args(n: Any, amplitude: Any, omega: Any, damping: Any, restitution: Any,
+                       spacing: Any, boundary: Any, x0: Any, v0: Any, transient: Any,
+                       phase: Any, stick_speed: Any, parameter: Any, stop: Any, step: Any,
+                       period: Any, max_points: Any, doublings: Any
+                       ) -> tuple[dict[str, Any], dict[str, Any]]:
+    """The run's arguments (as :func:`_config`) and those of ``ic_continuation``."""
+    cfg = _config(n, amplitude, omega, damping, restitution, spacing, boundary, x0, v0,
+                  transient, 1, phase, stick_speed, 4096.0)
+    args = {key: cfg[key] for key in ("n", "spacing", "damping", "restitution", "amplitude",
+                                      "omega", "boundary", "explicit", "x0", "v0",
+                                      "transient", "phase", "stick_speed")}
+    args.update(
+        parameter=_name(parameter, "parameter"),
+        stop=_float(stop, "stop"),
+        step=_float(step, "step"),
+        period=_int32(period, "&continuation: period", "1..10000 (drive cycles)"),
+        max_points=_int32(max_points, "&continuation: max_points", ">= 1"),
+        doublings=_int32(doublings, "&continuation: doublings", "0..8"),
+    )
+    return cfg, args
+
+
+def _continue(args: dict[str, Any], progress: bool) -> dict[str, Any]:
+    """Validate, then run ``ic_continuation`` with room for the results guessed; once more
+    with the exact room if a guess was short (the run repeats itself bit for bit). The
+    outputs come back cut to their sizes."""
+    kernels = _extension()
+    no_control = np.zeros(4, dtype=np.int64)
+    out = dict(zip(CONTINUATION_OUTPUTS, kernels.ic_continuation(
+        **args, dry_run=1, nscap=1, ntext=1, nrcap=1, nbcap=1,
+        strobe_x=np.empty((1, 1, 1), order="F"), control=no_control), strict=True))
+    _raise_for(out["status"], out["msg_len"], out["message"])
+    room = _first_room(args)
+    for _ in range(2):
+        strobe = np.empty((args["n"], room["nlong"], room["npcap"]), order="F")
+        call = dict(args, dry_run=0, strobe_x=strobe,
+                    **{k: room[k] for k in ("nscap", "ntext", "nrcap", "nbcap")})
+        result = _watched(kernels.ic_continuation, call, progress, _CONTINUATION_STAGES)
+        out = dict(zip(CONTINUATION_OUTPUTS, result, strict=True), strobe_x=strobe)
+        if out["status"] != _STATUS_CAPACITY:
+            break
+        for key, size in zip(_CONTINUATION_SIZES, out["sizes"]):
+            if key is not None:
+                room[key] = max(room[key], int(size))
+    _raise_for(out["status"], out["msg_len"], out["message"])
+    points, specials, longest, reason, _, residuals, impacts, start_reason = (
+        int(i) for i in out["sizes"])
+    cut = {"strobe_x": (slice(None), slice(longest), slice(points)),
+           "x": (slice(None), slice(points)), "v": (slice(None), slice(points)),
+           "mult_re": (slice(None), slice(points)), "mult_im": (slice(None), slice(points)),
+           "special_kind": (slice(None), slice(specials)),
+           "end_reason": slice(reason), "start_reason": slice(start_reason),
+           "start_residuals": slice(residuals), "start_bonds": slice(impacts)}
+    for key in ("values", "periods", "branch", "stable", "min_gap", "min_impact_speed",
+                "impacts", "residual", "iterations"):
+        cut[key] = slice(points)
+    for key in ("special_index", "special_value"):
+        cut[key] = slice(specials)
+    return {key: value[cut[key]] if key in cut else value for key, value in out.items()}
+
+
+def _first_room(args: dict[str, Any]) -> dict[str, int]:
+    """ic_continuation's capacities for a first call: every crossing of the longest period
+    the branches can have, the points of max_points per branch and a few special points
+    (within about 64 MB), and ample room for texts, Newton's residuals and impacts."""
+    n, period = args["n"], args["period"]
+    nlong = period * 2 ** args["doublings"]
+    per_point = 8 * (n * nlong + 6 * n + 8)
+    return dict(npcap=min(args["max_points"] * (1 + args["doublings"]) + 16,
+                          max(16, _FIRST_CONTINUATION_BYTES // per_point)),
+                nlong=nlong, nscap=64, ntext=4096, nrcap=64,
+                nbcap=min(max(1024, 16 * (n + 1) * period), 1 << 20))
+
+
+def _continuation_dataset(xr: Any, out: dict[str, Any], cfg: dict[str, Any],
+                          args: dict[str, Any]) -> Any:
+    """ic_continuation's arrays (Fortran order) as the file's /continuation group: the same
+    dimensions, coordinates, variables, their attributes (chain_branch_file's describe_all)
+    and the group's attributes."""
+    parameter = _text(args["parameter"])
+    unit = _PARAMETER_UNITS[parameter]
+    points = out["values"].size
+    n = cfg["n"]
+
+    def described(dims: tuple[str, ...], values: Any, long_name: str,
+                  model_units: str | None = None) -> tuple[Any, ...]:
+        attrs = {"long_name": long_name, "units": "1"}
+        if model_units is not None:
+            attrs["model_units"] = model_units
+        return (dims, np.ascontiguousarray(values), attrs)
+
+    def index(name: str, first: int, count: int, long_name: str) -> tuple[Any, ...]:
+        return described((name,), np.arange(first, first + count, dtype=np.int32), long_name)
+
+    kinds = [bytes(np.asarray(k).astype(np.uint8)).split(b"\0")[0].decode()
+             for k in np.asarray(out["special_kind"]).T]
+    coords = {
+        "point": index("point", 0, points, "point index (in the order found, branch after "
+                                           "branch)"),
+        "oscillator": index("oscillator", 1, n, "oscillator index"),
+        "multiplier": index("multiplier", 1, 2 * n, "multiplier index"),
+        "iterate": index("iterate", 1, out["strobe_x"].shape[1],
+                         "section crossing of the period"),
+        "special": index("special", 0, len(kinds), "special point index"),
+    }
+    p, po, pm = ("point",), ("point", "oscillator"), ("point", "multiplier")
+    data = {
+        "values": described(p, out["values"], f"{parameter} (the continued parameter) at the "
+                            "point", unit),
+        "x": described(po, out["x"].T, "displacement from equilibrium on the section, the "
+                       "orbit's state", "length"),
+        "v": described(po, out["v"].T, "velocity on the section, the orbit's state",
+                       "length/time"),
+        "strobe_x": described(("point", "iterate", "oscillator"),
+                              out["strobe_x"].transpose(2, 1, 0), "displacement at the "
+                              "section crossings of one period (NaN beyond the period)",
+                              "length"),
+        "period": described(p, out["periods"], "period of the orbit", "drive cycles"),
+        "branch": described(p, out["branch"], "branch index (0: the first; 1, 2, ...: "
+                            "branches switched to at period doublings)"),
+        "multipliers_re": described(pm, out["mult_re"].T, "Floquet multiplier, real part"),
+        "multipliers_im": described(pm, out["mult_im"].T,
+                                    "Floquet multiplier, imaginary part"),
+        "stable": described(p, out["stable"], "stability (1: every multiplier inside the "
+                            "unit circle)"),
+        "min_gap": described(p, out["min_gap"], "smallest gap at a local minimum over one "
+                             "period, other than a bond's own impacts (inf: none)", "length"),
+        "min_impact_speed": described(p, out["min_impact_speed"], "smallest impact speed "
+                                      "over one period (inf: no impacts)", "length/time"),
+        "impacts_per_period": described(p, out["impacts"], "impacts over one period"),
+        "residual": described(p, out["residual"],
+                              "Newton's last residual |P(z) - z| / (1 + |z|)"),
+        "iterations": described(p, out["iterations"], "Newton iterations of the point"),
+        "special_index": described(("special",), out["special_index"],
+                                   "the point (0-based index) of the special point"),
+        "special_kind": described(("special",), np.array(kinds, dtype=str),
+                                  "fold, period-doubling, neimark-sacker or grazing"),
+        "special_value": described(("special",), out["special_value"],
+                                   f"{parameter} at the special point", unit),
+    }
+    spacing = np.asarray(cfg["spacing"])
+    start = float(spacing[0]) if parameter == "spacing" else cfg[parameter]
+    attrs = dict(parameter=parameter, phase=cfg["phase"], start=start, stop=args["stop"],
+                 step=args["step"], end_reason=_text(out["end_reason"]))
+    return xr.Dataset(data, coords=coords, attrs=attrs)
+
+
 # ------------------------------------------------------------------------------ helpers
 
 
@@ -815,7 +1143,8 @@ def _call_run(kernels: Any, cfg: dict[str, Any], dry_run: bool, nr: int = 0, nc:
     return dict(zip(RUN_OUTPUTS, result, strict=True)) | records
 
 
-def _watched(kernel: Callable[..., Any], args: dict[str, Any], progress: bool) -> Any:
+def _watched(kernel: Callable[..., Any], args: dict[str, Any], progress: bool,
+             stages: Mapping[int, tuple[str, str]] = _STAGES) -> Any:
     """``kernel(**args, control=...)`` in a worker thread, watched from this one.
 
     The kernel releases the GIL and polls ``control`` (int64, 4 values: chain_bridge's
@@ -832,7 +1161,7 @@ def _watched(kernel: Callable[..., Any], args: dict[str, Any], progress: bool) -
         except BaseException as exc:  # handed to the calling thread
             outcome["error"] = exc
 
-    bar = _ProgressBar() if progress else None
+    bar = _ProgressBar(stages) if progress else None
     worker = threading.Thread(target=work, name="impactchain-kernel", daemon=True)
     worker.start()
     try:
@@ -855,22 +1184,23 @@ def _watched(kernel: Callable[..., Any], args: dict[str, Any], progress: bool) -
 class _ProgressBar:
     """A tqdm bar per stage of a watched kernel (a new one when the stage changes)."""
 
-    def __init__(self) -> None:
+    def __init__(self, stages: Mapping[int, tuple[str, str]] = _STAGES) -> None:
         try:
             from tqdm.auto import tqdm
         except ImportError:
             raise ImportError("progress=True needs tqdm: pip install tqdm") from None
         self._tqdm = tqdm
+        self._stages = stages
         self._bar: Any = None
         self._stage = 0
 
     def show(self, control: NDArray[np.int64]) -> None:
         stage, done, total = (int(c) for c in control[1:4])
-        if stage not in _STAGES:
+        if stage not in self._stages:
             return
         if stage != self._stage:
             self.close()
-            description, unit = _STAGES[stage]
+            description, unit = self._stages[stage]
             self._bar = self._tqdm(total=total, desc=description, unit=unit, leave=False)
             self._stage = stage
         self._bar.total = total

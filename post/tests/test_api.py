@@ -15,6 +15,9 @@ What these tests demonstrate:
    and draws with the gallery's figure function. (That ``pip install`` builds the extension
    in a fresh environment is post/tests/test_install.py's; ``make test`` installs the package
    before running pytest.)
+5. Long calls stop on Ctrl-C and show progress; sweeps and continuations of periodic orbits
+   return the CLI file's groups (``/sweep``, ``/continuation``) as xarray reads them, bit for
+   bit; a periodic orbit is the CLI's Newton-only continuation point.
 
 Tests that need the extension are skipped when it cannot be imported, unless the
 environment variable IMPACTCHAIN_REQUIRE_EXTENSION is set (``make test`` sets it), in which
@@ -306,10 +309,11 @@ def test_threads_give_the_same_results() -> None:
 
 
 @pytest.mark.parametrize("kernel, names", [("ic_run", "RUN_OUTPUTS"),
-                                           ("ic_sweep", "SWEEP_OUTPUTS")])
+                                           ("ic_sweep", "SWEEP_OUTPUTS"),
+                                           ("ic_continuation", "CONTINUATION_OUTPUTS")])
 def test_extension_outputs_in_documented_order(kernel: str, names: str) -> None:
-    """api.RUN_OUTPUTS / SWEEP_OUTPUTS name the tuples f2py returns; a reordered layer must
-    fail here."""
+    """api.RUN_OUTPUTS / SWEEP_OUTPUTS / CONTINUATION_OUTPUTS name the tuples f2py returns; a
+    reordered layer must fail here."""
     first_line = getattr(api._extension(), kernel).__doc__.splitlines()[0]
     returned = first_line.split(" = ")[0].split(",")
     assert tuple(returned) == getattr(api, names)
@@ -465,7 +469,7 @@ def test_no_leak() -> None:
 
     def calls(count: int) -> None:
         for i in range(count):
-            kind = i % 6
+            kind = i % 7
             if kind == 0:
                 api.simulate(4, 1.7, 1.5, cycles=5)
             elif kind == 1:
@@ -480,9 +484,11 @@ def test_no_leak() -> None:
                 api.poincare_jacobian(zeros, zeros, 1.7, 1.5)
             elif kind == 4:
                 api.random_start(4, seed=i, x_amp=0.3)
-            else:
+            elif kind == 5:
                 with pytest.raises(ValueError):
                     api.simulate(4, 1.7, 1.5, damping=1.5, cycles=5)
+            else:
+                api.periodic_orbit(4, 1.7, 1.5, transient=5)
 
     calls(500)
     before = _rss_kib()
@@ -557,6 +563,8 @@ _LONG_CALLS = {
     "exponents": "api.lyapunov(16, 1.7, 1.5, transient=10, cycles=10**6)",
     "sweep": ("api.sweep(8, 6.0, 1.9, transient=250, cycles=50, parameter='amplitude', "
               "start=6.0, stop=1.0, step=-1e-5, threads=1)"),
+    "continuation": ("api.continuation(16, 1.7, 1.5, transient=10**10, "
+                     "parameter='amplitude', stop=3.0, step=0.01)"),
 }
 _CHILD = """
 import sys, time
@@ -645,7 +653,7 @@ def test_sweep_is_the_cli_file(name: str, cli: Path, tmp_path: Path) -> None:
     assert result.returncode == 0, result.stderr
     ds = api.sweep(**run, **python_args, threads=2)
     with xr.open_dataset(tmp_path / "run.h5", engine="h5netcdf", group="sweep") as f:
-        xr.testing.assert_identical(ds.drop_attrs(), f.load().drop_attrs())
+        xr.testing.assert_identical(ds.drop_attrs(deep=False), f.load().drop_attrs(deep=False))
         for key in ("parameter", "parameter2", "mode"):
             assert ds.attrs[key] == f.attrs[key]
     # the figures take the Dataset as they take the file: the same Sweep, field by field
@@ -700,3 +708,178 @@ def test_extension_needs_no_executable_stack() -> None:
         flags[p_type] = p_flags
     pt_gnu_stack, pf_x = 0x6474E551, 1
     assert pt_gnu_stack in flags and not flags[pt_gnu_stack] & pf_x
+
+
+# ------------------------------------------- 5. periodic orbits and their branches, from Python
+
+# Figure 10's chain (n = 8, b = 0.05, K = 0.5, omega = 1.9) from rest after 5 cycles
+FIG10 = dict(n=8, omega=1.9, damping=0.05, restitution=0.5, transient=5)
+CONTINUATIONS: dict[str, tuple[float, dict[str, Any], str, float]] = {
+    # A = 1 upwards: the forced response, no impacts, until the walls are grazed
+    "grazing": (1.0, dict(parameter="amplitude", stop=3.5, step=0.1), "grazing",
+                2.6169065707475),
+    # A = 3 downwards on the impacting branch: it folds back near A = 2.885
+    "fold": (3.0, dict(parameter="amplitude", stop=2.0, step=-0.05), "fold", 2.8851913052),
+}
+
+
+def _continuation_namelist(amplitude: float, group: dict[str, Any]) -> str:
+    keys = ", ".join(f"{key} = {value!r}" for key, value in group.items())
+    return (namelist(**{**FIG10, "amplitude": amplitude}, cycles=1, events=False)
+            + f"&continuation {keys} /\n")
+
+
+def _file_group(xr: Any, path: Path) -> Any:
+    with xr.open_dataset(path, engine="h5netcdf", group="continuation") as f:
+        return f.load()
+
+
+def assert_same_bits(mine: Any, theirs: Any) -> None:
+    """xarray's identical, and every float of every variable the same bits (NaN included)."""
+    import xarray as xr
+
+    xr.testing.assert_identical(mine, theirs)
+    for name in mine.variables:
+        a, b = mine[name].values, theirs[name].values
+        if a.dtype.kind == "f":
+            np.testing.assert_array_equal(a.view(np.uint64), b.view(np.uint64), err_msg=name)
+
+
+@pytest.mark.parametrize("name", sorted(CONTINUATIONS))
+def test_continuation_is_the_cli_file(name: str, cli: Path, tmp_path: Path) -> None:
+    """api.continuation returns the CLI file's /continuation group as xarray reads it: the
+    same dimensions, coordinates, variables, attributes (the group's too), every value bit
+    for bit; the special point it ends at or passes is where it is known to be."""
+    xr = pytest.importorskip("xarray")
+    pytest.importorskip("h5netcdf")
+    amplitude, group, kind, where = CONTINUATIONS[name]
+    result = run_cli(cli, _continuation_namelist(amplitude, group), tmp_path)
+    assert result.returncode == 0, result.stderr
+    ds = api.continuation(**FIG10, amplitude=amplitude, **group)
+    assert_same_bits(ds, _file_group(xr, tmp_path / "run.h5"))
+    assert list(ds.special_kind.values) == [kind]
+    assert abs(float(ds.special_value[0]) - where) < 1e-8
+    assert ds.attrs["start"] == amplitude and ds.attrs["parameter"] == "amplitude"
+    assert (ds.iterations >= 0).all() and (ds.residual >= 0).all()
+    assert float(ds.residual.max()) <= 1e-9  # converged orbits, Newton's last residuals
+    assert ds.x.dims == ("point", "oscillator") and ds.strobe_x.sizes["iterate"] == 1
+
+
+def test_continuation_capacity_retry_is_invisible(monkeypatch: pytest.MonkeyPatch) -> None:
+    """With room for one of everything at first, the call runs again with the sizes the
+    first call reported, and returns what the first guess gives."""
+    xr = pytest.importorskip("xarray")
+    amplitude, group, _, _ = CONTINUATIONS["fold"]
+    ample = api.continuation(**FIG10, amplitude=amplitude, **group)
+    monkeypatch.setattr(api, "_first_room", lambda args: dict(
+        npcap=1, nlong=1, nscap=1, ntext=1, nrcap=1, nbcap=1))
+    xr.testing.assert_identical(api.continuation(**FIG10, amplitude=amplitude, **group), ample)
+
+
+def test_periodic_orbit_is_the_cli_point(cli: Path, tmp_path: Path) -> None:
+    """api.periodic_orbit is the one point of the CLI's &continuation max_points = 1 file
+    (an impacting orbit of figure 10's chain), with Newton's history, its Jacobian (whose
+    eigenvalues are the multipliers) and the bonds of its impacts (those of the simulator's
+    events over one period from the orbit's state)."""
+    xr = pytest.importorskip("xarray")
+    pytest.importorskip("h5netcdf")
+    text = _continuation_namelist(3.0, dict(parameter="amplitude", max_points=1))
+    assert run_cli(cli, text, tmp_path).returncode == 0
+    f = _file_group(xr, tmp_path / "run.h5")
+    assert f.sizes["point"] == 1
+    orbit = api.periodic_orbit(**FIG10, amplitude=3.0)
+    assert orbit.converged and orbit.reason == "" and orbit.stable == bool(f.stable[0])
+    np.testing.assert_array_equal(orbit.x, f.x[0])
+    np.testing.assert_array_equal(orbit.v, f.v[0])
+    np.testing.assert_array_equal(orbit.multipliers.real, f.multipliers_re[0])
+    np.testing.assert_array_equal(orbit.multipliers.imag, f.multipliers_im[0])
+    assert orbit.min_gap == float(f.min_gap[0])
+    assert orbit.min_impact_speed == float(f.min_impact_speed[0])
+    assert orbit.impacts == int(f.impacts_per_period[0]) == orbit.impact_bonds.size > 0
+    assert orbit.residuals[-1] == float(f.residual[0])
+    assert orbit.residuals.size == int(f.iterations[0]) + 1
+    # the same Fortran call as a continuation of one point
+    assert_same_bits(api.continuation(**FIG10, amplitude=3.0, parameter="amplitude", stop=0.0,
+                                      step=0.0, max_points=1), f)
+    eigenvalues = np.linalg.eigvals(orbit.jacobian)
+    for mu in orbit.multipliers:
+        assert np.min(np.abs(eigenvalues - mu)) < 1e-10
+    sim = api.simulate(8, 3.0, 1.9, damping=0.05, restitution=0.5, x0=orbit.x, v0=orbit.v,
+                       cycles=1)
+    hits = (sim.event_kind == api.IMPACT) | ((sim.event_kind == api.STICK)
+                                            & (sim.event_speed > 0))
+    np.testing.assert_array_equal(orbit.impact_bonds, sim.event_site[hits])
+    for array in (orbit.x, orbit.multipliers, orbit.jacobian, orbit.impact_bonds):
+        assert not array.flags.writeable
+
+
+def test_newton_failure_is_a_result(cli: Path, tmp_path: Path) -> None:
+    """An orbit that rests on the left wall once per cycle (test_corners' chain): Newton
+    fails, which is a result with its reason, not an exception; the continuation from there
+    has no point and says why, as the CLI's file does."""
+    xr = pytest.importorskip("xarray")
+    pytest.importorskip("h5netcdf")
+    chain = dict(n=2, amplitude=1.0, omega=0.4, damping=0.1, restitution=0.5,
+                 spacing=[0.5, 0.5, 3.0], x0=[0.0, 0.0])
+    orbit = api.periodic_orbit(**chain)
+    assert not orbit.converged and "sticks on a wall" in orbit.reason
+    assert orbit.multipliers.size == 0 and not orbit.stable and orbit.min_gap == math.inf
+    assert orbit.residuals.size >= 1 and orbit.jacobian.shape == (4, 4)
+    text = namelist(**chain, cycles=1, events=False) + \
+        "&continuation parameter = 'amplitude', max_points = 1 /\n"
+    assert run_cli(cli, text, tmp_path).returncode == 0
+    f = _file_group(xr, tmp_path / "run.h5")
+    ds = api.continuation(**chain, parameter="amplitude", stop=0.0, step=0.0, max_points=1)
+    assert_same_bits(ds, f)
+    assert ds.sizes["point"] == 0 and orbit.reason in ds.attrs["end_reason"]
+
+
+# (the API's arguments beyond FIG10 at A = 1, the namelist's &continuation group)
+BAD_CONTINUATIONS: dict[str, tuple[dict[str, Any], str]] = {
+    "parameter": (dict(parameter="amplitdue", stop=2.0, step=0.1),
+                  "parameter = 'amplitdue', stop = 2.0, step = 0.1"),
+    "period": (dict(parameter="amplitude", stop=2.0, step=0.1, period=0),
+               "parameter = 'amplitude', stop = 2.0, step = 0.1, period = 0"),
+    "doublings": (dict(parameter="amplitude", stop=2.0, step=0.1, doublings=9),
+                  "parameter = 'amplitude', stop = 2.0, step = 0.1, doublings = 9"),
+    "step sign": (dict(parameter="amplitude", stop=2.0, step=-0.1),
+                  "parameter = 'amplitude', stop = 2.0, step = -0.1"),
+    "stop invalid": (dict(parameter="restitution", stop=1.5, step=0.1),
+                     "parameter = 'restitution', stop = 1.5, step = 0.1"),
+    "spacing list": (dict(parameter="spacing", stop=1.5, step=0.1,
+                          spacing=[1.0] * 8 + [1.1]),
+                     "parameter = 'spacing', stop = 1.5, step = 0.1"),
+}
+
+
+@pytest.mark.parametrize("name", sorted(BAD_CONTINUATIONS))
+def test_continuation_errors_match_cli(name: str, cli: Path, tmp_path: Path) -> None:
+    """A bad &continuation raises ValueError with the CLI's message, before any work."""
+    args, group = BAD_CONTINUATIONS[name]
+    chain = {**FIG10, "amplitude": 1.0, "spacing": args.get("spacing", 1.0)}
+    text = namelist(**chain, cycles=1, events=False) + f"&continuation {group} /\n"
+    expected = cli_error(cli, text, tmp_path)
+    assert expected.startswith("&continuation")
+    call = {key: value for key, value in args.items() if key != "spacing"}
+    with pytest.raises(ValueError) as info:
+        api.continuation(**chain, **call)
+    assert str(info.value) == expected
+    if name == "period":
+        with pytest.raises(ValueError, match=re.escape(expected)):
+            api.periodic_orbit(**{**chain, "period": 0})
+
+
+def test_continuation_progress_shows_and_changes_nothing(
+        capfd: pytest.CaptureFixture[str]) -> None:
+    """progress=True draws a bar of the transient, then one of the orbits found, and leaves
+    every number as it was."""
+    xr = pytest.importorskip("xarray")
+    pytest.importorskip("tqdm")
+    args = dict(n=64, amplitude=3.0, omega=1.9, damping=0.05, restitution=0.5,
+                transient=200_000, parameter="amplitude", stop=2.0, step=-0.05)
+    quiet = api.continuation(**args)
+    capfd.readouterr()
+    shown = api.continuation(**args, progress=True)
+    err = capfd.readouterr().err
+    assert "transient" in err and "orbits" in err, err
+    xr.testing.assert_identical(quiet, shown)

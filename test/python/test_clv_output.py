@@ -1,0 +1,96 @@
+"""/clv of a run with covariant Lyapunov vectors (docs/model.md section 14): its layout read by
+h5py and xarray (named dimensions, coordinates the records' drive cycles), numbers that must
+hold whatever the chain (unit vectors, weights summing to 1, participation ratios in [1/n, 1],
+the vectors' growth rates against /lyapunov), the input checked key by key, and a run stopped
+early, which is run again rather than continued."""
+from __future__ import annotations
+
+import signal
+import subprocess
+import time
+
+import h5py
+import numpy as np
+import pytest
+
+from simulator import impactchain_exe, run_namelist  # noqa: F401 (fixture)
+
+RUN = """&chain n = 4, amplitude = 4.15, omega = 1.5, restitution = 0.85 /
+&initial kind = 'random', seed = 3, x_amp = 0.2, v_amp = 0.2 /
+&run transient = 100, cycles = 700, record_events = .false. /
+&lyapunov covariant = .true., clv_transient = 200, clv_store = 3, clv_save = 2 {extra}/
+&output file = 'clv.h5' /
+"""
+
+
+def test_clv_group_layout_and_invariants(impactchain_exe, tmp_path):
+    run_namelist(impactchain_exe, RUN.format(extra=""), tmp_path)
+    with h5py.File(tmp_path / "clv.h5") as f:
+        g = f["clv"]
+        kept = 700 - 200
+        assert g["ipr"].shape == (kept, 8)
+        assert g["site_weight"].shape == (kept, 3, 4)
+        assert g["min_angle"].shape == (kept,)
+        assert g["vectors"].shape == (2, 8, 8)
+        assert g.attrs["clv_transient"] == 200 and g.attrs["unstable"] == 1
+        np.testing.assert_array_equal(g["cycle"][:], f["strobe/cycle"][:kept])
+        np.testing.assert_array_equal(g["saved_cycle"][:], f["strobe/cycle"][kept - 2:kept])
+        np.testing.assert_allclose(np.linalg.norm(g["vectors"][:], axis=2), 1, atol=1e-14)
+        np.testing.assert_allclose(g["site_weight"][:].sum(axis=2), 1, atol=1e-14)
+        ipr = g["ipr"][:]
+        assert np.all((ipr >= 0.25 - 1e-14) & (ipr <= 1))
+        angle = g["min_angle"][:]
+        assert np.all((angle > 0) & (angle <= np.pi / 2))
+        # the weights of the first vectors are those of their own participation ratios
+        np.testing.assert_allclose((g["site_weight"][:] ** 2).sum(axis=2), ipr[:, :3],
+                                   rtol=1e-12)
+        gap = np.abs(g["exponents"][:] - f["lyapunov/exponents"][:])
+        assert np.all(gap <= 3 * np.hypot(g["stderr"][:], f["lyapunov/stderr"][:]))
+        assert np.all(g["stderr_block"][:] >= 1) and np.all(g["stderr"][:] > 0)
+        assert g["exponents"].attrs["units"] == "bit"
+        assert g["min_angle"].attrs["units"] == "radian"
+
+
+def test_clv_group_is_a_netcdf_group(impactchain_exe, tmp_path):
+    xr = pytest.importorskip("xarray")
+    run_namelist(impactchain_exe, RUN.format(extra=""), tmp_path)
+    with xr.open_dataset(tmp_path / "clv.h5", group="clv") as ds:
+        assert ds["ipr"].dims == ("cycle", "vector")
+        assert ds["site_weight"].dims == ("cycle", "leading_vector", "oscillator")
+        assert ds["vectors"].dims == ("saved_cycle", "vector", "component")
+        assert ds["exponents"].dims == ("vector",)
+        assert list(ds["vector"].values) == list(range(1, 9))
+        assert ds["cycle"].values[0] == 101
+
+
+@pytest.mark.parametrize("extra, needle", [
+    ("clv_transient = 700", "clv_transient = 700 is outside [1, cycles - 1 = 699]"),
+    ("clv_store = 9", "clv_store = 9 is outside [0, vectors = 8]"),
+    ("clv_save = 501", "clv_save = 501 is outside [0, cycles - clv_transient = 500]"),
+    ("qr_every = 3", "qr_every = 3 must be 0 or 1"),
+    ("enabled = .false.", "covariant = .true. needs enabled = .true."),
+])
+def test_bad_keys_are_named(impactchain_exe, tmp_path, extra, needle):
+    result = run_namelist(impactchain_exe, RUN.format(extra=", " + extra), tmp_path,
+                          check=False)
+    assert result.returncode == 1
+    assert needle in result.stderr, result.stderr
+    assert not list(tmp_path.glob("*.h5*"))
+
+
+def test_stopped_run_is_run_again_not_continued(impactchain_exe, tmp_path):
+    text = RUN.format(extra="").replace("cycles = 700", "cycles = 2000000")
+    (tmp_path / "input.nml").write_text(text)
+    run = subprocess.Popen([str(impactchain_exe), "--quiet", "input.nml"], cwd=tmp_path,
+                           stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    time.sleep(1.5)
+    run.send_signal(signal.SIGINT)
+    _, stderr = run.communicate(timeout=60)
+    assert run.returncode == 3, stderr
+    assert "without covariant vectors" in stderr
+    with h5py.File(tmp_path / "clv.h5") as f:
+        assert f.attrs["complete"] == 0 and "clv" not in f
+    again = subprocess.run([str(impactchain_exe), "--quiet", "input.nml"], cwd=tmp_path,
+                           capture_output=True, text=True, timeout=60)
+    assert again.returncode == 1
+    assert "cannot be continued" in again.stderr and "overwrite" in again.stderr
