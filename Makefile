@@ -139,7 +139,7 @@ FIGURES := $(foreach f,fig1a fig1b fig1c fig1d fig2a fig2b fig2c fig2d fig2e fig
            figures/fig10_branches.png $(CENSUS_FIGURES)
 # Attractor censuses at the paper's disputed figures (README, Basin fractions): their inputs
 # live in gallery/census/, not namelists/, because test/python/test_recipes.py reruns every
-# recipe in namelists/ in CI and these take minutes (about 18 on 2 threads, all six).
+# recipe in namelists/ in CI and these take minutes (about 750 CPU seconds, all six).
 CENSUS := gallery/census
 CENSUS_FIGURES := $(foreach f,fig1a fig1b fig1d fig2 fig3,figures/census_$(f).png) \
                   figures/census_fig3_plane.png
