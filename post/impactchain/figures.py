@@ -1085,7 +1085,8 @@ def clv_space_time(
             axis.set_ylabel(_label("time", TIME_LABEL_UNIT, "t"), fontsize="small")
         mean_ipr = float(np.mean(clv.ipr[rows, v - 1]))
         axis.set_title(f"vector {v}: $\\lambda_{{{v}}}$ = {clv.exponents[v - 1]:.3f} "
-                       f"$\\pm$ {clv.stderr[v - 1]:.3f}\nmean IPR {mean_ipr:.3f}",
+                       f"$\\pm$ {clv.stderr[v - 1]:.3f}\nmean IPR over these records "
+                       f"{mean_ipr:.3f}",
                        fontsize="small")
         axis.tick_params(labelsize="x-small")
     assert mesh is not None
@@ -1197,9 +1198,9 @@ def clv_angles(run: RunLike, bins: int = 40, near: float = NEAR_TANGENCY,
     ax.set_ylim(0.0, 1.08 * float(counts.max()))
     missing = clv.min_angle.size - angle.size
     note = f"; {missing} records without an angle" if missing else ""
-    ax.set_title(f"{_title(run)}\n{below / angle.size:.1%} of {angle.size} records below "
-                 f"{near:g} rad (smallest {float(angle.min()):.3g} rad, median "
-                 f"{float(np.median(angle)):.3g}){note}", fontsize="medium")
+    ax.set_title(f"{_title(run)}\n{below} of {angle.size} records ({below / angle.size:.1%}) "
+                 f"below {near:g} rad; smallest {float(angle.min()):.3g} rad, median "
+                 f"{float(np.median(angle)):.3g} rad{note}", fontsize="medium")
     _record_sources(fig, [run])
     return fig
 

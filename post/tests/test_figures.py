@@ -804,13 +804,13 @@ def test_clv_angles_histogram_counts_every_record(make_run: MakeRun) -> None:
     assert ax.get_xscale() == "log"
     finite = angle[np.isfinite(angle)]
     below = int(np.count_nonzero(finite < 0.1))
-    assert f"{below / 48:.1%} of 48 records below 0.1 rad" in ax.get_title()
+    assert f"{below} of 48 records ({below / 48:.1%}) below 0.1 rad" in ax.get_title()
     assert "2 records without an angle" in ax.get_title()
     (near,) = _lines(ax, "near")
     assert near.get_xdata()[0] == 0.1
     wider = figures.clv_angles(run, near=0.3).axes[0]
-    assert f"{np.count_nonzero(finite < 0.3) / 48:.1%} of 48 records below 0.3 rad" in \
-        wider.get_title()
+    wide = int(np.count_nonzero(finite < 0.3))
+    assert f"{wide} of 48 records ({wide / 48:.1%}) below 0.3 rad" in wider.get_title()
     with h5py.File(path, "r+") as f:
         f["clv/min_angle"][...] = np.nan
     with pytest.raises(figures.FigureError, match="holds no angle"):
