@@ -130,13 +130,14 @@ FIG1_Y := --ylim=-3.0,1.1
 FIG2_Y := --ylim=-2.3,1.2
 FIG12_Y := --ylim=0,11
 SINGLE := fig1a fig1b fig1c fig1d fig2a fig2b fig2c fig2d fig2e fig2f fig3_red fig3_green \
-          fig4_7
+          fig4_7 fig1c_clv
 SWEEPS := fig10 fig11_b005 fig11_b010 fig11_b015 fig12_K08 fig12_K06 fig12_K04 fig13
 FIGURES := $(foreach f,fig1a fig1b fig1c fig1d fig2a fig2b fig2c fig2d fig2e fig2f,figures/$(f).png) \
            figures/fig3.png figures/fig4.png figures/fig5.png figures/fig6.png \
            figures/fig7.png figures/fig8.png figures/fig10.png figures/fig11.png \
            figures/fig12_damping.png figures/fig12_restitution.png figures/fig13.png \
-           figures/fig10_branches.png $(CENSUS_FIGURES)
+           figures/fig10_branches.png figures/fig1c_clv_space_time.png \
+           figures/fig1c_clv_ipr.png figures/fig1c_clv_angles.png $(CENSUS_FIGURES)
 # Attractor censuses at the paper's disputed figures (README, Basin fractions): their inputs
 # live in gallery/census/, not namelists/, because test/python/test_recipes.py reruns every
 # recipe in namelists/ in CI and these take minutes (about 750 CPU seconds, all six).
@@ -172,6 +173,13 @@ figures/census_fig3_plane.png: $(RUNS)/census_fig3_plane.h5
 figures/census_%.png: $(RUNS)/census_%.h5
 	$(POST) basin-fractions $< -o $@ $(GALLERY)
 
+# the covariant vectors of figure 1c's chain (before the pattern rule of figures 1a-1d)
+figures/fig1c_clv_space_time.png: $(RUNS)/fig1c_clv.h5
+	$(POST) clv-space-time $< --vector 1,2 --start 2230 --cycles 120 -o $@ $(GALLERY)
+figures/fig1c_clv_ipr.png: $(RUNS)/fig1c_clv.h5
+	$(POST) clv-ipr $< -o $@ $(GALLERY)
+figures/fig1c_clv_angles.png: $(RUNS)/fig1c_clv.h5
+	$(POST) clv-angles $< -o $@ $(GALLERY)
 figures/fig1%.png: $(RUNS)/fig1%.h5
 	$(POST) space-amplitude $< -o $@ $(FIG1_Y) $(GALLERY)
 figures/fig2%.png: $(RUNS)/fig2%.h5

@@ -19,6 +19,7 @@ from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
+import numpy as np
 from matplotlib.figure import Figure
 
 from impactchain import figures
@@ -193,6 +194,23 @@ def _non_negative_int(text: str) -> int:
     if value < 0:
         raise argparse.ArgumentTypeError(f"{value} must be >= 0")
     return value
+def _clv_space_time_options(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--vector", type=_site_list, default=[1], metavar="J,K,...",
+                        help="covariant vectors to show, 1-based, one panel each; among the "
+                             "first clv_store (default: 1)")
+    parser.add_argument("--start", type=int, metavar="CYCLE",
+                        help="first cycle shown (default: the first record with vectors)")
+    parser.add_argument("--cycles", type=_positive_int, metavar="N",
+                        help="number of records shown from --start (default: all)")
+
+
+def _clv_angles_options(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--bins", type=_positive_int, default=40, metavar="B",
+                        help="logarithmically spaced bins (default: 40)")
+    parser.add_argument("--near", type=_positive_float, default=figures.NEAR_TANGENCY,
+                        metavar="RAD",
+                        help="angles below this count as near-tangencies in the title "
+                             f"(default: {figures.NEAR_TANGENCY:g})")
 
 
 def _all_options(parser: argparse.ArgumentParser) -> None:
@@ -271,6 +289,21 @@ COMMANDS: dict[str, Command] = {
                 "(census file with &census plane)",
                 ("census",), (), False, _plane_options,
                 lambda runs, a: figures.basin_plane(runs[0], a.point)),
+        Command("clv-space-time",
+                "weight of covariant Lyapunov vectors along the chain against time, with "
+                "the collisions",
+                ("clv/site_weight",), ("events",), False, _clv_space_time_options,
+                lambda runs, a: figures.clv_space_time(runs[0], a.vector, a.cycles,
+                                                       a.start)),
+        Command("clv-ipr",
+                "inverse participation ratio of each covariant vector, with its growth rate",
+                ("clv",), (), False, _no_options,
+                lambda runs, a: figures.clv_ipr(runs[0])),
+        Command("clv-angles",
+                "histogram of the smallest angle between the unstable covariant vectors and "
+                "the others",
+                ("clv",), (), False, _clv_angles_options,
+                lambda runs, a: figures.clv_angles(runs[0], a.bins, a.near)),
     )
 }
 
@@ -367,6 +400,17 @@ def _all_figures(run: Run, args: argparse.Namespace) -> Iterator[tuple[str, Figu
         yield "basin-fractions", figures.basin_fractions(run)
         if run.census.plane is not None:
             yield "basin-plane", figures.basin_plane(run)
+    if run.clv is not None and run.clv.n_record:
+        if run.clv.stored:
+            # the first --panel-cycles records with vectors, as many as a shock-wave panel
+            yield "clv-space-time", figures.clv_space_time(run, 1, args.panel_cycles)
+        else:
+            _note(f"skipped clv-space-time: {run.path} holds no site weights (clv_store = 0)")
+        yield "clv-ipr", figures.clv_ipr(run)
+        if np.isfinite(run.clv.min_angle).any():
+            yield "clv-angles", figures.clv_angles(run)
+        else:
+            _note(f"skipped clv-angles: {run.path} holds no angle (no unstable-stable pair)")
 
 
 def _read(path: str, require: tuple[str, ...], optional: tuple[str, ...] | None,

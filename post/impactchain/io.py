@@ -25,6 +25,10 @@ HDF5 path                 dataclass field         shape (h5py / numpy order)
                                                   ``sample_attractor`` (P, N),
                                                   ``attractor_period`` (A, n),
                                                   ``fraction`` (P, A), ...
+/clv                      ``Run.clv``             ``cycle`` (R,), ``ipr`` (R, k),
+                                                  ``site_weight`` (R, m, n), ``min_angle``
+                                                  (R,), ``exponents`` (k,), ``vectors``
+                                                  (r, k, 2n), ...
 ========================  ======================  ===================================
 
 Version 2 (README "Output") is netCDF-4 readable: every group carries its dimensions and
@@ -83,6 +87,7 @@ __all__ = [
     "ATTRACTOR_KINDS",
     "Census",
     "period_pattern",
+    "Clv",
     "Run",
     "FILE_UNITS",
     "read_run",
@@ -144,6 +149,14 @@ FILE_UNITS: Mapping[str, str] = MappingProxyType({
     "census/attractor_lambda1_stderr": "bits per drive cycle",
     "census/attractor_x": "length",
     "census/attractor_v": "length/time",
+    "clv/cycle": "drive cycles",
+    "clv/exponents": "bits per drive cycle",
+    "clv/stderr": "bits per drive cycle",
+    "clv/stderr_block": "drive cycles",
+    "clv/ipr": "1",
+    "clv/site_weight": "1",
+    "clv/min_angle": "radian",
+    "clv/vectors": "1",
 })
 """The unit of each dataset in the model's reduced units (docs/model.md section 1.5): a
 version-2 file's ``model_units`` attribute (its ``units`` are UDUNITS', ``1`` for these),
@@ -151,7 +164,7 @@ a version-1 file's ``units``; the units of a run made in memory (:func:`run_from
 the defaults of the figures' axis labels."""
 
 OPTIONAL_GROUPS = ("initial", "final", "strobe", "events", "stats", "lyapunov", "sweep",
-                   "continuation", "census")
+                   "continuation", "census", "clv")
 
 _HINTS = {
     "strobe": "the run recorded no strobe snapshots",
@@ -162,6 +175,10 @@ _HINTS = {
     "sweep/ky_dimension": "the sweep did not compute Lyapunov exponents",
     "continuation": "this is not a continuation file",
     "census": "this is not a census file (no &census in its input)",
+    "clv": "covariant Lyapunov vectors were not computed in this run: &lyapunov covariant = "
+           ".false.",
+    "clv/site_weight": "the run stored no site weights of covariant vectors: &lyapunov "
+                       "clv_store = 0, or no covariant = .true.",
 }
 
 SPECIAL_KINDS = ("fold", "period-doubling", "neimark-sacker", "grazing")
@@ -480,6 +497,46 @@ class Census:
 
 
 @dataclass(frozen=True, eq=False)
+class Clv:
+    """Covariant Lyapunov vectors (``/clv``, docs/model.md section 14), record by record.
+
+    The records with vectors are the run's first ``R`` strobe records (``cycle``, the drive
+    cycle of each, as ``/strobe/cycle``); the last ``clv_transient`` records of the run only
+    brought the backward pass to convergence and have none. Vector ``i`` (0-based here,
+    ``i + 1`` in the file's coordinate) is in the order of the QR frame's columns, that of the
+    exponents of ``/lyapunov`` sorted descending. The per-oscillator weight of a vector is
+    ``x_i**2 + v_i**2`` of its two components at oscillator ``i``, normalised to sum 1.
+    """
+
+    cycle: np.ndarray  # (R,) drive cycle of each record with vectors
+    exponents: np.ndarray  # (k,) bits/cycle: each vector's own growth rate
+    stderr: np.ndarray  # (k,) bits/cycle, by blocking
+    stderr_block: np.ndarray  # (k,) records per block at which stderr was read off
+    ipr: np.ndarray  # (R, k) inverse participation ratio of the weights, 1/n .. 1
+    min_angle: np.ndarray  # (R,) rad: unstable span against the other vectors (NaN: none)
+    clv_transient: int  # records at the end of the run without vectors
+    unstable: int  # u: positive exponents of /lyapunov, the vectors spanning E_u
+    site_weight: np.ndarray | None = None  # (R, m, n) of the first m vectors; clv_store = 0
+    vectors: np.ndarray | None = None  # (r, k, 2n) unit vectors, x(1), v(1), x(2), ...
+    saved_cycle: np.ndarray | None = None  # (r,) drive cycle of each record in ``vectors``
+
+    @property
+    def n_record(self) -> int:
+        """Number of records with vectors, R."""
+        return int(self.cycle.shape[0])
+
+    @property
+    def k(self) -> int:
+        """Number of covariant vectors."""
+        return int(self.exponents.shape[0])
+
+    @property
+    def stored(self) -> int:
+        """Number of leading vectors whose site weights are stored, m (``clv_store``)."""
+        return 0 if self.site_weight is None else int(self.site_weight.shape[1])
+
+
+@dataclass(frozen=True, eq=False)
 class Run:
     """One impactchain output file."""
 
@@ -498,6 +555,7 @@ class Run:
     sweep: Sweep | None = None
     continuation: Continuation | None = None
     census: Census | None = None
+    clv: Clv | None = None
     units: Mapping[str, str] = field(default_factory=dict)
     resolved_namelist: str = ""  # every key as used; '' for an older file
 
@@ -628,6 +686,7 @@ def _read(f: h5py.File, path: str, wanted: set[str]) -> Run:
         "sweep": lambda g: _read_sweep(g, path, n),
         "continuation": lambda g: _read_continuation(g, path, n),
         "census": lambda g: _read_census(g, path, n),
+        "clv": lambda g: _read_clv(g, path, n),
     }
     parts: dict[str, Any] = {}
     for name, reader in readers.items():
@@ -967,6 +1026,36 @@ def _read_census(g: h5py.Group, path: str, n: int) -> Census:
         plane=plane,
         plane_range=plane_range,
         plane_points=plane_points,
+def _read_clv(g: h5py.Group, path: str, n: int) -> Clv:
+    exponents = _dataset(g, path, "exponents", (None,), float)
+    k = exponents.shape[0]
+    cycle = _dataset(g, path, "cycle", (None,), int)
+    r = cycle.shape[0]
+    unstable = _int(_attr(g, path, "unstable"), path, f"{g.name}@unstable")
+    if not 0 <= unstable <= k:
+        raise SchemaError(f"{path}: {g.name}@unstable = {unstable} is outside 0..{k}")
+    site_weight = None
+    if "site_weight" in g:
+        site_weight = _dataset(g, path, "site_weight", (r, None, n), float)
+        if site_weight.shape[1] > k:
+            raise SchemaError(f"{path}: {g.name}/site_weight holds {site_weight.shape[1]} "
+                              f"vectors, more than the {k} of {g.name}/exponents")
+    vectors = saved_cycle = None
+    if "vectors" in g or "saved_cycle" in g:
+        saved_cycle = _dataset(g, path, "saved_cycle", (None,), int)
+        vectors = _dataset(g, path, "vectors", (saved_cycle.shape[0], k, 2 * n), float)
+    return Clv(
+        cycle=cycle,
+        exponents=exponents,
+        stderr=_dataset(g, path, "stderr", (k,), float),
+        stderr_block=_dataset(g, path, "stderr_block", (k,), int),
+        ipr=_dataset(g, path, "ipr", (r, k), float),
+        min_angle=_dataset(g, path, "min_angle", (r,), float),
+        clv_transient=_int(_attr(g, path, "clv_transient"), path, f"{g.name}@clv_transient"),
+        unstable=unstable,
+        site_weight=site_weight,
+        vectors=vectors,
+        saved_cycle=saved_cycle,
     )
 
 

@@ -103,6 +103,7 @@ def write_run(
     omega: float = 1.5,
     transpose_strobe: bool = False,
     seed: int | None = None,
+    clv: bool | Mapping[str, Any] | None = None,
 ) -> Path:
     """Write a synthetic run file and return its path.
 
@@ -113,6 +114,7 @@ def write_run(
     values instead, False stores none. ``seed``: a random start with this seed, written
     into the input namelist and a ``resolved_namelist`` as the simulator writes them
     (without it: a start at rest, and no resolved namelist, as in an older file).
+    ``clv``: True or a mapping overriding :data:`DEFAULT_CLV` for a /clv group.
     """
     path = Path(path)
     period = 2 * math.pi / omega
@@ -155,6 +157,8 @@ def write_run(
             _write_lyapunov(f, n, records)
         if sweep:
             _write_sweep(f, n, {**DEFAULT_SWEEP, **(sweep if isinstance(sweep, Mapping) else {})})
+        if clv:
+            _write_clv(f, n, cycle, {**DEFAULT_CLV, **(clv if isinstance(clv, Mapping) else {})})
     return path
 
 
@@ -251,6 +255,66 @@ def _write_sweep(f: h5py.File, n: int, spec: Mapping[str, Any]) -> None:
         if spec["ky_dimension"]:
             # not those of the exponents (e.g. point 0: 4 + 0.2/0.7 for k = 6)
             _dataset(g, "ky_dimension", np.linspace(0.0, 3.0, points), "1")
+
+
+DEFAULT_CLV: dict[str, Any] = {
+    "transient": 10,
+    "store": 2,
+    "save": 1,
+    "unstable": 1,
+}
+"""The synthetic /clv of ``write_run(clv=True)``: records without vectors at the end, vectors
+with site weights, records with saved vectors, unstable vectors."""
+
+
+def clv_weights(n: int, records: int, stored: int) -> np.ndarray:
+    """Synthetic site weights (records, stored, n), each row summing to 1: vectors 1, 3, ...
+    on the left half of the chain (oscillators 1..n//2), vectors 2, 4, ... on the right."""
+    r = np.arange(records)[:, None, None]
+    j = np.arange(stored)[None, :, None]
+    i = np.arange(n)[None, None, :]
+    left = i < n // 2
+    on = np.where(j % 2 == 0, left, ~left)
+    w = on * (1.0 + 0.5 * np.cos(2 * math.pi * r / 7 + i + j))
+    return w / w.sum(axis=2, keepdims=True)
+
+
+def clv_min_angles(records: int) -> np.ndarray:
+    """Synthetic smallest angles (records,), rad: log-spaced from 0.01 to 1.5, shuffled."""
+    return np.random.default_rng(5).permutation(np.geomspace(0.01, 1.5, records))
+
+
+def clv_exponents(n: int) -> np.ndarray:
+    """The vectors' growth rates: not those of /lyapunov, so that a figure showing those
+    instead would be caught."""
+    return lyapunov_spectrum(n) + 0.01
+
+
+def _write_clv(f: h5py.File, n: int, cycle: np.ndarray, spec: Mapping[str, Any]) -> None:
+    """/clv as the simulator writes it (h5py order: records first)."""
+    g = f.create_group("clv")
+    k, stored, save = 2 * n, spec["store"], spec["save"]
+    kept = cycle[: cycle.size - spec["transient"]]
+    records = kept.size
+    weights = clv_weights(n, records, stored)
+    ipr = np.tile(np.linspace(0.3, 0.9, k), (records, 1))
+    ipr[:, :stored] = (weights ** 2).sum(axis=2)
+    _dataset(g, "cycle", kept, "1")
+    _dataset(g, "exponents", clv_exponents(n), "bit")
+    _dataset(g, "stderr", np.full(k, 0.03), "bit")
+    _dataset(g, "stderr_block", np.full(k, 4, dtype=np.int64), "1")
+    _dataset(g, "ipr", ipr, "1")
+    _dataset(g, "min_angle", clv_min_angles(records), "radian")
+    if stored:
+        _dataset(g, "site_weight", weights, "1")
+    if save:
+        vectors = np.random.default_rng(7).standard_normal((save, k, 2 * n))
+        _dataset(g, "vectors", vectors / np.linalg.norm(vectors, axis=2, keepdims=True), "1")
+        _dataset(g, "saved_cycle", kept[records - save:], "1")
+    for name in ("exponents", "stderr"):
+        g[name].attrs["model_units"] = "bits per drive cycle"
+    g.attrs["clv_transient"] = _one(spec["transient"], np.int32)
+    g.attrs["unstable"] = _one(spec["unstable"], np.int32)
 
 
 @pytest.fixture

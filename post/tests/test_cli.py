@@ -314,3 +314,40 @@ def test_ylim_option(run_file: Path, sweep_file: Path, tmp_path: Path,
     assert made["ky.png"].axes[0].get_ylim() == (0.0, 11.0)
     with pytest.raises(SystemExit):
         main(["ky-dimension", str(sweep_file), "-o", str(tmp_path / "x.png"), "--ylim", "3,1"])
+
+
+# -------------------------------------------------------------- covariant vectors
+
+
+def test_clv_figures(make_run: MakeRun, tmp_path: Path,
+                     monkeypatch: pytest.MonkeyPatch) -> None:
+    path = str(make_run(n=4, records=40, clv={"transient": 10, "store": 3}))
+    made = _captured(monkeypatch)
+    assert main(["clv-space-time", path, "-o", str(tmp_path / "st.png"), "--vector", "1,3",
+                 "--start", "105", "--cycles", "12"]) == 0
+    assert main(["clv-ipr", path, "-o", str(tmp_path / "ipr.png")]) == 0
+    assert main(["clv-angles", path, "-o", str(tmp_path / "a.png"), "--bins", "9",
+                 "--near", "0.2"]) == 0
+    left, right = [ax for ax in made["st.png"].axes if ax.get_label() != "<colorbar>"]
+    assert left.get_title().startswith("vector 1:") and right.get_title().startswith("vector 3:")
+    assert left.get_ylim() == pytest.approx((104.5, 116.5))
+    assert "below 0.2 rad" in made["a.png"].axes[0].get_title()
+    assert len(made["a.png"].axes[0].patches) == 9
+    assert main(["all", path, "-o", str(tmp_path / "r")]) == 0
+    assert {"r_clv_space_time.png", "r_clv_ipr.png", "r_clv_angles.png"} <= set(made)
+
+
+def test_clv_errors(make_run: MakeRun, run_file: Path, tmp_path: Path,
+                    capsys: pytest.CaptureFixture[str]) -> None:
+    _expect_error(["clv-ipr", str(run_file)], "no /clv, needed by clv-ipr", tmp_path / "o.png",
+                  capsys)
+    bare = str(make_run("bare.h5", clv={"store": 0}))
+    _expect_error(["clv-space-time", bare], "no /clv/site_weight, needed by clv-space-time",
+                  tmp_path / "o.png", capsys)
+    path = str(make_run("clv.h5", clv=True))
+    _expect_error(["clv-space-time", path, "--vector", "4"], "vector 4 is outside 1..2",
+                  tmp_path / "o.png", capsys)
+    assert main(["all", bare, "-o", str(tmp_path / "b")]) == 0
+    assert "skipped clv-space-time" in capsys.readouterr().err
+    assert (tmp_path / "b_clv_ipr.png").exists()
+    assert not (tmp_path / "b_clv_space_time.png").exists()

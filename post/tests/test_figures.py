@@ -692,3 +692,147 @@ def test_a_given_y_range_is_shared_and_what_it_cuts_is_counted(make_run: MakeRun
     assert "2 of 7 values outside" in ky.get_title()  # the fixture's 2.5 and 3.0
     with pytest.raises(figures.FigureError, match="lower limit must be below"):
         figures.space_amplitude(run, ylim=(1.0, 1.0))
+
+
+# ------------------------------------------------------------------- covariant vectors
+
+
+def _mesh(ax: Axes, gid: str) -> Any:
+    (mesh,) = [c for c in ax.collections if c.get_gid() == gid]
+    return mesh
+
+
+def test_clv_space_time_shows_the_stored_weights_and_the_collisions(make_run: MakeRun) -> None:
+    # a collision on every bond, a release and a touch (not collisions) on bond 2; the
+    # oscillators at 1.0, 1.8, 3.0 and 4.0, the right wall at 5.1
+    period = 2 * np.pi / 1.5
+    times = (np.array([0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7]) + 105) * period
+    sites = np.array([0, 1, 2, 3, 4, 2, 2])
+    kinds = np.array([0, 0, 1, 0, 0, 2, 3])
+    spacing = np.array([1.0, 0.8, 1.2, 1.0, 1.1])
+    run = read_run(make_run(n=4, records=30, first_cycle=100, spacing=spacing,
+                            events={"time": times, "site": sites, "kind": kinds},
+                            clv={"transient": 10, "store": 2}))
+    clv = run.clv
+    assert clv is not None and clv.site_weight is not None
+    fig = figures.clv_space_time(run, vector=[1, 2], start=103, cycles=5)
+    left, right = _plots(fig)
+    for ax, v in ((left, 1), (right, 2)):
+        mesh = _mesh(ax, f"weight-{v}")
+        np.testing.assert_array_equal(mesh.get_array(), clv.site_weight[3:8, v - 1, :])
+        corners = mesh.get_coordinates()  # (rows + 1, columns + 1, 2)
+        np.testing.assert_allclose(corners[0, :, 0], [0.0, 1.4, 2.4, 3.5, 5.1])
+        np.testing.assert_allclose(corners[:, 0, 1], np.arange(102.5, 108.0))
+        points = np.asarray(_scatter(ax, "collisions").get_offsets())
+        # collisions only, at the bond's middle (the walls for bonds 0 and n), at t/T
+        np.testing.assert_allclose(points, [[0.0, 105.1], [1.4, 105.2], [2.4, 105.3],
+                                            [3.5, 105.4], [5.1, 105.5]])
+        assert ax.get_ylim() == pytest.approx((102.5, 107.5))
+        assert _walls(ax) == pytest.approx([0.0, 5.1])
+        assert mesh.get_clim() == (0.0, float(clv.site_weight[3:8].max()))
+    # vector 1 lives on the left half, vector 2 on the right (the fixture's design)
+    assert _mesh(left, "weight-1").get_array()[:, 2:].max() == 0.0
+    assert _mesh(right, "weight-2").get_array()[:, :2].max() == 0.0
+    (cax,) = _colorbars(fig)
+    assert cax.get_ylabel() == "weight of the oscillator $w_i$ [1]"
+    assert "$\\lambda_{1}$ = 0.410 $\\pm$ 0.030" in left.get_title()  # /clv's, not /lyapunov's
+
+
+def test_clv_space_time_section_phase_records_and_errors(make_run: MakeRun) -> None:
+    run = read_run(make_run(n=4, records=30, first_cycle=0, phase=np.pi, events=False,
+                            clv={"transient": 10, "store": 2}))
+    fig = figures.clv_space_time(run)
+    (ax,) = _plots(fig)
+    assert ax.get_ylim() == pytest.approx((0.0, 20.0))  # records 0..19 at c + 1/2
+    assert not [c for c in ax.collections if c.get_gid() == "collisions"]
+    assert "no events recorded" in fig.get_suptitle()
+    with pytest.raises(figures.FigureError, match=r"vector 3 is outside 1..2"):
+        figures.clv_space_time(run, vector=3)
+    with pytest.raises(figures.FigureError, match="start cycle 25 is outside the records "
+                                                  "with vectors 0..19"):
+        figures.clv_space_time(run, start=25)
+    bare = make_run("bare.h5", clv={"store": 0})
+    with pytest.raises(SchemaError, match="no /clv/site_weight, needed by clv-space-time"):
+        figures.clv_space_time(bare)
+    with pytest.raises(figures.FigureError, match="no /clv/site_weight"):
+        figures.clv_space_time(read_run(bare))
+    with pytest.raises(figures.FigureError, match="no covariant Lyapunov vectors"):
+        figures.clv_space_time(read_run(make_run("plain.h5")))
+
+
+def test_clv_ipr_shows_the_mean_ipr_and_the_vectors_exponents(make_run: MakeRun) -> None:
+    run = read_run(make_run(n=4, records=30, lyapunov=True,
+                            clv={"store": 3, "unstable": 2}))
+    clv = run.clv
+    assert clv is not None
+    upper, lower = _plots(figures.clv_ipr(run))
+    (mean,) = _lines(upper, "ipr-mean")
+    np.testing.assert_array_equal(mean.get_xdata(), np.arange(1, 9))
+    np.testing.assert_allclose(mean.get_ydata(), clv.ipr.mean(axis=0))
+    (even,) = _lines(upper, "ipr-even")
+    assert even.get_ydata()[0] == pytest.approx(0.25)
+    band = [c for c in upper.collections if c.get_gid() == "ipr-quartiles"]
+    assert len(band) == 1
+    ys = np.concatenate([b.lines[0].get_ydata() for b in lower.containers])
+    np.testing.assert_array_equal(ys, clv.exponents)  # /clv/exponents, not /lyapunov's
+    filled = [b for b in lower.containers if b.lines[0].get_gid() == "exponents-unstable"]
+    (unstable,) = filled
+    assert unstable.lines[0].get_xdata().tolist() == [1, 2]
+    spans = [seg[1, 1] - seg[0, 1] for b in lower.containers
+             for seg in b.lines[2][0].get_segments()]
+    np.testing.assert_allclose(spans, 2 * clv.stderr)
+    assert lower.get_xlabel() == "covariant vector index $j$ [1]"
+    assert upper.get_ylabel() == "inverse participation ratio $\\mathrm{IPR}$ [1]"
+
+
+def test_clv_angles_histogram_counts_every_record(make_run: MakeRun) -> None:
+    path = make_run(n=4, records=60, clv={"transient": 10})
+    with h5py.File(path, "r+") as f:
+        angle = f["clv/min_angle"][:]
+        angle[[3, 7]] = np.nan
+        f["clv/min_angle"][...] = angle
+    run = read_run(path)
+    ax = figures.clv_angles(run, bins=12).axes[0]
+    bars = list(ax.patches)
+    heights = np.array([p.get_height() for p in bars])
+    assert len(bars) == 12 and heights.sum() == 48
+    lefts = np.array([p.get_x() for p in bars])
+    ratios = lefts[1:] / lefts[:-1]
+    np.testing.assert_allclose(ratios, ratios[0])  # log-spaced
+    assert lefts[0] <= np.nanmin(angle) and lefts[-1] + bars[-1].get_width() == \
+        pytest.approx(np.pi / 2)
+    assert ax.get_xscale() == "log"
+    finite = angle[np.isfinite(angle)]
+    below = int(np.count_nonzero(finite < 0.1))
+    assert f"{below} of 48 records ({below / 48:.1%}) below 0.1 rad" in ax.get_title()
+    assert "2 records without an angle" in ax.get_title()
+    (near,) = _lines(ax, "near")
+    assert near.get_xdata()[0] == 0.1
+    wider = figures.clv_angles(run, near=0.3).axes[0]
+    wide = int(np.count_nonzero(finite < 0.3))
+    assert f"{wide} of 48 records ({wide / 48:.1%}) below 0.3 rad" in wider.get_title()
+    with h5py.File(path, "r+") as f:
+        f["clv/min_angle"][...] = np.nan
+    with pytest.raises(figures.FigureError, match="holds no angle"):
+        figures.clv_angles(read_run(path))
+
+
+def test_clv_figures_label_units_and_draw_into_given_axes(make_run: MakeRun) -> None:
+    run = read_run(make_run(n=4, records=30, clv=True))
+    made = [figures.clv_space_time(run, vector=[1, 2]), figures.clv_ipr(run),
+            figures.clv_angles(run)]
+    for fig in made:
+        for label in _all_labels(fig):
+            assert re.fullmatch(r"[^\[\]]+ \[[^\[\]]+\]", label), label
+    fig = Figure()
+    axes = list(fig.subplots(1, 5))
+    assert figures.clv_space_time(run, vector=[1, 2], ax=axes[:2]) is fig
+    assert figures.clv_ipr(run, ax=axes[2:4]) is fig
+    assert figures.clv_angles(run, ax=axes[4]) is fig
+    assert set(_plots(fig)) == set(axes) and fig.get_suptitle() == ""
+    assert all(ax.has_data() for ax in axes)
+    alone = Figure()
+    (ax,) = _plots(figures.clv_ipr(run, ax=alone.add_subplot()))
+    assert _lines(ax, "ipr-mean") and ax.get_xlabel() == "covariant vector index $j$ [1]"
+    with pytest.raises(figures.FigureError, match="draws into 2 axes, 1 given"):
+        figures.clv_space_time(run, vector=[1, 2], ax=Figure().add_subplot())

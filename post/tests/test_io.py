@@ -8,13 +8,14 @@ import math
 from collections.abc import Callable
 from pathlib import Path
 from types import SimpleNamespace
+from typing import Any
 
 import h5py
 import numpy as np
 import pytest
 
 from conftest import PERIODS, cascade_events, lyapunov_spectrum, strobe_record, sweep_values
-from conftest import DEFAULT_SWEEP
+from conftest import DEFAULT_SWEEP, clv_exponents, clv_min_angles, clv_weights
 from impactchain.io import (FILE_UNITS, IN_MEMORY, SchemaError, namelist_groups, read_run,
                             run_from_api)
 
@@ -181,6 +182,81 @@ def test_event_site_out_of_range(make_run: MakeRun) -> None:
     path = make_run(n=3, events={"time": [0.1, 0.2], "site": [0, 7]})
     with pytest.raises(SchemaError, match="outside 0..3"):
         read_run(path)
+
+
+# ------------------------------------------------------------------- covariant vectors
+
+
+def test_reads_clv_with_records_first(make_run: MakeRun) -> None:
+    run = read_run(make_run(n=4, records=30, first_cycle=40, lyapunov=True,
+                            clv={"transient": 10, "store": 3, "save": 2, "unstable": 1}))
+    clv = run.clv
+    assert clv is not None
+    assert (clv.n_record, clv.k, clv.stored, clv.unstable, clv.clv_transient) == (20, 8, 3, 1, 10)
+    np.testing.assert_array_equal(clv.cycle, np.arange(40, 60))
+    np.testing.assert_array_equal(clv.exponents, clv_exponents(4))
+    assert clv.stderr.shape == (8,) and clv.stderr_block.dtype == np.int64
+    assert clv.site_weight is not None and clv.site_weight.shape == (20, 3, 4)
+    np.testing.assert_array_equal(clv.site_weight, clv_weights(4, 20, 3))
+    assert clv.ipr.shape == (20, 8)
+    np.testing.assert_allclose(clv.ipr[:, :3], (clv.site_weight ** 2).sum(axis=2))
+    np.testing.assert_array_equal(clv.min_angle, clv_min_angles(20))
+    assert clv.vectors is not None and clv.vectors.shape == (2, 8, 8)
+    assert clv.saved_cycle is not None and clv.saved_cycle.tolist() == [58, 59]
+    assert run.unit("clv/exponents") == "bits per drive cycle"
+    assert run.unit("clv/min_angle") == "radian"
+    with pytest.raises(ValueError):
+        clv.ipr[0, 0] = 1.0
+
+
+def test_clv_without_site_weights_or_vectors(make_run: MakeRun) -> None:
+    run = read_run(make_run(clv={"store": 0, "save": 0}))
+    assert run.clv is not None and run.clv.stored == 0
+    assert run.clv.site_weight is None and run.clv.vectors is None and run.clv.saved_cycle is None
+    with pytest.raises(SchemaError, match=r"no /clv/site_weight, needed by clv-space-time "
+                                          r"\(the run stored no site weights"):
+        read_run(run.path, require=("clv/site_weight",), purpose="clv-space-time")
+    assert read_run(make_run("plain.h5")).clv is None
+    with pytest.raises(SchemaError, match=r"no /clv, needed by clv-ipr \(covariant Lyapunov "
+                                          "vectors were not computed"):
+        read_run(make_run("plain.h5"), require=("clv",), purpose="clv-ipr")
+
+
+def _edit_clv(path: Path, edit: Callable[[h5py.Group], None]) -> Path:
+    with h5py.File(path, "r+") as f:
+        edit(f["clv"])
+    return path
+
+
+def _replace(name: str, data: Any) -> Callable[[h5py.Group], None]:
+    def edit(g: h5py.Group) -> None:
+        del g[name]
+        g[name] = data
+    return edit
+
+
+@pytest.mark.parametrize(("edit", "message"), [
+    (lambda g: g.__delitem__("ipr"), "no /clv/ipr dataset"),
+    (lambda g: g.__delitem__("stderr_block"), "no /clv/stderr_block dataset"),
+    (lambda g: g.attrs.__delitem__("unstable"), "/clv lacks attribute 'unstable'"),
+    (lambda g: g.attrs.__delitem__("clv_transient"), "/clv lacks attribute 'clv_transient'"),
+    (lambda g: g.__delitem__("vectors"), "no /clv/vectors dataset"),
+    (lambda g: g.attrs.__setitem__("unstable", 9), "/clv@unstable = 9 is outside 0..8"),
+    (_replace("ipr", np.zeros((8, 20))), r"/clv/ipr has shape \(8, 20\), expected \(20, 8\) "
+                                         r"\(axes transposed"),
+    (_replace("min_angle", np.zeros(19)), r"/clv/min_angle has shape \(19,\), expected \(20\)"),
+    (_replace("site_weight", np.zeros((20, 2, 5))), r"/clv/site_weight has shape \(20, 2, 5\), "
+                                                    r"expected \(20, \*, 4\)"),
+    (_replace("site_weight", np.zeros((20, 9, 4))), "holds 9 vectors, more than the 8"),
+    (_replace("vectors", np.zeros((1, 8, 4))), r"/clv/vectors has shape \(1, 8, 4\), "
+                                               r"expected \(1, 8, 8\)"),
+])
+def test_clv_schema_errors_name_what_is_wrong(make_run: MakeRun, edit: Callable[[h5py.Group],
+                                              None], message: str) -> None:
+    path = _edit_clv(make_run(n=4, records=30, clv=True), edit)
+    with pytest.raises(SchemaError, match=message):
+        read_run(path)
+    assert read_run(path, groups=("strobe",)).clv is None  # not loaded, not checked
 
 
 # ------------------------------------------------------------------------- namelists

@@ -63,6 +63,35 @@ def test_clv_group_is_a_netcdf_group(impactchain_exe, tmp_path):
         assert ds["cycle"].values[0] == 101
 
 
+def test_clv_read_by_impactchain_io(impactchain_exe, tmp_path):
+    """impactchain.io's Run.clv holds the file's /clv, records first, in the simulator's units."""
+    from impactchain.io import read_run
+
+    run_namelist(impactchain_exe, RUN.format(extra=""), tmp_path)
+    run = read_run(tmp_path / "clv.h5", require=("clv", "clv/site_weight"))
+    clv = run.clv
+    assert clv is not None and run.strobe is not None
+    assert (clv.n_record, clv.k, clv.stored, clv.unstable, clv.clv_transient) == (500, 8, 3, 1,
+                                                                                 200)
+    np.testing.assert_array_equal(clv.cycle, run.strobe.cycle[:500])
+    np.testing.assert_array_equal(clv.saved_cycle, run.strobe.cycle[498:500])
+    with h5py.File(tmp_path / "clv.h5") as f:
+        g = f["clv"]
+        for name in ("exponents", "stderr", "stderr_block", "ipr", "min_angle", "site_weight",
+                     "vectors"):
+            np.testing.assert_array_equal(getattr(clv, name), g[name][:], err_msg=name)
+    assert run.unit("clv/exponents") == run.unit("lyapunov/exponents") == "bits per drive cycle"
+    assert run.unit("clv/min_angle") == "radian" and run.unit("clv/cycle") == "drive cycles"
+    assert run.clv.site_weight.shape == (500, 3, 4)
+    # clv_store = 0 and clv_save = 0: no /clv/site_weight, /clv/vectors, /clv/saved_cycle
+    text = RUN.format(extra="").replace("clv_store = 3, clv_save = 2", "clv_store = 0, "
+                                        "clv_save = 0").replace("clv.h5", "bare.h5")
+    run_namelist(impactchain_exe, text, tmp_path, name="bare.nml")
+    bare = read_run(tmp_path / "bare.h5").clv
+    assert bare is not None and bare.stored == 0 and bare.vectors is None
+    np.testing.assert_array_equal(bare.ipr, clv.ipr)
+
+
 @pytest.mark.parametrize("extra, needle", [
     ("clv_transient = 700", "clv_transient = 700 is outside [1, cycles - 1 = 699]"),
     ("clv_store = 9", "clv_store = 9 is outside [0, vectors = 8]"),
