@@ -90,7 +90,8 @@ def build_shock_waves(
     """Group collision events into left and right shock waves (rules in the module doc).
 
     ``time`` and ``site`` are the event times and sites (0..n); ``kind``, if given, drops
-    releases (kind 2) and touches (kind 3), which are not collisions. Returns the waves in order of creation (start time).
+    releases (kind 2) and touches (kind 3), which are not collisions. Returns the waves in
+    order of creation (start time).
     """
     times, sites = _collisions(time, site, n, kind)
     if drive_period <= 0 or max_wait < 0:
