@@ -194,6 +194,8 @@ def _non_negative_int(text: str) -> int:
     if value < 0:
         raise argparse.ArgumentTypeError(f"{value} must be >= 0")
     return value
+
+
 def _clv_space_time_options(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--vector", type=_site_list, default=[1], metavar="J,K,...",
                         help="covariant vectors to show, 1-based, one panel each; among the "

@@ -1026,6 +1026,9 @@ def _read_census(g: h5py.Group, path: str, n: int) -> Census:
         plane=plane,
         plane_range=plane_range,
         plane_points=plane_points,
+    )
+
+
 def _read_clv(g: h5py.Group, path: str, n: int) -> Clv:
     exponents = _dataset(g, path, "exponents", (None,), float)
     k = exponents.shape[0]
