@@ -99,15 +99,9 @@ contains
         round_seconds = round_length()
     end subroutine read_input
 
-    !> Check the sweep, refuse an existing output (rank 0) and load the checkpoint
-    !> (every rank, so that every rank can own any branch).
-    subroutine start_sweep()
-        integer :: b
-
-        plan = plan_sweep(cfg)
-        ! every point is checked before any work (every rank alike)
-        call validate_sweep_points(cfg, plan, err)
-        if (allocated(err)) call stop_all(err%message)
+    !> With --check, print the resolved input (rank 0) and end; else rank 0 opens the output,
+    !> refusing an existing file, and every rank stops if it could not.
+    subroutine check_only_or_open_output()
         if (cli%check) then
             if (rank == 0) write (output_unit, '(a)', advance='no') config_summary(cfg)
             call MPI_Finalize()
@@ -120,6 +114,18 @@ contains
         end if
         call MPI_Bcast(failed, 1, MPI_INTEGER, 0, MPI_COMM_WORLD)
         if (failed /= 0) call stop_all(err_text(err))
+    end subroutine check_only_or_open_output
+
+    !> Check the sweep, refuse an existing output (rank 0) and load the checkpoint
+    !> (every rank, so that every rank can own any branch).
+    subroutine start_sweep()
+        integer :: b
+
+        plan = plan_sweep(cfg)
+        ! every point is checked before any work (every rank alike)
+        call validate_sweep_points(cfg, plan, err)
+        if (allocated(err)) call stop_all(err%message)
+        call check_only_or_open_output()
         call sweep_result_init(res, cfg, plan)
         allocate (starts(plan%n_branches))
         checkpoint = checkpoint_path(cfg)
@@ -270,18 +276,7 @@ contains
         if (cfg%sweep) call validate_sweep_points(cfg, plan_sweep(cfg), err)
         if (.not. allocated(err)) call check_census_size(cfg, err)
         if (allocated(err)) call stop_all(err%message)
-        if (cli%check) then
-            if (rank == 0) write (output_unit, '(a)', advance='no') config_summary(cfg)
-            call MPI_Finalize()
-            stop
-        end if
-        failed = 0
-        if (rank == 0) then
-            call output_begin(out, cfg%output_file, cfg%overwrite, err)
-            if (allocated(err)) failed = 1
-        end if
-        call MPI_Bcast(failed, 1, MPI_INTEGER, 0, MPI_COMM_WORLD)
-        if (failed /= 0) call stop_all(err_text(err))
+        call check_only_or_open_output()
         call census_starts(census, cfg, err)
         call agree_or_stop(err)
         checkpoint = checkpoint_path(cfg)
