@@ -1,6 +1,7 @@
 !> Standard errors of the mean of a correlated series by blocking (Flyvbjerg and Petersen,
 !> J. Chem. Phys. 91, 461, 1989), read off where they stop growing with the block size
-!> (docs/model.md section 14.2): the per-record growth rates of covariant vectors.
+!> (docs/model.md sections 7.4 and 14.2): the growth rates of the QR frame's columns and of
+!> covariant vectors.
 !>
 !> Consecutive values are averaged in pairs, the pairs' means in pairs again, and so on: level
 !> l holds the means of blocks of 2**l values, and the naive standard error of the mean from
@@ -15,6 +16,7 @@ module chain_blocking
     implicit none
     private
     public :: blocking_t, blocking_start, blocking_add, blocking_error, min_blocks
+    public :: blocking_pack, blocking_unpack
 
     !> Levels with fewer blocks than this are not used (their errors scatter by more than 18 %).
     integer, parameter :: min_blocks = 16
@@ -107,6 +109,45 @@ contains
             block(i) = 2_i8**at
         end do
     end subroutine blocking_error
+
+    !> The blocks as plain arrays, appended to `ints` and `reals` (to save a stopped run), and
+    !> `blocking_unpack` back into blocks started for the same m and capacity.
+    pure subroutine blocking_pack(b, ints, reals)
+        type(blocking_t), intent(in) :: b
+        integer(i8), allocatable, intent(inout) :: ints(:)
+        real(wp), allocatable, intent(inout) :: reals(:)
+
+        ints = [ints, b%count]
+        reals = [reals, b%shift, reshape(b%total, [size(b%total)]), &
+                 reshape(b%squares, [size(b%squares)]), reshape(b%waiting, [size(b%waiting)])]
+    end subroutine blocking_pack
+
+    !> Blocks `b` (from blocking_start) filled from ints(ip + 1:) and reals(rp + 1:), the
+    !> positions moved past what was read; info = 1 if the arrays are too short or a count is
+    !> negative, 0 otherwise.
+    pure subroutine blocking_unpack(ints, reals, ip, rp, b, info)
+        integer(i8), intent(in) :: ints(:)
+        real(wp), intent(in) :: reals(:)
+        integer, intent(inout) :: ip, rp
+        type(blocking_t), intent(inout) :: b
+        integer, intent(out) :: info
+        integer :: levels, m, nl
+
+        info = 1
+        levels = size(b%count)
+        m = size(b%shift)
+        nl = m*levels
+        if (size(ints) < ip + levels .or. size(reals) < rp + m + 3*nl) return
+        if (any(ints(ip + 1:ip + levels) < 0)) return
+        b%count = ints(ip + 1:ip + levels)
+        ip = ip + levels
+        b%shift = reals(rp + 1:rp + m)
+        b%total = reshape(reals(rp + m + 1:rp + m + nl), shape(b%total))
+        b%squares = reshape(reals(rp + m + nl + 1:rp + m + 2*nl), shape(b%squares))
+        b%waiting = reshape(reals(rp + m + 2*nl + 1:rp + m + 3*nl), shape(b%waiting))
+        rp = rp + m + 3*nl
+        info = 0
+    end subroutine blocking_unpack
 
     !> The naive standard error of the mean of series i from the block means of level l.
     pure real(wp) function level_error(b, i, l) result(se)

@@ -70,6 +70,7 @@ module chain_config
         key_spec_t('lyapunov', 'clv_transient', key_integer, .false.), &
         key_spec_t('lyapunov', 'clv_store', key_integer, .false.), &
         key_spec_t('lyapunov', 'clv_save', key_integer, .false.), &
+        key_spec_t('lyapunov', 'window', key_integer, .false.), &
         key_spec_t('output', 'file', key_string, .false.), &
         key_spec_t('output', 'overwrite', key_logical, .false.), &
         key_spec_t('output', 'max_size_mb', key_real, .false.), &
@@ -475,10 +476,10 @@ contains
         type(error_t), allocatable, intent(out) :: err
         logical :: enabled, jacobian, covariant
         integer :: vectors, qr_every, align, jacobian_cycles, ios
-        integer :: clv_transient, clv_store, clv_save
+        integer :: clv_transient, clv_store, clv_save, window
         character(len=512) :: msg
         namelist /lyapunov/ enabled, vectors, qr_every, align, jacobian, jacobian_cycles, &
-            covariant, clv_transient, clv_store, clv_save
+            covariant, clv_transient, clv_store, clv_save, window
 
         enabled = .true.
         vectors = cfg%record%vectors
@@ -490,6 +491,7 @@ contains
         clv_transient = cfg%record%clv_transient
         clv_store = cfg%record%clv_store
         clv_save = cfg%record%clv_save
+        window = cfg%record%window
         rewind (u)
         read (u, nml=lyapunov, iostat=ios, iomsg=msg)
         if (ios /= 0) then
@@ -506,6 +508,7 @@ contains
         cfg%record%clv_transient = clv_transient
         cfg%record%clv_store = clv_store
         cfg%record%clv_save = clv_save
+        cfg%record%window = window
     end subroutine read_lyapunov
 
     subroutine read_output(u, cfg, err)
@@ -834,8 +837,35 @@ contains
                            fmt_int(cfg%record%jacobian_cycles)//" is outside [1, 1000]")
             return
         end if
+        if (cfg%record%window /= 0) call validate_window(cfg, err)
+        if (allocated(err)) return
         if (cfg%record%covariant) call validate_covariant(cfg, err)
     end subroutine validate_lyapunov
+
+    !> The window of finite-time exponents (docs/model.md section 7.10).
+    subroutine validate_window(cfg, err)
+        type(config_t), intent(in) :: cfg
+        type(error_t), allocatable, intent(out) :: err
+
+        associate (r => cfg%record)
+            if (r%window < 0 .or. r%window > r%cycles) then
+                call set_error(err, "&lyapunov: window = "//fmt_int(r%window)// &
+                               " is outside [0, cycles = "//fmt_int8(r%cycles)//"] (recorded "// &
+                               "cycles per finite-time exponent; 0: none)")
+            else if (.not. r%lyapunov) then
+                call set_error(err, "&lyapunov: window = "//fmt_int(r%window)// &
+                               " needs enabled = .true.")
+            else if (cfg%sweep .or. cfg%census) then
+                call set_error(err, "&lyapunov: window = "//fmt_int(r%window)//" is for a "// &
+                               "single run, not a &sweep or a &census")
+            else if (r%qr_every > 1) then
+                if (modulo(r%window, r%qr_every) /= 0) &
+                    call set_error(err, "&lyapunov: window = "//fmt_int(r%window)// &
+                                   " must be a multiple of qr_every = "// &
+                                   fmt_int(r%qr_every)//" (a window ends at a QR step)")
+            end if
+        end associate
+    end subroutine validate_window
 
     !> The keys of covariant Lyapunov vectors (docs/model.md section 14.5).
     subroutine validate_covariant(cfg, err)
@@ -1221,6 +1251,7 @@ contains
             if (r%covariant) text = text//", covariant = "//fmt_logical(r%covariant)// &
                 ", clv_transient = "//fmt_int(r%clv_transient)//", clv_store = "// &
                 fmt_int(r%clv_store)//", clv_save = "//fmt_int(r%clv_save)
+            if (r%window > 0) text = text//", window = "//fmt_int(r%window)
             text = text//" /"//new_line('a')
         end associate
     end function lyapunov_group
@@ -1409,11 +1440,15 @@ contains
         if (cfg%record%lyapunov) mb = mb + (8.0_wp*k + 8)* &
                                       running_rows(cfg%record%cycles/ &
                                                    max(1, cfg%record%qr_every))/1.0e6_wp
+        ! finite-time exponents: k values and a cycle per window
+        if (cfg%record%lyapunov .and. cfg%record%window > 0) &
+            mb = mb + (8.0_wp*k + 8)*(cfg%record%cycles/cfg%record%window)/1.0e6_wp
         if (mb > cfg%max_size_mb) then
             call set_error(err, "&output: the strobe records of this run need about "// &
                            fmt_real(mb)//" MB (n x cycles x 16 bytes, plus Lyapunov "// &
-                           "estimates), more than max_size_mb = "//fmt_real(cfg%max_size_mb)// &
-                           "; lower &run cycles or raise &output max_size_mb")
+                           "estimates and finite-time exponents), more than max_size_mb = "// &
+                           fmt_real(cfg%max_size_mb)//"; lower &run cycles (or raise "// &
+                           "&lyapunov window) or raise &output max_size_mb")
             return
         end if
         ! tangent frames in memory: the frame, the QR's copy, the copy kept while lost

@@ -2,8 +2,10 @@
 !> the Kaplan-Yorke dimension. (Floquet multipliers: chain_floquet.)
 !>
 !> The frame itself is carried by the engine (exact propagators between impacts, saltation
-!> matrices at impacts); this module only turns frames into numbers. Block averages of the
-!> per-step growth rates give the standard error of each exponent.
+!> matrices at impacts); this module only turns frames into numbers. The standard error of
+!> each exponent comes from blocking its growth per cycle (chain_blocking), read where it
+!> levels off with the block size; finite-time exponents, over windows of a chosen number of
+!> cycles, come out one window at a time (docs/model.md sections 7.4 and 7.10).
 !>
 !> QR steps come every `qr_every` cycles, or, with qr_every = 0, at an adaptive interval: the
 !> frame is re-orthonormalised before the growths of its columns since the last step are
@@ -19,14 +21,17 @@ module chain_lyapunov
     use chain_kinds, only: wp, i8
     use, intrinsic :: ieee_arithmetic, only: ieee_value, ieee_negative_inf, ieee_is_finite
     use chain_lapack, only: qr_orthonormalise, qr_workspace_t, general_eigenvalues
+    use chain_blocking, only: blocking_t, blocking_start, blocking_add, blocking_error, &
+                              blocking_pack, blocking_unpack
     implicit none
     private
     public :: lyapunov_acc_t, lyapunov_start, lyapunov_step, lyapunov_result_t
     public :: lyapunov_result, ky_dimension, initial_frame, lyapunov_due, adaptive_interval
-    public :: longest_interval
+    public :: longest_interval, lyapunov_unit
     public :: running_capacity, running_rows, lyapunov_pack, lyapunov_unpack
 
-    integer, parameter :: max_blocks = 20
+    !> The standard error's blocking starts from units of cycles, at least this many per run.
+    integer, parameter :: min_units = 40
     !> A frame column whose QR diagonal is below this fraction of its own length, after an
     !> event with a singular tangent map, lies in the span of the columns before it: a
     !> direction the event removed (its true growth is zero), not a contraction. A genuine one
@@ -35,14 +40,14 @@ module chain_lyapunov
     !> Most running estimates kept (even: a full buffer halves), 4096 x k x 8 bytes.
     integer, parameter :: running_capacity = 4096
     !> Layout of lyapunov_pack's arrays; change it when the accumulator changes.
-    integer(i8), parameter :: pack_layout = 3
+    integer(i8), parameter :: pack_layout = 4
     !> Adaptive QR steps keep the frame's condition (the spread of its columns' growths since
     !> it was orthonormal) below this: the smallest columns then keep about 16 - log10(bound)
     !> significant digits, and QR steps spaced by it give the exponents of a step every cycle
     !> to 1e-10 bits per cycle (test_lyapunov's adaptive_matches_every_cycle).
     real(wp), parameter :: condition_bound = 1.0e8_wp
-    !> ... and never wait more than this many cycles (nor more than a fortieth of the run, so
-    !> that each block of the standard error holds at least two steps).
+    !> ... and never wait more than this many cycles (nor more than a unit of the standard
+    !> error's blocking, lyapunov_unit).
     integer, parameter :: longest_interval = 64
 
     type :: lyapunov_acc_t
@@ -51,13 +56,19 @@ module chain_lyapunov
         integer, allocatable :: active(:) !! exponent index of each remaining frame column
         integer :: steps = 0          !! QR steps done
         integer(i8) :: cycles = 0     !! drive cycles the steps cover
-        integer(i8) :: planned = 0    !! drive cycles planned (sets the blocks)
+        integer(i8) :: planned = 0    !! drive cycles planned (sets the units)
         integer :: qr_every = 1       !! cycles per step, 0: adaptive
         integer :: interval = 1       !! cycles from the last step to the next
         integer :: longest = 1        !! longest adaptive interval
         real(wp), allocatable :: total(:)        !! total(k): sum of ln|R(j,j)|
-        real(wp), allocatable :: block_sum(:, :) !! block_sum(k, n_blocks)
-        integer(i8), allocatable :: block_len(:) !! cycles in each block
+        integer :: unit = 1           !! cycles per value of the standard error's blocking
+        real(wp), allocatable :: unit_sum(:)     !! unit_sum(k): growth in the current unit
+        type(blocking_t) :: blocks    !! each unit's growth per cycle, blocked
+        integer :: window = 0         !! cycles per finite-time exponent, 0: none
+        integer(i8) :: windows = 0    !! windows completed
+        real(wp), allocatable :: window_sum(:)   !! window_sum(k): growth in the current window
+        real(wp), allocatable :: window_last(:)  !! the last complete window's growth per
+                                                 !! cycle (nats), by exponent index
         integer :: stride = 1         !! steps between kept running estimates (a power of 2)
         integer :: rows = 0           !! running estimates kept: steps stride, 2 stride, ...
         real(wp), allocatable :: running(:, :)   !! running(k, <= running_capacity): total /
@@ -70,7 +81,8 @@ module chain_lyapunov
     type :: lyapunov_result_t
         real(wp), allocatable :: bits_per_cycle(:)  !! descending
         real(wp), allocatable :: nats_per_time(:)
-        real(wp), allocatable :: stderr_bits(:)     !! standard error from block means
+        real(wp), allocatable :: stderr_bits(:)     !! standard error (blocking plateau)
+        integer(i8), allocatable :: stderr_cycles(:) !! cycles per block at the plateau
         real(wp), allocatable :: running_bits(:, :) !! running(k, rows), bits per cycle
         integer(i8), allocatable :: running_cycles(:) !! cycles averaged at each row
         real(wp) :: ky_dimension = 0
@@ -80,32 +92,56 @@ module chain_lyapunov
 contains
 
     !> An empty accumulator of k exponents for a run of `cycles` drive cycles with a QR step
-    !> every `qr_every` cycles (default 1; 0: adaptive). The blocks of the standard error
-    !> divide the cycles the steps will cover.
-    pure subroutine lyapunov_start(acc, k, cycles, qr_every)
+    !> every `qr_every` cycles (default 1; 0: adaptive), and finite-time exponents over
+    !> windows of `window` cycles (default 0: none; with qr_every > 1 a multiple of it).
+    pure subroutine lyapunov_start(acc, k, cycles, qr_every, window)
         type(lyapunov_acc_t), intent(out) :: acc
         integer, intent(in) :: k
         integer(i8), intent(in) :: cycles
-        integer, intent(in), optional :: qr_every
+        integer, intent(in), optional :: qr_every, window
         integer(i8) :: most_steps
-        integer :: n_blocks, j
+        integer :: j
 
         acc%k = k
         if (present(qr_every)) acc%qr_every = qr_every
+        if (present(window)) acc%window = window
         acc%interval = max(1, acc%qr_every)
         acc%planned = (cycles/acc%interval)*acc%interval
         most_steps = acc%planned/acc%interval
-        n_blocks = int(max(1_i8, min(int(max_blocks, i8), most_steps)))
-        acc%longest = int(max(1_i8, min(int(longest_interval, i8), acc%planned/(2*max_blocks))))
-        allocate (acc%total(k), acc%block_sum(k, n_blocks), acc%block_len(n_blocks))
+        acc%unit = lyapunov_unit(acc%planned, acc%qr_every)
+        acc%longest = acc%unit
+        call blocking_start(acc%blocks, k, max(1_i8, acc%planned/acc%unit))
+        allocate (acc%total(k), acc%unit_sum(k), acc%window_sum(k), acc%window_last(k))
         allocate (acc%running(k, max(0_i8, min(most_steps, int(running_capacity, i8)))))
         allocate (acc%running_cycles(size(acc%running, 2)))
         allocate (acc%r_diag(k), acc%growth(k))
         acc%active = [(j, j=1, k)]
         acc%total = 0
-        acc%block_sum = 0
-        acc%block_len = 0
+        acc%unit_sum = 0
+        acc%window_sum = 0
+        acc%window_last = 0
     end subroutine lyapunov_start
+
+    !> Cycles per value of the standard error's blocking in a run of `planned` cycles with
+    !> QR steps every `qr_every` cycles (0: adaptive): qr_every itself when above 1 (each step
+    !> one value); otherwise the largest power of two within min(longest_interval, planned /
+    !> min_units), so that a step every cycle and adaptive steps (which never cross a unit)
+    !> give the same units, and units and their doublings stay whole powers of two.
+    pure integer function lyapunov_unit(planned, qr_every) result(unit)
+        integer(i8), intent(in) :: planned
+        integer, intent(in) :: qr_every
+        integer(i8) :: most
+
+        if (qr_every > 1) then
+            unit = qr_every
+            return
+        end if
+        most = max(1_i8, min(int(longest_interval, i8), planned/min_units))
+        unit = 1
+        do while (2*unit <= most)
+            unit = 2*unit
+        end do
+    end function lyapunov_unit
 
     !> The accumulator as two plain arrays (to save a stopped run and continue it bit for bit),
     !> and `lyapunov_unpack` back: these two are the one place that lists its components, so a
@@ -118,9 +154,11 @@ contains
         ints = [pack_layout, int(acc%k, i8), int(acc%steps, i8), acc%planned, &
                 int(acc%stride, i8), int(acc%rows, i8), int(acc%collapsed, i8), &
                 acc%cycles, int(acc%qr_every, i8), int(acc%interval, i8), &
-                acc%block_len, acc%running_cycles(:acc%rows), int(acc%active, i8)]
-        reals = [acc%total, reshape(acc%block_sum, [size(acc%block_sum)]), &
-                 reshape(acc%running(:, :acc%rows), [acc%k*acc%rows])]
+                int(acc%window, i8), acc%windows]
+        reals = [acc%total, acc%unit_sum, acc%window_sum, acc%window_last]
+        call blocking_pack(acc%blocks, ints, reals)
+        ints = [ints, acc%running_cycles(:acc%rows), int(acc%active, i8)]
+        reals = [reals, reshape(acc%running(:, :acc%rows), [acc%k*acc%rows])]
     end subroutine lyapunov_pack
 
     !> The accumulator from lyapunov_pack's arrays; info = 1 if they are not such arrays (of
@@ -130,38 +168,42 @@ contains
         real(wp), intent(in) :: reals(:)
         type(lyapunov_acc_t), intent(out) :: acc
         integer, intent(out) :: info
-        integer, parameter :: head = 10
-        integer :: k, nb, rows, p
+        integer, parameter :: head = 12
+        integer :: k, rows, ip, rp, status
 
         info = 1
         if (size(ints) < head) return
         if (ints(1) /= pack_layout .or. ints(2) < 1 .or. any(ints(3:4) < 0) .or. &
             ints(5) < 1 .or. ints(6) < 0 .or. ints(7) < 0 .or. ints(7) > ints(2) .or. &
-            ints(8) < 0 .or. ints(9) < 0 .or. ints(10) < 1 .or. &
-            any(ints([2, 3, 5, 6, 7, 9, 10]) > huge(1))) return
+            ints(8) < 0 .or. ints(9) < 0 .or. ints(10) < 1 .or. any(ints(11:12) < 0) .or. &
+            any(ints([2, 3, 5, 6, 7, 9, 10, 11]) > huge(1))) return
         k = int(ints(2))
-        call lyapunov_start(acc, k, ints(4), int(ints(9)))
+        call lyapunov_start(acc, k, ints(4), int(ints(9)), int(ints(11)))
         if (acc%planned /= ints(4)) return
-        nb = size(acc%block_len)
         rows = int(ints(6))
         acc%collapsed = int(ints(7))
-        if (size(ints) /= head + nb + rows + k - acc%collapsed .or. &
+        if (size(reals) < 4*k) return
+        ip = head
+        rp = 4*k
+        call blocking_unpack(ints, reals, ip, rp, acc%blocks, status)
+        if (status /= 0) return
+        if (size(ints) /= ip + rows + k - acc%collapsed .or. &
             rows > size(acc%running, 2)) return
-        if (size(reals) /= k*(1 + nb + rows)) return
-        if (any(ints(head + nb + rows + 1:) < 1 .or. ints(head + nb + rows + 1:) > k)) return
+        if (size(reals) /= rp + k*rows) return
+        if (any(ints(ip + rows + 1:) < 1 .or. ints(ip + rows + 1:) > k)) return
         acc%steps = int(ints(3))
         acc%stride = int(ints(5))
         acc%rows = rows
         acc%cycles = ints(8)
         acc%interval = int(ints(10))
-        acc%block_len = ints(head + 1:head + nb)
-        acc%running_cycles(:rows) = ints(head + nb + 1:head + nb + rows)
-        acc%active = int(ints(head + nb + rows + 1:))
+        acc%windows = ints(12)
         acc%total = reals(1:k)
-        p = k
-        acc%block_sum = reshape(reals(p + 1:p + k*nb), [k, nb])
-        p = p + k*nb
-        acc%running(:, :rows) = reshape(reals(p + 1:p + k*rows), [k, rows])
+        acc%unit_sum = reals(k + 1:2*k)
+        acc%window_sum = reals(2*k + 1:3*k)
+        acc%window_last = reals(3*k + 1:4*k)
+        acc%running_cycles(:rows) = ints(ip + 1:ip + rows)
+        acc%active = int(ints(ip + rows + 1:))
+        acc%running(:, :rows) = reshape(reals(rp + 1:rp + k*rows), [k, rows])
         info = 0
     end subroutine lyapunov_unpack
 
@@ -172,7 +214,9 @@ contains
     !> collapsed, or K = 0) a column that now lies in the span of the columns before it is a
     !> direction that event removed: its exponent is -infinity, and the column leaves the
     !> frame, so that the other exponents never take the logarithm of a diagonal that is only
-    !> rounding. With adaptive steps, the interval to the next step is set here.
+    !> rounding. With adaptive steps, the interval to the next step is set here. A step that
+    !> ends a window of finite-time exponents counts it in acc%windows, its exponents in
+    !> acc%window_last.
     subroutine lyapunov_step(acc, frame, info, scale_bits, log_scale, singular, cycles)
         type(lyapunov_acc_t), intent(inout) :: acc
         real(wp), allocatable, intent(inout) :: frame(:, :)
@@ -186,7 +230,7 @@ contains
         real(wp), allocatable :: before(:, :), scale(:)
         real(wp) :: minus_infinity
         logical, allocatable :: gone(:)
-        integer :: b, n_blocks, j, kept, span
+        integer :: j, kept, span
 
         info = 0
         span = 1
@@ -225,26 +269,43 @@ contains
                     acc%growth(acc%active(j)) + scale(j)
             end if
         end do
-        ! the block of the step's first cycle (with a fixed interval q: of step m, as
-        ! 1 + (m - 1) q n_blocks / (planned steps q))
-        n_blocks = size(acc%block_len)
-        b = int(min(int(n_blocks, i8), 1 + acc%cycles*n_blocks/max(1_i8, acc%planned)))
         acc%steps = acc%steps + 1
         acc%cycles = acc%cycles + span
         acc%total = acc%total + acc%growth
-        acc%block_sum(:, b) = acc%block_sum(:, b) + acc%growth
-        acc%block_len(b) = acc%block_len(b) + span
+        ! (a collapsed direction has no error bar: its growth counts as 0 there)
+        where (ieee_is_finite(acc%growth)) acc%unit_sum = acc%unit_sum + acc%growth
+        if (modulo(acc%cycles, int(acc%unit, i8)) == 0) then
+            call blocking_add(acc%blocks, acc%unit_sum/acc%unit)
+            acc%unit_sum = 0
+        end if
+        if (acc%window > 0) then
+            acc%window_sum = acc%window_sum + acc%growth
+            if (modulo(acc%cycles, int(acc%window, i8)) == 0) then
+                acc%windows = acc%windows + 1
+                acc%window_last = acc%window_sum/acc%window
+                acc%window_sum = 0
+            end if
+        end if
         if (modulo(acc%steps, acc%stride) == 0) call keep_running(acc)
         if (acc%qr_every == 0) then
+            ! a step never crosses into the next unit or window: each then holds the same
+            ! cycles as with a step every cycle, and its growth is theirs (the R factors
+            ! telescope)
             acc%interval = min(adaptive_interval(acc%growth/span, acc%longest), &
-                               adaptive_interval(acc%total/acc%cycles, acc%longest))
-            ! a step never crosses into the next block: each block then holds the same cycles
-            ! as with a step every cycle, and its growth is theirs (the R factors telescope)
-            b = int(min(int(n_blocks, i8), 1 + acc%cycles*n_blocks/max(1_i8, acc%planned)))
-            if (b < n_blocks) acc%interval = int(min(int(acc%interval, i8), &
-                (b*acc%planned + n_blocks - 1)/n_blocks - acc%cycles))
+                               adaptive_interval(acc%total/acc%cycles, acc%longest), &
+                               cycles_to_boundary(acc%cycles, acc%unit))
+            if (acc%window > 0) acc%interval = min(acc%interval, &
+                                                   cycles_to_boundary(acc%cycles, acc%window))
         end if
     end subroutine lyapunov_step
+
+    !> Cycles from `cycles` to the next multiple of `every` (every, when on one).
+    pure integer function cycles_to_boundary(cycles, every) result(left)
+        integer(i8), intent(in) :: cycles
+        integer, intent(in) :: every
+
+        left = every - int(modulo(cycles, int(every, i8)))
+    end function cycles_to_boundary
 
     !> Cycles until the spread of growths of columns growing at `rates` (ln per cycle; values
     !> that are not finite, collapsed directions, are left out) reaches condition_bound:
@@ -308,39 +369,26 @@ contains
     end function running_rows
 
     !> Exponents in the paper's units (bits per drive cycle) and per unit time, sorted
-    !> descending, with standard errors and the running estimates; every mean is over cycles.
+    !> descending, with standard errors (and the cycles per block they were read at) and the
+    !> running estimates; every mean is over cycles.
     pure function lyapunov_result(acc, period) result(res)
         type(lyapunov_acc_t), intent(in) :: acc
         real(wp), intent(in) :: period
         type(lyapunov_result_t) :: res
-        real(wp) :: nats(acc%k), err(acc%k), mean(acc%k), to_bits
-        integer :: order(acc%k), j, b, nb, used
+        real(wp) :: nats(acc%k), err(acc%k), to_bits
+        integer(i8) :: block(acc%k)
+        integer :: order(acc%k), j, used
 
         to_bits = 1/log(2.0_wp)
         nats = acc%total/max(1_i8, acc%cycles)
-        err = 0
-        nb = count(acc%block_len > 0)
-        if (nb > 1) then
-            ! (the blocks that hold steps: the first nb, unless a run stopped early)
-            mean = 0
-            do b = 1, size(acc%block_len)
-                if (acc%block_len(b) > 0) mean = mean + acc%block_sum(:, b)/acc%block_len(b)
-            end do
-            mean = mean/nb
-            ! no error bar for an exponent of -infinity (a run with rests on the walls)
-            where (.not. ieee_is_finite(mean)) mean = 0
-            do b = 1, size(acc%block_len)
-                if (acc%block_len(b) == 0) cycle
-                where (ieee_is_finite(acc%block_sum(:, b))) &
-                    err = err + (acc%block_sum(:, b)/acc%block_len(b) - mean)**2
-            end do
-            err = sqrt(err/(nb - 1)/nb)
-            where (.not. ieee_is_finite(acc%total)) err = 0
-        end if
+        call blocking_error(acc%blocks, err, block)
+        ! no error bar for an exponent of -infinity (a run with rests on the walls)
+        where (.not. ieee_is_finite(acc%total)) err = 0
         order = descending_order(nats)
         res%bits_per_cycle = nats(order)*to_bits
         res%nats_per_time = nats(order)/period
         res%stderr_bits = err(order)*to_bits
+        res%stderr_cycles = block(order)*acc%unit
         ! the kept rows, and the last step (the final estimate) if it is not one of them
         used = acc%rows
         if (acc%steps > acc%rows*acc%stride) used = used + 1

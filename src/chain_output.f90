@@ -36,7 +36,7 @@ module chain_output
     private
     public :: output_t, output_begin, output_header, output_strobe_write, output_events_append
     public :: output_final, output_stats, output_periods, output_lyapunov, output_jacobian
-    public :: output_clv_rows, output_clv
+    public :: output_clv_rows, output_clv, output_windows_write, output_truncate_windows
     public :: output_end, output_abort, read_final_state, output_group
     public :: schema_version, code_version, output_truncate_strobe
     public :: resume_data_t, output_resume, read_resume, output_inspect, output_continue
@@ -411,10 +411,11 @@ contains
 
     !> /lyapunov; `running_bits(k, rows)` are the running estimates at drive cycles
     !> `running_cycle(rows)` (a bounded selection of the QR steps: chain_lyapunov).
-    subroutine output_lyapunov(out, bits, per_time, stderr_bits, running_bits, running_cycle, &
-                               ky, positive_sum, collisions_per_cycle, err)
+    subroutine output_lyapunov(out, bits, per_time, stderr_bits, stderr_cycles, running_bits, &
+                               running_cycle, ky, positive_sum, collisions_per_cycle, err)
         type(output_t), intent(inout) :: out
         real(wp), intent(in), contiguous :: bits(:), per_time(:), stderr_bits(:)
+        integer(i8), intent(in), contiguous :: stderr_cycles(:)
         real(wp), intent(in), contiguous :: running_bits(:, :)
         integer(i8), intent(in), contiguous :: running_cycle(:)
         real(wp), intent(in) :: ky, positive_sum, collisions_per_cycle
@@ -434,7 +435,11 @@ contains
                           'nats per unit time', 'exponent', err)
             call h5_write(f, 'lyapunov/stderr', stderr_bits, 'bit', err)
             call describe(f, 'lyapunov/stderr', 'standard error of the Lyapunov exponent '// &
-                          '(20 block averages)', 'bits per drive cycle', 'exponent', err)
+                          '(blocking, where it levels off with the block size)', &
+                          'bits per drive cycle', 'exponent', err)
+            call h5_write(f, 'lyapunov/stderr_block', stderr_cycles, '1', err)
+            call describe(f, 'lyapunov/stderr_block', 'drive cycles per block at which '// &
+                          'stderr was read', 'drive cycles', 'exponent', err)
             call h5_write(f, 'lyapunov/running_cycle', running_cycle, '1', err)
             call describe(f, 'lyapunov/running_cycle', 'drive cycle of the running estimate', &
                           'drive cycles', 'qr_step', err)
@@ -447,6 +452,61 @@ contains
             call h5_write_attr(f, 'lyapunov', 'collisions_per_cycle', collisions_per_cycle, err)
         end associate
     end subroutine output_lyapunov
+
+    !> /finite_time (docs/model.md section 7.10), a chunk of windows at a time: windows first ..
+    !> first + m - 1 of `n_windows`, exponents(k, m) in bits per drive cycle, each window of
+    !> `window` cycles ending at drive cycle cycle(m); the first window creates the group.
+    !> (Its own group, not /lyapunov, which the end of a run writes whole: a run stopped
+    !> early keeps its windows, and its continuation adds to them, as /strobe.)
+    subroutine output_windows_write(out, n_windows, first, window, exponents, cycle, err)
+        type(output_t), intent(inout) :: out
+        integer(i8), intent(in) :: n_windows, first
+        integer, intent(in) :: window
+        real(wp), intent(in), contiguous :: exponents(:, :)
+        integer(i8), intent(in), contiguous :: cycle(:)
+        type(error_t), allocatable, intent(out) :: err
+        integer(i8) :: k
+
+        k = size(exponents, 1)
+        associate (f => out%file)
+            if (first == 1) then
+                call h5_create_group(f, 'finite_time', err)
+                call h5_write_attr(f, 'finite_time', 'window', window, err)
+                call h5_create_growing(f, 'finite_time/cycle', h5_int8, [n_windows], '1', err)
+                call h5_set_scale(f, 'finite_time/cycle', err)
+                call describe(f, 'finite_time/cycle', 'drive cycle at the end of the window', &
+                              'drive cycles', '', err)
+                call index_coordinate(f, 'finite_time/exponent', 1, int(k), 'exponent index '// &
+                                      '(column of the tangent frame: the order of '// &
+                                      '/lyapunov/exponents unless two exponents cross)', err)
+                call h5_create_growing(f, 'finite_time/exponents', h5_real, [k, n_windows], &
+                                       '1', err)
+                call describe(f, 'finite_time/exponents', 'finite-time Lyapunov exponent '// &
+                              'over the window (growth of the frame column per cycle)', &
+                              'bits per drive cycle', 'cycle exponent', err)
+            end if
+            call h5_write_slab(f, 'finite_time/exponents', [0_i8, first - 1], exponents, &
+                               grow=.false., err=err)
+            call h5_write_slab(f, 'finite_time/cycle', [first - 1], cycle, grow=.false., &
+                               err=err)
+        end associate
+    end subroutine output_windows_write
+
+    !> A run stopped early: /finite_time cut (or, continued, grown back) to `windows`.
+    subroutine output_truncate_windows(out, windows, err)
+        type(output_t), intent(inout) :: out
+        integer(i8), intent(in) :: windows
+        type(error_t), allocatable, intent(out) :: err
+        integer(i8), allocatable :: dims(:)
+        logical :: exists
+
+        call h5_exists(out%file, 'finite_time', exists, err)
+        if (.not. exists .or. allocated(err)) return
+        call h5_extent(out%file, 'finite_time/exponents', dims, err)
+        if (allocated(err)) return
+        call h5_set_extent(out%file, 'finite_time/exponents', [dims(1), windows], err)
+        call h5_set_extent(out%file, 'finite_time/cycle', [windows], err)
+    end subroutine output_truncate_windows
 
     !> /clv's per-record datasets (docs/model.md section 14.5), a block of records at a time:
     !> records first .. first + m - 1 of the `total` records with covariant vectors, in any
@@ -758,12 +818,14 @@ contains
     !> Reopen the run stopped early in `path` to continue it: a copy `path.part` (the file
     !> under the final name stays as it is until the continuation ends), without the results
     !> that the end of the run writes again (/final, /stats, /lyapunov, /floquet, /resume,
-    !> /strobe/period), with /strobe back at `n_records` records.
-    subroutine output_continue(out, path, n, n_records, err)
+    !> /strobe/period), with /strobe back at `n_records` records and /finite_time at
+    !> `n_windows` windows.
+    subroutine output_continue(out, path, n, n_records, n_windows, err)
         type(output_t), intent(out) :: out
         character(len=*), intent(in) :: path
         integer, intent(in) :: n
         integer(i8), intent(in) :: n_records
+        integer(i8), intent(in) :: n_windows !! finite-time windows of the whole run
         type(error_t), allocatable, intent(out) :: err
         character(len=14), parameter :: results(6) = [character(len=14) :: 'final', 'stats', &
                                                       'lyapunov', 'floquet', 'resume', &
@@ -786,6 +848,7 @@ contains
             if (exists) call h5_delete(out%file, trim(results(j)), err)
         end do
         call set_strobe_records(out, n_records, err)
+        if (.not. allocated(err)) call output_truncate_windows(out, n_windows, err)
         call h5_exists(out%file, 'events', out%events_created, err)
         if (out%events_created) then
             call h5_extent(out%file, 'events/time', dims, err)

@@ -54,6 +54,9 @@ module chain_record
         integer :: clv_transient = 200       !! last records without vectors (convergence)
         integer :: clv_store = 4             !! vectors whose per-oscillator weights are kept
         integer :: clv_save = 1              !! last records with vectors whose vectors are kept
+        !> finite-time exponents over windows of this many recorded cycles (0: none;
+        !> docs/model.md section 7.10)
+        integer :: window = 0
     end type record_spec_t
 
     !> Where strobe records and events go, chunk by chunk.
@@ -64,6 +67,8 @@ module chain_record
         !> per-record numbers of covariant vectors, a block at a time, last block first
         !> (by default dropped)
         procedure :: put_clv => discard_clv
+        !> finite-time exponents, a chunk of windows at a time (by default dropped)
+        procedure :: put_windows => discard_windows
     end type record_sink_t
 
     abstract interface
@@ -83,9 +88,9 @@ module chain_record
         end subroutine put_events_i
     end interface
 
-    !> Keeps every record in memory: x(n, cycles), v(n, cycles), and all events; and the
+    !> Keeps every record in memory: x(n, cycles), v(n, cycles), and all events; the
     !> per-record numbers of covariant vectors (records with vectors in order, clv_rows_t's
-    !> arrays whole).
+    !> arrays whole); and the finite-time exponents (k, windows) with their cycles.
     type, extends(record_sink_t) :: memory_sink_t
         logical :: keep_strobe = .true.
         real(wp), allocatable :: x(:, :), v(:, :)
@@ -93,10 +98,13 @@ module chain_record
         type(event_log_t) :: events
         integer(i8), allocatable :: clv_cycle(:)
         real(wp), allocatable :: clv_ipr(:, :), clv_site_weight(:, :, :), clv_min_angle(:)
+        real(wp), allocatable :: window_exponents(:, :)
+        integer(i8), allocatable :: window_cycle(:)
     contains
         procedure :: put_strobe => memory_put_strobe
         procedure :: put_events => memory_put_events
         procedure :: put_clv => memory_put_clv
+        procedure :: put_windows => memory_put_windows
     end type memory_sink_t
 
     !> Where record_cycles stands after a record, beyond the chain itself (which is then at that
@@ -107,6 +115,14 @@ module chain_record
         real(wp), allocatable :: xwin(:, :), vwin(:, :) !! (n, window): the last records, a
                                                   !! ring (record j at modulo(j - 1, window) + 1)
     end type record_state_t
+
+    !> Finite-time exponents held for the sink: windows first .. first + count - 1 of `total`.
+    type :: window_buffer_t
+        integer(i8) :: total = 0, first = 1, seen = 0
+        integer :: count = 0
+        real(wp), allocatable :: exponents(:, :)  !! exponents(k, chunk), bits per cycle
+        integer(i8), allocatable :: cycle(:)      !! drive cycle at each window's end
+    end type window_buffer_t
 
     type :: record_result_t
         integer(i8) :: cycles_done = 0
@@ -165,6 +181,7 @@ contains
         type(clv_pass_t) :: clv
         real(wp), allocatable :: xbuf(:, :), vbuf(:, :)
         integer(i8), allocatable :: cbuf(:)
+        type(window_buffer_t) :: windows
         integer(i8) :: j, target_cycle, first
         real(wp) :: target_s
         integer :: m, i, w
@@ -196,6 +213,8 @@ contains
         res%cycles_done = st%cycles_done
         m = int(max(1_i8, min(spec%cycles - st%cycles_done, int(2**20/chain_size(chain), i8))))
         allocate (xbuf(chain_size(chain), m), vbuf(chain_size(chain), m), cbuf(m))
+        if (spec%lyapunov .and. spec%window > 0) &
+            call window_buffer_start(windows, st%acc, spec%cycles/spec%window)
         first = st%cycles_done + 1
         do j = st%cycles_done + 1, spec%cycles
             call section_target(chain, spec%transient, spec%phase, j, target_cycle, target_s)
@@ -219,6 +238,12 @@ contains
                     if (allocated(err)) exit
                 end if
             end if
+            if (allocated(windows%exponents)) then
+                call window_buffer_take(windows, st%acc, cbuf(i))
+                if (windows%count == size(windows%cycle)) call window_buffer_flush(windows, &
+                                                                                   sink, err)
+                if (allocated(err)) exit
+            end if
             res%cycles_done = j
             st%cycles_done = j
             stop_now = .false.
@@ -227,6 +252,8 @@ contains
             if (i == m .or. j == spec%cycles .or. log%count >= event_flush .or. stop_now) then
                 call sink%put_strobe(spec%cycles, first, xbuf(:, :i), vbuf(:, :i), cbuf(:i), err)
                 if (.not. allocated(err) .and. log%enabled) call sink%put_events(log, err)
+                if (.not. allocated(err) .and. allocated(windows%exponents)) &
+                    call window_buffer_flush(windows, sink, err)
                 if (allocated(err)) exit
                 call event_log_clear(log)
                 first = j + 1
@@ -263,7 +290,8 @@ contains
         call chain_reset_counts(chain)
         ! (covariant vectors: a QR step at every record)
         if (spec%lyapunov) call lyapunov_start(st%acc, chain_vectors(chain), spec%cycles, &
-                                              merge(1, spec%qr_every, spec%covariant))
+                                              merge(1, spec%qr_every, spec%covariant), &
+                                              spec%window)
         nwin = int(min(spec%cycles, int(period_window(spec%max_period), i8)))
         allocate (st%xwin(chain_size(chain), nwin), st%vwin(chain_size(chain), nwin))
     end subroutine begin_records
@@ -483,6 +511,73 @@ contains
         sink%v(:, first:last) = v
         sink%cycle(first:last) = cycle
     end subroutine memory_put_strobe
+
+    !> Finite-time exponents of a run of `total` windows: a chunk of at most 1 MiB held for the
+    !> sink (each record's QR step ends at most one window).
+    pure subroutine window_buffer_start(buf, acc, total)
+        type(window_buffer_t), intent(out) :: buf
+        type(lyapunov_acc_t), intent(in) :: acc
+        integer(i8), intent(in) :: total
+        integer :: chunk
+
+        chunk = int(max(1_i8, min(total, 131072_i8/acc%k)))
+        allocate (buf%exponents(acc%k, chunk), buf%cycle(chunk))
+        buf%total = total
+        buf%seen = acc%windows
+        buf%first = acc%windows + 1
+    end subroutine window_buffer_start
+
+    !> The window the last QR step ended, if it ended one, at drive cycle `cycle`, in bits per
+    !> cycle.
+    pure subroutine window_buffer_take(buf, acc, cycle)
+        type(window_buffer_t), intent(inout) :: buf
+        type(lyapunov_acc_t), intent(in) :: acc
+        integer(i8), intent(in) :: cycle
+
+        if (acc%windows == buf%seen) return
+        buf%seen = acc%windows
+        buf%count = buf%count + 1
+        buf%exponents(:, buf%count) = acc%window_last/log(2.0_wp)
+        buf%cycle(buf%count) = cycle
+    end subroutine window_buffer_take
+
+    !> The held windows to the sink.
+    subroutine window_buffer_flush(buf, sink, err)
+        type(window_buffer_t), intent(inout) :: buf
+        class(record_sink_t), intent(inout) :: sink
+        type(error_t), allocatable, intent(out) :: err
+
+        if (buf%count == 0) return
+        call sink%put_windows(buf%total, buf%first, buf%exponents(:, :buf%count), &
+                              buf%cycle(:buf%count), err)
+        buf%first = buf%first + buf%count
+        buf%count = 0
+    end subroutine window_buffer_flush
+
+    !> A sink that keeps no finite-time exponents.
+    subroutine discard_windows(sink, n_windows, first, exponents, cycle, err)
+        class(record_sink_t), intent(inout) :: sink
+        integer(i8), intent(in) :: n_windows, first
+        real(wp), intent(in), contiguous :: exponents(:, :)
+        integer(i8), intent(in), contiguous :: cycle(:)
+        type(error_t), allocatable, intent(out) :: err
+    end subroutine discard_windows
+
+    subroutine memory_put_windows(sink, n_windows, first, exponents, cycle, err)
+        class(memory_sink_t), intent(inout) :: sink
+        integer(i8), intent(in) :: n_windows, first
+        real(wp), intent(in), contiguous :: exponents(:, :)
+        integer(i8), intent(in), contiguous :: cycle(:)
+        type(error_t), allocatable, intent(out) :: err
+        integer(i8) :: last
+
+        if (.not. allocated(sink%window_cycle)) &
+            allocate (sink%window_exponents(size(exponents, 1), n_windows), &
+                      sink%window_cycle(n_windows))
+        last = first + size(cycle) - 1
+        sink%window_exponents(:, first:last) = exponents
+        sink%window_cycle(first:last) = cycle
+    end subroutine memory_put_windows
 
     !> A sink that keeps no covariant vectors.
     subroutine discard_clv(sink, rows, err)

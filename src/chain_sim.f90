@@ -31,6 +31,7 @@ module chain_sim
                             output_lyapunov, output_jacobian, output_end, output_abort, &
                             output_clv_rows, output_clv, &
                             read_final_state, output_truncate_strobe, resume_data_t, &
+                            output_windows_write, output_truncate_windows, &
                             output_resume, read_resume, output_inspect, output_continue, &
                             file_continuable, file_other_input
     implicit none
@@ -41,10 +42,12 @@ module chain_sim
     !> Sends records to the HDF5 file as they come.
     type, extends(record_sink_t) :: file_sink_t
         type(output_t) :: out
+        integer :: window = 0    !! cycles per finite-time window
     contains
         procedure :: put_strobe => file_put_strobe
         procedure :: put_events => file_put_events
         procedure :: put_clv => file_put_clv
+        procedure :: put_windows => file_put_windows
     end type file_sink_t
 
 contains
@@ -223,7 +226,8 @@ contains
         if (found == file_continuable .and. .not. cfg%record%covariant) then
             call continue_chain(cfg, chain, state, err)
             if (allocated(err)) return
-            call output_continue(sink%out, cfg%output_file, cfg%model%n, cfg%record%cycles, err)
+            call output_continue(sink%out, cfg%output_file, cfg%model%n, cfg%record%cycles, &
+                                 planned_windows(cfg), err)
             if (allocated(err)) return
         else
             call start_chain(cfg, chain, err)
@@ -232,12 +236,15 @@ contains
             if (allocated(err)) return
             call header_for(sink%out, cfg, chain, err)
         end if
+        sink%window = cfg%record%window
         if (.not. allocated(err)) &
             call record_cycles(cfg%record, chain, sink, res, err, monitor, state)
         if (.not. allocated(err)) &
             call write_results(sink%out, chain, res, cfg%record%jacobian_cycles, err)
         if (.not. allocated(err) .and. .not. res%complete) then
             call output_truncate_strobe(sink%out, res%cycles_done, err)
+            if (.not. allocated(err) .and. cfg%record%window > 0) &
+                call output_truncate_windows(sink%out, state%acc%windows, err)
             if (.not. allocated(err)) call write_resume(sink%out, cfg, chain, state, err)
         end if
         if (allocated(err)) then
@@ -346,7 +353,8 @@ contains
         if (res%has_lyapunov) then
             associate (l => res%lyapunov)
                 call output_lyapunov(out, l%bits_per_cycle, l%nats_per_time, l%stderr_bits, &
-                                     l%running_bits, res%running_cycle, l%ky_dimension, &
+                                     l%stderr_cycles, l%running_bits, res%running_cycle, &
+                                     l%ky_dimension, &
                                      l%positive_sum, res%collisions_per_cycle, err)
             end associate
             if (allocated(err)) return
@@ -373,6 +381,25 @@ contains
 
         call output_strobe_write(sink%out, n_records, first, x, v, cycle, err)
     end subroutine file_put_strobe
+
+    subroutine file_put_windows(sink, n_windows, first, exponents, cycle, err)
+        class(file_sink_t), intent(inout) :: sink
+        integer(i8), intent(in) :: n_windows, first
+        real(wp), intent(in), contiguous :: exponents(:, :)
+        integer(i8), intent(in), contiguous :: cycle(:)
+        type(error_t), allocatable, intent(out) :: err
+
+        call output_windows_write(sink%out, n_windows, first, sink%window, exponents, cycle, err)
+    end subroutine file_put_windows
+
+    !> Finite-time windows of the run (&lyapunov window; 0 without).
+    pure integer(i8) function planned_windows(cfg)
+        type(config_t), intent(in) :: cfg
+
+        planned_windows = 0
+        if (cfg%record%lyapunov .and. cfg%record%window > 0) &
+            planned_windows = cfg%record%cycles/cfg%record%window
+    end function planned_windows
 
     subroutine file_put_clv(sink, rows, err)
         class(file_sink_t), intent(inout) :: sink

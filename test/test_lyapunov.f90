@@ -77,6 +77,8 @@ contains
         call running_estimates_decimated(t, 300, 300)
         call size_check_matches_storage(t)
         call pack_round_trip(t)
+        call stderr_at_the_plateau(t)
+        call finite_time_windows(t)
         call monitored_run(t, .false.)
         call monitored_run(t, .true.)
     end subroutine run_lyapunov_tests
@@ -92,7 +94,7 @@ contains
         real(wp), allocatable :: frame_t(:, :)
         integer :: q, info
 
-        call lyapunov_start(acc, 3, 9000_i8)
+        call lyapunov_start(acc, 3, 9000_i8, window=100)
         do q = 1, 9000
             if (q == 5000) then
                 call lyapunov_pack(acc, ints, reals)
@@ -106,6 +108,9 @@ contains
         b = lyapunov_result(copy, 1.0_wp)
         call check(t, all(a%bits_per_cycle == b%bits_per_cycle) .and. &
                    all(a%stderr_bits == b%stderr_bits) .and. &
+                   all(a%stderr_cycles == b%stderr_cycles) .and. &
+                   all(acc%window_last == copy%window_last) .and. &
+                   acc%windows == copy%windows .and. acc%windows == 90 .and. &
                    all(a%running_bits == b%running_bits) .and. &
                    all(a%running_cycles == b%running_cycles), &
                    'pack: packed, unpacked and continued = never packed, bit for bit')
@@ -128,6 +133,100 @@ contains
         end subroutine step
 
     end subroutine pack_round_trip
+
+    !> Growths that repeat for `run` = 256 consecutive steps (each run's value drawn uniformly
+    !> from [0.5, 1.5)) have a known standard error of their mean: sigma / sqrt(runs), sigma =
+    !> 1 / sqrt(12). The blocking plateau finds it (to 15 %, the scatter of an error estimate
+    !> from ~100 independent blocks) at blocks of at least one run, and says so (the naive
+    !> error of single steps would be 16 times too small).
+    subroutine stderr_at_the_plateau(t)
+        type(tally_t), intent(inout) :: t
+        integer, parameter :: run = 256, runs = 1024
+        type(lyapunov_acc_t) :: acc
+        type(lyapunov_result_t) :: res
+        real(wp), allocatable :: frame(:, :)
+        real(wp) :: g, expected
+        integer(i8) :: state
+        integer :: q, info
+        character(len=80) :: label
+
+        call lyapunov_start(acc, 1, int(run, i8)*runs)
+        state = 12345
+        g = 0
+        allocate (frame(1, 1))
+        do q = 0, run*runs - 1
+            if (modulo(q, run) == 0) then
+                state = modulo(48271_i8*state, 2147483647_i8)
+                g = 0.5_wp + real(state, wp)/2147483647.0_wp
+            end if
+            frame = exp(g)
+            call lyapunov_step(acc, frame, info)
+        end do
+        res = lyapunov_result(acc, 1.0_wp)
+        expected = 1/sqrt(12.0_wp)/sqrt(real(runs, wp))/log(2.0_wp)
+        write (label, '(a,es9.3,a,es9.3,a,i0,a)') ' (', res%stderr_bits(1), ' against ', &
+            expected, ', read at blocks of ', res%stderr_cycles(1), ' cycles)'
+        call check(t, abs(res%stderr_bits(1)/expected - 1) < 0.15_wp, &
+                   'standard error of a correlated series at the plateau'//trim(label))
+        call check(t, res%stderr_cycles(1) >= run, &
+                   'the plateau is read at blocks at least as long as the correlation')
+    end subroutine stderr_at_the_plateau
+
+    !> Finite-time exponents over windows of 100 cycles (docs/model.md section 7.10) on fig.
+    !> 1c's chain, adaptive QR: the windows' mean is the exponents (to rounding); they equal the
+    !> windows of a QR step every cycle (the steps never cross a window); each window ends 100
+    !> cycles after the last; a window of the whole run is the exponents; and the scatter of
+    !> the windows, sd / sqrt(windows), agrees with the plateau's standard error (to 30 %).
+    subroutine finite_time_windows(t)
+        type(tally_t), intent(inout) :: t
+        integer, parameter :: window = 100, cycles = 6000
+        type(chain_t) :: chain, copy, whole
+        type(error_t), allocatable :: err
+        type(record_result_t) :: adaptive, every, one
+        type(memory_sink_t) :: sink_adaptive, sink_every, sink_one
+        type(config_t) :: cfg
+        real(wp), allocatable :: mean(:), sd(:)
+        integer :: nw
+        character(len=80) :: label
+
+        call make_chain(chain, 16, 1.7_wp, 1.5_wp, 0.05_wp, 0.7_wp, .true., 0.3_wp, 0.5_wp, err)
+        copy = chain
+        whole = chain
+        cfg = spectrum_config(16, 500_i8, int(cycles, i8), 4)
+        cfg%record%qr_every = 0
+        cfg%record%window = window
+        sink_adaptive%keep_strobe = .false.
+        call record_cycles(cfg%record, chain, sink_adaptive, adaptive, err)
+        call check(t, .not. allocated(err), 'finite-time windows: adaptive run')
+        if (allocated(err)) return
+        nw = cycles/window
+        call check(t, size(sink_adaptive%window_cycle) == nw .and. &
+                   all(sink_adaptive%window_cycle(2:) - sink_adaptive%window_cycle(:nw - 1) &
+                       == window), 'finite-time windows: 60 windows, 100 cycles apart')
+        mean = sum(sink_adaptive%window_exponents, dim=2)/nw
+        call check_close(t, maxval(abs(mean - adaptive%lyapunov%bits_per_cycle)), 0.0_wp, &
+                         'finite-time windows: their mean is the exponents', 1.0e-12_wp)
+        cfg%record%qr_every = 1
+        sink_every%keep_strobe = .false.
+        call record_cycles(cfg%record, copy, sink_every, every, err)
+        call check_close(t, maxval(abs(sink_every%window_exponents - &
+                                       sink_adaptive%window_exponents)), 0.0_wp, &
+                         'finite-time windows: adaptive QR = QR every cycle', 1.0e-10_wp)
+        cfg%record%qr_every = 0
+        cfg%record%window = cycles
+        sink_one%keep_strobe = .false.
+        call record_cycles(cfg%record, whole, sink_one, one, err)
+        call check_close(t, maxval(abs(sink_one%window_exponents(:, 1) - &
+                                       one%lyapunov%bits_per_cycle)), 0.0_wp, &
+                         'finite-time windows: one window of the whole run is the exponents', &
+                         1.0e-12_wp)
+        sd = sqrt(sum((sink_adaptive%window_exponents - spread(mean, 2, nw))**2, dim=2)/ &
+                  (nw - 1))/sqrt(real(nw, wp))
+        write (label, '(a,es9.3,a,es9.3,a)') ' (', sd(1), ' and ', &
+            adaptive%lyapunov%stderr_bits(1), ' bits/cycle)'
+        call check(t, all(abs(sd/adaptive%lyapunov%stderr_bits - 1) < 0.3_wp), &
+                   'finite-time windows: their scatter is the standard error'//trim(label))
+    end subroutine finite_time_windows
 
     !> The running estimates take the same memory for a run of 10^4 QR steps as for one of
     !> 10^9: the accumulator's buffer is bounded, not sized by the planned steps.

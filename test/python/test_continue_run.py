@@ -1,6 +1,7 @@
 """A single run stopped by SIGINT/SIGTERM records planned and done cycles, and the same command
 continues it into the same file, bit for bit the file of an uninterrupted run (every dataset
-and attribute, with Lyapunov exponents, events and the Jacobian on), even when stopped twice.
+and attribute, with Lyapunov exponents, finite-time exponents, events and the Jacobian on),
+even when stopped twice.
 A finished file is still refused without overwrite, and a stopped run of another input is
 refused with a message saying so; neither is touched."""
 from __future__ import annotations
@@ -19,7 +20,7 @@ CYCLES = 100000
 INPUT = f"""&chain n = 16, amplitude = 1.7, omega = 1.5 /
 &initial kind = 'random', seed = 4, x_amp = 0.3, v_amp = 0.4 /
 &run transient = 20, cycles = {CYCLES}, max_period = 4 /
-&lyapunov vectors = 6, qr_every = 2, jacobian = .true. /
+&lyapunov vectors = 6, qr_every = 2, jacobian = .true., window = 10 /
 &output file = 'run.h5' /
 """
 
@@ -91,6 +92,10 @@ def test_stopped_run_continues_bit_for_bit(impactchain_exe, tmp_path):
         assert 0 < done < CYCLES
         assert int(np.ravel(f["params"].attrs["cycles"])[0]) == CYCLES
         assert f["strobe/x"].shape == (done, 16) and "resume" in f
+        # the finite-time exponents of the windows done, and no more
+        windows = f["finite_time/exponents"]
+        assert windows.shape == (done // 10, 6) and done >= 10
+        assert np.all(np.isfinite(windows[()]))
     assert not (parts / "run.h5.part").exists()
 
     # a stopped run of another input is not continued, and left as it was
@@ -112,7 +117,8 @@ def test_stopped_run_continues_bit_for_bit(impactchain_exe, tmp_path):
 
     a, b = _contents(whole / "run.h5"), _contents(parts / "run.h5")
     assert sorted(a) == sorted(b)
-    for name in ("events/time", "lyapunov/running", "floquet/jacobian", "stats/cycles_done"):
+    for name in ("events/time", "lyapunov/running", "floquet/jacobian", "stats/cycles_done",
+                 "finite_time/exponents"):
         assert name in a
     different = [name for name in a if not _same(a[name], b[name])]
     assert not different, different
