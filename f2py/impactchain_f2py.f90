@@ -250,7 +250,8 @@ subroutine ic_sweep(n, nsp, spacing, damping, restitution, amplitude, omega, nb,
                     max_size_mb, lyapunov, vectors, qr_every, npar, parameter, start, stop, &
                     step, nmode, mode, npar2, parameter2, start2, stop2, step2, threads, &
                     dry_run, nf, nc, npts, kcap, sizes, values, x, collisions, period, &
-                    exponents, stderr_bits, ky, control, status, msg_len, message)
+                    exponents, stderr_bits, stderr_cycles, ky, control, status, msg_len, &
+                    message)
     use, intrinsic :: iso_c_binding, only: c_int, c_int64_t, c_double
     use impactchain, only: i8, error_t, config_t, validate_config, check_size, plan_sweep, &
                            sweep_plan_t, sweep_result_t, sweep_result_init, chain_state_t, &
@@ -271,6 +272,7 @@ subroutine ic_sweep(n, nsp, spacing, damping, restitution, amplitude, omega, nb,
     real(c_double), intent(inout) :: x(nf, nc, npts) ! caller-allocated, as ic_run's records
     integer(c_int), intent(out) :: period(nf, npts)
     real(c_double), intent(out) :: exponents(kcap, npts), stderr_bits(kcap, npts), ky(npts)
+    integer(c_int64_t), intent(out) :: stderr_cycles(kcap, npts)
     integer(c_int64_t), intent(inout), target :: control(4)
     integer(c_int), intent(out) :: status, msg_len
     integer(c_int), intent(out) :: message(1024)
@@ -288,6 +290,7 @@ subroutine ic_sweep(n, nsp, spacing, damping, restitution, amplitude, omega, nb,
     period = 0
     exponents = 0
     stderr_bits = 0
+    stderr_cycles = 0
     ky = 0
     call make_config(cfg, int(n), spacing, damping, restitution, amplitude, omega, boundary, &
                      explicit /= 0, x0, v0, int(transient, i8), int(cycles, i8), phase, &
@@ -326,6 +329,7 @@ subroutine ic_sweep(n, nsp, spacing, damping, restitution, amplitude, omega, nb,
     period = res%period
     exponents = res%exponents
     stderr_bits = res%stderr
+    stderr_cycles = res%stderr_block
     ky = res%ky
 end subroutine ic_sweep
 

@@ -111,7 +111,7 @@ module chain_hdf5
     interface h5_write
         module procedure write_real_0d, write_real_1d, write_real_2d, write_real_3d, &
             write_real_4d, write_int_0d, write_int_1d, write_int_2d, write_int_3d, &
-            write_int8_0d, write_int8_1d
+            write_int8_0d, write_int8_1d, write_int8_2d, write_int8_3d
     end interface h5_write
 
     !> A dataset read into `values`, whose extents it must have (a scalar: one value).
@@ -841,6 +841,24 @@ contains
 
         call write_dataset(file, name, h5_int8, shape(values, hsize_t), c_loc(values), units, err)
     end subroutine write_int8_1d
+
+    subroutine write_int8_2d(file, name, values, units, err)
+        type(h5_file_t), intent(in) :: file
+        character(len=*), intent(in) :: name, units
+        integer(i8), intent(in), target, contiguous :: values(:, :)
+        type(error_t), allocatable, intent(inout) :: err
+
+        call write_dataset(file, name, h5_int8, shape(values, hsize_t), c_loc(values), units, err)
+    end subroutine write_int8_2d
+
+    subroutine write_int8_3d(file, name, values, units, err)
+        type(h5_file_t), intent(in) :: file
+        character(len=*), intent(in) :: name, units
+        integer(i8), intent(in), target, contiguous :: values(:, :, :)
+        type(error_t), allocatable, intent(inout) :: err
+
+        call write_dataset(file, name, h5_int8, shape(values, hsize_t), c_loc(values), units, err)
+    end subroutine write_int8_3d
 
     !> Read dataset `name` whole into `buf` (element type `kind`), after checking that its
     !> extents are `dims` (none: a scalar, or one value).

@@ -46,7 +46,7 @@ module chain_sweep
     public :: branch_record_sizes, pack_branch, unpack_branch
 
     !> The checkpoint's first bytes; the number changes with the layout of pack_branch.
-    character(len=8), parameter :: checkpoint_magic = 'ICSWEEP2'
+    character(len=8), parameter :: checkpoint_magic = 'ICSWEEP3'
     !> Seconds between checkpoints of a running sweep (and between MPI gathers in mpi/).
 
     type :: sweep_summary_t
@@ -75,6 +75,8 @@ module chain_sweep
         integer, allocatable :: period(:, :)         !! period(n, n_points)
         real(wp), allocatable :: exponents(:, :)     !! exponents(k, n_points), bits/cycle
         real(wp), allocatable :: stderr(:, :)        !! stderr(k, n_points)
+        integer(i8), allocatable :: stderr_block(:, :) !! (k, n_points): cycles per block of
+                                                       !! the blocking plateau
         real(wp), allocatable :: ky(:)               !! ky(n_points)
         logical, allocatable :: done(:)              !! done(n_points)
     end type sweep_result_t
@@ -140,12 +142,14 @@ contains
         allocate (res%x(cfg%model%n, int(cfg%record%cycles), plan%n_points))
         allocate (res%collisions(plan%n_points), res%period(cfg%model%n, plan%n_points))
         allocate (res%exponents(plan%k, plan%n_points), res%stderr(plan%k, plan%n_points))
+        allocate (res%stderr_block(plan%k, plan%n_points))
         allocate (res%ky(plan%n_points), res%done(plan%n_points))
         res%x = 0
         res%collisions = 0
         res%period = 0
         res%exponents = 0
         res%stderr = 0
+        res%stderr_block = 0
         res%ky = 0
         res%done = .false.
     end subroutine sweep_result_init
@@ -244,6 +248,7 @@ contains
             if (out%has_lyapunov) then
                 res%exponents(:, p) = out%lyapunov%bits_per_cycle
                 res%stderr(:, p) = out%lyapunov%stderr_bits
+                res%stderr_block(:, p) = out%lyapunov%stderr_cycles
                 res%ky(p) = out%lyapunov%ky_dimension
             end if
             res%done(p) = .true.
@@ -479,7 +484,8 @@ contains
                                  'drive cycles', points//' oscillator', err)
     end subroutine write_sweep_records
 
-    !> /sweep/exponents, stderr and ky_dimension, in the layout of write_sweep_records.
+    !> /sweep/exponents, stderr, stderr_block and ky_dimension, in the layout of
+    !> write_sweep_records.
     subroutine write_sweep_exponents(out, plan, res, points, err)
         type(output_t), intent(inout) :: out
         type(sweep_plan_t), intent(in) :: plan
@@ -497,12 +503,16 @@ contains
             if (plan%n_axes == 1) then
                 call h5_write(f, 'sweep/exponents', res%exponents, 'bit', err)
                 call h5_write(f, 'sweep/stderr', res%stderr, 'bit', err)
+                call h5_write(f, 'sweep/stderr_block', res%stderr_block, '1', err)
                 call h5_write(f, 'sweep/ky_dimension', res%ky, '1', err)
             else
                 call h5_write(f, 'sweep/exponents', reshape(res%exponents, [plan%k, n2, n1], &
                                                             order=[1, 3, 2]), 'bit', err)
                 call h5_write(f, 'sweep/stderr', reshape(res%stderr, [plan%k, n2, n1], &
                                                          order=[1, 3, 2]), 'bit', err)
+                call h5_write(f, 'sweep/stderr_block', reshape(res%stderr_block, &
+                                                               [plan%k, n2, n1], &
+                                                               order=[1, 3, 2]), '1', err)
                 call h5_write(f, 'sweep/ky_dimension', reshape(res%ky, [n2, n1], &
                                                                order=[2, 1]), '1', err)
             end if
@@ -512,7 +522,11 @@ contains
                              'bits per drive cycle', points//' exponent', err)
         if (.not. allocated(err)) &
             call output_describe(out, 'sweep/stderr', 'standard error of the Lyapunov '// &
-                                 'exponent (20 block averages)', 'bits per drive cycle', &
+                                 'exponent (blocking, where it levels off with the block '// &
+                                 'size)', 'bits per drive cycle', points//' exponent', err)
+        if (.not. allocated(err)) &
+            call output_describe(out, 'sweep/stderr_block', 'drive cycles per block at '// &
+                                 'which stderr was read', 'drive cycles', &
                                  points//' exponent', err)
         if (.not. allocated(err)) &
             call output_describe(out, 'sweep/ky_dimension', 'Kaplan-Yorke dimension', &
@@ -660,7 +674,7 @@ contains
         integer, intent(out) :: nr, ni
 
         nr = plan%points_per_branch*point_reals(cfg, plan) + 2*cfg%model%n + 1
-        ni = plan%points_per_branch*point_ints(cfg) + cfg%model%n + 2
+        ni = plan%points_per_branch*point_ints(cfg, plan) + cfg%model%n + 2
     end subroutine branch_record_sizes
 
     !> Reals per point: collisions, x (n x cycles), exponents, stderr, Kaplan-Yorke dimension.
@@ -671,11 +685,12 @@ contains
         point_reals = 2 + cfg%model%n*int(cfg%record%cycles) + 2*plan%k
     end function point_reals
 
-    !> Integers per point: done, periods (n).
-    pure integer function point_ints(cfg)
+    !> Integers per point: done, periods (n), the standard errors' blocks (k).
+    pure integer function point_ints(cfg, plan)
         type(config_t), intent(in) :: cfg
+        type(sweep_plan_t), intent(in) :: plan
 
-        point_ints = 1 + cfg%model%n
+        point_ints = 1 + cfg%model%n + plan%k
     end function point_ints
 
     !> Branch b of a sweep, its points and the state it resumes from, as two plain arrays
@@ -694,7 +709,7 @@ contains
         integer :: q, p, nr, ni
 
         nr = point_reals(cfg, plan)
-        ni = point_ints(cfg)
+        ni = point_ints(cfg, plan)
         do q = 1, plan%points_per_branch
             p = (b - 1)*plan%points_per_branch + q
             reals((q - 1)*nr + 1:q*nr) = [res%collisions(p), &
@@ -702,7 +717,7 @@ contains
                                               [cfg%model%n*int(cfg%record%cycles)]), &
                                           res%exponents(:, p), res%stderr(:, p), res%ky(p)]
             ints((q - 1)*ni + 1:q*ni) = [merge(1_i8, 0_i8, res%done(p)), &
-                                         int(res%period(:, p), i8)]
+                                         int(res%period(:, p), i8), res%stderr_block(:, p)]
         end do
         reals(plan%points_per_branch*nr + 1:) = 0
         ints(plan%points_per_branch*ni + 1:) = 0
@@ -729,7 +744,7 @@ contains
         do q = 1, plan%points_per_branch
             p = (b - 1)*plan%points_per_branch + q
             j = (q - 1)*point_reals(cfg, plan)
-            i = (q - 1)*point_ints(cfg)
+            i = (q - 1)*point_ints(cfg, plan)
             res%collisions(p) = reals(j + 1)
             res%x(:, :, p) = reshape(reals(j + 2:j + 1 + m), [n, int(cfg%record%cycles)])
             res%exponents(:, p) = reals(j + 2 + m:j + 1 + m + k)
@@ -737,9 +752,10 @@ contains
             res%ky(p) = reals(j + 2 + m + 2*k)
             res%done(p) = ints(i + 1) == 1
             res%period(:, p) = int(ints(i + 2:i + 1 + n))
+            res%stderr_block(:, p) = ints(i + 2 + n:i + 1 + n + k)
         end do
         j = plan%points_per_branch*point_reals(cfg, plan)
-        i = plan%points_per_branch*point_ints(cfg)
+        i = plan%points_per_branch*point_ints(cfg, plan)
         if (ints(i + 1) /= 1) then
             starts(b) = chain_state_t()
             return

@@ -131,8 +131,8 @@ RUN_OUTPUTS = (
 )
 #: Outputs of ``_kernels.ic_sweep``, in f2py's order (checked by post/tests/test_api.py).
 SWEEP_OUTPUTS = (
-    "sizes", "values", "collisions", "period", "exponents", "stderr_bits", "ky", "status",
-    "msg_len", "message",
+    "sizes", "values", "collisions", "period", "exponents", "stderr_bits", "stderr_cycles",
+    "ky", "status", "msg_len", "message",
 )
 #: Outputs of ``_kernels.ic_continuation``, in f2py's order (checked by
 #: post/tests/test_api.py).
@@ -721,8 +721,12 @@ def _sweep_dataset(xr: Any, out: dict[str, Any], cfg: dict[str, Any], args: dict
         data["exponents"] = described(points + ("exponent",), grid(out["exponents"]),
                                       "Lyapunov exponent", "bit", "bits per drive cycle")
         data["stderr"] = described(points + ("exponent",), grid(out["stderr_bits"]),
-                                   "standard error of the Lyapunov exponent (20 block "
-                                   "averages)", "bit", "bits per drive cycle")
+                                   "standard error of the Lyapunov exponent (blocking, where "
+                                   "it levels off with the block size)", "bit",
+                                   "bits per drive cycle")
+        data["stderr_block"] = described(points + ("exponent",), grid(out["stderr_cycles"]),
+                                         "drive cycles per block at which stderr was read",
+                                         model_units="drive cycles")
         data["ky_dimension"] = described(points, grid(out["ky"]), "Kaplan-Yorke dimension")
     if "omega" in (parameter, parameter2):
         axis = "point" if parameter == "omega" else "point2"
