@@ -215,6 +215,26 @@ def _clv_angles_options(parser: argparse.ArgumentParser) -> None:
                              f"(default: {figures.NEAR_TANGENCY:g})")
 
 
+def _index_list(text: str) -> list[int]:
+    try:
+        indices = [int(item) for item in text.split(",") if item.strip()]
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a comma-separated list of "
+                                         "exponent indices, e.g. 1,2") from None
+    if not indices or min(indices) < 1:
+        raise argparse.ArgumentTypeError(f"{text!r}: exponent indices are 1-based integers")
+    return indices
+
+
+def _finite_time_options(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--exponents", type=_index_list, default=[1], metavar="J,K,...",
+                        help="exponents to show, 1-based, one panel each (default: 1, the "
+                             "largest)")
+    parser.add_argument("--bins", type=_positive_int, metavar="B",
+                        help=f"bins per histogram (default: numpy's choice, at most "
+                             f"{figures.FINITE_TIME_BINS})")
+
+
 def _all_options(parser: argparse.ArgumentParser) -> None:
     _cycles_option(parser)
     _panel_options(parser)
@@ -306,6 +326,12 @@ COMMANDS: dict[str, Command] = {
                 "the others",
                 ("clv",), (), False, _clv_angles_options,
                 lambda runs, a: figures.clv_angles(runs[0], a.bins, a.near)),
+        Command("finite-time",
+                "histogram of the finite-time Lyapunov exponents over windows, with the "
+                "run's exponent and standard error; several files (window lengths) overlay "
+                "in colours",
+                ("finite_time",), ("lyapunov",), True, _finite_time_options,
+                lambda runs, a: figures.finite_time(runs, a.exponents, a.bins)),
     )
 }
 
@@ -413,6 +439,11 @@ def _all_figures(run: Run, args: argparse.Namespace) -> Iterator[tuple[str, Figu
             yield "clv-angles", figures.clv_angles(run)
         else:
             _note(f"skipped clv-angles: {run.path} holds no angle (no unstable-stable pair)")
+    if run.finite_time is not None and run.finite_time.n_windows:
+        if np.isfinite(run.finite_time.exponents[:, 0]).any():
+            yield "finite-time", figures.finite_time(run)
+        else:
+            _note(f"skipped finite-time: {run.path}: exponent 1 is -infinity in every window")
 
 
 def _read(path: str, require: tuple[str, ...], optional: tuple[str, ...] | None,

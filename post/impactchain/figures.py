@@ -58,8 +58,8 @@ from matplotlib.patches import Patch
 
 from impactchain import __version__
 from impactchain.analysis import panel_ranges, period_label
-from impactchain.io import (FILE_UNITS, SPECIAL_KINDS, Census, Clv, Continuation, Run, Strobe,
-                            Sweep, is_sweep_dataset, read_run, run_from_sweep)
+from impactchain.io import (FILE_UNITS, SPECIAL_KINDS, Census, Clv, Continuation, FiniteTime,
+                            Run, Strobe, Sweep, is_sweep_dataset, read_run, run_from_sweep)
 from impactchain.shockwave import Wave, build_shock_waves
 
 __all__ = [
@@ -86,6 +86,7 @@ __all__ = [
     "clv_space_time",
     "clv_ipr",
     "clv_angles",
+    "finite_time",
     "wave_points",
 ]
 
@@ -1253,6 +1254,160 @@ def _collision_points(run: Run, window: tuple[float, float]) -> np.ndarray | Non
     t = events.time / run.params.drive_period
     keep = events.collisions & (t >= window[0]) & (t < window[1])
     return np.column_stack((_cell_edges(run)[events.site[keep]], t[keep]))
+
+
+# ------------------------------------------------------------------ finite-time exponents
+
+
+FINITE_TIME_BINS = 100
+"""At most this many bins in a histogram of :func:`finite_time` (numpy's automatic choice
+below that)."""
+FINITE_TIME_FILL = 0.25
+"""Opacity of a histogram's fill in :func:`finite_time` (its outline is opaque)."""
+
+
+def finite_time(
+    runs: RunLike | Sequence[RunLike],
+    exponents: int | Sequence[int] = 1,
+    bins: int | None = None,
+    labels: Sequence[str] | None = None,
+    ax: Axes | Sequence[Axes] | None = None,
+) -> Figure:
+    """How far finite stretches of the trajectory stray from the Lyapunov exponent: the
+    histogram (a probability density) of the finite-time exponents ``/finite_time/exponents``
+    over the run's windows of ``W`` cycles (docs/model.md section 7.10), with the run's
+    exponent ``/lyapunov/exponents`` as a dashed line in a band of +-1 stored standard error
+    ``/lyapunov/stderr`` (section 7.4).
+
+    ``exponents``: 1-based indices (the frame's columns: the order of ``/lyapunov/exponents``
+    unless two exponents cross), one panel each, sharing the density axis; default the
+    largest. Several runs (the same chain with windows of 10, 100 and 1000 cycles) overlay in
+    colours, each histogram over its own range; they narrow as ``W`` grows. A run's legend
+    entry gives its exponent and standard error, and on a second line ``W``, the number
+    ``N`` of windows and ``sd/sqrt(N)`` of their exponents, an estimate of the standard error
+    independent of the blocking one (close to it once a window is longer than the
+    correlation time), with the cycles per block at which that one was read
+    (``/lyapunov/stderr_block``). Windows after a direction collapsed (``-inf``) are counted
+    there, not drawn. A run without ``/lyapunov`` (stopped early) gets no line. ``bins``: per
+    histogram (default: numpy's choice, at most :data:`FINITE_TIME_BINS`). ``labels``: one
+    per run, put before its exponent (default: what differs between the runs besides the
+    window, :func:`run_labels`). ``ax``: one Axes per exponent.
+    """
+    runs = _as_runs(runs, ("finite_time",), "finite-time")
+    if not runs:
+        raise FigureError("finite-time needs at least one file")
+    if labels is not None and len(labels) != len(runs):
+        raise FigureError(f"{len(labels)} labels for {len(runs)} runs")
+    chosen = [exponents] if isinstance(exponents, (int, np.integer)) else list(exponents)
+    if not chosen:
+        raise FigureError("finite-time needs at least one exponent")
+    if bins is not None and bins < 1:
+        raise FigureError(f"bins = {bins} must be >= 1")
+    windows = [_finite_time(run) for run in runs]
+    for run, ft in zip(runs, windows):
+        for j in chosen:
+            if not 1 <= j <= ft.k:
+                raise FigureError(f"{run.path}: exponent {j} is outside 1..{ft.k}, the "
+                                  "exponents of /finite_time")
+    owned = ax is None
+    if ax is None:
+        fig: Figure = _new_figure(max(7.4, 5.4 * len(chosen) + 1.4), 5.0 + 0.35 * len(runs))
+        axes = list(np.ravel(fig.subplots(1, len(chosen), sharey=True, squeeze=False)))
+    else:
+        axes = _axes_list(ax, len(chosen), "finite-time")
+        fig = _root(axes[0])
+    names = list(labels) if labels is not None else _finite_time_labels(runs, windows)
+    colours = _overlay_colours(len(runs))
+    unit = _unit(runs[0], "finite_time/exponents")
+    for index, (axis, j) in enumerate(zip(axes, chosen)):
+        handles = []
+        for i, (run, ft, colour, name) in enumerate(zip(runs, windows, colours, names)):
+            values = ft.exponents[:, j - 1]
+            finite = values[np.isfinite(values)]
+            if finite.size == 0:
+                raise FigureError(f"{run.path}: exponent {j} is -infinity in every window "
+                                  "(its direction collapsed)")
+            axis.hist(finite, bins=_finite_time_edges(finite, bins), density=True,
+                      histtype="stepfilled", facecolor=matplotlib.colors.to_rgba(
+                          colour, FINITE_TIME_FILL), edgecolor=colour, linewidth=1.0,
+                      gid=f"histogram-{i + 1}")
+            lyap = run.lyapunov
+            if lyap is not None and j <= lyap.exponents.size \
+                    and math.isfinite(lyap.exponents[j - 1]):
+                mean, error = float(lyap.exponents[j - 1]), float(lyap.stderr[j - 1])
+                axis.axvspan(mean - error, mean + error, color=colour, alpha=0.15,
+                             linewidth=0, gid=f"stderr-{i + 1}")
+                axis.axvline(mean, color=colour, linestyle="--", linewidth=1.2,
+                             gid=f"exponent-{i + 1}")
+            handles.append(Patch(facecolor=matplotlib.colors.to_rgba(colour, FINITE_TIME_FILL),
+                                 edgecolor=colour,
+                                 label=_finite_time_entry(run, ft, j, finite, name)))
+        # below the axes: the narrowest histogram reaches the top
+        axis.legend(handles=handles, fontsize="x-small", loc="upper center",
+                    bbox_to_anchor=(0.5, -0.16))
+        axis.set_xlabel(_label("finite-time exponent", unit, f"\\lambda_{{{j}}}"))
+        if index == 0 or not owned:
+            axis.set_ylabel(_label("probability density", f"1/({unit})"))
+    if owned:
+        fig.suptitle(f"{_title(runs[0], skip=_differing_parameters(runs))}\nfinite-time "
+                     "exponents over windows of W cycles; dashed: the run's exponent, band: "
+                     "$\\pm$1 standard error", fontsize="medium")
+    _record_sources(fig, runs)
+    return fig
+
+
+def _finite_time(run: Run) -> FiniteTime:
+    if run.finite_time is None:
+        raise FigureError(f"{run.path}: no /finite_time (the run computed no finite-time "
+                          "Lyapunov exponents: &lyapunov window = 0)")
+    if run.finite_time.n_windows == 0:
+        raise FigureError(f"{run.path}: /finite_time holds no window (the run ended before "
+                          f"its first {run.finite_time.window} cycles)")
+    return run.finite_time
+
+
+def _finite_time_edges(values: np.ndarray, bins: int | None) -> np.ndarray:
+    if bins is not None:
+        return np.histogram_bin_edges(values, bins)
+    edges = np.histogram_bin_edges(values, "auto")
+    if edges.size - 1 > FINITE_TIME_BINS:
+        edges = np.histogram_bin_edges(values, FINITE_TIME_BINS)
+    return edges
+
+
+def _finite_time_labels(runs: Sequence[Run], windows: Sequence[FiniteTime]) -> list[str]:
+    """What tells the runs apart besides the window (which each legend entry gives): none
+    when only the window differs."""
+    names = run_labels(runs)
+    generic = [f"run {i}" for i in range(1, len(runs) + 1)]
+    if len(runs) < 2 or (names == generic and len({ft.window for ft in windows}) == len(runs)):
+        return ["" for _ in runs]
+    return names
+
+
+def _finite_time_entry(run: Run, ft: FiniteTime, j: int, finite: np.ndarray,
+                       name: str) -> str:
+    """A run's legend entry: its exponent, then ``W = ... cycles, N windows, sd/sqrt(N) =
+    ... vs stderr = ... (blocks of ... cycles)``."""
+    lyap = run.lyapunov
+    prefix = f"{name}: " if name else ""
+    count = finite.size
+    collapsed = ft.n_windows - count
+    spread = (f"sd/$\\sqrt{{N}}$ = {float(np.std(finite, ddof=1)) / math.sqrt(count):.3g}"
+              if count > 1 else "sd/$\\sqrt{N}$: one window")
+    second = f"W = {ft.window} cycles, {count} windows"
+    if collapsed:
+        second += f" (+{collapsed} at $-\\infty$)"
+    second += f", {spread}"
+    if lyap is None or j > lyap.exponents.size:
+        return f"{prefix}no /lyapunov in this run\n{second}"
+    mean, error = float(lyap.exponents[j - 1]), float(lyap.stderr[j - 1])
+    if not math.isfinite(mean):
+        return f"{prefix}$\\lambda_{{{j}}}$ = {mean:.4g} (collapsed)\n{second}"
+    second += f" vs stderr = {error:.3g}"
+    if lyap.stderr_block is not None:
+        second += f" (blocks of {int(lyap.stderr_block[j - 1])} cycles)"
+    return f"{prefix}$\\lambda_{{{j}}}$ = {mean:.4g} $\\pm$ {error:.3g}\n{second}"
 
 
 # --------------------------------------------------------------------------- continuation

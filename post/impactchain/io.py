@@ -14,7 +14,10 @@ HDF5 path                 dataclass field         shape (h5py / numpy order)
 /events                   ``Run.events``          ``time``, ``site``, ... (n_events,)
 /stats                    ``Run.stats``           ``site_counts`` (n+1,), ``cycles_done``
 /lyapunov                 ``Run.lyapunov``        ``exponents`` (k,), ``running`` (m, k),
-                                                  ``running_cycle`` (m,), ``ky_dimension``
+                                                  ``running_cycle`` (m,), ``ky_dimension``,
+                                                  ``stderr_block`` (k,)
+/finite_time              ``Run.finite_time``     ``exponents`` (w, k), ``cycle`` (w,),
+                                                  ``window``
 /sweep                    ``Run.sweep``           ``x`` (n_points, cycles, n), ``period``
                                                   (n_points, n), ``exponents`` (n_points,
                                                   k), ``ky_dimension`` (n_points,)
@@ -88,6 +91,7 @@ __all__ = [
     "Census",
     "period_pattern",
     "Clv",
+    "FiniteTime",
     "Run",
     "FILE_UNITS",
     "read_run",
@@ -129,6 +133,7 @@ FILE_UNITS: Mapping[str, str] = MappingProxyType({
     "final/v": "length/time",
     "lyapunov/exponents": "bits per drive cycle",
     "lyapunov/stderr": "bits per drive cycle",
+    "lyapunov/stderr_block": "drive cycles",
     "lyapunov/running": "bits per drive cycle",
     "sweep/x": "length",
     "sweep/exponents": "bits per drive cycle",
@@ -157,6 +162,8 @@ FILE_UNITS: Mapping[str, str] = MappingProxyType({
     "clv/site_weight": "1",
     "clv/min_angle": "radian",
     "clv/vectors": "1",
+    "finite_time/cycle": "drive cycles",
+    "finite_time/exponents": "bits per drive cycle",
 })
 """The unit of each dataset in the model's reduced units (docs/model.md section 1.5): a
 version-2 file's ``model_units`` attribute (its ``units`` are UDUNITS', ``1`` for these),
@@ -164,7 +171,7 @@ a version-1 file's ``units``; the units of a run made in memory (:func:`run_from
 the defaults of the figures' axis labels."""
 
 OPTIONAL_GROUPS = ("initial", "final", "strobe", "events", "stats", "lyapunov", "sweep",
-                   "continuation", "census", "clv")
+                   "continuation", "census", "clv", "finite_time")
 
 _HINTS = {
     "strobe": "the run recorded no strobe snapshots",
@@ -179,6 +186,7 @@ _HINTS = {
            ".false.",
     "clv/site_weight": "the run stored no site weights of covariant vectors: &lyapunov "
                        "clv_store = 0, or no covariant = .true.",
+    "finite_time": "the run computed no finite-time Lyapunov exponents: &lyapunov window = 0",
 }
 
 SPECIAL_KINDS = ("fold", "period-doubling", "neimark-sacker", "grazing")
@@ -309,6 +317,7 @@ class Lyapunov:
     positive_sum: float
     collisions_per_cycle: float
     running_cycle: np.ndarray | None = None  # (m,) drive cycle of each running row
+    stderr_block: np.ndarray | None = None  # (k,) drive cycles per block; None: older file
 
 
 @dataclass(frozen=True, eq=False)
@@ -537,6 +546,33 @@ class Clv:
 
 
 @dataclass(frozen=True, eq=False)
+class FiniteTime:
+    """Finite-time Lyapunov exponents (``/finite_time``, docs/model.md section 7.10): the
+    growth per cycle of each tangent-frame column over consecutive windows of ``window``
+    recorded cycles, counted from the first record, in bits per drive cycle.
+
+    Exponent ``j`` (0-based here, ``j + 1`` in the file's ``exponent`` coordinate) is column
+    ``j`` of the frame: the order of ``/lyapunov/exponents`` unless two exponents cross within
+    their errors; ``-inf`` in the windows after its direction collapsed (section 7.8). A run
+    stopped early holds the windows it finished.
+    """
+
+    window: int  # recorded cycles per window
+    cycle: np.ndarray  # (w,) drive cycle at the end of each window
+    exponents: np.ndarray  # (w, k) bits/cycle
+
+    @property
+    def n_windows(self) -> int:
+        """Number of windows, w."""
+        return int(self.cycle.shape[0])
+
+    @property
+    def k(self) -> int:
+        """Number of exponents (frame columns)."""
+        return int(self.exponents.shape[1])
+
+
+@dataclass(frozen=True, eq=False)
 class Run:
     """One impactchain output file."""
 
@@ -556,6 +592,7 @@ class Run:
     continuation: Continuation | None = None
     census: Census | None = None
     clv: Clv | None = None
+    finite_time: FiniteTime | None = None
     units: Mapping[str, str] = field(default_factory=dict)
     resolved_namelist: str = ""  # every key as used; '' for an older file
 
@@ -687,6 +724,7 @@ def _read(f: h5py.File, path: str, wanted: set[str]) -> Run:
         "continuation": lambda g: _read_continuation(g, path, n),
         "census": lambda g: _read_census(g, path, n),
         "clv": lambda g: _read_clv(g, path, n),
+        "finite_time": lambda g: _read_finite_time(g, path),
     }
     parts: dict[str, Any] = {}
     for name, reader in readers.items():
@@ -825,6 +863,8 @@ def _read_lyapunov(g: h5py.Group, path: str) -> Lyapunov:
                                     "lyapunov/collisions_per_cycle"),
         running_cycle=_dataset(g, path, "running_cycle", (running.shape[0],), int)
         if "running_cycle" in g else None,
+        stderr_block=_dataset(g, path, "stderr_block", (k,), int)
+        if "stderr_block" in g else None,
     )
 
 
@@ -1059,6 +1099,18 @@ def _read_clv(g: h5py.Group, path: str, n: int) -> Clv:
         site_weight=site_weight,
         vectors=vectors,
         saved_cycle=saved_cycle,
+    )
+
+
+def _read_finite_time(g: h5py.Group, path: str) -> FiniteTime:
+    window = _int(_attr(g, path, "window"), path, f"{g.name}@window")
+    if window < 1:
+        raise SchemaError(f"{path}: {g.name}@window = {window} must be >= 1")
+    cycle = _dataset(g, path, "cycle", (None,), int)
+    return FiniteTime(
+        window=window,
+        cycle=cycle,
+        exponents=_dataset(g, path, "exponents", (cycle.shape[0], None), float),
     )
 
 
