@@ -2,7 +2,9 @@
 !> parameter point, or at every point of a one-parameter `&sweep`, each run through `&run
 !> transient` cycles and `&run cycles` records with its largest Lyapunov exponent, then told
 !> apart by the rules of chain_attractor: which attractors there are, and the fraction of the
-!> starts that reach each (its basin fraction).
+!> starts that reach each (its basin fraction). With `&census exponents = k` each sample keeps
+!> its k leading exponents, and each attractor the mean and the spread of its samples' (section
+!> 13.4: an ensemble of spectra).
 !>
 !> Sample s (1..samples) starts from its own stream of the portable generator of
 !> `&initial kind = 'random'` (sample_seed): its start depends on (seed, s) alone, neither on
@@ -13,6 +15,7 @@
 !> sample is done the finished ones live in the checkpoint `file.h5.ckpt` (every few seconds
 !> and when stopped), from which the same input resumes.
 module chain_census
+    use, intrinsic :: ieee_arithmetic, only: ieee_is_finite, ieee_value, ieee_positive_inf
     use chain_kinds, only: wp, i8
     use chain_error, only: error_t, set_error, fmt_real, fmt_int
     use chain_engine, only: chain_t, chain_init, chain_positions, chain_velocities, chain_period
@@ -33,12 +36,12 @@ module chain_census
     public :: census_result_t, census_result_init, census_points, census_point_config
     public :: sample_seed, sample_start, run_sample, run_census_samples, classify_census
     public :: census_starts, plane_starts, plane_value
-    public :: sample_record_sizes, pack_sample, unpack_sample
+    public :: sample_record_sizes, pack_sample, unpack_sample, ensemble_statistics
     public :: orbit_states, save_census_checkpoint, load_census_checkpoint
     public :: census_checkpoint_monitor_t
 
     !> The checkpoint's first bytes; the number changes with its layout.
-    character(len=8), parameter :: checkpoint_magic = 'ICCENSU1'
+    character(len=8), parameter :: checkpoint_magic = 'ICCENSU2'
 
     !> Everything a census finds: per sample (filled in parallel), then the classification.
     !> Arrays are in Fortran order; h5py shows the point first.
@@ -46,6 +49,7 @@ module chain_census
         integer :: n_points = 1
         integer :: n_samples = 1
         integer :: resumed = 0                        !! samples taken from a checkpoint
+        integer :: n_exponents = 1                    !! k, the leading exponents of a sample
         real(wp), allocatable :: values(:)            !! values(n_points): a sweep's parameter
         real(wp), allocatable :: x0(:, :, :), v0(:, :, :) !! (n, samples, points): the starts
         logical, allocatable :: done(:, :)            !! (samples, points)
@@ -53,6 +57,9 @@ module chain_census
         integer(i8), allocatable :: sites(:, :, :)    !! (n+1, samples, points) impacts/bond
         real(wp), allocatable :: lambda1(:, :)        !! (samples, points) bits per cycle
         real(wp), allocatable :: stderr1(:, :)        !! its standard error
+        !> (k, samples, points): the k leading exponents (bits per cycle, descending; the first
+        !> is lambda1) and their standard errors
+        real(wp), allocatable :: exponents(:, :, :), exponents_stderr(:, :, :)
         real(wp), allocatable :: x(:, :, :), v(:, :, :) !! (n, samples, points) last record
         ! the classification (classify_census)
         integer :: n_attractors = 0
@@ -62,6 +69,9 @@ module chain_census
         !> (n_attractors, points): fraction of a point's samples on each attractor, and its
         !> binomial standard error sqrt(f (1 - f) / samples)
         real(wp), allocatable :: fraction(:, :), fraction_stderr(:, :)
+        !> (k, n_attractors): the mean of the exponents over the attractor's samples, and their
+        !> sample standard deviation (n - 1; 0 with one sample): the spread between trajectories
+        real(wp), allocatable :: attractor_exponents(:, :), attractor_spread(:, :)
     end type census_result_t
 
     !> The census's monitor: the caller's, and a checkpoint every few seconds. It is told
@@ -97,10 +107,12 @@ contains
         n = cfg%model%n
         res%n_points = census_points(cfg)
         res%n_samples = cfg%census_samples
-        associate (ns => res%n_samples, np => res%n_points)
+        res%n_exponents = cfg%census_exponents
+        associate (ns => res%n_samples, np => res%n_points, k => res%n_exponents)
             allocate (res%values(np), res%x0(n, ns, np), res%v0(n, ns, np), res%done(ns, np))
             allocate (res%periods(n, ns, np), res%sites(n + 1, ns, np))
             allocate (res%lambda1(ns, np), res%stderr1(ns, np))
+            allocate (res%exponents(k, ns, np), res%exponents_stderr(k, ns, np))
             allocate (res%x(n, ns, np), res%v(n, ns, np))
             allocate (res%attractor(ns, np), res%mirrored(ns, np))
         end associate
@@ -121,12 +133,16 @@ contains
         res%sites = 0
         res%lambda1 = 0
         res%stderr1 = 0
+        res%exponents = 0
+        res%exponents_stderr = 0
         res%x = 0
         res%v = 0
         res%attractor = 0
         res%mirrored = .false.
         allocate (res%attractors(0), res%fraction(0, res%n_points))
         allocate (res%fraction_stderr(0, res%n_points))
+        allocate (res%attractor_exponents(res%n_exponents, 0))
+        allocate (res%attractor_spread(res%n_exponents, 0))
     end subroutine census_result_init
 
     !> An empty census of cfg with its starts: random (census_result_init), or on the grid
@@ -257,8 +273,8 @@ contains
     end subroutine sample_start
 
     !> The plain run of point p (1-based; the only point without a sweep), validated, that
-    !> each sample there makes: no events, no Jacobian, the largest exponent (k = 1, with the
-    !> input's qr_every and align).
+    !> each sample there makes: no events, no Jacobian, the leading k = `&census exponents`
+    !> exponents (1 by default: the largest alone), with the input's qr_every and align.
     subroutine census_point_config(cfg, p, point, err)
         type(config_t), intent(in) :: cfg
         integer, intent(in) :: p
@@ -275,19 +291,20 @@ contains
         point%record%record_events = .false.
         point%record%jacobian = .false.
         point%record%lyapunov = .true.
-        point%record%vectors = 1
+        point%record%vectors = cfg%census_exponents
         call validate_config(point, err)
     end subroutine census_point_config
 
     !> One sample from (x0, v0) at t = 0 under the point's configuration: its oscillators'
-    !> periods, impacts per bond, largest exponent and standard error, and its state at the
+    !> periods, impacts per bond, leading exponents (as many as `exponents` holds, the point's
+    !> vectors; descending, bits per cycle) and their standard errors, and its state at the
     !> last record. The same run as `&initial kind = 'explicit'` with x0, v0.
-    subroutine run_sample(point, x0, v0, periods, sites, lambda1, stderr1, x, v, err)
+    subroutine run_sample(point, x0, v0, periods, sites, exponents, stderr, x, v, err)
         type(config_t), intent(in) :: point
         real(wp), intent(in) :: x0(:), v0(:)
         integer, intent(out) :: periods(:)
         integer(i8), intent(out) :: sites(:)
-        real(wp), intent(out) :: lambda1, stderr1, x(:), v(:)
+        real(wp), intent(out) :: exponents(:), stderr(:), x(:), v(:)
         type(error_t), allocatable, intent(out) :: err
         type(chain_t) :: chain
         type(memory_sink_t) :: sink
@@ -295,8 +312,8 @@ contains
 
         periods = 0
         sites = 0
-        lambda1 = 0
-        stderr1 = 0
+        exponents = 0
+        stderr = 0
         x = 0
         v = 0
         sink%keep_strobe = .false.
@@ -307,8 +324,8 @@ contains
         periods = out%periods
         sites = out%site_counts
         if (out%has_lyapunov) then
-            lambda1 = out%lyapunov%bits_per_cycle(1)
-            stderr1 = out%lyapunov%stderr_bits(1)
+            exponents = out%lyapunov%bits_per_cycle
+            stderr = out%lyapunov%stderr_bits
         end if
         x = chain_positions(chain)
         v = chain_velocities(chain)
@@ -361,7 +378,8 @@ contains
         integer :: s, p, n
         integer :: periods(cfg%model%n)
         integer(i8) :: sites(cfg%model%n + 1)
-        real(wp) :: lambda1, stderr1, x(cfg%model%n), v(cfg%model%n)
+        real(wp) :: exponents(res%n_exponents), stderr(res%n_exponents)
+        real(wp) :: x(cfg%model%n), v(cfg%model%n)
         real(wp), allocatable :: x0(:), v0(:)
         logical :: stopping, done
 
@@ -378,7 +396,7 @@ contains
         if (done .or. stopping) return
         call census_point_config(cfg, p, point, err)
         if (allocated(err)) return
-        call run_sample(point, x0, v0, periods, sites, lambda1, stderr1, x, v, err)
+        call run_sample(point, x0, v0, periods, sites, exponents, stderr, x, v, err)
         if (allocated(err)) then
             err%message = "&census: sample "//fmt_int(s)//point_text(cfg, res, p)//": "// &
                           err%message
@@ -387,8 +405,10 @@ contains
         !$omp critical (census_results)
         res%periods(:, s, p) = periods
         res%sites(:, s, p) = sites
-        res%lambda1(s, p) = lambda1
-        res%stderr1(s, p) = stderr1
+        res%lambda1(s, p) = exponents(1)
+        res%stderr1(s, p) = stderr(1)
+        res%exponents(:, s, p) = exponents
+        res%exponents_stderr(:, s, p) = stderr
         res%x(:, s, p) = x
         res%v(:, s, p) = v
         res%done(s, p) = .true.
@@ -403,13 +423,13 @@ contains
     end subroutine run_task
 
     !> One sample's record as pack_sample lays it out: nr reals and ni 64-bit integers for a
-    !> chain of n oscillators.
-    pure subroutine sample_record_sizes(n, nr, ni)
-        integer, intent(in) :: n
+    !> chain of n oscillators and k exponents per sample.
+    pure subroutine sample_record_sizes(n, k, nr, ni)
+        integer, intent(in) :: n, k
         integer, intent(out) :: nr, ni
 
-        nr = 2 + 2*n   ! lambda1, stderr1, x(n), v(n)
-        ni = 2 + 2*n   ! done, periods(n), sites(n+1)
+        nr = 2 + 2*n + 2*k   ! lambda1, stderr1, x(n), v(n), exponents(k), their stderrs(k)
+        ni = 2 + 2*n         ! done, periods(n), sites(n+1)
     end subroutine sample_record_sizes
 
     !> Sample s of point p's results as plain numbers (sent between MPI ranks): values as they
@@ -419,13 +439,16 @@ contains
         integer, intent(in) :: s, p
         real(wp), intent(out) :: reals(:)
         integer(i8), intent(out) :: ints(:)
-        integer :: n
+        integer :: n, k
 
         n = size(res%x, 1)
+        k = res%n_exponents
         reals(1) = res%lambda1(s, p)
         reals(2) = res%stderr1(s, p)
         reals(3:2 + n) = res%x(:, s, p)
         reals(3 + n:2 + 2*n) = res%v(:, s, p)
+        reals(3 + 2*n:2 + 2*n + k) = res%exponents(:, s, p)
+        reals(3 + 2*n + k:2 + 2*n + 2*k) = res%exponents_stderr(:, s, p)
         ints(1) = merge(1_i8, 0_i8, res%done(s, p))
         ints(2:1 + n) = int(res%periods(:, s, p), i8)
         ints(2 + n:2 + 2*n) = res%sites(:, s, p)
@@ -437,13 +460,16 @@ contains
         integer(i8), intent(in) :: ints(:)
         integer, intent(in) :: s, p
         type(census_result_t), intent(inout) :: res
-        integer :: n
+        integer :: n, k
 
         n = size(res%x, 1)
+        k = res%n_exponents
         res%lambda1(s, p) = reals(1)
         res%stderr1(s, p) = reals(2)
         res%x(:, s, p) = reals(3:2 + n)
         res%v(:, s, p) = reals(3 + n:2 + 2*n)
+        res%exponents(:, s, p) = reals(3 + 2*n:2 + 2*n + k)
+        res%exponents_stderr(:, s, p) = reals(3 + 2*n + k:2 + 2*n + 2*k)
         res%done(s, p) = ints(1) == 1
         res%periods(:, s, p) = int(ints(2:1 + n))
         res%sites(:, s, p) = ints(2 + n:2 + 2*n)
@@ -515,7 +541,77 @@ contains
             end do
         end do
         res%fraction_stderr = sqrt(res%fraction*(1 - res%fraction)/res%n_samples)
+        call attractor_ensembles(res)
     end subroutine classify_census
+
+    !> Each attractor's samples (at its point, in sample order) as an ensemble of spectra: the
+    !> mean of their exponents and the spread between them (ensemble_statistics).
+    subroutine attractor_ensembles(res)
+        type(census_result_t), intent(inout) :: res
+        integer, allocatable :: sizes(:), first(:), filled(:), members(:)
+        integer :: s, p, a, na
+
+        na = res%n_attractors
+        if (allocated(res%attractor_exponents)) deallocate (res%attractor_exponents)
+        if (allocated(res%attractor_spread)) deallocate (res%attractor_spread)
+        allocate (res%attractor_exponents(res%n_exponents, na))
+        allocate (res%attractor_spread(res%n_exponents, na))
+        ! the members of each attractor, one after the other (a counting sort of the samples)
+        allocate (sizes(na), first(na), filled(na), members(res%n_samples*res%n_points))
+        sizes = 0
+        do p = 1, res%n_points
+            do s = 1, res%n_samples
+                sizes(res%attractor(s, p)) = sizes(res%attractor(s, p)) + 1
+            end do
+        end do
+        if (na > 0) first(1) = 1
+        do a = 2, na
+            first(a) = first(a - 1) + sizes(a - 1)
+        end do
+        filled = 0
+        do p = 1, res%n_points
+            do s = 1, res%n_samples
+                a = res%attractor(s, p)
+                members(first(a) + filled(a)) = s
+                filled(a) = filled(a) + 1
+            end do
+        end do
+        do a = 1, na
+            associate (mine => members(first(a):first(a) + sizes(a) - 1))
+                call ensemble_statistics(res%exponents(:, mine, res%attractors(a)%point), &
+                                         res%attractor_exponents(:, a), &
+                                         res%attractor_spread(:, a))
+            end associate
+        end do
+    end subroutine attractor_ensembles
+
+    !> The mean over m members of k exponents each (values(k, m); the members in the order
+    !> given; zeros without members) and the spread between them, the sample standard deviation
+    !> sqrt(sum (x - mean)**2 / (m - 1)), 0 for one member. An exponent of -infinity in a
+    !> member (a direction removed by a rest on a wall, or K = 0) makes that mean -infinity, and
+    !> its spread 0 when every member's is -infinity, +infinity when some are finite.
+    pure subroutine ensemble_statistics(values, mean, spread)
+        real(wp), intent(in) :: values(:, :)
+        real(wp), intent(out) :: mean(:), spread(:)
+        integer :: j, m
+
+        m = size(values, 2)
+        mean = 0
+        spread = 0
+        if (m == 0) return
+        do j = 1, size(values, 1)
+            mean(j) = sum(values(j, :))/m
+            if (m == 1) then
+                spread(j) = 0
+            else if (all(ieee_is_finite(values(j, :)))) then
+                spread(j) = sqrt(sum((values(j, :) - mean(j))**2)/(m - 1))
+            else if (all(values(j, :) == values(j, 1))) then
+                spread(j) = 0
+            else
+                spread(j) = ieee_value(1.0_wp, ieee_positive_inf)
+            end if
+        end do
+    end subroutine ensemble_statistics
 
     !> The attractor that sample s of point p founds, with it as the representative. When its
     !> state cannot be run again as a fresh chain (chain_at_section refuses it), the orbit is
@@ -618,9 +714,10 @@ contains
             return
         end if
         write (u, iostat=ios, iomsg=msg) checkpoint_magic, len(cfg%input_text), &
-            cfg%input_text, res%n_points, res%n_samples, cfg%model%n
+            cfg%input_text, res%n_points, res%n_samples, cfg%model%n, res%n_exponents
         if (ios == 0) write (u, iostat=ios, iomsg=msg) merge(1, 0, res%done), res%periods, &
-            res%sites, res%lambda1, res%stderr1, res%x0, res%v0, res%x, res%v
+            res%sites, res%lambda1, res%stderr1, res%x0, res%v0, res%x, res%v, &
+            res%exponents, res%exponents_stderr
         written = 0
         if (ios == 0) inquire (unit=u, pos=written, iostat=ios, iomsg=msg)
         call close_checked(u, path//'.tmp', written - 1, ios, msg)
@@ -641,7 +738,7 @@ contains
         type(error_t), allocatable, intent(out) :: err
         character(len=8) :: magic
         character(len=:), allocatable :: text
-        integer :: u, ios, length, n_points, n_samples, n
+        integer :: u, ios, length, n_points, n_samples, n, k
         integer, allocatable :: done(:, :)
         logical :: exists, ours
         type(census_result_t) :: got
@@ -655,9 +752,9 @@ contains
         read (u, iostat=ios) magic, length
         if (ios == 0 .and. magic == checkpoint_magic .and. length == len(cfg%input_text)) then
             allocate (character(len=length) :: text)
-            read (u, iostat=ios) text, n_points, n_samples, n
+            read (u, iostat=ios) text, n_points, n_samples, n, k
             ours = ios == 0 .and. text == cfg%input_text .and. n_points == res%n_points .and. &
-                   n_samples == res%n_samples .and. n == cfg%model%n
+                   n_samples == res%n_samples .and. n == cfg%model%n .and. k == res%n_exponents
         end if
         if (.not. ours) then
             close (u)
@@ -668,7 +765,7 @@ contains
         got = res
         allocate (done(n_samples, n_points))
         read (u, iostat=ios) done, got%periods, got%sites, got%lambda1, got%stderr1, got%x0, &
-            got%v0, got%x, got%v
+            got%v0, got%x, got%v, got%exponents, got%exponents_stderr
         close (u)
         if (ios /= 0) then
             call set_error(err, "&census: the checkpoint '"//path//"' is damaged; remove it "// &
@@ -685,6 +782,8 @@ contains
         call move_alloc(got%v0, res%v0)
         call move_alloc(got%x, res%x)
         call move_alloc(got%v, res%v)
+        call move_alloc(got%exponents, res%exponents)
+        call move_alloc(got%exponents_stderr, res%exponents_stderr)
     end subroutine load_census_checkpoint
 
     subroutine save_census_progress(monitor)

@@ -75,25 +75,28 @@ contains
     end subroutine census_to_file
 
     !> Refuse, before anything runs, a census whose results exceed &output max_size_mb: per
-    !> sample its start, state, periods and impacts per bond (in memory and in the file).
+    !> sample its start, state, periods, impacts per bond and k exponents with their errors (in
+    !> memory and in the file).
     subroutine check_census_size(cfg, err)
         type(config_t), intent(in) :: cfg
         type(error_t), allocatable, intent(out) :: err
         real(wp) :: mb
 
-        associate (n => real(cfg%model%n, wp))
-            mb = real(cfg%census_samples, wp)*census_points(cfg)*(44*n + 50)/1.0e6_wp
+        associate (n => real(cfg%model%n, wp), k => real(cfg%census_exponents, wp))
+            mb = real(cfg%census_samples, wp)*census_points(cfg)*(44*n + 34 + 16*k)/1.0e6_wp
         end associate
         if (mb > cfg%max_size_mb) call set_error(err, "&census: the samples of this census "// &
-            "need about "//fmt_real(mb)//" MB (points x samples x (44 n + 50) bytes), more "// &
+            "need about "//fmt_real(mb)//" MB (points x samples x (44 n + 34 + 16 k) bytes, "// &
+            "k = exponents), more "// &
             "than &output max_size_mb = "//fmt_real(cfg%max_size_mb)//"; lower samples or "// &
             "raise max_size_mb")
     end subroutine check_census_size
 
     !> The run's header (for a sweep without the swept parameter, which /params cannot hold
     !> as one number) and /census: per point and sample the start, the attractor reached and
-    !> whether its mirror image; per attractor its kind, periods, largest exponent,
-    !> representative state and impact sites; per point and attractor the basin fraction.
+    !> whether its mirror image, its k leading exponents and their errors; per attractor its
+    !> kind, periods, largest exponent, representative state and impact sites, and the mean
+    !> and spread of its samples' exponents; per point and attractor the basin fraction.
     !> Attractor ids (0-based) are global: an attractor belongs to the point where it was found.
     subroutine write_census_file(out, cfg, res, err)
         type(output_t), intent(inout) :: out
@@ -144,6 +147,11 @@ contains
             call h5_write(f, 'census/attractor_sites', sites, '1', err)
             call h5_write(f, 'census/fraction', res%fraction, '1', err)
             call h5_write(f, 'census/fraction_stderr', res%fraction_stderr, '1', err)
+            call h5_write(f, 'census/sample_exponents', res%exponents, 'bit', err)
+            call h5_write(f, 'census/sample_exponents_stderr', res%exponents_stderr, 'bit', err)
+            call h5_write(f, 'census/attractor_exponents', res%attractor_exponents, 'bit', err)
+            call h5_write(f, 'census/attractor_exponents_spread', res%attractor_spread, 'bit', &
+                          err)
         end associate
         if (.not. allocated(err)) call describe_all(out, err)
     end subroutine write_census_file
@@ -180,8 +188,8 @@ contains
     end subroutine census_attributes
 
     !> The dimensions of /census: `point` (the swept parameter's values, or index 0 at one
-    !> point), `sample` (1..samples, the stream of each), `oscillator`, `attractor` (its id)
-    !> and `bond`.
+    !> point), `sample` (1..samples, the stream of each), `oscillator`, `attractor` (its id),
+    !> `bond` and `exponent` (1..k).
     subroutine census_axes(out, cfg, res, err)
         type(output_t), intent(inout) :: out
         type(config_t), intent(in) :: cfg
@@ -208,6 +216,9 @@ contains
         if (.not. allocated(err)) call output_index(out, 'census/bond', 0, cfg%model%n + 1, &
             'bond index: bond k joins oscillators k and k+1 (0: the left wall, n: the '// &
             'right wall)', err)
+        if (.not. allocated(err)) call output_index(out, 'census/exponent', 1, &
+                                                    res%n_exponents, 'exponent index '// &
+                                                    '(descending order)', err)
     end subroutine census_axes
 
     !> The long names, units and dimensions of /census's datasets.
@@ -249,6 +260,19 @@ contains
                       'attractor (its basin fraction)', '', 'point attractor')
         call describe('fraction_stderr', 'binomial standard error of fraction, '// &
                       'sqrt(f (1 - f) / samples)', '', 'point attractor')
+        call describe('sample_exponents', "the sample's leading Lyapunov exponents over its "// &
+                      'records (&census exponents; the first is lambda1)', &
+                      'bits per drive cycle', 'point sample exponent')
+        call describe('sample_exponents_stderr', 'standard error of sample_exponents '// &
+                      "(block averages along the sample's own run)", 'bits per drive cycle', &
+                      'point sample exponent')
+        call describe('attractor_exponents', "mean of sample_exponents over the attractor's "// &
+                      'samples (mirror images included)', 'bits per drive cycle', &
+                      'attractor exponent')
+        call describe('attractor_exponents_spread', 'standard deviation of '// &
+                      "sample_exponents between the attractor's samples (n - 1 in the "// &
+                      'denominator; 0 for one sample): the spread between trajectories', &
+                      'bits per drive cycle', 'attractor exponent')
     contains
         subroutine describe(name, long_name, model_units, dims)
             character(len=*), intent(in) :: name, long_name, model_units, dims

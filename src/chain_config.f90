@@ -97,7 +97,8 @@ module chain_config
         key_spec_t('census', 'mirror', key_string, .false.), &
         key_spec_t('census', 'plane', key_string, .true.), &
         key_spec_t('census', 'plane_range', key_real, .true.), &
-        key_spec_t('census', 'plane_points', key_integer, .false.)]
+        key_spec_t('census', 'plane_points', key_integer, .false.), &
+        key_spec_t('census', 'exponents', key_integer, .false.)]
     character(len=*), parameter :: sweep_parameters(*) = model_parameters
 
     type :: config_t
@@ -137,6 +138,8 @@ module chain_config
         character(len=16) :: census_plane(2) = ''
         real(wp) :: census_plane_range(4) = 0
         integer :: census_plane_points = 0
+        !> Leading Lyapunov exponents of each sample (1 .. 2n): an ensemble of spectra
+        integer :: census_exponents = 1
         ! the input as read
         character(len=:), allocatable :: input_text
     end type config_t
@@ -627,13 +630,13 @@ contains
         type(config_t), intent(inout) :: cfg
         type(error_t), allocatable, intent(out) :: err
         integer, parameter :: unset_int = -huge(1)
-        integer :: samples, seed, plane_points, ios
+        integer :: samples, seed, plane_points, exponents, ios
         real(wp) :: x_amp, v_amp, tolerance, plane_range(4)
         character(len=64) :: mirror
         character(len=16) :: plane(2)
         character(len=512) :: msg
         namelist /census/ samples, seed, x_amp, v_amp, tolerance, mirror, plane, plane_range, &
-            plane_points
+            plane_points, exponents
 
         samples = unset_int
         seed = cfg%census_seed
@@ -644,6 +647,7 @@ contains
         plane = ''
         plane_range = unset
         plane_points = unset_int
+        exponents = cfg%census_exponents
         rewind (u)
         read (u, nml=census, iostat=ios, iomsg=msg)
         if (ios /= 0) then
@@ -688,6 +692,7 @@ contains
         cfg%census_v_amp = v_amp
         cfg%census_tolerance = tolerance
         cfg%census_mirror = lower(trim(adjustl(mirror)))
+        cfg%census_exponents = exponents
     end subroutine read_census
 
     !> Check every value against its allowed range (also used for values given from Python),
@@ -1036,6 +1041,12 @@ contains
         call check_range(err, 'census', 'tolerance', cfg%census_tolerance, tiny(1.0_wp), &
                          1.0_wp, '(0, 1)', open_high=.true.)
         if (allocated(err)) return
+        if (cfg%census_exponents < 1 .or. cfg%census_exponents > 2*cfg%model%n) then
+            call set_error(err, "&census: exponents = "//fmt_int(cfg%census_exponents)// &
+                           " is outside [1, 2n = "//fmt_int(2*cfg%model%n)//"] (the leading "// &
+                           "Lyapunov exponents of each sample)")
+            return
+        end if
         if (cfg%census_mirror /= 'merge' .and. cfg%census_mirror /= 'separate') then
             call set_error(err, "&census: mirror = '"//cfg%census_mirror//"' is not one of "// &
                            "'merge', 'separate'")
@@ -1179,6 +1190,9 @@ contains
             trim(cfg%census_plane(1))//"', '"//trim(cfg%census_plane(2))// &
             "', plane_range = "//exact_list(cfg%census_plane_range)//", plane_points = "// &
             fmt_int(cfg%census_plane_points)
+        ! (the default, 1, left out: the summary of a census without the key stays as it was)
+        if (cfg%census_exponents /= 1) text = text//", exponents = "// &
+                                              fmt_int(cfg%census_exponents)
         text = text//" /"//new_line('a')
     end function census_group
 

@@ -46,7 +46,8 @@ module impactchain
     use chain_census, only: census_result_t, census_result_init, census_points, &
                             census_point_config, sample_start, run_sample, run_census_samples, &
                             classify_census, save_census_checkpoint, load_census_checkpoint, &
-                            census_starts, sample_record_sizes, pack_sample, unpack_sample
+                            census_starts, sample_record_sizes, pack_sample, unpack_sample, &
+                            ensemble_statistics
     use chain_census_file, only: census_to_file, write_census_file, check_census_size
     use chain_output, only: code_version, output_t, output_begin, output_end, output_abort
     use chain_cli, only: cli_t, parse_command_line, cli_run, cli_help, cli_version, cli_usage, &
@@ -82,7 +83,7 @@ module impactchain
     public :: census_point_config, sample_start, run_sample, run_census_samples
     public :: classify_census, save_census_checkpoint, load_census_checkpoint
     public :: census_to_file, write_census_file, check_census_size, census_starts
-    public :: sample_record_sizes, pack_sample, unpack_sample
+    public :: sample_record_sizes, pack_sample, unpack_sample, ensemble_statistics
     public :: code_version, output_t, output_begin, output_end, output_abort
     public :: cli_t, parse_command_line, cli_run, cli_help, cli_version, cli_usage, cli_error
     public :: catch_interrupts, interrupted

@@ -5,12 +5,18 @@
 !> (mirror = 'separate') or as one with a flag ('merge', also with the section past half a
 !> cycle); a sample rerun alone from its stored start; a phase-shifted copy of an orbit; 1 and
 !> 2 threads, and a census stopped and resumed, equal bit for bit; a census along a sweep; bad
-!> input named with its key and range; the starts of a census plane exactly its grid.
+!> input named with its key and range; the starts of a census plane exactly its grid. An
+!> ensemble of spectra (`exponents = k`, k = 2n and 3): each sample's k exponents those of an
+!> ordinary run from its start, bit for bit, the full spectra on the sum rule, each
+!> attractor's mean and spread those of its samples; threads, stop and resume, the MPI record
+!> and a checkpoint of another k.
 module test_census
     use, intrinsic :: iso_fortran_env, only: output_unit
+    use, intrinsic :: ieee_arithmetic, only: ieee_value, ieee_negative_inf, ieee_positive_inf
     !$ use omp_lib, only: omp_set_num_threads
     use chain_kinds, only: wp, i8
-    use chain_error, only: error_t
+    use chain_error, only: error_t, fmt_int
+    use chain_flow, only: flow_t
     use chain_config, only: config_t, read_config
     use chain_state, only: chain_state_t
     use chain_engine, only: chain_t, chain_positions, chain_velocities
@@ -22,8 +28,11 @@ module test_census
                                states_close, orbit_offset, match_attractor, site_fractions
     use chain_census, only: census_result_t, census_result_init, census_point_config, &
                             run_census_samples, classify_census, save_census_checkpoint, &
-                            load_census_checkpoint, census_starts, plane_value
+                            load_census_checkpoint, census_starts, plane_value, &
+                            ensemble_statistics, sample_record_sizes, pack_sample, unpack_sample
     use chain_monitor, only: monitor_t, stage_samples
+    use test_chains, only: flow_of
+    use test_invariants, only: check_sum_rule
     use testing, only: tally_t, check, check_close
     implicit none
     private
@@ -34,6 +43,14 @@ module test_census
     character(len=*), parameter :: fig3 = &
         "&chain n = 15, amplitude = 2.2, omega = 1.5, damping = 0.05, restitution = 0.7 /"// &
         new_line('a')//"&run transient = 2000, cycles = 48, max_period = 8 /"//new_line('a')
+
+    !> A chain of four with three attractors among twelve starts of seed 3 (x_amp = 0.3,
+    !> v_amp = 1): aperiodic-nonchaotic (3 samples), chaotic (7), period 3 (2); no rests.
+    character(len=*), parameter :: small = &
+        "&chain n = 4, amplitude = 1.0, omega = 0.9, damping = 0.05, restitution = 0.7 /"// &
+        new_line('a')//"&run transient = 300, cycles = 200, max_period = 8 /"//new_line('a')
+    character(len=*), parameter :: small_census = &
+        "&census samples = 12, seed = 3, x_amp = 0.3, v_amp = 1.0"
 
     !> Asks the census to stop once three samples are done.
     type, extends(monitor_t) :: stop_after_three_t
@@ -58,6 +75,10 @@ contains
         call test_bad_input(t)
         call test_plane(t)
         call test_bad_plane(t)
+        call test_ensemble_statistics(t)
+        call test_ensemble(t, 8)
+        call test_ensemble(t, 3)
+        call test_ensemble_threads_and_resume(t)
     end subroutine run_census_tests
 
     !> The rules on hand-made numbers: periods, kinds, closeness, the cycle offset, mirror
@@ -359,20 +380,23 @@ contains
     subroutine test_bad_input(t)
         type(tally_t), intent(inout) :: t
         character(len=*), parameter :: nl = achar(10)
-        character(len=*), parameter :: cases(8) = [character(len=160) :: &
+        character(len=*), parameter :: cases(10) = [character(len=160) :: &
             "&census samples = 0 /", "&census samples = 10000001 /", &
+            "&census exponents = 0 /", "&census exponents = 31 /", &
             "&census x_amp = 0.5 /", "&census v_amp = -1 /", "&census tolerance = 0 /", &
             "&census mirror = 'both' /", &
             "&census /"//nl//"&continuation parameter = 'amplitude', stop = 2.5, step = 0.1 /", &
             "&census /"//nl//"&sweep parameter = 'amplitude', start = 2, stop = 3, step = 1, "// &
             "parameter2 = 'omega', start2 = 1, stop2 = 2, step2 = 1 /"]
         !> what the message must say: the key and its value, and the allowed range
-        character(len=*), parameter :: keys(8) = [character(len=40) :: &
-            "&census: samples = 0 ", "&census: samples = 10000001 ", "&census: x_amp = 0.5", &
+        character(len=*), parameter :: keys(10) = [character(len=40) :: &
+            "&census: samples = 0 ", "&census: samples = 10000001 ", &
+            "&census: exponents = 0 ", "&census: exponents = 31 ", "&census: x_amp = 0.5", &
             "&census: v_amp = -1.0", "&census: tolerance = 0.0", "&census: mirror = 'both'", &
             "&census cannot be combined", "&census runs at one point"]
-        character(len=*), parameter :: ranges(8) = [character(len=40) :: &
+        character(len=*), parameter :: ranges(10) = [character(len=40) :: &
             "is outside [1, 10000000]", "is outside [1, 10000000]", &
+            "is outside [1, 2n = 30]", "is outside [1, 2n = 30]", &
             "outside [0, half the smallest spacing", "is outside [0, 1e6]", &
             "is outside (0, 1)", "is not one of 'merge', 'separate'", "with &continuation", &
             "with parameter2 is not supported"]
@@ -455,20 +479,6 @@ contains
                                            0.0_wp, 0.2_wp, 0.2_wp, 0.2_wp]) .and. &
                    all(res%x0(:14, :, 1) == 0) .and. all(res%v0(2:, :, 1) == 0), &
                    'v1 fastest, then x15; the rest at rest')
-    contains
-        function list(values) result(text)
-            real(wp), intent(in) :: values(:)
-            character(len=:), allocatable :: text
-            character(len=32) :: item
-            integer :: q
-
-            text = ''
-            do q = 1, size(values)
-                write (item, '(es24.17)') values(q)
-                text = text//trim(adjustl(item))
-                if (q < size(values)) text = text//', '
-            end do
-        end function list
     end subroutine test_plane
 
     !> Each bad plane refused, naming what is wrong.
@@ -510,6 +520,202 @@ contains
                                        'the message names the start: '//err%message)
     end subroutine test_bad_plane
 
+    !> ensemble_statistics on hand-made numbers: the mean and the sample standard deviation
+    !> (n - 1), 0 for one member; -infinity in every member, or in some.
+    subroutine test_ensemble_statistics(t)
+        type(tally_t), intent(inout) :: t
+        real(wp) :: values(3, 4), mean(3), spread(3), one_mean(1), one_spread(1), minus_inf
+
+        minus_inf = ieee_value(1.0_wp, ieee_negative_inf)
+        values(1, :) = [1.0_wp, 2.0_wp, 3.0_wp, 4.0_wp]
+        values(2, :) = minus_inf
+        values(3, :) = [0.5_wp, minus_inf, 0.25_wp, 0.5_wp]
+        call ensemble_statistics(values, mean, spread)
+        call check_close(t, mean(1), 2.5_wp, 'ensemble mean of 1, 2, 3, 4', &
+                         abs_tol=4*epsilon(1.0_wp))
+        call check_close(t, spread(1), sqrt(5.0_wp/3), 'ensemble spread of 1, 2, 3, 4: '// &
+                         'sqrt(5/3), n - 1 in the denominator', rel_tol=4*epsilon(1.0_wp))
+        call check(t, mean(2) == minus_inf .and. spread(2) == 0, &
+                   'every member -infinity: mean -infinity, spread 0')
+        call check(t, mean(3) == minus_inf .and. spread(3) == ieee_value(1.0_wp, &
+                                                                         ieee_positive_inf), &
+                   'some members -infinity: mean -infinity, spread +infinity')
+        call ensemble_statistics(reshape([-0.3_wp], [1, 1]), one_mean, one_spread)
+        call check(t, one_mean(1) == -0.3_wp .and. one_spread(1) == 0, &
+                   'one member: its value, spread 0')
+    end subroutine test_ensemble_statistics
+
+    !> A census of the small chain with exponents = k: k exponents per sample, descending, the
+    !> first lambda1 itself; every sample's exponents and standard errors those of an ordinary
+    !> run with &lyapunov vectors = k from its start, bit for bit (and its impacts per bond);
+    !> with k = 2n each sample's full spectrum on the sum rule, its impacts per cycle from the
+    !> census's own counts; each attractor's mean and spread those of its samples' exponents,
+    !> recomputed here by Welford's updates (another order of the sums: rounding only).
+    subroutine test_ensemble(t, k)
+        type(tally_t), intent(inout) :: t
+        integer, intent(in) :: k
+        type(config_t) :: cfg, plain
+        type(census_result_t) :: res
+        type(chain_t) :: chain
+        type(memory_sink_t) :: sink
+        type(record_result_t) :: out
+        type(error_t), allocatable :: err
+        type(flow_t) :: flow
+        character(len=:), allocatable :: label
+        real(wp) :: residual, worst, expected, spread, mean(k), m2(k), step(k)
+        integer :: s, a, j, members, reruns_equal, largest
+        logical :: reran
+
+        label = 'k = '//fmt_int(k)
+        call config_text(cfg, small//small_census//", exponents = "//fmt_int(k)//" /", &
+                         'ensemble')
+        call whole_census(t, cfg, res)
+        if (.not. all(res%done)) return
+        call check(t, all(shape(res%exponents) == [k, 12, 1]) .and. &
+                   all(shape(res%exponents_stderr) == [k, 12, 1]) .and. &
+                   all(shape(res%attractor_exponents) == [k, res%n_attractors]) .and. &
+                   all(shape(res%attractor_spread) == [k, res%n_attractors]), &
+                   label//': k exponents per sample and per attractor')
+        call check(t, all(res%exponents(1, :, :) == res%lambda1) .and. &
+                   all(res%exponents_stderr(1, :, :) == res%stderr1), &
+                   label//': the first exponent is lambda1, bit for bit')
+        call check(t, all(res%exponents(2:, :, :) <= res%exponents(:k - 1, :, :)), &
+                   label//': descending')
+        call check(t, res%n_attractors == 3, label//': three attractors')
+        ! each sample alone, as an ordinary run of the same chain from its start
+        reruns_equal = 0
+        worst = 0
+        do s = 1, res%n_samples
+            call config_text(plain, small//"&initial kind = 'explicit', x0 = "// &
+                             list(res%x0(:, s, 1))//", v0 = "//list(res%v0(:, s, 1))//" /"// &
+                             new_line('a')//"&lyapunov enabled = .true., vectors = "// &
+                             fmt_int(k)//" /", 'ensemble_rerun')
+            call start_chain(plain, chain, err)
+            if (.not. allocated(err)) call record_cycles(plain%record, chain, sink, out, err)
+            reran = .not. allocated(err)
+            if (reran) reran = size(out%lyapunov%bits_per_cycle) == k
+            if (reran) then
+                if (all(out%lyapunov%bits_per_cycle == res%exponents(:, s, 1)) .and. &
+                    all(out%lyapunov%stderr_bits == res%exponents_stderr(:, s, 1)) .and. &
+                    all(out%site_counts == res%sites(:, s, 1))) reruns_equal = reruns_equal + 1
+            end if
+            if (k /= 2*cfg%model%n .or. .not. reran) cycle
+            ! the sum rule, with the impacts per cycle the census counted
+            flow = flow_of(chain)
+            ! (check_sum_rule passes over runs with rests, whose sum is -infinity)
+            call check(t, out%sticks == 0, label//', census sample '//fmt_int(s)// &
+                       ': no rests, so the sum rule applies')
+            associate (c => real(sum(res%sites(:, s, 1)), wp)/cfg%record%cycles)
+                call check_sum_rule(t, label//', census sample '//fmt_int(s), cfg%model%n, &
+                                    flow, cfg%model%restitution, c, res%exponents(:, s, 1), &
+                                    out%sticks)
+                expected = -2*flow%damping*cfg%model%n*flow%period + &
+                           2*log(cfg%model%restitution)*c
+                residual = abs(sum(res%exponents(:, s, 1))*log(2.0_wp) - expected)
+                worst = max(worst, residual)
+            end associate
+        end do
+        call check(t, reruns_equal == res%n_samples, label//': every sample rerun alone '// &
+                   'with &lyapunov vectors = k gives its k exponents and errors, bit for '// &
+                   'bit ('//fmt_int(reruns_equal)//' of '//fmt_int(res%n_samples)//')')
+        if (k == 2*cfg%model%n) write (output_unit, '(a,i0,a,es9.2,a)') &
+            '  census ensemble of ', res%n_samples, ' full spectra (2n = 8): largest sum-rule '// &
+            'residual ', worst, ' nats per cycle'
+        ! each attractor's mean and spread, from its samples
+        largest = 0
+        do a = 1, res%n_attractors
+            members = 0
+            mean = 0
+            m2 = 0
+            do s = 1, res%n_samples
+                if (res%attractor(s, 1) /= a) cycle
+                members = members + 1
+                step = res%exponents(:, s, 1) - mean
+                mean = mean + step/members
+                m2 = m2 + step*(res%exponents(:, s, 1) - mean)
+            end do
+            largest = max(largest, members)
+            do j = 1, k
+                call check_close(t, res%attractor_exponents(j, a), mean(j), label// &
+                                 ': attractor '//fmt_int(a)//', exponent '//fmt_int(j)// &
+                                 ': mean of its samples', abs_tol=1.0e-13_wp, rel_tol=1.0e-13_wp)
+                spread = 0
+                if (members > 1) spread = sqrt(m2(j)/(members - 1))
+                call check_close(t, res%attractor_spread(j, a), spread, label// &
+                                 ': attractor '//fmt_int(a)//', exponent '//fmt_int(j)// &
+                                 ': spread of its samples', abs_tol=1.0e-13_wp, &
+                                 rel_tol=1.0e-12_wp)
+            end do
+        end do
+        call check(t, largest >= 2 .and. any(res%attractor_spread > 0), &
+                   label//': an attractor of several samples, with a spread')
+    end subroutine test_ensemble
+
+    !> The small chain's census of full spectra (k = 2n = 8) with 1 and 2 threads, and stopped
+    !> after three samples, checkpointed and resumed: equal bit for bit, exponents, errors,
+    !> means and spreads included. A sample's MPI record (pack_sample) restores its exponents
+    !> bit for bit; a checkpoint of another k is refused, by its input text and by its header.
+    subroutine test_ensemble_threads_and_resume(t)
+        type(tally_t), intent(inout) :: t
+        type(config_t) :: cfg, other
+        type(census_result_t) :: one, two, part, loaded, fresh
+        type(stop_after_three_t) :: monitor
+        type(error_t), allocatable :: err
+        character(len=:), allocatable :: path
+        real(wp), allocatable :: reals(:)
+        integer(i8), allocatable :: ints(:)
+        integer :: nr, ni
+
+        call config_text(cfg, small//small_census//", exponents = 8 /", 'ensemble_threads')
+        !$ call omp_set_num_threads(1)
+        call whole_census(t, cfg, one)
+        !$ call omp_set_num_threads(2)
+        call whole_census(t, cfg, two)
+        call check(t, same(one, two), 'k = 8: 1 and 2 threads agree bit for bit')
+        ! one sample's record, as the MPI driver sends it
+        call sample_record_sizes(cfg%model%n, 8, nr, ni)
+        call check(t, nr == 2 + 2*4 + 2*8 .and. ni == 2 + 2*4, &
+                   'k = 8: a record of 26 reals and 10 integers')
+        allocate (reals(nr), ints(ni))
+        call pack_sample(one, 5, 1, reals, ints)
+        call census_result_init(fresh, cfg)
+        call unpack_sample(reals, ints, 5, 1, fresh)
+        call check(t, all(fresh%exponents(:, 5, 1) == one%exponents(:, 5, 1)) .and. &
+                   all(fresh%exponents_stderr(:, 5, 1) == one%exponents_stderr(:, 5, 1)) .and. &
+                   fresh%lambda1(5, 1) == one%lambda1(5, 1) .and. fresh%done(5, 1), &
+                   'k = 8: the MPI record restores the exponents and errors bit for bit')
+        ! stopped after three samples, resumed from the checkpoint
+        call census_result_init(part, cfg)
+        monitor%total = 12
+        call run_census_samples(cfg, part, err, monitor)
+        call check(t, .not. allocated(err) .and. count(part%done) >= 3 .and. &
+                   .not. all(part%done), 'k = 8: the census stops early when asked')
+        path = temp_prefix()//'ensemble.ckpt'
+        call save_census_checkpoint(path, cfg, part, err)
+        call check(t, .not. allocated(err), 'k = 8: checkpoint written')
+        call census_result_init(loaded, cfg)
+        call load_census_checkpoint(path, cfg, loaded, err)
+        call check(t, .not. allocated(err) .and. all(loaded%done .eqv. part%done) .and. &
+                   all(loaded%exponents == part%exponents) .and. &
+                   all(loaded%exponents_stderr == part%exponents_stderr), &
+                   'k = 8: the checkpoint keeps the finished samples exponents bit for bit')
+        call run_census_samples(cfg, loaded, err)
+        if (.not. allocated(err)) call classify_census(cfg, loaded, err)
+        call check(t, .not. allocated(err) .and. same(one, loaded), &
+                   'k = 8: stopped + resumed = uninterrupted, bit for bit')
+        ! a checkpoint of another k: another input, or (the same text) another header
+        call config_text(other, small//small_census//", exponents = 3 /", 'ensemble_threads')
+        call census_result_init(fresh, other)
+        call load_census_checkpoint(path, other, fresh, err)
+        call check(t, allocated(err), 'a checkpoint of exponents = 8 refused with exponents = 3')
+        other = cfg
+        other%census_exponents = 3
+        call census_result_init(fresh, other)
+        call load_census_checkpoint(path, other, fresh, err)
+        call check(t, allocated(err), 'a checkpoint with k = 8 in its header refused for k = 3')
+        call remove_file(path)
+    end subroutine test_ensemble_threads_and_resume
+
     logical function stop_after_three(monitor, stage, done, total) result(keep_going)
         class(stop_after_three_t), intent(inout) :: monitor
         integer, intent(in) :: stage
@@ -541,7 +747,12 @@ contains
                all(a%lambda1 == b%lambda1) .and. all(a%stderr1 == b%stderr1) .and. &
                all(a%sites == b%sites) .and. all(a%x0 == b%x0) .and. &
                all(a%attractor == b%attractor) .and. all(a%mirrored .eqv. b%mirrored) .and. &
-               a%n_attractors == b%n_attractors
+               a%n_attractors == b%n_attractors .and. a%n_exponents == b%n_exponents
+        if (.not. same) return
+        same = all(a%exponents == b%exponents) .and. &
+               all(a%exponents_stderr == b%exponents_stderr) .and. &
+               all(a%attractor_exponents == b%attractor_exponents) .and. &
+               all(a%attractor_spread == b%attractor_spread)
         if (.not. same) return
         same = all(a%fraction == b%fraction)
         do k = 1, a%n_attractors
@@ -549,6 +760,21 @@ contains
                    a%attractors(k)%kind == b%attractors(k)%kind
         end do
     end function same
+
+    !> Reals as a namelist list, each to 17 significant digits (read back bit for bit).
+    function list(values) result(text)
+        real(wp), intent(in) :: values(:)
+        character(len=:), allocatable :: text
+        character(len=32) :: item
+        integer :: q
+
+        text = ''
+        do q = 1, size(values)
+            write (item, '(es24.17)') values(q)
+            text = text//trim(adjustl(item))
+            if (q < size(values)) text = text//', '
+        end do
+    end function list
 
     !> The configuration of a namelist text (the test stops on a bad one).
     subroutine config_text(cfg, text, name)

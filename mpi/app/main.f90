@@ -319,7 +319,7 @@ contains
         integer :: nr, ni, r, c, t, tasks, rcounts(0:ranks - 1), icounts(0:ranks - 1)
         integer :: rdispl(0:ranks - 1), idispl(0:ranks - 1), owned(0:ranks - 1)
 
-        call sample_record_sizes(cfg%model%n, nr, ni)
+        call sample_record_sizes(cfg%model%n, cfg%census_exponents, nr, ni)
         tasks = size(census%done)
         owned = [((tasks - r + ranks - 1)/ranks, r=0, ranks - 1)]
         rcounts = owned*nr

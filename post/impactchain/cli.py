@@ -311,6 +311,11 @@ COMMANDS: dict[str, Command] = {
                 "(census file with &census plane)",
                 ("census",), (), False, _plane_options,
                 lambda runs, a: figures.basin_plane(runs[0], a.point)),
+        Command("ensemble-spectra",
+                "each attractor's mean Lyapunov spectrum with the spread between its "
+                "samples, over every sample's spectrum (census file; &census exponents = k)",
+                ("census",), (), False, _no_options,
+                lambda runs, a: figures.ensemble_spectra(runs[0])),
         Command("clv-space-time",
                 "weight of covariant Lyapunov vectors along the chain against time, with "
                 "the collisions",
@@ -428,6 +433,8 @@ def _all_figures(run: Run, args: argparse.Namespace) -> Iterator[tuple[str, Figu
         yield "basin-fractions", figures.basin_fractions(run)
         if run.census.plane is not None:
             yield "basin-plane", figures.basin_plane(run)
+        if run.census.k > 1:
+            yield "ensemble-spectra", figures.ensemble_spectra(run)
     if run.clv is not None and run.clv.n_record:
         if run.clv.stored:
             # the first --panel-cycles records with vectors, as many as a shock-wave panel

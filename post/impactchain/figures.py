@@ -55,6 +55,7 @@ from matplotlib.colors import BoundaryNorm, ListedColormap
 from matplotlib.figure import Figure, SubFigure
 from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
+from matplotlib.ticker import MaxNLocator
 
 from impactchain import __version__
 from impactchain.analysis import panel_ranges, period_label
@@ -83,6 +84,7 @@ __all__ = [
     "multipliers",
     "basin_fractions",
     "basin_plane",
+    "ensemble_spectra",
     "clv_space_time",
     "clv_ipr",
     "clv_angles",
@@ -112,6 +114,9 @@ ATTRACTOR_COLOURS = ("tab:blue", "tab:orange", "tab:green", "tab:red", "tab:purp
                      "tab:brown", "tab:pink", "tab:olive", "tab:cyan", "tab:gray",
                      "navy", "gold", "lime", "maroon", "teal", "salmon")
 """Colour of each attractor (or attractor label) of a census, in the order found (cycled)."""
+SAMPLE_ALPHA = 0.35
+"""In an ensemble of spectra, each sample's own spectrum is drawn this opaque under its
+attractor's mean."""
 MIRROR_BLEND = 0.55
 """In a basin picture, the samples that reached an attractor's mirror image are drawn in its
 colour blended this far towards white."""
@@ -1768,6 +1773,73 @@ def basin_plane(run: RunLike, point: int = 0, ax: Axes | None = None) -> Figure:
     del first, second
     _record_sources(fig, [run])
     return fig
+
+
+def ensemble_spectra(run: RunLike, ax: Axes | None = None) -> Figure:
+    """An ensemble of Lyapunov spectra (a census with ``&census exponents = k``): each
+    attractor's mean spectrum against the exponent index, with error bars of +-1 spread
+    between its samples (their standard deviation, docs/model.md section 13.4), over every
+    sample's own spectrum drawn lighter in the attractor's colour. The legend names each
+    attractor (id, kind and period pattern, its point along a sweep) with its basin fraction
+    and its number of samples. The attractors' means are set a little apart along the index
+    so that their bars do not hide each other; exponents of -infinity (directions removed by
+    rests on a wall) are left out. A census of the largest exponent alone (k = 1) is drawn
+    the same way, one column. ``ax``: one Axes.
+    """
+    run = as_run(run, ("census",), "ensemble-spectra")
+    census = _census(run)
+    unit = _unit(run, "census/sample_exponents")
+    k, count = census.k, census.n_attractors
+    fig, ax = _one_axes(ax, 9.5, 5.5, "ensemble-spectra")
+    index = np.arange(1, k + 1, dtype=float)
+    dodge = 0.3 * (np.arange(count) - (count - 1) / 2) / max(count - 1, 1)
+    for a in range(count):
+        colour = ATTRACTOR_COLOURS[a % len(ATTRACTOR_COLOURS)]
+        p = int(census.attractor_point[a])
+        members = census.members(a)
+        spectra = _finite_only(census.sample_exponents[p, members])
+        x = index + dodge[a]
+        if k > 1:
+            ax.add_collection(LineCollection([np.column_stack((x, row)) for row in spectra],
+                                             colors=colour, linewidths=0.6,
+                                             alpha=SAMPLE_ALPHA, gid=f"samples-{a}"))
+        else:
+            ax.plot(np.full(members.size, x[0]), spectra[:, 0], linestyle="none",
+                    marker=".", markersize=3, color=colour, alpha=SAMPLE_ALPHA,
+                    gid=f"samples-{a}")
+        label = f"{a}: {census.label(a)}"
+        if census.swept:
+            symbol = _SYMBOLS.get(census.parameter, (census.parameter, census.parameter))[1]
+            label += f" at ${symbol}$ = {census.values[p]:g}"
+        label += f", {100 * census.fraction[p, a]:.3g} % ({members.size} samples)"
+        ax.errorbar(x, _finite_only(census.attractor_exponents[a]),
+                    yerr=_finite_only(census.attractor_exponents_spread[a]), fmt="o-",
+                    markersize=3.5, linewidth=1.0, capsize=2.5, color=colour,
+                    markeredgecolor="k", markeredgewidth=0.4, label=_wrapped(label, 44),
+                    gid=f"mean-{a}")
+    ax.axhline(0.0, color="0.3", linewidth=0.8, linestyle="--", gid="zero")
+    ax.autoscale_view()
+    ax.set_xlim(0.5, k + 0.5)
+    if k <= 20:
+        ax.set_xticks(np.arange(1, k + 1))
+    else:
+        ax.xaxis.set_major_locator(MaxNLocator(integer=True))
+    ax.set_xlabel(_label("exponent index", "1", "j"))
+    ax.set_ylabel(_label("Lyapunov exponent", unit, r"\lambda_j"))
+    ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize="small",
+              title="attractor: kind, periods, fraction", title_fontsize="small")
+    what = f"the leading {k} exponents" if k > 1 else "the largest exponent"
+    lines = "thin lines: each sample's spectrum" if k > 1 else "dots: each sample"
+    ax.set_title(f"{_title(run, skip=census.parameter)}\nensemble of spectra: {what} of "
+                 f"{census.samples} starts per point\nbars: $\\pm$1 spread between the "
+                 f"samples; {lines}", fontsize="medium")
+    _record_sources(fig, [run])
+    return fig
+
+
+def _finite_only(values: np.ndarray) -> np.ndarray:
+    """``values`` with every non-finite entry NaN (left out of a line or a bar)."""
+    return np.where(np.isfinite(values), values, np.nan)
 
 
 def _coordinate_label(run: Run, name: str) -> str:

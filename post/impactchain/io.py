@@ -26,7 +26,9 @@ HDF5 path                 dataclass field         shape (h5py / numpy order)
                                                   (P, 2n), ``special_index`` (S,), ...
 /census                   ``Run.census``          ``x0``, ``v0`` (P, N, n),
                                                   ``sample_attractor`` (P, N),
+                                                  ``sample_exponents`` (P, N, k),
                                                   ``attractor_period`` (A, n),
+                                                  ``attractor_exponents`` (A, k),
                                                   ``fraction`` (P, A), ...
 /clv                      ``Run.clv``             ``cycle`` (R,), ``ipr`` (R, k),
                                                   ``site_weight`` (R, m, n), ``min_angle``
@@ -44,7 +46,7 @@ one parameter) is laid out the same way: ``/continuation`` with the dimensions `
 ``oscillator``, ``multiplier``, ``iterate`` and ``special``, and ``/params`` without the
 continued parameter; so is a census file (attractors and their basin fractions, at one point
 or along a swept parameter): ``/census`` with ``point``, ``sample``, ``oscillator``,
-``attractor`` and ``bond``, and ``/params`` without the swept parameter. This module
+``attractor``, ``bond`` and ``exponent``, and ``/params`` without the swept parameter. This module
 returns both versions in the same dataclasses, a 2-D sweep's points flattened in version 1's
 order (the first parameter varying fastest), so nothing downstream depends on the version.
 
@@ -154,6 +156,10 @@ FILE_UNITS: Mapping[str, str] = MappingProxyType({
     "census/attractor_lambda1_stderr": "bits per drive cycle",
     "census/attractor_x": "length",
     "census/attractor_v": "length/time",
+    "census/sample_exponents": "bits per drive cycle",
+    "census/sample_exponents_stderr": "bits per drive cycle",
+    "census/attractor_exponents": "bits per drive cycle",
+    "census/attractor_exponents_spread": "bits per drive cycle",
     "clv/cycle": "drive cycles",
     "clv/exponents": "bits per drive cycle",
     "clv/stderr": "bits per drive cycle",
@@ -423,6 +429,13 @@ class Census:
     plane of starts has ``plane`` (two coordinates such as ``('x3', 'v3')``), ``plane_range``
     and ``plane_points``; its sample ``1 + i + m j`` sits at grid point ``i`` of the first
     coordinate and ``j`` of the second (:meth:`plane_grid`).
+
+    Each sample keeps its ``k`` leading Lyapunov exponents (``&census exponents``, 1 by
+    default; ``sample_exponents[..., 0]`` is ``lambda1``), and each attractor the mean of its
+    samples' and the spread between them (their standard deviation, ``n - 1`` in the
+    denominator, 0 for one sample; docs/model.md section 13.4). A file written before the
+    census kept them (``ensemble_stored`` false) gets ``k = 1`` from ``lambda1``: the mean and
+    spread of its samples' ``lambda1``, their standard errors NaN (not stored per sample).
     """
 
     parameter: str  # the swept parameter, '' at one point
@@ -450,6 +463,11 @@ class Census:
     attractor_sites: np.ndarray  # (A, n+1) fraction of its impacts on each bond
     fraction: np.ndarray  # (P, A) basin fraction at each point (0 at other points)
     fraction_stderr: np.ndarray  # (P, A) binomial sqrt(f (1 - f) / N)
+    sample_exponents: np.ndarray  # (P, N, k) each sample's leading exponents, descending
+    sample_exponents_stderr: np.ndarray  # (P, N, k) their standard errors (NaN: not stored)
+    attractor_exponents: np.ndarray  # (A, k) the mean over the attractor's samples
+    attractor_exponents_spread: np.ndarray  # (A, k) the standard deviation between them
+    ensemble_stored: bool = True  # False: an older file, the four above made from lambda1
     plane: tuple[str, str] | None = None  # the two coordinates of a plane of starts
     plane_range: np.ndarray | None = None  # (4,) min, max of the first, then the second
     plane_points: int = 0  # grid points along each coordinate (0: random starts)
@@ -468,6 +486,15 @@ class Census:
     def swept(self) -> bool:
         """True for a census along a swept parameter."""
         return bool(self.parameter)
+
+    @property
+    def k(self) -> int:
+        """Number of leading exponents of each sample."""
+        return int(self.sample_exponents.shape[2])
+
+    def members(self, a: int) -> np.ndarray:
+        """The samples (0-based) of attractor ``a``'s point that reached it, in order."""
+        return np.flatnonzero(self.sample_attractor[int(self.attractor_point[a])] == a)
 
     def pattern(self, a: int) -> str:
         """Attractor ``a``'s period pattern (:func:`period_pattern`)."""
@@ -1037,6 +1064,18 @@ def _read_census(g: h5py.Group, path: str, n: int) -> Census:
         if plane_points**2 != s:
             raise SchemaError(f"{path}: {g.name}: plane_points = {plane_points} does not "
                               f"square to the {s} samples")
+    lambda1 = _dataset(g, path, "lambda1", (p, s), float)
+    stored = "sample_exponents" in g
+    if stored:
+        exponents = _dataset(g, path, "sample_exponents", (p, s, None), float)
+        k = exponents.shape[2]
+        exponents_stderr = _dataset(g, path, "sample_exponents_stderr", (p, s, k), float)
+        attractor_exponents = _dataset(g, path, "attractor_exponents", (a, k), float)
+        spread = _dataset(g, path, "attractor_exponents_spread", (a, k), float)
+    else:
+        exponents = _frozen(lambda1[:, :, np.newaxis].copy())
+        exponents_stderr = _frozen(np.full(exponents.shape, np.nan))
+        attractor_exponents, spread = _ensembles(exponents, ids, point, a)
     return Census(
         parameter=_str(_attr(g, path, "parameter")),
         samples=samples,
@@ -1051,7 +1090,7 @@ def _read_census(g: h5py.Group, path: str, n: int) -> Census:
         v0=_dataset(g, path, "v0", (p, s, n), float),
         sample_attractor=ids,
         mirrored=_frozen(mirrored == 1),
-        lambda1=_dataset(g, path, "lambda1", (p, s), float),
+        lambda1=lambda1,
         attractor_kind=kinds,
         attractor_period=_dataset(g, path, "attractor_period", (a, n), int),
         attractor_lambda1=_dataset(g, path, "attractor_lambda1", (a,), float),
@@ -1063,10 +1102,40 @@ def _read_census(g: h5py.Group, path: str, n: int) -> Census:
         attractor_sites=_dataset(g, path, "attractor_sites", (a, n + 1), float),
         fraction=_dataset(g, path, "fraction", (p, a), float),
         fraction_stderr=_dataset(g, path, "fraction_stderr", (p, a), float),
+        sample_exponents=exponents,
+        sample_exponents_stderr=exponents_stderr,
+        attractor_exponents=attractor_exponents,
+        attractor_exponents_spread=spread,
+        ensemble_stored=stored,
         plane=plane,
         plane_range=plane_range,
         plane_points=plane_points,
     )
+
+
+def _ensembles(exponents: np.ndarray, ids: np.ndarray, point: np.ndarray,
+               a: int) -> tuple[np.ndarray, np.ndarray]:
+    """(A, k) the mean of each attractor's samples' exponents and their standard deviation
+    (n - 1; 0 for one sample), as the simulator's census defines them: -infinity in some
+    member makes the mean -infinity and the spread +infinity (0 when every member's is)."""
+    k = exponents.shape[2]
+    mean = np.zeros((a, k))
+    spread = np.zeros((a, k))
+    for attractor in range(a):
+        values = exponents[int(point[attractor])][ids[int(point[attractor])] == attractor]
+        if values.shape[0] == 0:
+            continue
+        with np.errstate(invalid="ignore"):
+            mean[attractor] = values.mean(axis=0)
+        for j in range(k):
+            column = values[:, j]
+            if column.size == 1:
+                continue
+            if np.isfinite(column).all():
+                spread[attractor, j] = column.std(ddof=1)
+            elif not (column == column[0]).all():
+                spread[attractor, j] = np.inf
+    return _frozen(mean), _frozen(spread)
 
 
 def _read_clv(g: h5py.Group, path: str, n: int) -> Clv:

@@ -1,12 +1,14 @@
 """Census files (attractors and their basin fractions, docs/model.md section 13):
 impactchain.io reads /census into :class:`Census`, xarray opens it with its dimensions, the
-figures `basin_fractions` and `basin_plane` and their commands draw it; and the same with
-small censuses run by the simulator (skipped when it cannot be built).
+figures `basin_fractions`, `basin_plane` and `ensemble_spectra` and their commands draw it;
+an older file without the samples' exponents gets them from lambda1; and the same with small
+censuses run by the simulator (skipped when it cannot be built).
 
 ``write_census`` writes the layout the simulator writes: the root and /params of a version-2
 file (without the swept parameter along a sweep), and /census with the dimension scales
-point, sample (1..N), oscillator (1..n), attractor (0..A-1) and bond (0..n) attached to every
-dataset, each with ``long_name``, ``units`` and (for the reduced units) ``model_units``.
+point, sample (1..N), oscillator (1..n), attractor (0..A-1), bond (0..n) and exponent (1..k)
+attached to every dataset, each with ``long_name``, ``units`` and (for the reduced units)
+``model_units``.
 """
 
 from __future__ import annotations
@@ -22,7 +24,8 @@ import h5py
 import numpy as np
 import pytest
 from matplotlib.axes import Axes
-from matplotlib.container import BarContainer
+from matplotlib.collections import LineCollection
+from matplotlib.container import BarContainer, ErrorbarContainer
 from matplotlib.figure import Figure
 from matplotlib.image import AxesImage
 
@@ -45,12 +48,39 @@ PERIODS = ((1, 1, 1, 1), (2, 2, 1, 1), (0, 0, 0, 0), (1, 1, 1, 1), (0, 0, 0, 0))
 POINT = (0, 0, 0, 1, 1)
 IDS = ((0, 1, 0, 2, 0, 1, 0, 0, 2, 0), (3, 3, 4, 3, 3, 3, 3, 4, 3, 3))
 MIRRORED = ((0, 1, 0, 0, 1, 0, 0, 0, 0, 0), (0, 0, 0, 0, 0, 0, 0, 1, 0, 0))
+K = 3
+"""Exponents per sample of the synthetic census."""
 
 
 def fractions(ids: Sequence[Sequence[int]], attractors: int) -> np.ndarray:
     """(P, A): the fraction of each point's samples on each attractor."""
     ids = np.asarray(ids)
     return np.array([np.bincount(row, minlength=attractors)[:attractors] / row.size for row in ids])
+
+
+def sample_spectra(ids: np.ndarray, k: int) -> np.ndarray:
+    """(P, N, k) descending spectra, the first lambda1 (0.3 on attractor 2, else -0.05), the
+    others below it by j/2 and a sample-dependent amount."""
+    lambda1 = np.where(ids == 2, 0.3, -0.05)
+    points, samples = ids.shape
+    shift = 0.01 * np.arange(samples)[np.newaxis, :, np.newaxis] * np.arange(k)
+    return lambda1[:, :, np.newaxis] - 0.5 * np.arange(k) - shift * (1 + np.arange(points))[
+        :, np.newaxis, np.newaxis]
+
+
+def ensembles(spectra: np.ndarray, ids: np.ndarray, point: Sequence[int],
+              a: int) -> tuple[np.ndarray, np.ndarray]:
+    """(A, k) each attractor's mean spectrum and the standard deviation (n - 1) between its
+    samples', by numpy (zeros for an attractor without samples)."""
+    k = spectra.shape[2]
+    mean, spread = np.zeros((a, k)), np.zeros((a, k))
+    for j, p in enumerate(point[:a]):
+        members = spectra[min(p, len(ids) - 1)][ids[min(p, len(ids) - 1)] == j]
+        if members.shape[0]:
+            mean[j] = members.mean(axis=0)
+        if members.shape[0] > 1:
+            spread[j] = members.std(axis=0, ddof=1)
+    return mean, spread
 
 
 def write_census(
@@ -63,6 +93,8 @@ def write_census(
     mirrored: Sequence[Sequence[int]] = MIRRORED,
     *,
     plane: tuple[str, str, Sequence[float], int] | None = None,
+    exponents: int | None = K,
+    spectra: np.ndarray | None = None,
     leave_out: Sequence[str] = (),
     leave_out_attrs: Sequence[str] = (),
 ) -> Path:
@@ -70,8 +102,11 @@ def write_census(
 
     ``values``: the swept amplitudes, one per row of ``ids``; None for a census at one point
     (``ids`` then has one row). ``plane``: (first, second, range, points) of a plane census,
-    whose starts are then the grid around rest. ``leave_out``: datasets of /census not to
-    write; ``leave_out_attrs``: its attributes not to write.
+    whose starts are then the grid around rest. ``exponents``: k, the exponents per sample
+    (:func:`sample_spectra`, or ``spectra`` (P, N, k) when given), with each attractor's mean
+    and spread; None for a file written before the census kept them (lambda1 alone).
+    ``leave_out``: datasets of /census not to write; ``leave_out_attrs``: its attributes not
+    to write.
     """
     path = write_run(path, n=N, strobe=False, events=False, schema_version=2)
     ids = np.asarray(ids, dtype=np.int32)
@@ -115,8 +150,11 @@ def write_census(
             g["point"] = np.zeros(1, dtype=np.int32)
             g["point"].attrs.update(long_name="point index", units="1")
         g["point"].make_scale("point")
-        for name, count, first_index in (("sample", samples, 1), ("oscillator", N, 1),
-                                         ("attractor", a, 0), ("bond", N + 1, 0)):
+        axes = [("sample", samples, 1), ("oscillator", N, 1), ("attractor", a, 0),
+                ("bond", N + 1, 0)]
+        if exponents is not None:
+            axes.append(("exponent", exponents, 1))
+        for name, count, first_index in axes:
             g[name] = np.arange(first_index, first_index + count, dtype=np.int32)
             g[name].attrs.update(long_name=f"{name} index", units="1")
             g[name].make_scale(name)
@@ -145,6 +183,18 @@ def write_census(
             "fraction": (frac, "point attractor", ""),
             "fraction_stderr": (np.sqrt(frac * (1 - frac) / samples), "point attractor", ""),
         }
+        if exponents is not None:
+            if spectra is None:
+                spectra = sample_spectra(ids, exponents)
+            mean, spread = ensembles(spectra, ids, point, a)
+            datasets["lambda1"] = (spectra[:, :, 0], "point sample", "bit")
+            datasets.update({
+                "sample_exponents": (spectra, "point sample exponent", "bit"),
+                "sample_exponents_stderr": (np.full(spectra.shape, 0.02),
+                                            "point sample exponent", "bit"),
+                "attractor_exponents": (mean, "attractor exponent", "bit"),
+                "attractor_exponents_spread": (spread, "attractor exponent", "bit"),
+            })
         for name, (data, dims, model_units) in datasets.items():
             if name in leave_out:
                 continue
@@ -246,6 +296,9 @@ def test_xarray_sees_the_dimensions(make_census: MakeCensus) -> None:
         np.testing.assert_array_equal(ds.sample.values, np.arange(1, 11))
         shares = ds.fraction.sel(point=2.3).values
         np.testing.assert_array_equal(shares, [0, 0, 0, 0.8, 0.2])
+        assert ds.sample_exponents.dims == ("point", "sample", "exponent")
+        assert ds.attractor_exponents_spread.dims == ("attractor", "exponent")
+        np.testing.assert_array_equal(ds.exponent.values, np.arange(1, K + 1))
 
 
 def test_a_plane_of_starts(make_census: MakeCensus) -> None:
@@ -301,6 +354,59 @@ def test_census_only_when_asked(make_census: MakeCensus) -> None:
     assert read_run(make_census(), groups=("strobe",)).census is None
 
 
+def test_reads_the_ensemble_of_spectra(make_census: MakeCensus) -> None:
+    census = read_census(make_census())
+    ids = np.asarray(IDS)
+    spectra = sample_spectra(ids, K)
+    assert census.ensemble_stored and census.k == K
+    assert census.sample_exponents.shape == census.sample_exponents_stderr.shape == (2, 10, K)
+    assert census.attractor_exponents.shape == census.attractor_exponents_spread.shape == \
+        (5, K)
+    np.testing.assert_array_equal(census.sample_exponents, spectra)
+    np.testing.assert_array_equal(census.sample_exponents[..., 0], census.lambda1)
+    mean, spread = ensembles(spectra, ids, POINT, 5)
+    np.testing.assert_array_equal(census.attractor_exponents, mean)
+    np.testing.assert_array_equal(census.attractor_exponents_spread, spread)
+    np.testing.assert_array_equal(census.members(1), [1, 5])
+    np.testing.assert_array_equal(census.members(3), [0, 1, 3, 4, 5, 6, 8, 9])
+    with pytest.raises(ValueError):
+        census.sample_exponents[0, 0, 0] = 1.0
+    assert read_run(make_census()).unit("census/attractor_exponents") == "bit"
+
+
+def test_an_older_census_gets_its_ensemble_from_lambda1(make_census: MakeCensus) -> None:
+    """A file written before the census kept the samples' exponents: k = 1 from lambda1,
+    each attractor's mean and spread those of its samples' lambda1, no standard errors."""
+    census = read_census(make_census(exponents=None))
+    assert not census.ensemble_stored and census.k == 1
+    np.testing.assert_array_equal(census.sample_exponents[..., 0], census.lambda1)
+    assert np.isnan(census.sample_exponents_stderr).all()
+    ids = np.asarray(IDS)
+    for a, p in enumerate(POINT):
+        values = census.lambda1[p][ids[p] == a]
+        np.testing.assert_allclose(census.attractor_exponents[a], [values.mean()], rtol=1e-15)
+        np.testing.assert_allclose(census.attractor_exponents_spread[a],
+                                   [values.std(ddof=1)], rtol=1e-15, atol=1e-17)
+    # one sample alone: spread 0; -infinity in some members: mean -inf, spread +inf
+    alone = read_census(make_census("alone.h5", exponents=None,
+                                    ids=[[0, 1, 0, 2, 0, 0, 0, 0, 2, 0], IDS[1]]))
+    assert alone.attractor_exponents_spread[1, 0] == 0.0
+    assert alone.attractor_exponents[1, 0] == -0.05
+
+
+def test_a_missing_ensemble_dataset_is_named(make_census: MakeCensus) -> None:
+    for missing in ("sample_exponents_stderr", "attractor_exponents",
+                    "attractor_exponents_spread"):
+        with pytest.raises(SchemaError, match=f"no /census/{missing} dataset"):
+            read_run(make_census(f"{missing}.h5", leave_out=[missing]))
+    path = make_census("short.h5")
+    with h5py.File(path, "r+") as f:
+        del f["census/attractor_exponents"]
+        f["census/attractor_exponents"] = np.zeros((5, K - 1))
+    with pytest.raises(SchemaError, match="attractor_exponents"):
+        read_run(path)
+
+
 # ---------------------------------------------------------------------------------- figures
 
 
@@ -352,12 +458,64 @@ def test_the_basin_plane(make_census: MakeCensus) -> None:
     assert ax.get_ylabel() == "initial velocity of oscillator 4 $v_{4}$ [length/time]"
 
 
+def test_the_ensemble_spectra(make_census: MakeCensus) -> None:
+    fig = figures.ensemble_spectra(make_census())
+    ax = fig.axes[0]
+    census = read_census(make_census("again.h5"))
+    # each attractor's mean with its spread as error bars, over its samples' spectra
+    means = [c for c in ax.containers if isinstance(c, ErrorbarContainer)]
+    assert len(means) == 5
+    for a, container in enumerate(means):
+        line = container.lines[0]
+        np.testing.assert_allclose(line.get_ydata(), census.attractor_exponents[a])
+        np.testing.assert_allclose(np.diff(line.get_xdata()), 1.0)
+        (bars_,) = container.lines[2]
+        tops = np.array([segment[1, 1] for segment in bars_.get_segments()])
+        np.testing.assert_allclose(tops, census.attractor_exponents[a] +
+                                   census.attractor_exponents_spread[a])
+    samples = {c.get_gid(): c for c in ax.collections if isinstance(c, LineCollection)
+               and str(c.get_gid()).startswith("samples-")}
+    assert sorted(samples) == [f"samples-{a}" for a in range(5)]
+    assert [len(samples[f"samples-{a}"].get_segments()) for a in range(5)] == [6, 2, 2, 8, 2]
+    labels = [t.get_text().replace("\n", " ") for t in ax.get_legend().get_texts()]
+    assert labels[0] == "0: periodic 1×4 at $A$ = 2.2, 60 % (6 samples)"
+    assert labels[4] == "4: aperiodic-nonchaotic at $A$ = 2.3, 20 % (2 samples)"
+    assert [t.get_text() for t in ax.get_xticklabels()] == ["1", "2", "3"]
+    assert ax.get_xlabel() == "exponent index $j$ [1]"
+    assert ax.get_ylabel() == r"Lyapunov exponent $\lambda_j$ [bit]"  # the file's unit
+    assert "the leading 3 exponents of 10 starts per point" in ax.get_title()
+
+
+def test_the_ensemble_spectra_of_the_largest_exponent(make_census: MakeCensus) -> None:
+    """k = 1 (an older file, or exponents = 1): one column, each sample a dot."""
+    fig = figures.ensemble_spectra(make_census(**ONE_POINT, exponents=None))
+    ax = fig.axes[0]
+    dots = [line for line in ax.lines if str(line.get_gid()).startswith("samples-")]
+    assert [line.get_xdata().size for line in dots] == [6, 2, 2]
+    assert ax.get_xlim() == (0.5, 1.5)
+    assert "the largest exponent of 10 starts" in ax.get_title()
+
+
+def test_the_ensemble_spectra_leave_out_minus_infinity(make_census: MakeCensus) -> None:
+    """A direction removed by rests (-infinity) in some samples: drawn without it."""
+    spectra = sample_spectra(np.asarray(IDS), K)
+    spectra[0, 0, 2] = -np.inf
+    with np.errstate(invalid="ignore"):
+        path = make_census(spectra=spectra)
+    census = read_census(path)
+    assert census.attractor_exponents[0, 2] == -np.inf
+    fig = figures.ensemble_spectra(path)
+    (first,) = [c for c in fig.axes[0].containers if isinstance(c, ErrorbarContainer)][:1]
+    assert np.isnan(first.lines[0].get_ydata()[2])
+
+
 def test_figures_draw_into_given_axes(make_census: MakeCensus) -> None:
     fig = Figure()
-    left, right = fig.subplots(1, 2)
+    left, middle, right = fig.subplots(1, 3)
     assert figures.basin_fractions(make_census(), ax=left) is fig
-    assert figures.basin_plane(make_census("plane.h5", **PLANE), ax=right) is fig
-    assert bars(left) and right.get_images()
+    assert figures.basin_plane(make_census("plane.h5", **PLANE), ax=middle) is fig
+    assert figures.ensemble_spectra(make_census("spectra.h5"), ax=right) is fig
+    assert bars(left) and middle.get_images() and right.containers
 
 
 def test_figure_errors(make_census: MakeCensus, tmp_path: Path) -> None:
@@ -382,7 +540,19 @@ def test_cli_commands(make_census: MakeCensus, tmp_path: Path,
     assert main(["all", str(plane), "-o", str(tmp_path / "all")]) == 0
     made = capsys.readouterr().out.split()
     assert made == [str(tmp_path / "all_basin_fractions.png"),
-                    str(tmp_path / "all_basin_plane.png")]
+                    str(tmp_path / "all_basin_plane.png"),
+                    str(tmp_path / "all_ensemble_spectra.png")]
+    # the largest exponent alone (k = 1): no ensemble of spectra among 'all'
+    older = make_census("older.h5", **PLANE, exponents=None)
+    assert main(["all", str(older), "-o", str(tmp_path / "older")]) == 0
+    assert capsys.readouterr().out.split() == [str(tmp_path / "older_basin_fractions.png"),
+                                               str(tmp_path / "older_basin_plane.png")]
+    assert main(["ensemble-spectra", str(sweep), "-o", str(tmp_path / "e.png")]) == 0
+    assert (tmp_path / "e.png").stat().st_size > 0
+    plain = write_run(tmp_path / "run.h5", n=N, schema_version=2)
+    assert main(["ensemble-spectra", str(plain), "-o", str(tmp_path / "bad.png")]) == 2
+    assert "no /census" in capsys.readouterr().err
+    assert not (tmp_path / "bad.png").exists()
 
 
 # ---------------------------------------------------------------- censuses by the simulator
@@ -458,3 +628,37 @@ def test_a_plane_census_run(simulator: Path, tmp_path: Path) -> None:
     np.testing.assert_array_equal(ids.ravel(), census.sample_attractor[0])
     fig = figures.basin_plane(path)
     assert fig.axes[0].get_images()
+
+
+def test_an_ensemble_census_run(simulator: Path, tmp_path: Path) -> None:
+    """Full spectra (exponents = 2n = 8) of a chain of four at two amplitudes: the reader
+    gives the file's arrays, each attractor's mean and spread are its samples' (numpy, n - 1),
+    the first exponent is lambda1, and the figure draws every sample."""
+    path = run_simulator(simulator, tmp_path, (
+        "&chain n = 4, amplitude = 1.0, omega = 0.9, damping = 0.05, restitution = 0.7 /\n"
+        "&run transient = 300, cycles = 200, max_period = 8 /\n"
+        "&census samples = 12, seed = 3, x_amp = 0.3, v_amp = 1.0, exponents = 8 /\n"
+        "&sweep parameter = 'amplitude', start = 1.0, stop = 1.1, step = 0.1 /\n"), "ensemble")
+    census = read_census(path)
+    assert census.ensemble_stored and census.k == 8
+    with h5py.File(path) as f:
+        g = f["census"]
+        for name in ("sample_exponents", "sample_exponents_stderr", "attractor_exponents",
+                     "attractor_exponents_spread"):
+            np.testing.assert_array_equal(getattr(census, name), g[name][()], err_msg=name)
+    np.testing.assert_array_equal(census.sample_exponents[..., 0], census.lambda1)
+    assert (np.diff(census.sample_exponents, axis=2) <= 0).all()
+    assert (census.sample_exponents_stderr >= 0).all()
+    for a in range(census.n_attractors):
+        values = census.sample_exponents[census.attractor_point[a]][census.members(a)]
+        np.testing.assert_allclose(census.attractor_exponents[a], values.mean(axis=0),
+                                   rtol=1e-13, atol=1e-14)
+        spread = values.std(axis=0, ddof=1) if values.shape[0] > 1 else np.zeros(8)
+        np.testing.assert_allclose(census.attractor_exponents_spread[a], spread, rtol=1e-12,
+                                   atol=1e-14)
+    fig = figures.ensemble_spectra(path)
+    drawn = {c.get_gid(): len(c.get_segments()) for c in fig.axes[0].collections
+             if str(c.get_gid()).startswith("samples-")}
+    assert drawn == {f"samples-{a}": census.members(a).size
+                     for a in range(census.n_attractors)}
+    assert sum(drawn.values()) == 24

@@ -1,8 +1,9 @@
 """The command line's attractor censuses (`&census`): bad input named with its key and the
 allowed range, exit 1 and no file; the /census group read by xarray (figure 3's chain: its two
 mirror-image period-8 patterns merged or kept apart, fractions summing to one); a census along
-a sweep; the same file with 1 and 2 threads, and after an interrupted census is resumed; the
-same file from the MPI driver on 2 ranks, also after a stop by SIGTERM resumed on 3 ranks or by
+a sweep; an ensemble of spectra (`exponents = k`) and its datasets; the same file with 1 and 2
+threads, and after an interrupted census is resumed; the same file from the MPI driver on 2
+ranks (also with k exponents per sample), also after a stop by SIGTERM resumed on 3 ranks or by
 the threaded driver."""
 from __future__ import annotations
 
@@ -31,6 +32,9 @@ BAD = {
     "negative speed amplitude": ("v_amp = -1", ["&census: v_amp = -1", "[0, 1e6]"]),
     "tolerance": ("tolerance = 0", ["&census: tolerance = 0", "(0, 1)"]),
     "mirror": ("mirror = 'flip'", ["mirror = 'flip' is not one of 'merge', 'separate'"]),
+    "no exponents": ("exponents = 0", ["&census: exponents = 0 is outside [1, 2n = 30]"]),
+    "more exponents than 2n": ("exponents = 31",
+                               ["&census: exponents = 31 is outside [1, 2n = 30]"]),
     "misspelt key": ("sample = 5", ["unknown key 'sample'", "did you mean 'samples'"]),
 }
 
@@ -103,6 +107,51 @@ def test_census_along_a_sweep(impactchain_exe, tmp_path):
         assert "amplitude" not in f["params"].attrs
 
 
+SMALL = ("&chain n = 4, amplitude = 1.0, omega = 0.9, damping = 0.05, restitution = 0.7 /\n"
+         "&run transient = 300, cycles = 200, max_period = 8 /\n")
+
+
+def test_an_ensemble_of_spectra(impactchain_exe, tmp_path):
+    """exponents = 2n on a chain of four: per sample its 8 exponents, descending, the first
+    lambda1 bit for bit, with their standard errors; per attractor the mean over its samples
+    and the standard deviation between them (n - 1), both on the `exponent` dimension; the
+    key in the file's resolved namelist. The default census has one exponent per sample and
+    the same datasets as before besides."""
+    text = (SMALL + "&census samples = 12, seed = 3, x_amp = 0.3, v_amp = 1.0, exponents = 8 /\n"
+            "&output file = 'spectra.h5' /\n")
+    run_namelist(impactchain_exe, text, tmp_path)
+    ds = xr.open_dataset(tmp_path / "spectra.h5", engine="h5netcdf", group="census")
+    assert ds.sample_exponents.dims == ("point", "sample", "exponent")
+    assert ds.sample_exponents.shape == (1, 12, 8)
+    assert ds.sample_exponents_stderr.dims == ("point", "sample", "exponent")
+    assert ds.attractor_exponents.dims == ds.attractor_exponents_spread.dims == \
+        ("attractor", "exponent")
+    assert list(ds.exponent.values) == list(range(1, 9))
+    assert ds.sample_exponents.attrs["model_units"] == "bits per drive cycle"
+    spectra = ds.sample_exponents.values
+    np.testing.assert_array_equal(spectra[..., 0], ds.lambda1.values)
+    assert (np.diff(spectra, axis=2) <= 0).all()
+    assert (ds.sample_exponents_stderr.values >= 0).all()
+    ids = ds.sample_attractor.values[0]
+    for a in range(ds.sizes["attractor"]):
+        members = spectra[0][ids == a]
+        np.testing.assert_allclose(ds.attractor_exponents.values[a], members.mean(axis=0),
+                                   rtol=1e-13, atol=1e-14)
+        spread = members.std(axis=0, ddof=1) if len(members) > 1 else np.zeros(8)
+        np.testing.assert_allclose(ds.attractor_exponents_spread.values[a], spread,
+                                   rtol=1e-12, atol=1e-14)
+    with h5py.File(tmp_path / "spectra.h5") as f:
+        assert "exponents = 8" in f.attrs["resolved_namelist"]
+    # the default: one exponent, and the key left out of the resolved namelist
+    run_namelist(impactchain_exe, text.replace(", exponents = 8", "").replace(
+        "spectra.h5", "one.h5"), tmp_path, "one.nml")
+    with h5py.File(tmp_path / "one.h5") as f:
+        assert f["census/sample_exponents"].shape == (1, 12, 1)
+        np.testing.assert_array_equal(f["census/sample_exponents"][..., 0],
+                                      f["census/lambda1"][()])
+        assert "exponents" not in f.attrs["resolved_namelist"]
+
+
 def assert_same_census(a: Path, b: Path) -> None:
     with h5py.File(a) as fa, h5py.File(b) as fb:
         assert sorted(fa["census"]) == sorted(fb["census"])
@@ -165,6 +214,10 @@ SWEEP = ("&chain n = 15, amplitude = 2.2, omega = 1.5, damping = 0.05, restituti
          "&sweep parameter = 'amplitude', start = 2.2, stop = 2.3, step = 0.1 /\n"
          "&output file = '{out}' /\n")
 
+ENSEMBLE = (SMALL + "&census samples = 11, seed = 5, x_amp = 0.3, v_amp = 1.0, exponents = 8 /\n"
+            "&sweep parameter = 'amplitude', start = 1.0, stop = 1.1, step = 0.1 /\n"
+            "&output file = '{out}' /\n")
+
 PLANE = ("&chain n = 15, amplitude = 2.2, omega = 1.5, damping = 0.05, restitution = 0.7 /\n"
          "&initial kind = 'explicit', x0 = 15*0.02, v0 = 15*0.1 /\n"
          "&run transient = 300, cycles = 32, max_period = 8 /\n"
@@ -182,13 +235,14 @@ def run_mpi(exe: Path, tmp_path: Path, text: str, name: str, ranks: int = 2,
     return result
 
 
-@pytest.mark.parametrize("case", ["sweep", "plane"])
+@pytest.mark.parametrize("case", ["sweep", "plane", "ensemble"])
 def test_ranks_give_the_threaded_census(impactchain_exe, mpi_exe, tmp_path, case):
-    """11 samples at each of 2 points (tasks split unevenly over 2 ranks), or a 3 x 3 plane:
-    the MPI driver's /census equals the threaded driver's bit for bit."""
+    """11 samples at each of 2 points (tasks split unevenly over 2 ranks), or a 3 x 3 plane,
+    or full spectra (exponents = 2n = 8) of 11 samples at 2 points of a chain of four: the
+    MPI driver's /census equals the threaded driver's bit for bit."""
     if mpi_exe is None:
         pytest.skip("mpifort is not installed: the MPI comparison needs openmpi")
-    text = SWEEP if case == "sweep" else PLANE
+    text = {"sweep": SWEEP, "plane": PLANE, "ensemble": ENSEMBLE}[case]
     run_threads(impactchain_exe, tmp_path, text.format(out="one.h5"), 2, "one.nml")
     result = run_mpi(mpi_exe, tmp_path, text.format(out="mpi.h5"), "mpi.nml")
     assert "impactchain-mpi: wrote mpi.h5" in result.stdout
@@ -196,7 +250,10 @@ def test_ranks_give_the_threaded_census(impactchain_exe, mpi_exe, tmp_path, case
     assert_same_census(tmp_path / "one.h5", tmp_path / "mpi.h5")
     with h5py.File(tmp_path / "mpi.h5") as f:
         assert f.attrs["complete"] == 1
-        assert f["census/x0"].shape == ((2, 11, 15) if case == "sweep" else (1, 9, 15))
+        shapes = {"sweep": (2, 11, 15), "plane": (1, 9, 15), "ensemble": (2, 11, 4)}
+        assert f["census/x0"].shape == shapes[case]
+        if case == "ensemble":
+            assert f["census/sample_exponents"].shape == (2, 11, 8)
     assert not (tmp_path / "mpi.h5.ckpt").exists()
 
 

@@ -161,6 +161,8 @@ def test_a_census_is_netcdf(impactchain_exe, tmp_path, sweep):
     assert census["x0"].dims == ("point", "sample", "oscillator")
     assert census["x0"].shape == (2 if sweep else 1, 4, 5)
     assert census["attractor_x"].dims == ("attractor", "oscillator")
+    assert census["sample_exponents"].dims == ("point", "sample", "exponent")
+    assert census["attractor_exponents"].dims == ("attractor", "exponent")
     assert ("omega" in groups["params"].attrs) is not sweep
 
 
