@@ -89,15 +89,20 @@ def _output_options(parser: argparse.ArgumentParser, output_help: str) -> None:
                              f"(default: {DEFAULT_DPI})")
 
 
-def _site_list(text: str) -> list[int]:
+def _one_based_list(text: str, what: str, example: str) -> list[int]:
+    """A comma-separated list of 1-based indices (`what`: their name, plural)."""
     try:
-        sites = [int(item) for item in text.split(",") if item.strip()]
+        indices = [int(item) for item in text.split(",") if item.strip()]
     except ValueError:
         raise argparse.ArgumentTypeError(f"{text!r} is not a comma-separated list of "
-                                         "sites, e.g. 1,3") from None
-    if not sites or min(sites) < 1:
-        raise argparse.ArgumentTypeError(f"{text!r}: sites are 1-based integers")
-    return sites
+                                         f"{what}, e.g. {example}") from None
+    if not indices or min(indices) < 1:
+        raise argparse.ArgumentTypeError(f"{text!r}: {what} are 1-based integers")
+    return indices
+
+
+def _site_list(text: str) -> list[int]:
+    return _one_based_list(text, "sites", "1,3")
 
 
 def _range(text: str) -> tuple[float, float]:
@@ -216,14 +221,7 @@ def _clv_angles_options(parser: argparse.ArgumentParser) -> None:
 
 
 def _index_list(text: str) -> list[int]:
-    try:
-        indices = [int(item) for item in text.split(",") if item.strip()]
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"{text!r} is not a comma-separated list of "
-                                         "exponent indices, e.g. 1,2") from None
-    if not indices or min(indices) < 1:
-        raise argparse.ArgumentTypeError(f"{text!r}: exponent indices are 1-based integers")
-    return indices
+    return _one_based_list(text, "exponent indices", "1,2")
 
 
 def _finite_time_options(parser: argparse.ArgumentParser) -> None:

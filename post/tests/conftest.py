@@ -14,6 +14,8 @@ those of the strobe record.
 from __future__ import annotations
 
 import math
+import shutil
+import subprocess
 from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
@@ -24,6 +26,22 @@ import numpy as np
 import pytest
 
 matplotlib.use("Agg")
+
+ROOT = Path(__file__).resolve().parents[2]
+FPM = ROOT / ".venv" / "bin" / "fpm"
+
+
+@pytest.fixture(scope="session")
+def simulator() -> Path:
+    """The simulator built with the release profile (skipped when fpm is not there)."""
+    if not FPM.exists() or shutil.which("gfortran") is None:
+        pytest.skip("the simulator cannot be built here (no fpm or gfortran)")
+    out = subprocess.run([str(FPM), "run", "--profile", "release", "--runner", "echo"],
+                         cwd=ROOT, capture_output=True, text=True, check=True)
+    path = ROOT / out.stdout.strip().splitlines()[-1]
+    assert path.exists(), out.stdout + out.stderr
+    return path
+
 
 PERIODS = (1, 2, 4, 0)
 """Period of oscillator i is PERIODS[(i - 1) % 4] in the synthetic strobe record."""

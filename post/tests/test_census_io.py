@@ -14,7 +14,6 @@ attached to every dataset, each with ``long_name``, ``units`` and (for the reduc
 from __future__ import annotations
 
 import math
-import shutil
 import subprocess
 from collections.abc import Callable, Sequence
 from pathlib import Path
@@ -34,9 +33,6 @@ from impactchain import figures
 from impactchain.cli import main
 from impactchain.io import (ATTRACTOR_KINDS, Census, SchemaError, period_pattern, read_census,
                             read_run)
-
-ROOT = Path(__file__).resolve().parents[2]
-FPM = ROOT / ".venv" / "bin" / "fpm"
 
 N = 4
 """Oscillators of the synthetic census."""
@@ -556,18 +552,6 @@ def test_cli_commands(make_census: MakeCensus, tmp_path: Path,
 
 
 # ---------------------------------------------------------------- censuses by the simulator
-
-
-@pytest.fixture(scope="module")
-def simulator() -> Path:
-    """The simulator built with the release profile (skipped when fpm is not there)."""
-    if not FPM.exists() or shutil.which("gfortran") is None:
-        pytest.skip("the simulator cannot be built here (no fpm or gfortran)")
-    out = subprocess.run([str(FPM), "run", "--profile", "release", "--runner", "echo"],
-                         cwd=ROOT, capture_output=True, text=True, check=True)
-    path = ROOT / out.stdout.strip().splitlines()[-1]
-    assert path.exists(), out.stdout + out.stderr
-    return path
 
 
 CHAIN = ("&chain n = 15, amplitude = 2.2, omega = 1.5, damping = 0.05, restitution = 0.7 /\n"

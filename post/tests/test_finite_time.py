@@ -16,7 +16,6 @@ from __future__ import annotations
 import math
 import os
 import re
-import shutil
 import subprocess
 import sys
 from collections.abc import Callable, Sequence
@@ -36,9 +35,7 @@ from impactchain import figures
 from impactchain.cli import main
 from impactchain.io import FILE_UNITS, FiniteTime, SchemaError, read_run
 
-ROOT = Path(__file__).resolve().parents[2]
 DATA = Path(__file__).resolve().parent / "data"
-FPM = ROOT / ".venv" / "bin" / "fpm"
 
 N = 2
 """Oscillators of the synthetic run: k = 2n = 4 exponents."""
@@ -438,18 +435,6 @@ def test_cli_as_a_module(make_ft: MakeFiniteTime, tmp_path: Path) -> None:
 
 
 # ------------------------------------------------------------------ a run by the simulator
-
-
-@pytest.fixture(scope="module")
-def simulator() -> Path:
-    """The simulator built with the release profile (skipped when fpm is not there)."""
-    if not FPM.exists() or shutil.which("gfortran") is None:
-        pytest.skip("the simulator cannot be built here (no fpm or gfortran)")
-    out = subprocess.run([str(FPM), "run", "--profile", "release", "--runner", "echo"],
-                         cwd=ROOT, capture_output=True, text=True, check=True)
-    path = ROOT / out.stdout.strip().splitlines()[-1]
-    assert path.exists(), out.stdout + out.stderr
-    return path
 
 
 def test_a_run_by_the_simulator(simulator: Path, tmp_path: Path) -> None:
