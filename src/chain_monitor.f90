@@ -16,12 +16,14 @@ module chain_monitor
     implicit none
     private
     public :: monitor_t, signal_monitor_t, saving_monitor_t, checkpoint_every
-    public :: stage_transient, stage_records, stage_points, stage_samples, stage_name
+    public :: stage_transient, stage_records, stage_points, stage_samples, stage_backward
+    public :: stage_name
 
     integer, parameter :: stage_transient = 1 !! drive cycles of the transient (nothing recorded)
     integer, parameter :: stage_records = 2   !! strobe records of a run
     integer, parameter :: stage_points = 3    !! finished points of a sweep
     integer, parameter :: stage_samples = 4   !! finished samples of a census (all its points)
+    integer, parameter :: stage_backward = 5  !! records of the covariant vectors' backward pass
 
     type, abstract :: monitor_t
     contains
@@ -104,7 +106,8 @@ contains
         keep_going = now < monitor%deadline
     end function signal_keep_going
 
-    !> What a stage counts, for progress lines: 'transient cycle', 'cycle', 'point', 'sample'.
+    !> What a stage counts, for progress lines: 'transient cycle', 'cycle', 'point', 'sample',
+    !> 'record (backward pass)'.
     pure function stage_name(stage) result(name)
         integer, intent(in) :: stage
         character(len=:), allocatable :: name
@@ -116,6 +119,8 @@ contains
             name = 'cycle'
         case (stage_samples)
             name = 'sample'
+        case (stage_backward)
+            name = 'record (backward pass)'
         case default
             name = 'point'
         end select

@@ -21,7 +21,7 @@ module chain_record
     use chain_period, only: detect_period
     use chain_section, only: section_target, advance_to_point, advance_cycles
     use chain_floquet, only: floquet_result
-    use chain_monitor, only: monitor_t, stage_records
+    use chain_monitor, only: monitor_t, stage_records, stage_backward
     use chain_clv, only: clv_pass_t, clv_rows_t, clv_result_t, clv_start, clv_forward, &
                          clv_backward_begin, clv_backward_rows, clv_result, clv_close
     implicit none
@@ -266,7 +266,7 @@ contains
         end if
         call summarise_run(spec, chain, st, res)
         if (spec%lyapunov .and. spec%covariant .and. res%complete) &
-            call covariant_pass(clv, st%acc, sink, res, err)
+            call covariant_pass(clv, st%acc, sink, res, err, monitor)
         call clv_close(clv)
         if (allocated(err)) return
         if (present(state)) call move_state(st, state)
@@ -438,13 +438,15 @@ contains
 
     !> The backward pass of a complete run with covariant vectors: per-record numbers to the
     !> sink, block by block, the rest to res%clv. The unstable subspace is spanned by as many
-    !> leading vectors as the run's QR exponents have positive ones.
-    subroutine covariant_pass(clv, acc, sink, res, err)
+    !> leading vectors as the run's QR exponents have positive ones. `monitor` is told the
+    !> records done after each block, and may stop the pass (an error: nothing to keep).
+    subroutine covariant_pass(clv, acc, sink, res, err, monitor)
         type(clv_pass_t), intent(inout) :: clv
         type(lyapunov_acc_t), intent(in) :: acc
         class(record_sink_t), intent(inout) :: sink
         type(record_result_t), intent(inout) :: res
         type(error_t), allocatable, intent(out) :: err
+        class(monitor_t), intent(inout), optional :: monitor
         type(clv_rows_t) :: rows
 
         call clv_backward_begin(clv, count(acc%total > 0), err)
@@ -455,6 +457,15 @@ contains
             if (rows%count == 0) exit
             call sink%put_clv(rows, err)
             if (allocated(err)) return
+            if (.not. present(monitor)) cycle
+            ! (the records are done from the last back to the first)
+            if (.not. monitor%keep_going(stage_backward, rows%total - rows%first + 1, &
+                                         rows%total)) then
+                call set_error(err, "run stopped during the backward pass of the covariant "// &
+                               "vectors, after all its records: nothing was written (such a "// &
+                               "run cannot be continued); run it again from the start")
+                return
+            end if
         end do
         res%has_clv = .true.
         res%clv = clv_result(clv)

@@ -26,6 +26,7 @@ module test_clv
     use test_engine, only: make_chain
     use test_chains, only: model_of, flow_of
     use chain_blocking, only: blocking_t, blocking_start, blocking_add, blocking_error
+    use chain_monitor, only: monitor_t, stage_backward
     use testing, only: tally_t, check, check_close
     implicit none
     private
@@ -33,6 +34,16 @@ module test_clv
 
     !> Angles between vectors that must be parallel (the issue's bound).
     real(wp), parameter :: angle_tol = 1.0e-8_wp
+
+    !> Notes what the backward pass tells it; with `stop_there`, asks it to stop.
+    type, extends(monitor_t) :: backward_monitor_t
+        logical :: stop_there = .false.
+        integer :: calls = 0
+        integer(i8) :: last_done = 0, last_total = 0
+        logical :: rising = .true.
+    contains
+        procedure :: keep_going => backward_keep_going
+    end type backward_monitor_t
 
 contains
 
@@ -43,6 +54,7 @@ contains
         call chaotic_run(t)
         call no_impacts(t)
         call leading_vectors(t)
+        call backward_progress(t)
         call interval_factor(t)
         call folded_factors(t)
         call scratch_round_trip(t)
@@ -284,6 +296,45 @@ contains
         call check(t, maxval(abs(full_sink%clv_ipr(:3, :) - sink%clv_ipr)) < 1.0e-8_wp, &
                    'clv leading: and have the same participation at every record')
     end subroutine leading_vectors
+
+    !> The backward pass tells a monitor the records it has done, up to all of them; asked to
+    !> stop, it ends with an error and no vectors.
+    subroutine backward_progress(t)
+        type(tally_t), intent(inout) :: t
+        type(chain_t) :: chain, copy
+        type(error_t), allocatable :: err
+        type(memory_sink_t) :: sink
+        type(record_result_t) :: res
+        type(backward_monitor_t) :: watch
+
+        call make_chain(chain, 3, 0.2_wp, 1.5_wp, 0.05_wp, 0.7_wp, .true., 0.2_wp, 0.1_wp, err)
+        copy = chain
+        sink%keep_strobe = .false.
+        call record_cycles(clv_spec(0_i8, 600_i8, 0, 100, 1), chain, sink, res, err, watch)
+        call check(t, .not. allocated(err) .and. res%has_clv .and. watch%calls >= 1 .and. &
+                   watch%rising .and. watch%last_done == 500 .and. watch%last_total == 500, &
+                   'clv backward pass: the monitor is told its records, up to all 500')
+        watch = backward_monitor_t(stop_there=.true.)
+        call record_cycles(clv_spec(0_i8, 600_i8, 0, 100, 1), copy, sink, res, err, watch)
+        call check(t, allocated(err) .and. .not. res%has_clv, &
+                   'clv backward pass: a stop asked there is an error, without vectors')
+        if (allocated(err)) call check(t, index(err%message, 'backward pass') > 0, &
+                                       'clv backward pass: the error says where it stopped')
+    end subroutine backward_progress
+
+    logical function backward_keep_going(monitor, stage, done, total) result(keep_going)
+        class(backward_monitor_t), intent(inout) :: monitor
+        integer, intent(in) :: stage
+        integer(i8), intent(in) :: done, total
+
+        keep_going = .true.
+        if (stage /= stage_backward) return
+        monitor%calls = monitor%calls + 1
+        monitor%rising = monitor%rising .and. done > monitor%last_done .and. done <= total
+        monitor%last_done = done
+        monitor%last_total = total
+        keep_going = .not. monitor%stop_there
+    end function backward_keep_going
 
     !> The R factor of a QR step over several cycles of a chain with many inelastic impacts
     !> (n = 16, K = 0.7: the engine re-orthonormalises the frame in between, 7.2) satisfies
