@@ -242,8 +242,44 @@ def report(output: Path) -> None:
               f"{r['bonds_colliding']:5d}/{c.n + 1:<5d}"
               f"{r['bond_rate_min']:6.2f}/{r['bond_rate_middle']:5.2f}/{r['bond_rate_mean']:5.2f} "
               f"{ky:>18s}")
+    runs = [read_run(RUNS / f"{c.name}.h5") for c in present]
+    compare_to_reference(runs, present)
     (HERE / "results.json").write_text(json.dumps(rows, indent=1) + "\n")
-    figure([read_run(RUNS / f"{c.name}.h5") for c in present], present, rows, output)
+    figure(runs, present, rows, output)
+
+
+#: the ranges of i / N over which each length is compared with the reference N = 256
+RANGES = ((0.03, 0.25), (0.25, 1.0))
+REFERENCE_N = 256
+
+
+def compare_to_reference(runs: list, cases: list[Case]) -> None:
+    """Each spectrum against its family's N = 256, interpolated at the same i / N: the mean
+    difference over each range of RANGES (bits per cycle), the largest, and the mean difference
+    in units of the combined standard error, sqrt(se**2 + se_ref**2), averaged over the range."""
+    print(f"\nagainst N = {REFERENCE_N} of the same family, at the same i/N:")
+    print(f"{'case':26s} {'range':>12s} {'mean diff':>10s} {'largest':>9s} {'errors':>7s}")
+    for family in sorted({c.family for c in cases}):
+        pairs = [(run, c) for run, c in zip(runs, cases) if c.family == family]
+        ref = [run for run, c in pairs if c.n == REFERENCE_N]
+        if not ref:
+            continue
+        ref_lam, ref_err = ref[0].lyapunov.exponents, ref[0].lyapunov.stderr
+        ref_x = np.arange(1, ref_lam.size + 1) / REFERENCE_N
+        for run, case in pairs:
+            if case.n == REFERENCE_N:
+                continue
+            lam, err = run.lyapunov.exponents, run.lyapunov.stderr
+            x = np.arange(1, lam.size + 1) / case.n
+            for low, high in RANGES:
+                inside = (x >= low) & (x <= high) & (x <= ref_x[-1])
+                if np.count_nonzero(inside) < 2:
+                    continue
+                diff = lam[inside] - np.interp(x[inside], ref_x, ref_lam)
+                combined = np.hypot(err[inside], np.interp(x[inside], ref_x, ref_err))
+                print(f"{case.name:26s} [{low:.2f}, {high:.2f}] {diff.mean():+10.4f} "
+                      f"{diff[np.argmax(np.abs(diff))]:+9.4f} "
+                      f"{diff.mean() / combined.mean():+7.1f}")
 
 
 def figure(runs: list, cases: list[Case], rows: list[dict], output: Path) -> None:
