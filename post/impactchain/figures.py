@@ -1284,9 +1284,10 @@ def finite_time(
     exponent ``/lyapunov/exponents`` as a dashed line in a band of +-1 stored standard error
     ``/lyapunov/stderr`` (section 7.4).
 
-    ``exponents``: 1-based indices (the frame's columns: the order of ``/lyapunov/exponents``
-    unless two exponents cross), one panel each, sharing the density axis; default the
-    largest. Several runs (the same chain with windows of 10, 100 and 1000 cycles) overlay in
+    ``exponents``: 1-based indices in the order of ``/lyapunov/exponents`` (each the frame
+    column whose windows' mean is that exponent, :attr:`FiniteTime.descending`: two nearly
+    equal exponents may have crossed columns), one panel each, sharing the density axis;
+    default the largest. Several runs (the same chain with windows of 10, 100 and 1000 cycles) overlay in
     colours, each histogram over its own range; they narrow as ``W`` grows. A run's legend
     entry gives its exponent and standard error, and on a second line ``W``, the number
     ``N`` of windows and ``sd/sqrt(N)`` of their exponents, an estimate of the standard error
@@ -1327,7 +1328,7 @@ def finite_time(
     for index, (axis, j) in enumerate(zip(axes, chosen)):
         handles = []
         for i, (run, ft, colour, name) in enumerate(zip(runs, windows, colours, names)):
-            values = ft.exponents[:, j - 1]
+            values = ft.descending[:, j - 1]
             finite = values[np.isfinite(values)]
             if finite.size == 0:
                 raise FigureError(f"{run.path}: exponent {j} is -infinity in every window "

@@ -581,7 +581,8 @@ class FiniteTime:
     Exponent ``j`` (0-based here, ``j + 1`` in the file's ``exponent`` coordinate) is column
     ``j`` of the frame: the order of ``/lyapunov/exponents`` unless two exponents cross within
     their errors; ``-inf`` in the windows after its direction collapsed (section 7.8). A run
-    stopped early holds the windows it finished.
+    stopped early holds the windows it finished. :attr:`descending` puts the columns in the
+    order of ``/lyapunov/exponents`` whatever happened.
     """
 
     window: int  # recorded cycles per window
@@ -597,6 +598,17 @@ class FiniteTime:
     def k(self) -> int:
         """Number of exponents (frame columns)."""
         return int(self.exponents.shape[1])
+
+    @property
+    def descending(self) -> np.ndarray:
+        """(w, k): the columns reordered so that their means over the windows descend, the
+        order of ``/lyapunov/exponents`` (which sorts the columns' means over every recorded
+        cycle: the same means when the windows cover the run); ``-inf`` columns last, ties
+        in column order."""
+        with np.errstate(invalid="ignore"):
+            means = self.exponents.mean(axis=0) if self.n_windows else np.zeros(self.k)
+        means = np.where(np.isnan(means), -np.inf, means)
+        return self.exponents[:, np.argsort(-means, kind="stable")]
 
 
 @dataclass(frozen=True, eq=False)
