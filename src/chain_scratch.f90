@@ -7,7 +7,10 @@
 !> deletes it when it is closed or the program ends). Records go through one buffer of whole
 !> records, at most `buffer_bytes` (at least one record): appends fill it and are written to
 !> the file as one block; a read loads the block of records that holds the one asked for, so
-!> reading backwards costs one file read per block, not per record.
+!> reading backwards costs one file read per block, not per record. The records still in the
+!> buffer when reading begins (the last block) are read from there, and written to the file
+!> only if another block is asked for: a file whose records fit in one buffer is never
+!> written, and one read backwards never reads back the block it wrote last.
 !> Infrastructure, no model section of its own.
 module chain_scratch
     use chain_kinds, only: wp, i8
@@ -18,7 +21,7 @@ module chain_scratch
     public :: scratch_block
 
     !> Most bytes the buffer of a scratch file holds (more only for a single record).
-    integer(i8), parameter :: buffer_bytes = 4_i8*1024*1024
+    integer(i8), parameter :: buffer_bytes = 1_i8*1024*1024
 
     type :: scratch_records_t
         integer :: unit = -1              !! open unit, -1 when closed
@@ -27,7 +30,8 @@ module chain_scratch
         real(wp), allocatable :: buffer(:, :) !! buffer(width, block): whole records
         integer(i8) :: first = 1          !! the record in buffer(:, 1)
         integer :: held = 0               !! records in the buffer
-        logical :: reading = .false.      !! the buffer holds records read back
+        logical :: reading = .false.      !! appending is over
+        logical :: unwritten = .false.    !! the records in the buffer are not in the file
     end type scratch_records_t
 
 contains
@@ -73,14 +77,16 @@ contains
         if (file%held == size(file%buffer, 2)) then
             call write_buffer(file, err)
             if (allocated(err)) return
+            file%first = file%first + file%held
+            file%held = 0
         end if
         file%held = file%held + 1
         file%buffer(:, file%held) = values
         file%count = file%count + 1
+        file%unwritten = .true.
     end subroutine scratch_append
 
-    !> Record j (1 .. count) into `values` (an array of any rank, `width` reals). The first
-    !> read writes out what is still buffered.
+    !> Record j (1 .. count) into `values` (an array of any rank, `width` reals).
     subroutine scratch_read(file, j, values, err)
         type(scratch_records_t), intent(inout) :: file
         integer(i8), intent(in) :: j
@@ -94,12 +100,13 @@ contains
             call set_error(err, "scratch file: no such record")
             return
         end if
-        if (.not. file%reading) then
-            call write_buffer(file, err)
-            if (allocated(err)) return
-            file%reading = .true.
-        end if
+        file%reading = .true.
         if (j < file%first .or. j >= file%first + file%held) then
+            ! (the last block, kept since the appends, goes to the file before it is replaced)
+            if (file%unwritten) then
+                call write_buffer(file, err)
+                if (allocated(err)) return
+            end if
             block = size(file%buffer, 2)
             file%first = ((j - 1)/block)*block + 1
             file%held = int(min(block, file%count - file%first + 1))
@@ -125,7 +132,8 @@ contains
         file%held = 0
     end subroutine scratch_close
 
-    !> The buffered records to the file, after those written before.
+    !> The buffered records to the file, at their place (block-aligned: after those written
+    !> before).
     subroutine write_buffer(file, err)
         type(scratch_records_t), intent(inout) :: file
         type(error_t), allocatable, intent(out) :: err
@@ -139,8 +147,7 @@ contains
             call set_error(err, "scratch file: write failed (disk full?): "//trim(msg))
             return
         end if
-        file%first = file%first + file%held
-        file%held = 0
+        file%unwritten = .false.
     end subroutine write_buffer
 
     !> The file position (bytes from 1) of record j.

@@ -358,14 +358,16 @@ contains
                    'clv fold: unit columns')
     end subroutine folded_factors
 
-    !> Records spilled over several blocks come back bit for bit, read backwards and at random.
+    !> Records spilled over several blocks come back bit for bit, read backwards and at random
+    !> (the last block from the buffer, until another is read); records that fit in the
+    !> buffer never reach the file.
     subroutine scratch_round_trip(t)
         type(tally_t), intent(inout) :: t
         type(scratch_records_t) :: file
         type(error_t), allocatable :: err
-        integer, parameter :: width = 200000
+        integer, parameter :: width = 20000
         real(wp), allocatable :: values(:)
-        integer(i8) :: j, records
+        integer(i8) :: j, records, bytes
         integer :: i
         logical :: same
 
@@ -396,6 +398,23 @@ contains
         call check(t, same, 'clv scratch: and in any order')
         call scratch_append(file, values, err)
         call check(t, allocated(err), 'clv scratch: no append after reading')
+        call scratch_close(file)
+        records = scratch_block(width)
+        call scratch_open(file, width, err)
+        do j = 1, records
+            if (allocated(err)) exit
+            values = [(real(j, wp)*1.0e6_wp + i, i=1, width)]
+            call scratch_append(file, values, err)
+        end do
+        same = .not. allocated(err)
+        do j = records, 1, -1
+            if (.not. same) exit
+            call scratch_read(file, j, values, err)
+            same = .not. allocated(err) .and. values(1) == real(j, wp)*1.0e6_wp + 1
+        end do
+        inquire (unit=file%unit, size=bytes)
+        call check(t, same .and. bytes == 0, 'clv scratch: one block read back from the '// &
+                   'buffer, never written')
         call scratch_close(file)
     end subroutine scratch_round_trip
 
