@@ -20,7 +20,7 @@ module test_clv
     use chain_floquet, only: poincare_jacobian
     use chain_orbit, only: orbit_t, find_orbit
     use chain_lapack, only: general_eigenvectors, qr_orthonormalise, qr_workspace_t, qr_last_r
-    use chain_clv, only: fold_upper, initial_c, unstable_angle, site_weights
+    use chain_clv, only: fold_upper, initial_c, unstable_angle, site_weights, vector_numbers
     use chain_scratch, only: scratch_records_t, scratch_open, scratch_append, scratch_read, &
                              scratch_close, scratch_block
     use test_engine, only: make_chain
@@ -47,6 +47,8 @@ contains
         call folded_factors(t)
         call scratch_round_trip(t)
         call angle_by_projection(t)
+        call numbers_by_vector(t, 7)
+        call numbers_by_vector(t, 8)
         call blocking_plateau(t, 0.0_wp)
         call blocking_plateau(t, 0.9_wp)
     end subroutine run_clv_tests
@@ -450,6 +452,32 @@ contains
         call check_close(t, sum(site_weights(v(:, 1))), 1.0_wp, 'clv weights sum to 1', &
                          10*epsilon(1.0_wp))
     end subroutine angle_by_projection
+
+    !> The numbers of k vectors at once (columns summed four at a time) are those of one vector
+    !> at a time, bit for bit: each normalised, its site weights and their sum of squares.
+    subroutine numbers_by_vector(t, k)
+        type(tally_t), intent(inout) :: t
+        integer, intent(in) :: k
+        integer, parameter :: n = 5, m = 3
+        real(wp) :: v(2*n, k), u(2*n), w(n), ipr(k), weight(n, m)
+        logical :: same
+        integer :: i, l
+
+        do l = 1, k
+            do i = 1, 2*n
+                v(i, l) = sin(0.9_wp*i*l + 0.3_wp*l)*exp(0.1_wp*i)
+            end do
+        end do
+        u = v(:, k)
+        call vector_numbers(v, ipr, weight)
+        same = all(v(:, k) == u/sqrt(sum(u**2)))
+        do l = 1, k
+            w = site_weights(v(:, l))
+            same = same .and. ipr(l) == sum(w**2)
+            if (l <= m) same = same .and. all(weight(:, l) == w)
+        end do
+        call check(t, same, 'clv numbers: of '//digit(k)//' vectors at once as of each alone')
+    end subroutine numbers_by_vector
 
     !> The standard error by blocking of the mean of an AR(1) series x(i) = phi x(i-1) + e(i)
     !> (unit Gaussian innovations, 2**16 values) is that of its closed form,
