@@ -14,7 +14,7 @@
 module chain_clv
     use chain_kinds, only: wp, i8
     use chain_error, only: error_t, set_error
-    use chain_lapack, only: solve_upper, times_upper
+    use chain_lapack, only: solve_upper_triangle, times_upper
     use chain_scratch, only: scratch_records_t, scratch_open, scratch_append, scratch_read, &
                              scratch_close
     use chain_blocking, only: blocking_t, blocking_start, blocking_add, blocking_error
@@ -92,6 +92,8 @@ contains
         call scratch_open(pass%frames, 2*n*k, err)
         if (allocated(err)) return
         allocate (pass%record(factor_width(k)), pass%r_s(k, k), pass%r_log(k), pass%v(2*n, k))
+        ! (step_back fills only the upper triangle)
+        pass%r_s = 0
     end subroutine clv_start
 
     !> Bytes of the scratch files of such a run (docs/model.md section 14.3).
@@ -219,7 +221,6 @@ contains
         if (allocated(err)) return
         cycle = nint(pass%record(1), i8)
         pass%r_log = pass%record(2:pass%k + 1)
-        pass%r_s = 0
         p = pass%k + 1
         do i = 1, pass%k
             pass%r_s(1:i, i) = pass%record(p + 1:p + i)
@@ -238,12 +239,12 @@ contains
     !> vector (minus ln of its column's length before normalisation).
     subroutine backward_step(r_s, r_log, c, growth)
         real(wp), intent(in) :: r_s(:, :), r_log(:)
-        real(wp), intent(inout) :: c(:, :)
+        real(wp), intent(inout), contiguous :: c(:, :)
         real(wp), intent(out) :: growth(:)
         real(wp) :: low, length(size(c, 2)), scale(size(c, 1))
         integer :: j
 
-        call solve_upper(r_s, c)
+        call solve_upper_triangle(r_s, c)
         ! R^-1 = exp(-low) diag(exp(-(r_log - low))) r_s^-1, each factor <= 1
         low = minval(r_log)
         scale = exp(low - r_log)

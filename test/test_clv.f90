@@ -19,7 +19,8 @@ module test_clv
     use chain_event_log, only: event_log_t, event_log_init
     use chain_floquet, only: poincare_jacobian
     use chain_orbit, only: orbit_t, find_orbit
-    use chain_lapack, only: general_eigenvectors, qr_orthonormalise, qr_workspace_t, qr_last_r
+    use chain_lapack, only: general_eigenvectors, qr_orthonormalise, qr_workspace_t, qr_last_r, &
+                            solve_upper_triangle
     use chain_clv, only: fold_upper, initial_c, unstable_angle, site_weights, vector_numbers
     use chain_scratch, only: scratch_records_t, scratch_open, scratch_append, scratch_read, &
                              scratch_close, scratch_block
@@ -49,6 +50,8 @@ contains
         call angle_by_projection(t)
         call numbers_by_vector(t, 7)
         call numbers_by_vector(t, 8)
+        call triangle_solve(t, 7)
+        call triangle_solve(t, 100)
         call blocking_plateau(t, 0.0_wp)
         call blocking_plateau(t, 0.9_wp)
     end subroutine run_clv_tests
@@ -478,6 +481,34 @@ contains
         end do
         call check(t, same, 'clv numbers: of '//digit(k)//' vectors at once as of each alone')
     end subroutine numbers_by_vector
+
+    !> X = R^-1 C for upper triangular R and C (k = 7: plain loops; 100: the library, by blocks
+    !> of columns) is upper triangular and solves R X = C to rounding.
+    subroutine triangle_solve(t, k)
+        type(tally_t), intent(inout) :: t
+        integer, intent(in) :: k
+        real(wp) :: r(k, k), c(k, k), x(k, k), residual
+        integer :: i, j
+
+        r = 0
+        c = 0
+        do j = 1, k
+            do i = 1, j
+                r(i, j) = cos(1.7_wp*i + 0.6_wp*j)
+                c(i, j) = sin(0.8_wp*i - 1.3_wp*j)
+            end do
+            r(j, j) = r(j, j) + 2*sign(1.0_wp, r(j, j))
+        end do
+        x = c
+        call solve_upper_triangle(r, x)
+        residual = 0
+        do j = 1, k
+            residual = max(residual, norm2(matmul(r, x(:, j)) - c(:, j))/norm2(c(:, j)))
+        end do
+        call check(t, residual <= 100*epsilon(1.0_wp) .and. &
+                   all([(all(x(j + 1:, j) == 0), j=1, k)]), &
+                   'clv solve: upper triangular X with R X = C, k = '//digit(k))
+    end subroutine triangle_solve
 
     !> The standard error by blocking of the mean of an AR(1) series x(i) = phi x(i-1) + e(i)
     !> (unit Gaussian innovations, 2**16 values) is that of its closed form,
