@@ -281,24 +281,36 @@ contains
     end subroutine solve_upper_triangle
 
     !> a := a C for the upper triangle C of c (k x k, k the columns of a), by dtrmm, or in
-    !> plain loops for at most `small_triangle` columns.
+    !> plain loops for at most `small_triangle` columns: each entry a(i, j) c(j, j) plus
+    !> a(i, l) c(l, j) for l = 1 .. j - 1 in turn, from a copy of a (faster than a product in
+    !> place, which must run from the last column).
     subroutine times_upper(a, c)
-        real(wp), intent(inout) :: a(:, :)
+        real(wp), intent(inout), contiguous :: a(:, :)
         real(wp), intent(in) :: c(:, :)
-        integer :: j, l
 
         if (size(c, 1) > small_triangle) then
             call dtrmm('R', 'U', 'N', 'N', size(a, 1), size(a, 2), 1.0_wp, c, size(c, 1), a, &
                        size(a, 1))
-            return
+        else
+            call from_copy(a)
         end if
-        ! (from the last column: each new column needs the old columns before it)
-        do j = size(a, 2), 1, -1
-            a(:, j) = a(:, j)*c(j, j)
-            do l = 1, j - 1
-                a(:, j) = a(:, j) + a(:, l)*c(l, j)
+
+    contains
+
+        subroutine from_copy(a)
+            real(wp), intent(inout), contiguous :: a(:, :)
+            real(wp) :: old(size(a, 1), size(a, 2))
+            integer :: j, l
+
+            old = a
+            do j = 1, size(a, 2)
+                a(:, j) = old(:, j)*c(j, j)
+                do l = 1, j - 1
+                    a(:, j) = a(:, j) + old(:, l)*c(l, j)
+                end do
             end do
-        end do
+        end subroutine from_copy
+
     end subroutine times_upper
 
     !> Eigenvalues wr + i wi and right eigenvectors of a general square matrix (a is
