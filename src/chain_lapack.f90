@@ -9,7 +9,8 @@ module chain_lapack
     implicit none
     private
     public :: qr_orthonormalise, qr_workspace_t, general_eigenvalues
-    public :: solve_linear, qr_last_r, solve_upper_triangle, times_upper, general_eigenvectors
+    public :: solve_linear, qr_last_r, qr_copy_r, solve_upper_triangle, times_upper
+    public :: general_eigenvectors
 
     !> Triangular matrices of at most this order are solved and multiplied in plain loops.
     integer, parameter :: small_triangle = 40
@@ -245,6 +246,18 @@ contains
             r(1:j, j) = ws%r(1:j, j)
         end do
     end function qr_last_r
+
+    !> The same R into the upper triangle of r (k x k; below the diagonal r is left as it
+    !> is), without a temporary: a covariant run takes it at every record.
+    pure subroutine qr_copy_r(ws, r)
+        type(qr_workspace_t), intent(in) :: ws
+        real(wp), intent(inout) :: r(:, :)
+        integer :: j
+
+        do j = 1, size(r, 2)
+            r(1:j, j) = ws%r(1:j, j)
+        end do
+    end subroutine qr_copy_r
 
     !> c := R^-1 c for upper triangular R (the upper triangle of r) and c, both k x k (below
     !> the diagonal c is zero, and stays zero, of either sign). By LAPACK's dtrsm on each block
