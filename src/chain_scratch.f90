@@ -110,8 +110,8 @@ contains
             block = size(file%buffer, 2)
             file%first = ((j - 1)/block)*block + 1
             file%held = int(min(block, file%count - file%first + 1))
-            read (file%unit, pos=position(file, file%first), iostat=ios, iomsg=msg) &
-                file%buffer(:, :file%held)
+            call read_reals(file%unit, position(file, file%first), file%buffer, &
+                            file%width*file%held, ios, msg)
             if (ios /= 0) then
                 file%held = 0
                 call set_error(err, "scratch file: read failed: "//trim(msg))
@@ -141,14 +141,39 @@ contains
         integer :: ios
 
         if (file%held == 0) return
-        write (file%unit, pos=position(file, file%first), iostat=ios, iomsg=msg) &
-            file%buffer(:, :file%held)
+        call write_reals(file%unit, position(file, file%first), file%buffer, &
+                         file%width*file%held, ios, msg)
         if (ios /= 0) then
             call set_error(err, "scratch file: write failed (disk full?): "//trim(msg))
             return
         end if
         file%unwritten = .false.
     end subroutine write_buffer
+
+    ! The buffer's first m reals as one array, which the runtime library moves in one
+    ! transfer: a section of the buffer goes column by column, short columns through a buffer
+    ! of gfortran's own (with records of 8 KiB a section's reads took 15 % longer, its
+    ! writes twice as long).
+
+    subroutine write_reals(unit, pos, values, m, ios, msg)
+        integer, intent(in) :: unit, m
+        integer(i8), intent(in) :: pos
+        real(wp), intent(in) :: values(m)
+        integer, intent(out) :: ios
+        character(len=*), intent(inout) :: msg
+
+        write (unit, pos=pos, iostat=ios, iomsg=msg) values
+    end subroutine write_reals
+
+    subroutine read_reals(unit, pos, values, m, ios, msg)
+        integer, intent(in) :: unit, m
+        integer(i8), intent(in) :: pos
+        real(wp), intent(out) :: values(m)
+        integer, intent(out) :: ios
+        character(len=*), intent(inout) :: msg
+
+        read (unit, pos=pos, iostat=ios, iomsg=msg) values
+    end subroutine read_reals
 
     !> The file position (bytes from 1) of record j.
     pure integer(i8) function position(file, j)
