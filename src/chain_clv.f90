@@ -14,9 +14,9 @@
 module chain_clv
     use chain_kinds, only: wp, i8
     use chain_error, only: error_t, set_error
-    use chain_lapack, only: solve_upper_triangle, times_upper
-    use chain_scratch, only: scratch_records_t, scratch_open, scratch_append, scratch_read, &
-                             scratch_close
+    use chain_lapack, only: solve_upper_triangle, upper_product
+    use chain_scratch, only: scratch_records_t, scratch_open, scratch_append, scratch_next, &
+                             scratch_find, scratch_close
     use chain_blocking, only: blocking_t, blocking_start, blocking_add, blocking_error
     use, intrinsic :: ieee_arithmetic, only: ieee_value, ieee_quiet_nan
     implicit none
@@ -67,7 +67,7 @@ module chain_clv
         type(blocking_t) :: blocks                  !! the growths of the kept steps, blocked
         real(wp), allocatable :: vectors(:, :, :)   !! vectors(2n, k, r)
         integer(i8), allocatable :: saved_cycle(:)
-        real(wp), allocatable :: record(:), r_s(:, :), r_log(:), v(:, :) !! work
+        real(wp), allocatable :: r_s(:, :), r_log(:), v(:, :) !! work
     end type clv_pass_t
 
 contains
@@ -91,7 +91,7 @@ contains
         if (allocated(err)) return
         call scratch_open(pass%frames, 2*n*k, err)
         if (allocated(err)) return
-        allocate (pass%record(factor_width(k)), pass%r_s(k, k), pass%r_log(k), pass%v(2*n, k))
+        allocate (pass%r_s(k, k), pass%r_log(k), pass%v(2*n, k))
         ! (step_back fills only the upper triangle)
         pass%r_s = 0
     end subroutine clv_start
@@ -121,21 +121,24 @@ contains
         real(wp), intent(in) :: r_factor(:, :), r_log(:)
         real(wp), intent(in), contiguous :: frame(:, :)
         type(error_t), allocatable, intent(out) :: err
-        integer :: i, p
+        integer :: i, p, at
 
         if (j /= pass%factors%count + 1) then
             call set_error(err, "clv: forward records out of order")
             return
         end if
-        pass%record(1) = real(cycle, wp)
-        pass%record(2:pass%k + 1) = r_log
-        p = pass%k + 1
-        do i = 1, pass%k
-            pass%record(p + 1:p + i) = r_factor(1:i, i)
-            p = p + i
-        end do
-        call scratch_append(pass%factors, pass%record, err)
-        if (allocated(err) .or. j > pass%kept) return
+        call scratch_next(pass%factors, at, err)
+        if (allocated(err)) return
+        associate (record => pass%factors%buffer(:, at))
+            record(1) = real(cycle, wp)
+            record(2:pass%k + 1) = r_log
+            p = pass%k + 1
+            do i = 1, pass%k
+                record(p + 1:p + i) = r_factor(1:i, i)
+                p = p + i
+            end do
+        end associate
+        if (j > pass%kept) return
         call scratch_append(pass%frames, frame, err)
     end subroutine clv_forward
 
@@ -198,10 +201,11 @@ contains
         integer, intent(in) :: i
         type(error_t), allocatable, intent(out) :: err
         integer(i8) :: s
+        integer :: at
 
-        call scratch_read(pass%frames, pass%at, pass%v, err)
+        call scratch_find(pass%frames, pass%at, at, err)
         if (allocated(err)) return
-        call times_upper(pass%v, pass%c)
+        call upper_product(pass%frames%buffer(:, at), pass%c, pass%v)
         call vector_numbers(pass%v, rows%ipr(:, i), rows%site_weight(:, :, i))
         rows%min_angle(i) = unstable_angle(pass%c, pass%unstable)
         s = pass%at - (pass%kept - pass%r)
@@ -215,17 +219,19 @@ contains
         integer(i8), intent(out) :: cycle
         type(error_t), allocatable, intent(out) :: err
         real(wp) :: growth(pass%k)
-        integer :: i, p
+        integer :: i, p, at
 
-        call scratch_read(pass%factors, pass%at, pass%record, err)
+        call scratch_find(pass%factors, pass%at, at, err)
         if (allocated(err)) return
-        cycle = nint(pass%record(1), i8)
-        pass%r_log = pass%record(2:pass%k + 1)
-        p = pass%k + 1
-        do i = 1, pass%k
-            pass%r_s(1:i, i) = pass%record(p + 1:p + i)
-            p = p + i
-        end do
+        associate (record => pass%factors%buffer(:, at))
+            cycle = nint(record(1), i8)
+            pass%r_log = record(2:pass%k + 1)
+            p = pass%k + 1
+            do i = 1, pass%k
+                pass%r_s(1:i, i) = record(p + 1:p + i)
+                p = p + i
+            end do
+        end associate
         call backward_step(pass%r_s, pass%r_log, pass%c, growth)
         if (pass%at <= pass%kept) then
             pass%total = pass%total + growth

@@ -9,7 +9,7 @@ module chain_lapack
     implicit none
     private
     public :: qr_orthonormalise, qr_workspace_t, general_eigenvalues
-    public :: solve_linear, qr_last_r, qr_copy_r, solve_upper_triangle, times_upper
+    public :: solve_linear, qr_last_r, qr_copy_r, solve_upper_triangle, upper_product
     public :: general_eigenvectors
 
     !> Triangular matrices of at most this order are solved and multiplied in plain loops.
@@ -293,38 +293,28 @@ contains
         end do
     end subroutine solve_upper_triangle
 
-    !> a := a C for the upper triangle C of c (k x k, k the columns of a), by dtrmm, or in
-    !> plain loops for at most `small_triangle` columns: each entry a(i, j) c(j, j) plus
-    !> a(i, l) c(l, j) for l = 1 .. j - 1 in turn, from a copy of a (faster than a product in
-    !> place, which must run from the last column).
-    subroutine times_upper(a, c)
-        real(wp), intent(inout), contiguous :: a(:, :)
-        real(wp), intent(in) :: c(:, :)
+    !> b = a C for a (m x k) and the upper triangle C of c (k x k): by dtrmm on a copy of a,
+    !> or for at most `small_triangle` columns in plain loops, each entry a(i, j) c(j, j) plus
+    !> a(i, l) c(l, j) for l = 1 .. j - 1 in turn. (a is explicit-shape, so that a record of
+    !> a scratch file can be passed in place.)
+    subroutine upper_product(a, c, b)
+        real(wp), intent(out), contiguous :: b(:, :)
+        real(wp), intent(in) :: a(size(b, 1), size(b, 2)), c(:, :)
+        integer :: j, l
 
         if (size(c, 1) > small_triangle) then
-            call dtrmm('R', 'U', 'N', 'N', size(a, 1), size(a, 2), 1.0_wp, c, size(c, 1), a, &
-                       size(a, 1))
-        else
-            call from_copy(a)
+            b = a
+            call dtrmm('R', 'U', 'N', 'N', size(b, 1), size(b, 2), 1.0_wp, c, size(c, 1), b, &
+                       size(b, 1))
+            return
         end if
-
-    contains
-
-        subroutine from_copy(a)
-            real(wp), intent(inout), contiguous :: a(:, :)
-            real(wp) :: old(size(a, 1), size(a, 2))
-            integer :: j, l
-
-            old = a
-            do j = 1, size(a, 2)
-                a(:, j) = old(:, j)*c(j, j)
-                do l = 1, j - 1
-                    a(:, j) = a(:, j) + old(:, l)*c(l, j)
-                end do
+        do j = 1, size(b, 2)
+            b(:, j) = a(:, j)*c(j, j)
+            do l = 1, j - 1
+                b(:, j) = b(:, j) + a(:, l)*c(l, j)
             end do
-        end subroutine from_copy
-
-    end subroutine times_upper
+        end do
+    end subroutine upper_product
 
     !> Eigenvalues wr + i wi and right eigenvectors of a general square matrix (a is
     !> overwritten), in LAPACK's dgeev form: for a real eigenvalue j, vr(:, j) is its unit

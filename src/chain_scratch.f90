@@ -18,7 +18,7 @@ module chain_scratch
     implicit none
     private
     public :: scratch_records_t, scratch_open, scratch_append, scratch_read, scratch_close
-    public :: scratch_block
+    public :: scratch_block, scratch_next, scratch_find
 
     !> Most bytes the buffer of a scratch file holds (more only for a single record).
     integer(i8), parameter :: buffer_bytes = 1_i8*1024*1024
@@ -69,7 +69,36 @@ contains
         type(scratch_records_t), intent(inout) :: file
         real(wp), intent(in) :: values(file%width)
         type(error_t), allocatable, intent(out) :: err
+        integer :: at
 
+        call scratch_next(file, at, err)
+        if (allocated(err)) return
+        file%buffer(:, at) = values
+    end subroutine scratch_append
+
+    !> Record j (1 .. count) into `values` (an array of any rank, `width` reals).
+    subroutine scratch_read(file, j, values, err)
+        type(scratch_records_t), intent(inout) :: file
+        integer(i8), intent(in) :: j
+        real(wp), intent(out) :: values(file%width)
+        type(error_t), allocatable, intent(out) :: err
+        integer :: at
+
+        call scratch_find(file, j, at, err)
+        if (allocated(err)) return
+        values = file%buffer(:, at)
+    end subroutine scratch_read
+
+    ! scratch_next and scratch_find give a record's place in the buffer, to be filled or read
+    ! there without a copy, until the next call on the file.
+
+    !> Append one record after the last, to be filled as file%buffer(:, at).
+    subroutine scratch_next(file, at, err)
+        type(scratch_records_t), intent(inout) :: file
+        integer, intent(out) :: at
+        type(error_t), allocatable, intent(out) :: err
+
+        at = 0
         if (file%reading) then
             call set_error(err, "scratch file: a record appended after reading began")
             return
@@ -81,21 +110,22 @@ contains
             file%held = 0
         end if
         file%held = file%held + 1
-        file%buffer(:, file%held) = values
         file%count = file%count + 1
         file%unwritten = .true.
-    end subroutine scratch_append
+        at = file%held
+    end subroutine scratch_next
 
-    !> Record j (1 .. count) into `values` (an array of any rank, `width` reals).
-    subroutine scratch_read(file, j, values, err)
+    !> Record j (1 .. count), to be read as file%buffer(:, at).
+    subroutine scratch_find(file, j, at, err)
         type(scratch_records_t), intent(inout) :: file
         integer(i8), intent(in) :: j
-        real(wp), intent(out) :: values(file%width)
+        integer, intent(out) :: at
         type(error_t), allocatable, intent(out) :: err
         character(len=512) :: msg
         integer(i8) :: block
         integer :: ios
 
+        at = 0
         if (j < 1 .or. j > file%count) then
             call set_error(err, "scratch file: no such record")
             return
@@ -118,8 +148,8 @@ contains
                 return
             end if
         end if
-        values = file%buffer(:, j - file%first + 1)
-    end subroutine scratch_read
+        at = int(j - file%first) + 1
+    end subroutine scratch_find
 
     !> Close (and so delete) the file; nothing if it is not open.
     subroutine scratch_close(file)
