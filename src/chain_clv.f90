@@ -14,9 +14,9 @@
 module chain_clv
     use chain_kinds, only: wp, i8
     use chain_error, only: error_t, set_error
-    use chain_lapack, only: solve_upper, times_upper
-    use chain_scratch, only: scratch_records_t, scratch_open, scratch_append, scratch_read, &
-                             scratch_close
+    use chain_lapack, only: solve_upper_triangle, upper_product
+    use chain_scratch, only: scratch_records_t, scratch_open, scratch_append, scratch_next, &
+                             scratch_find, scratch_close
     use chain_blocking, only: blocking_t, blocking_start, blocking_add, blocking_error
     use, intrinsic :: ieee_arithmetic, only: ieee_value, ieee_quiet_nan
     implicit none
@@ -24,7 +24,7 @@ module chain_clv
     public :: clv_pass_t, clv_rows_t, clv_result_t
     public :: clv_start, clv_forward, clv_backward_begin, clv_backward_rows, clv_result
     public :: clv_close, clv_scratch_bytes
-    public :: fold_upper, initial_c, site_weights, unstable_angle, backward_step
+    public :: fold_upper, initial_c, site_weights, unstable_angle, backward_step, vector_numbers
 
     !> Most bytes of one block of per-record numbers.
     integer(i8), parameter :: rows_bytes = 4_i8*1024*1024
@@ -67,7 +67,7 @@ module chain_clv
         type(blocking_t) :: blocks                  !! the growths of the kept steps, blocked
         real(wp), allocatable :: vectors(:, :, :)   !! vectors(2n, k, r)
         integer(i8), allocatable :: saved_cycle(:)
-        real(wp), allocatable :: record(:), r_s(:, :), r_log(:), v(:, :) !! work
+        real(wp), allocatable :: r_s(:, :), r_log(:), v(:, :) !! work
     end type clv_pass_t
 
 contains
@@ -91,7 +91,9 @@ contains
         if (allocated(err)) return
         call scratch_open(pass%frames, 2*n*k, err)
         if (allocated(err)) return
-        allocate (pass%record(factor_width(k)), pass%r_s(k, k), pass%r_log(k), pass%v(2*n, k))
+        allocate (pass%r_s(k, k), pass%r_log(k), pass%v(2*n, k))
+        ! (step_back fills only the upper triangle)
+        pass%r_s = 0
     end subroutine clv_start
 
     !> Bytes of the scratch files of such a run (docs/model.md section 14.3).
@@ -119,21 +121,24 @@ contains
         real(wp), intent(in) :: r_factor(:, :), r_log(:)
         real(wp), intent(in), contiguous :: frame(:, :)
         type(error_t), allocatable, intent(out) :: err
-        integer :: i, p
+        integer :: i, p, at
 
         if (j /= pass%factors%count + 1) then
             call set_error(err, "clv: forward records out of order")
             return
         end if
-        pass%record(1) = real(cycle, wp)
-        pass%record(2:pass%k + 1) = r_log
-        p = pass%k + 1
-        do i = 1, pass%k
-            pass%record(p + 1:p + i) = r_factor(1:i, i)
-            p = p + i
-        end do
-        call scratch_append(pass%factors, pass%record, err)
-        if (allocated(err) .or. j > pass%kept) return
+        call scratch_next(pass%factors, at, err)
+        if (allocated(err)) return
+        associate (record => pass%factors%buffer(:, at))
+            record(1) = real(cycle, wp)
+            record(2:pass%k + 1) = r_log
+            p = pass%k + 1
+            do i = 1, pass%k
+                record(p + 1:p + i) = r_factor(1:i, i)
+                p = p + i
+            end do
+        end associate
+        if (j > pass%kept) return
         call scratch_append(pass%frames, frame, err)
     end subroutine clv_forward
 
@@ -195,20 +200,13 @@ contains
         type(clv_rows_t), intent(inout) :: rows
         integer, intent(in) :: i
         type(error_t), allocatable, intent(out) :: err
-        real(wp) :: w(pass%n)
         integer(i8) :: s
-        integer :: l
+        integer :: at
 
-        call scratch_read(pass%frames, pass%at, pass%v, err)
+        call scratch_find(pass%frames, pass%at, at, err)
         if (allocated(err)) return
-        if (allocated(err)) return
-        call times_upper(pass%v, pass%c)
-        do l = 1, pass%k
-            pass%v(:, l) = pass%v(:, l)/sqrt(sum(pass%v(:, l)**2))
-            w = site_weights(pass%v(:, l))
-            rows%ipr(l, i) = sum(w**2)
-            if (l <= pass%m) rows%site_weight(:, l, i) = w
-        end do
+        call upper_product(pass%frames%buffer(:, at), pass%c, pass%v)
+        call vector_numbers(pass%v, rows%ipr(:, i), rows%site_weight(:, :, i))
         rows%min_angle(i) = unstable_angle(pass%c, pass%unstable)
         s = pass%at - (pass%kept - pass%r)
         if (s >= 1) pass%vectors(:, :, s) = pass%v
@@ -221,18 +219,19 @@ contains
         integer(i8), intent(out) :: cycle
         type(error_t), allocatable, intent(out) :: err
         real(wp) :: growth(pass%k)
-        integer :: i, p
+        integer :: i, p, at
 
-        call scratch_read(pass%factors, pass%at, pass%record, err)
+        call scratch_find(pass%factors, pass%at, at, err)
         if (allocated(err)) return
-        cycle = nint(pass%record(1), i8)
-        pass%r_log = pass%record(2:pass%k + 1)
-        pass%r_s = 0
-        p = pass%k + 1
-        do i = 1, pass%k
-            pass%r_s(1:i, i) = pass%record(p + 1:p + i)
-            p = p + i
-        end do
+        associate (record => pass%factors%buffer(:, at))
+            cycle = nint(record(1), i8)
+            pass%r_log = record(2:pass%k + 1)
+            p = pass%k + 1
+            do i = 1, pass%k
+                pass%r_s(1:i, i) = record(p + 1:p + i)
+                p = p + i
+            end do
+        end associate
         call backward_step(pass%r_s, pass%r_log, pass%c, growth)
         if (pass%at <= pass%kept) then
             pass%total = pass%total + growth
@@ -246,20 +245,23 @@ contains
     !> vector (minus ln of its column's length before normalisation).
     subroutine backward_step(r_s, r_log, c, growth)
         real(wp), intent(in) :: r_s(:, :), r_log(:)
-        real(wp), intent(inout) :: c(:, :)
+        real(wp), intent(inout), contiguous :: c(:, :)
         real(wp), intent(out) :: growth(:)
-        real(wp) :: low, length, scale(size(c, 1))
+        real(wp) :: low, length(size(c, 2)), scale(size(c, 1))
         integer :: j
 
-        call solve_upper(r_s, c)
+        call solve_upper_triangle(r_s, c)
         ! R^-1 = exp(-low) diag(exp(-(r_log - low))) r_s^-1, each factor <= 1
         low = minval(r_log)
         scale = exp(low - r_log)
         do j = 1, size(c, 2)
             c(1:j, j) = c(1:j, j)*scale(1:j)
-            length = sqrt(sum(c(1:j, j)**2))
-            c(1:j, j) = c(1:j, j)/length
-            growth(j) = low - log(length)
+        end do
+        call triangle_squares(c, length)
+        do j = 1, size(c, 2)
+            length(j) = sqrt(length(j))
+            c(1:j, j) = c(1:j, j)/length(j)
+            growth(j) = low - log(length(j))
         end do
     end subroutine backward_step
 
@@ -349,14 +351,129 @@ contains
     pure real(wp) function unstable_angle(c, u) result(angle)
         real(wp), intent(in) :: c(:, :)
         integer, intent(in) :: u
+        real(wp) :: inside(size(c, 2) - u), outside(size(c, 2) - u)
         integer :: s
 
         angle = ieee_value(1.0_wp, ieee_quiet_nan)
         if (u < 1 .or. u >= size(c, 2)) return
+        call column_squares(c(1:u, u + 1:), inside)
+        call triangle_squares(c(u + 1:, u + 1:), outside)
         angle = huge(1.0_wp)
-        do s = u + 1, size(c, 2)
-            angle = min(angle, atan2(sqrt(sum(c(u + 1:s, s)**2)), sqrt(sum(c(1:u, s)**2))))
+        ! (scalar atan2: the vector one of glibc's libmvec, which gfortran calls in a
+        ! vectorised loop, rounds differently)
+        !GCC$ novector
+        do s = 1, size(c, 2) - u
+            angle = min(angle, atan2(sqrt(outside(s)), sqrt(inside(s))))
         end do
     end function unstable_angle
+
+    !> The numbers of the vectors v(2n, k) (rows x(1), v(1), x(2), ...): each column
+    !> normalised, its inverse participation ratio ipr(k) (the sum of its squared site
+    !> weights) and the site weights of the first size(weight, 2) columns, weight(n, :).
+    pure subroutine vector_numbers(v, ipr, weight)
+        real(wp), intent(inout) :: v(:, :)
+        real(wp), intent(out) :: ipr(:), weight(:, :)
+        real(wp) :: length(size(v, 2)), w(size(v, 1)/2, size(v, 2)), total(size(v, 2))
+        integer :: l, i
+
+        call column_squares(v, length)
+        do l = 1, size(v, 2)
+            v(:, l) = v(:, l)/sqrt(length(l))
+            do i = 1, size(w, 1)
+                w(i, l) = v(2*i - 1, l)**2 + v(2*i, l)**2
+            end do
+        end do
+        call column_sums(w, total)
+        do l = 1, size(v, 2)
+            w(:, l) = w(:, l)/total(l)
+        end do
+        call column_squares(w, ipr)
+        weight = w(:, :size(weight, 2))
+    end subroutine vector_numbers
+
+    ! The column sums below are those of SUM, each in row order from zero, so bit for bit the
+    ! same, but four columns at a time: four independent chains of additions, which the
+    ! processor overlaps, where one column's chain makes each addition wait for the last.
+
+    !> s(l) = sum(a(:, l)**2) for every column l.
+    pure subroutine column_squares(a, s)
+        real(wp), intent(in) :: a(:, :)
+        real(wp), intent(out) :: s(:)
+        real(wp) :: s1, s2, s3, s4
+        integer :: i, l
+
+        do l = 1, size(a, 2) - 3, 4
+            s1 = 0
+            s2 = 0
+            s3 = 0
+            s4 = 0
+            do i = 1, size(a, 1)
+                s1 = s1 + a(i, l)**2
+                s2 = s2 + a(i, l + 1)**2
+                s3 = s3 + a(i, l + 2)**2
+                s4 = s4 + a(i, l + 3)**2
+            end do
+            s(l:l + 3) = [s1, s2, s3, s4]
+        end do
+        do l = size(a, 2) - modulo(size(a, 2), 4) + 1, size(a, 2)
+            s(l) = sum(a(:, l)**2)
+        end do
+    end subroutine column_squares
+
+    !> s(l) = sum(a(:, l)) for every column l.
+    pure subroutine column_sums(a, s)
+        real(wp), intent(in) :: a(:, :)
+        real(wp), intent(out) :: s(:)
+        real(wp) :: s1, s2, s3, s4
+        integer :: i, l
+
+        do l = 1, size(a, 2) - 3, 4
+            s1 = 0
+            s2 = 0
+            s3 = 0
+            s4 = 0
+            do i = 1, size(a, 1)
+                s1 = s1 + a(i, l)
+                s2 = s2 + a(i, l + 1)
+                s3 = s3 + a(i, l + 2)
+                s4 = s4 + a(i, l + 3)
+            end do
+            s(l:l + 3) = [s1, s2, s3, s4]
+        end do
+        do l = size(a, 2) - modulo(size(a, 2), 4) + 1, size(a, 2)
+            s(l) = sum(a(:, l))
+        end do
+    end subroutine column_sums
+
+    !> s(l) = sum(a(1:l, l)**2) for every column l of the upper triangle of a.
+    pure subroutine triangle_squares(a, s)
+        real(wp), intent(in) :: a(:, :)
+        real(wp), intent(out) :: s(:)
+        real(wp) :: s1, s2, s3, s4
+        integer :: i, l
+
+        do l = 1, size(a, 2) - 3, 4
+            s1 = 0
+            s2 = 0
+            s3 = 0
+            s4 = 0
+            do i = 1, l
+                s1 = s1 + a(i, l)**2
+                s2 = s2 + a(i, l + 1)**2
+                s3 = s3 + a(i, l + 2)**2
+                s4 = s4 + a(i, l + 3)**2
+            end do
+            s2 = s2 + a(l + 1, l + 1)**2
+            s3 = s3 + a(l + 1, l + 2)**2
+            s4 = s4 + a(l + 1, l + 3)**2
+            s3 = s3 + a(l + 2, l + 2)**2
+            s4 = s4 + a(l + 2, l + 3)**2
+            s4 = s4 + a(l + 3, l + 3)**2
+            s(l:l + 3) = [s1, s2, s3, s4]
+        end do
+        do l = size(a, 2) - modulo(size(a, 2), 4) + 1, size(a, 2)
+            s(l) = sum(a(1:l, l)**2)
+        end do
+    end subroutine triangle_squares
 
 end module chain_clv

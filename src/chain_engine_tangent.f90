@@ -10,7 +10,7 @@
 !> instant are kept in the coordinates of now until the instant ends.
 submodule(chain_engine) chain_engine_tangent
     use chain_error, only: set_error, fmt_int
-    use chain_lapack, only: qr_orthonormalise, qr_last_r
+    use chain_lapack, only: qr_orthonormalise, qr_last_r, qr_copy_r
     use chain_lyapunov, only: lyapunov_step
     use chain_clv, only: fold_upper
     use, intrinsic :: ieee_arithmetic, only: ieee_value, ieee_negative_inf
@@ -91,7 +91,7 @@ contains
                     call fold_upper(qr_last_r(acc%qr, k), r_factor, r_log)
                 else
                     ! (P = I: the step's own R, as it is)
-                    r_factor = qr_last_r(acc%qr, k)
+                    call qr_copy_r(acc%qr, r_factor)
                 end if
             end if
         end if
@@ -141,7 +141,8 @@ contains
         chain%tangent_scale_bits = 0
         chain%rank_losses = 0
         chain%jumps_volume = 0
-        if (chain%keep_r_factors) call reset_r_product(chain)
+        ! (P = I still unless a re-orthonormalisation came since the last reset)
+        if (chain%keep_r_factors .and. chain%r_folded) call reset_r_product(chain)
     end subroutine restart_bookkeeping
 
     !> No re-orthonormalisation since the frame was orthonormal: P = I.

@@ -9,7 +9,8 @@ module chain_lapack
     implicit none
     private
     public :: qr_orthonormalise, qr_workspace_t, general_eigenvalues
-    public :: solve_linear, qr_last_r, solve_upper, times_upper, general_eigenvectors
+    public :: solve_linear, qr_last_r, qr_copy_r, solve_upper_triangle, upper_product
+    public :: general_eigenvectors
 
     !> Triangular matrices of at most this order are solved and multiplied in plain loops.
     integer, parameter :: small_triangle = 40
@@ -246,48 +247,74 @@ contains
         end do
     end function qr_last_r
 
-    !> b := R^-1 b for the upper triangle R of r (k x k), by LAPACK's dtrsm, or for at most
-    !> `small_triangle` columns by the same back substitution in plain loops (on matrices
-    !> this small the library's per-call work costs more than the arithmetic).
-    subroutine solve_upper(r, b)
-        real(wp), intent(in) :: r(:, :)
-        real(wp), intent(inout) :: b(:, :)
-        integer :: c, l
+    !> The same R into the upper triangle of r (k x k; below the diagonal r is left as it
+    !> is), without a temporary: a covariant run takes it at every record.
+    pure subroutine qr_copy_r(ws, r)
+        type(qr_workspace_t), intent(in) :: ws
+        real(wp), intent(inout) :: r(:, :)
+        integer :: j
 
-        if (size(r, 1) > small_triangle) then
-            call dtrsm('L', 'U', 'N', 'N', size(b, 1), size(b, 2), 1.0_wp, r, size(r, 1), b, &
-                       size(b, 1))
+        do j = 1, size(r, 2)
+            r(1:j, j) = ws%r(1:j, j)
+        end do
+    end subroutine qr_copy_r
+
+    !> c := R^-1 c for upper triangular R (the upper triangle of r) and c, both k x k (below
+    !> the diagonal c is zero, and stays zero, of either sign). By LAPACK's dtrsm on each block
+    !> of `solve_block` columns of c down to the block's last row only, as below it the block
+    !> is zero (k = 128: 0.8 times the time of one solve of all of c, with the same result bit
+    !> for bit on BLIS, as with reference BLAS, whose solve goes column by column), or for at
+    !> most `small_triangle` columns in plain loops (on matrices this small the library's
+    !> per-call work costs more than the arithmetic).
+    subroutine solve_upper_triangle(r, c)
+        real(wp), intent(in) :: r(:, :)
+        real(wp), intent(inout), contiguous :: c(:, :)
+        integer, parameter :: solve_block = 64
+        integer :: j, l, k, first, last
+
+        k = size(c, 2)
+        if (k > small_triangle) then
+            do first = 1, k, solve_block
+                last = min(k, first + solve_block - 1)
+                call dtrsm('L', 'U', 'N', 'N', last, last - first + 1, 1.0_wp, r, size(r, 1), &
+                           c(:, first:), k)
+            end do
             return
         end if
-        do c = 1, size(b, 2)
-            do l = size(b, 1), 1, -1
-                if (b(l, c) == 0) cycle
-                b(l, c) = b(l, c)/r(l, l)
-                b(1:l - 1, c) = b(1:l - 1, c) - b(l, c)*r(1:l - 1, l)
+        ! (row l of every column in turn, from the last row: each entry gets the updates from
+        ! the rows below it, last first, then its division, as in a back substitution of one
+        ! column at a time, and column l of R serves every column of c at once)
+        do l = k, 1, -1
+            do j = l, k
+                if (c(l, j) == 0) cycle
+                c(l, j) = c(l, j)/r(l, l)
+                c(1:l - 1, j) = c(1:l - 1, j) - c(l, j)*r(1:l - 1, l)
             end do
         end do
-    end subroutine solve_upper
+    end subroutine solve_upper_triangle
 
-    !> a := a C for the upper triangle C of c (k x k, k the columns of a), by dtrmm, or in
-    !> plain loops for at most `small_triangle` columns.
-    subroutine times_upper(a, c)
-        real(wp), intent(inout) :: a(:, :)
-        real(wp), intent(in) :: c(:, :)
+    !> b = a C for a (m x k) and the upper triangle C of c (k x k): by dtrmm on a copy of a,
+    !> or for at most `small_triangle` columns in plain loops, each entry a(i, j) c(j, j) plus
+    !> a(i, l) c(l, j) for l = 1 .. j - 1 in turn. (a is explicit-shape, so that a record of
+    !> a scratch file can be passed in place.)
+    subroutine upper_product(a, c, b)
+        real(wp), intent(out), contiguous :: b(:, :)
+        real(wp), intent(in) :: a(size(b, 1), size(b, 2)), c(:, :)
         integer :: j, l
 
         if (size(c, 1) > small_triangle) then
-            call dtrmm('R', 'U', 'N', 'N', size(a, 1), size(a, 2), 1.0_wp, c, size(c, 1), a, &
-                       size(a, 1))
+            b = a
+            call dtrmm('R', 'U', 'N', 'N', size(b, 1), size(b, 2), 1.0_wp, c, size(c, 1), b, &
+                       size(b, 1))
             return
         end if
-        ! (from the last column: each new column needs the old columns before it)
-        do j = size(a, 2), 1, -1
-            a(:, j) = a(:, j)*c(j, j)
+        do j = 1, size(b, 2)
+            b(:, j) = a(:, j)*c(j, j)
             do l = 1, j - 1
-                a(:, j) = a(:, j) + a(:, l)*c(l, j)
+                b(:, j) = b(:, j) + a(:, l)*c(l, j)
             end do
         end do
-    end subroutine times_upper
+    end subroutine upper_product
 
     !> Eigenvalues wr + i wi and right eigenvectors of a general square matrix (a is
     !> overwritten), in LAPACK's dgeev form: for a real eigenvalue j, vr(:, j) is its unit

@@ -19,8 +19,9 @@ module test_clv
     use chain_event_log, only: event_log_t, event_log_init
     use chain_floquet, only: poincare_jacobian
     use chain_orbit, only: orbit_t, find_orbit
-    use chain_lapack, only: general_eigenvectors, qr_orthonormalise, qr_workspace_t, qr_last_r
-    use chain_clv, only: fold_upper, initial_c, unstable_angle, site_weights
+    use chain_lapack, only: general_eigenvectors, qr_orthonormalise, qr_workspace_t, qr_last_r, &
+                            solve_upper_triangle
+    use chain_clv, only: fold_upper, initial_c, unstable_angle, site_weights, vector_numbers
     use chain_scratch, only: scratch_records_t, scratch_open, scratch_append, scratch_read, &
                              scratch_close, scratch_block
     use test_engine, only: make_chain
@@ -59,6 +60,10 @@ contains
         call folded_factors(t)
         call scratch_round_trip(t)
         call angle_by_projection(t)
+        call numbers_by_vector(t, 7)
+        call numbers_by_vector(t, 8)
+        call triangle_solve(t, 7)
+        call triangle_solve(t, 100)
         call blocking_plateau(t, 0.0_wp)
         call blocking_plateau(t, 0.9_wp)
     end subroutine run_clv_tests
@@ -409,14 +414,16 @@ contains
                    'clv fold: unit columns')
     end subroutine folded_factors
 
-    !> Records spilled over several blocks come back bit for bit, read backwards and at random.
+    !> Records spilled over several blocks come back bit for bit, read backwards and at random
+    !> (the last block from the buffer, until another is read); records that fit in the
+    !> buffer never reach the file.
     subroutine scratch_round_trip(t)
         type(tally_t), intent(inout) :: t
         type(scratch_records_t) :: file
         type(error_t), allocatable :: err
-        integer, parameter :: width = 200000
+        integer, parameter :: width = 20000
         real(wp), allocatable :: values(:)
-        integer(i8) :: j, records
+        integer(i8) :: j, records, bytes
         integer :: i
         logical :: same
 
@@ -447,6 +454,23 @@ contains
         call check(t, same, 'clv scratch: and in any order')
         call scratch_append(file, values, err)
         call check(t, allocated(err), 'clv scratch: no append after reading')
+        call scratch_close(file)
+        records = scratch_block(width)
+        call scratch_open(file, width, err)
+        do j = 1, records
+            if (allocated(err)) exit
+            values = [(real(j, wp)*1.0e6_wp + i, i=1, width)]
+            call scratch_append(file, values, err)
+        end do
+        same = .not. allocated(err)
+        do j = records, 1, -1
+            if (.not. same) exit
+            call scratch_read(file, j, values, err)
+            same = .not. allocated(err) .and. values(1) == real(j, wp)*1.0e6_wp + 1
+        end do
+        inquire (unit=file%unit, size=bytes)
+        call check(t, same .and. bytes == 0, 'clv scratch: one block read back from the '// &
+                   'buffer, never written')
         call scratch_close(file)
     end subroutine scratch_round_trip
 
@@ -482,6 +506,60 @@ contains
         call check_close(t, sum(site_weights(v(:, 1))), 1.0_wp, 'clv weights sum to 1', &
                          10*epsilon(1.0_wp))
     end subroutine angle_by_projection
+
+    !> The numbers of k vectors at once (columns summed four at a time) are those of one vector
+    !> at a time, bit for bit: each normalised, its site weights and their sum of squares.
+    subroutine numbers_by_vector(t, k)
+        type(tally_t), intent(inout) :: t
+        integer, intent(in) :: k
+        integer, parameter :: n = 5, m = 3
+        real(wp) :: v(2*n, k), u(2*n), w(n), ipr(k), weight(n, m)
+        logical :: same
+        integer :: i, l
+
+        do l = 1, k
+            do i = 1, 2*n
+                v(i, l) = sin(0.9_wp*i*l + 0.3_wp*l)*exp(0.1_wp*i)
+            end do
+        end do
+        u = v(:, k)
+        call vector_numbers(v, ipr, weight)
+        same = all(v(:, k) == u/sqrt(sum(u**2)))
+        do l = 1, k
+            w = site_weights(v(:, l))
+            same = same .and. ipr(l) == sum(w**2)
+            if (l <= m) same = same .and. all(weight(:, l) == w)
+        end do
+        call check(t, same, 'clv numbers: of '//digit(k)//' vectors at once as of each alone')
+    end subroutine numbers_by_vector
+
+    !> X = R^-1 C for upper triangular R and C (k = 7: plain loops; 100: the library, by blocks
+    !> of columns) is upper triangular and solves R X = C to rounding.
+    subroutine triangle_solve(t, k)
+        type(tally_t), intent(inout) :: t
+        integer, intent(in) :: k
+        real(wp) :: r(k, k), c(k, k), x(k, k), residual
+        integer :: i, j
+
+        r = 0
+        c = 0
+        do j = 1, k
+            do i = 1, j
+                r(i, j) = cos(1.7_wp*i + 0.6_wp*j)
+                c(i, j) = sin(0.8_wp*i - 1.3_wp*j)
+            end do
+            r(j, j) = r(j, j) + 2*sign(1.0_wp, r(j, j))
+        end do
+        x = c
+        call solve_upper_triangle(r, x)
+        residual = 0
+        do j = 1, k
+            residual = max(residual, norm2(matmul(r, x(:, j)) - c(:, j))/norm2(c(:, j)))
+        end do
+        call check(t, residual <= 100*epsilon(1.0_wp) .and. &
+                   all([(all(x(j + 1:, j) == 0), j=1, k)]), &
+                   'clv solve: upper triangular X with R X = C, k = '//digit(k))
+    end subroutine triangle_solve
 
     !> The standard error by blocking of the mean of an AR(1) series x(i) = phi x(i-1) + e(i)
     !> (unit Gaussian innovations, 2**16 values) is that of its closed form,
