@@ -40,9 +40,13 @@ module chain_bridge
         integer, pointer :: site(:) => null()
         integer, pointer :: kind(:) => null()
         integer(i8) :: n_events = 0                 !! events seen so far (may exceed capacity)
+        real(wp), pointer :: windows(:, :) => null() !! windows(k, n_windows): finite-time
+                                                     !! exponents, bits per drive cycle
+        integer(i8), pointer :: window_cycle(:) => null() !! (n_windows) cycle at each end
     contains
         procedure :: put_strobe => array_put_strobe
         procedure :: put_events => array_put_events
+        procedure :: put_windows => array_put_windows
     end type array_sink_t
 
     !> A control array shared with the caller while a call runs (the Python layer polls it from
@@ -310,6 +314,25 @@ contains
         sink%v(:, first:last) = v
         sink%cycle(first:last) = cycle
     end subroutine array_put_strobe
+
+    subroutine array_put_windows(sink, n_windows, first, exponents, cycle, err)
+        class(array_sink_t), intent(inout) :: sink
+        integer(i8), intent(in) :: n_windows, first
+        real(wp), intent(in), contiguous :: exponents(:, :)
+        integer(i8), intent(in), contiguous :: cycle(:)
+        type(error_t), allocatable, intent(out) :: err
+        integer(i8) :: last
+
+        if (.not. associated(sink%windows)) return
+        last = first + size(cycle) - 1
+        if (size(sink%windows, 2) /= n_windows .or. last > n_windows .or. &
+            size(sink%windows, 1) /= size(exponents, 1)) then
+            call set_error(err, "python layer: finite-time arrays of the wrong shape")
+            return
+        end if
+        sink%windows(:, first:last) = exponents
+        sink%window_cycle(first:last) = cycle
+    end subroutine array_put_windows
 
     subroutine array_put_events(sink, log, err)
         class(array_sink_t), intent(inout) :: sink

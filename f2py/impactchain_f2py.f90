@@ -39,15 +39,19 @@
 !> so give at least 1 where nothing is kept);
 !> the Lyapunov spectrum (kcap = number of exponents) and the Jacobian of the `jacobian_cycles`
 !> Poincare map at the final state with its eigenvalues (mj = 2n) when asked. nf = n always.
-!> (Long because f2py's protocol flattens a whole run into 59 plain arguments: their list and
+!> With window > 0 the finite-time exponents of the nw = cycles / window windows go to
+!> windows(kw = kcap, nw) and window_cycle(nw) (caller-allocated; kw = nw = 1 and unused
+!> without).
+!> (Long because f2py's protocol flattens a whole run into 66 plain arguments: their list and
 !> declarations are half of it; the rest validates, runs and hands the results over.)
 subroutine ic_run(n, nsp, spacing, damping, restitution, amplitude, omega, nb, boundary, &
                   explicit, nx0, x0, nv0, v0, transient, cycles, phase, stick_speed, &
                   max_size_mb, record_events, lyapunov, vectors, qr_every, jacobian, &
-                  jacobian_cycles, dry_run, keep_strobe, nr, nc, nf, ncap, kcap, mj, x, v, &
-                  cycle, final_x, final_v, periods, site_counts, counts, collisions_per_cycle, &
-                  nev, ev_time, ev_site, ev_speed, ev_kind, k, exponents, stderr_bits, &
-                  per_time, ky, jac, mult_re, mult_im, control, status, msg_len, message)
+                  jacobian_cycles, window, dry_run, keep_strobe, nr, nc, nf, ncap, kcap, mj, &
+                  kw, nw, x, v, cycle, final_x, final_v, periods, site_counts, counts, &
+                  collisions_per_cycle, nev, ev_time, ev_site, ev_speed, ev_kind, k, exponents, &
+                  stderr_bits, stderr_cycles, per_time, ky, jac, mult_re, mult_im, windows, &
+                  window_cycle, control, status, msg_len, message)
     use, intrinsic :: iso_c_binding, only: c_int, c_int64_t, c_double
     use impactchain, only: i8, error_t, config_t, validate_config, chain_t, record_result_t, &
                            record_cycles, check_size, start_chain
@@ -58,8 +62,8 @@ subroutine ic_run(n, nsp, spacing, damping, restitution, amplitude, omega, nb, b
     !f2py threadsafe
     integer(c_int), intent(in) :: n, nsp, nb, nx0, nv0, explicit, record_events, lyapunov
     integer(c_int), intent(in) :: vectors, qr_every, jacobian, jacobian_cycles, dry_run
-    integer(c_int), intent(in) :: keep_strobe, nr, nf, kcap, mj
-    integer(c_int64_t), intent(in) :: transient, cycles, nc, ncap
+    integer(c_int), intent(in) :: keep_strobe, nr, nf, kcap, mj, window, kw
+    integer(c_int64_t), intent(in) :: transient, cycles, nc, ncap, nw
     real(c_double), intent(in) :: spacing(nsp), damping, restitution, amplitude, omega
     real(c_double), intent(in) :: x0(nx0), v0(nv0), phase, stick_speed, max_size_mb
     integer(c_int), intent(in) :: boundary(nb)
@@ -75,7 +79,11 @@ subroutine ic_run(n, nsp, spacing, damping, restitution, amplitude, omega, nb, b
     integer(c_int), intent(inout), target :: ev_site(ncap), ev_kind(ncap)
     integer(c_int), intent(out) :: k
     real(c_double), intent(out) :: exponents(kcap), stderr_bits(kcap), per_time(kcap)
+    integer(c_int64_t), intent(out) :: stderr_cycles(kcap)
     real(c_double), intent(out) :: jac(mj, mj), mult_re(mj), mult_im(mj)
+    ! finite-time exponents (&lyapunov window): caller-allocated as the records
+    real(c_double), intent(inout), target :: windows(kw, nw)
+    integer(c_int64_t), intent(inout), target :: window_cycle(nw)
     integer(c_int64_t), intent(inout), target :: control(4)
     integer(c_int), intent(out) :: status, msg_len
     integer(c_int), intent(out) :: message(1024)
@@ -88,12 +96,14 @@ subroutine ic_run(n, nsp, spacing, damping, restitution, amplitude, omega, nb, b
 
     call put_message('', status_ok, status, msg_len, message)
     nev = 0
+    stderr_cycles = 0
     call put_run_results(final_x, final_v, periods, site_counts, counts, collisions_per_cycle, &
                          k, exponents, stderr_bits, per_time, ky, jac, mult_re, mult_im)
     call make_config(cfg, int(n), spacing, damping, restitution, amplitude, omega, boundary, &
                      explicit /= 0, x0, v0, int(transient, i8), int(cycles, i8), phase, &
                      stick_speed, max_size_mb, record_events /= 0, lyapunov /= 0, &
                      int(vectors), int(qr_every), jacobian /= 0, int(jacobian_cycles), err)
+    cfg%record%window = int(window)
     if (.not. allocated(err)) call validate_config(cfg, err)
     if (.not. allocated(err)) call check_size(cfg, err)
     if (.not. allocated(err)) call start_chain(cfg, chain, err)
@@ -104,7 +114,8 @@ subroutine ic_run(n, nsp, spacing, damping, restitution, amplitude, omega, nb, b
     if (dry_run /= 0) return
 
     if (.not. run_sizes_ok(cfg, keep_strobe /= 0, int(nr), int(nc, i8), int(nf), int(kcap), &
-                           int(mj))) then
+                           int(mj)) .or. (window > 0 .and. (nw /= cycles/window .or. &
+                                                            kw /= kcap))) then
         call put_message("python layer: output sizes do not match the configuration", &
                          status_internal, status, msg_len, message)
         return
@@ -120,6 +131,10 @@ subroutine ic_run(n, nsp, spacing, damping, restitution, amplitude, omega, nb, b
         sink%site => ev_site
         sink%kind => ev_kind
     end if
+    if (window > 0) then
+        sink%windows => windows
+        sink%window_cycle => window_cycle
+    end if
     monitor%control => control
     call record_cycles(cfg%record, chain, sink, res, err, monitor)
     if (call_ended(control, err, status, msg_len, message)) return
@@ -127,6 +142,7 @@ subroutine ic_run(n, nsp, spacing, damping, restitution, amplitude, omega, nb, b
     call put_run_results(final_x, final_v, periods, site_counts, counts, collisions_per_cycle, &
                          k, exponents, stderr_bits, per_time, ky, jac, mult_re, mult_im, res, &
                          chain)
+    if (res%has_lyapunov) stderr_cycles(:k) = res%lyapunov%stderr_cycles
     nev = sink%n_events
     if (nev > ncap) call put_message("python layer: more events than the capacity ncap", &
                                      status_capacity, status, msg_len, message)

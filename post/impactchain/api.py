@@ -126,8 +126,8 @@ _BYTES_PER_EVENT = 24  # time, speed (float64), site, kind (int32)
 #: Outputs of ``_kernels.ic_run``, in f2py's order (checked by post/tests/test_api.py).
 RUN_OUTPUTS = (
     "final_x", "final_v", "periods", "site_counts", "counts", "collisions_per_cycle", "nev",
-    "k", "exponents", "stderr_bits", "per_time", "ky", "jac", "mult_re", "mult_im", "status",
-    "msg_len", "message",
+    "k", "exponents", "stderr_bits", "stderr_cycles", "per_time", "ky", "jac", "mult_re",
+    "mult_im", "status", "msg_len", "message",
 )
 #: Outputs of ``_kernels.ic_sweep``, in f2py's order (checked by post/tests/test_api.py).
 SWEEP_OUTPUTS = (
@@ -232,7 +232,8 @@ class Lyapunov:
     exponents: NDArray[np.float64]
     """(k,) exponents in bits per drive cycle, descending."""
     stderr: NDArray[np.float64]
-    """(k,) standard error of each exponent from block averages, bits per drive cycle."""
+    """(k,) standard error of each exponent, bits per drive cycle, read where it levels off
+    with the block size (docs/model.md section 7.4)."""
     exponents_per_time: NDArray[np.float64]
     """(k,) the same exponents in nats per unit time."""
     ky_dimension: float
@@ -245,7 +246,13 @@ class Lyapunov:
     """(n,) velocity at the end of the run [length/time]."""
     params: Mapping[str, Any] = field(default_factory=dict)
     """The arguments as used (as :attr:`Simulation.params`, with ``vectors``,
-    ``qr_every``)."""
+    ``qr_every``, ``window``)."""
+    stderr_block: NDArray[np.int64] | None = None
+    """(k,) drive cycles per block at which each standard error was read."""
+    finite_time: Any = None
+    """With ``window``: the finite-time exponents, an :class:`impactchain.io.FiniteTime`
+    (``exponents`` (windows, k) in the frame's column order, ``descending`` in that of
+    ``exponents``; ``cycle`` (windows,)), as the CLI's ``/finite_time``."""
 
     def to_run(self) -> Run:
         """This spectrum as a :class:`impactchain.io.Run` (``Run.lyapunov``, without running
@@ -400,6 +407,7 @@ def lyapunov(
     vectors: int = 0,
     *,
     qr_every: int = 0,
+    window: int = 0,
     phase: float = 0.0,
     stick_speed: float = 1.0e-9,
     max_size_mb: float = 4096.0,
@@ -411,20 +419,30 @@ def lyapunov(
     exact flow and the saltation matrices of every impact and re-orthonormalised (LAPACK
     QR) every ``qr_every`` cycles (0 <= qr_every <= cycles; 0, the default: at an adaptive
     interval, before the frame's columns are predicted to grow apart by 1e8, which gives the
-    exponents of qr_every = 1 to rounding). The leading k exponents do not depend on k. Other
+    exponents of qr_every = 1 to rounding). The leading k exponents do not depend on k.
+    ``window`` > 0: also the finite-time exponents over consecutive windows of that many
+    recorded cycles (docs/model.md section 7.10; with qr_every > 1 a multiple of it). Other
     arguments as :func:`simulate`.
 
     Returns:
         A :class:`Lyapunov`: ``exponents`` and ``stderr`` (k,) in bits per drive cycle,
-        descending, k = vectors or 2n.
+        descending, k = vectors or 2n, ``stderr_block`` (k,), and with ``window``
+        ``finite_time``.
     """
     cfg = _config(n, amplitude, omega, damping, restitution, spacing, boundary, x0, v0,
                   transient, cycles, phase, stick_speed, max_size_mb)
     cfg["lyapunov"] = 1
     cfg["vectors"] = _int32(vectors, "&lyapunov: vectors", "[0, 2n] (0 means all 2n)")
     cfg["qr_every"] = _int32(qr_every, "&lyapunov: qr_every", "[0, cycles] (0: adaptive)")
+    cfg["window"] = _int32(window, "&lyapunov: window", "[0, cycles] (0: none)")
     out = _run(cfg, strobe=False, events=False, progress=progress)
     k = int(out["k"])
+    finite_time = None
+    if cfg["window"] > 0:
+        from impactchain.io import FiniteTime
+
+        finite_time = FiniteTime(window=cfg["window"], cycle=_frozen(out["window_cycle"]),
+                                 exponents=_frozen(out["windows"][:k].T))
     return Lyapunov(
         exponents=_frozen(out["exponents"][:k]),
         stderr=_frozen(out["stderr_bits"][:k]),
@@ -434,7 +452,9 @@ def lyapunov(
         final_x=_frozen(out["final_x"]),
         final_v=_frozen(out["final_v"]),
         params=_used(cfg, boundary, events=False, vectors=cfg["vectors"],
-                     qr_every=cfg["qr_every"]),
+                     qr_every=cfg["qr_every"], window=cfg["window"]),
+        stderr_block=_frozen(out["stderr_cycles"][:k]),
+        finite_time=finite_time,
     )
 
 
@@ -1102,7 +1122,7 @@ def _run(cfg: dict[str, Any], strobe: bool, events: bool, progress: bool = False
          ) -> dict[str, Any]:
     """Validate, allocate, run; retry once with the exact event count if it was short."""
     kernels = _extension()
-    cfg = dict(cfg, record_events=int(events))
+    cfg = dict(cfg, record_events=int(events), window=cfg.get("window", 0))
     out = _call_run(kernels, cfg, dry_run=True)
     _raise_for(out["status"], out["msg_len"], out["message"])
     n = cfg["n"]
@@ -1113,6 +1133,7 @@ def _run(cfg: dict[str, Any], strobe: bool, events: bool, progress: bool = False
     if events:
         low, high = _FIRST_EVENT_CAPACITY
         capacity = int(min(max(low, 4 * (n + 1) * cfg["cycles"]), high))
+    sizes["nw"] = cfg["cycles"] // cfg["window"] if cfg["window"] > 0 else 0
     out = _call_run(kernels, cfg, dry_run=False, ncap=capacity, progress=progress, **sizes)
     if out["status"] == _STATUS_CAPACITY:
         need = int(out["nev"])
@@ -1128,18 +1149,21 @@ def _run(cfg: dict[str, Any], strobe: bool, events: bool, progress: bool = False
 
 
 def _call_run(kernels: Any, cfg: dict[str, Any], dry_run: bool, nr: int = 0, nc: int = 0,
-              nf: int = 0, ncap: int = 0, kcap: int = 0, mj: int = 0,
+              nf: int = 0, ncap: int = 0, kcap: int = 0, mj: int = 0, nw: int = 0,
               progress: bool = False) -> dict[str, Any]:
-    # records and events in arrays allocated here, untouched (np.empty): the kernel fills
-    # them with the GIL released (f2py refuses a size 0 there: one element when none is kept)
+    # records, events and finite-time windows in arrays allocated here, untouched (np.empty):
+    # the kernel fills them with the GIL released (f2py refuses a size 0 there: one element
+    # when none is kept)
     keep_strobe = nr > 0 and nc > 0
     nr, nc, ncap = max(nr, 1), max(nc, 1), max(ncap, 1)
     records = dict(x=np.empty((nr, nc), order="F"), v=np.empty((nr, nc), order="F"),
                    cycle=np.empty(nc, dtype=np.int64), ev_time=np.empty(ncap),
                    ev_site=np.empty(ncap, dtype=np.int32), ev_speed=np.empty(ncap),
-                   ev_kind=np.empty(ncap, dtype=np.int32))
+                   ev_kind=np.empty(ncap, dtype=np.int32),
+                   windows=np.empty((kcap if nw else 1, max(nw, 1)), order="F"),
+                   window_cycle=np.empty(max(nw, 1), dtype=np.int64))
     args = dict(cfg, dry_run=int(dry_run), keep_strobe=int(keep_strobe), nr=nr, nc=nc, nf=nf,
-                ncap=ncap, kcap=kcap, mj=mj, **records)
+                ncap=ncap, kcap=kcap, mj=mj, kw=kcap if nw else 1, nw=max(nw, 1), **records)
     if dry_run:
         result = kernels.ic_run(**args, control=np.zeros(4, dtype=np.int64))
     else:

@@ -1335,7 +1335,10 @@ def run_from_api(simulation: Any = None, lyapunov: Any = None) -> Run:
             ky_dimension=float(lyapunov.ky_dimension),
             positive_sum=math.nan,  # not returned by impactchain.api
             collisions_per_cycle=float(lyapunov.collisions_per_cycle),
+            stderr_block=getattr(lyapunov, "stderr_block", None),
         )
+        if getattr(lyapunov, "finite_time", None) is not None:
+            parts["finite_time"] = lyapunov.finite_time
         if "final" not in parts:
             parts["final"] = FinalState(
                 x=_frozen(lyapunov.final_x), v=_frozen(lyapunov.final_v),
@@ -1473,8 +1476,10 @@ def _equivalent_namelist(config: Mapping[str, Any], lyapunov: bool) -> str:
                  f"{int(config['cycles'])}, phase = {real(config['phase'])}, "
                  f"stick_speed = {real(config['stick_speed'])}, record_events = {record} /")
     if lyapunov:
+        window = int(config.get("window", 0))
         lines.append(f"&lyapunov enabled = .true., vectors = {int(config.get('vectors', 0))}, "
-                     f"qr_every = {int(config.get('qr_every', 1))} /")
+                     f"qr_every = {int(config.get('qr_every', 1))}"
+                     + (f", window = {window}" if window else "") + " /")
     return "\n".join(lines) + "\n"
 
 

@@ -77,7 +77,8 @@ def namelist(n: int, amplitude: float, omega: float, damping: float = 0.05,
              x0: Any = None, v0: Any = None, transient: int = 0, cycles: int = 100,
              events: bool = True, phase: float = 0.0, stick_speed: float = 1.0e-9,
              max_size_mb: float = 4096.0, lyapunov: bool = False, vectors: int = 0,
-             qr_every: int = 0, period: int | None = None, random: dict | None = None) -> str:
+             qr_every: int = 0, period: int | None = None, random: dict | None = None,
+             window: int = 0) -> str:
     """The namelist equivalent to a call of impactchain.api with these arguments."""
     lines = [f"&chain n = {n}, amplitude = {_values(amplitude)}, omega = {_values(omega)}, "
              f"damping = {_values(damping)}, restitution = {_values(restitution)}, "
@@ -95,7 +96,8 @@ def namelist(n: int, amplitude: float, omega: float, damping: float = 0.05,
     if lyapunov or period is not None:
         lines.append(f"&lyapunov enabled = {'T' if lyapunov else 'F'}, vectors = {vectors}, "
                      f"qr_every = {qr_every}, jacobian = {'T' if period is not None else 'F'}, "
-                     f"jacobian_cycles = {1 if period is None else period} /")
+                     f"jacobian_cycles = {1 if period is None else period}"
+                     + (f", window = {window}" if window else "") + " /")
     lines.append(f"&output file = 'run.h5', overwrite = T, "
                  f"max_size_mb = {_values(max_size_mb)} /")
     return "\n".join(lines) + "\n"
@@ -150,6 +152,35 @@ def _initial(case: dict[str, Any]) -> tuple[Any, Any]:
 def _model_args(case: dict[str, Any]) -> dict[str, Any]:
     keys = ("damping", "restitution", "spacing", "boundary", "transient", "cycles", "phase")
     return {k: case[k] for k in keys if k in case}
+
+
+@pytest.mark.parametrize("qr_every, window", [(0, 20), (2, 10)])
+def test_finite_time_windows_are_the_cli_file(cli: Path, tmp_path: Path, qr_every: int,
+                                              window: int) -> None:
+    """api.lyapunov(window=W): the standard errors' block sizes and the finite-time exponents
+    of the CLI's /lyapunov/stderr_block and /finite_time, bit for bit."""
+    args = dict(n=6, amplitude=2.0, omega=1.9, transient=30, cycles=200, vectors=5,
+                qr_every=qr_every)
+    x0 = [0.1, -0.2, 0.05, 0.3, -0.1, 0.0]
+    result = run_cli(cli, namelist(**args, x0=x0, events=False, lyapunov=True, window=window),
+                     tmp_path)
+    assert result.returncode == 0, result.stderr
+    lyap = api.lyapunov(**args, x0=x0, window=window)
+    assert lyap.params["window"] == window
+    with h5py.File(tmp_path / "run.h5") as f:
+        np.testing.assert_array_equal(lyap.exponents, f["lyapunov/exponents"][:], strict=True)
+        np.testing.assert_array_equal(lyap.stderr, f["lyapunov/stderr"][:], strict=True)
+        np.testing.assert_array_equal(lyap.stderr_block, f["lyapunov/stderr_block"][:],
+                                      strict=True)
+        np.testing.assert_array_equal(lyap.finite_time.exponents,
+                                      f["finite_time/exponents"][:], strict=True)
+        np.testing.assert_array_equal(lyap.finite_time.cycle, f["finite_time/cycle"][:],
+                                      strict=True)
+    assert lyap.finite_time.window == window and lyap.finite_time.n_windows == 200 // window
+    assert lyap.to_run().finite_time is lyap.finite_time
+    assert api.lyapunov(**args, x0=x0).finite_time is None
+    with pytest.raises(ValueError, match="window = 201 is outside"):
+        api.lyapunov(**args, x0=x0, window=201)
 
 
 @pytest.mark.parametrize("name", CASES)
