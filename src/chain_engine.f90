@@ -35,7 +35,7 @@ module chain_engine
     use chain_flow, only: flow_t, propagator_pair, forced_response_at, acceleration_at
     use chain_phases, only: drive_phase
     use chain_gaps, only: gap_t, gap_search_t, next_gap_zero, search_root, search_horizon, &
-                          resolvable_speed, earliest_closing
+                          resolvable_speed, surely_resolvable, earliest_closing
     use chain_impact, only: pair_impact, wall_impact, pair_reset_jacobian, &
                             wall_reset_jacobian, saltation_matrix
     use chain_model, only: model_t, bond_gaps
@@ -929,7 +929,9 @@ contains
         ! the gap is a(bond) +- x(i) + const: its curvature is the acceleration, signed
         curvature = -sgn*acc_minus
         call gap_now(chain, bond, gap, closes, resting)
-        u_min = resolvable_speed(chain%flow, gap, curvature)
+        u_min = 0
+        if (.not. surely_resolvable(chain%flow, gap, curvature, u)) &
+            u_min = resolvable_speed(chain%flow, gap, curvature)
         if (u < max(chain%stick_speed, u_min)) then
             if (pressed(chain, i, side)) then
                 call stick_event(chain, bond, i, side, u, log)
@@ -981,6 +983,7 @@ contains
         type(error_t), allocatable, intent(out) :: err
         integer :: l, r
         real(wp) :: u, yl, wl, yr, wr, curvature, u_min
+        type(gap_t) :: gap
         logical :: both_moving
 
         l = bond
@@ -1005,11 +1008,13 @@ contains
         if (u > 0 .and. both_moving) then
             ! the pair gap a + (yr - yl) is a free damped oscillation: g'' = -(yr - yl) - 2 b g'
             curvature = -(yr - yl) - 2*chain%flow%damping*(wr - wl)
-            u_min = resolvable_speed(chain%flow, gap_t(chain%spacing(bond), yr - yl, wr - wl, &
-                                                       0.0_wp), curvature)
-            if (u < u_min) then
-                call touch_event(chain, bond, u, u_min, curvature, log)
-                return
+            gap = gap_t(chain%spacing(bond), yr - yl, wr - wl, 0.0_wp)
+            if (.not. surely_resolvable(chain%flow, gap, curvature, u)) then
+                u_min = resolvable_speed(chain%flow, gap, curvature)
+                if (u < u_min) then
+                    call touch_event(chain, bond, u, u_min, curvature, log)
+                    return
+                end if
             end if
         end if
         if (u > 0) then

@@ -15,7 +15,8 @@ module chain_gaps
     use chain_phases, only: free_phase, free_decay, drive_phase, advance_free_phase, phase_angle
     implicit none
     private
-    public :: gap_t, gap_search_t, next_gap_zero, gap_value, resolvable_speed, earliest_closing
+    public :: gap_t, gap_search_t, next_gap_zero, gap_value, resolvable_speed, surely_resolvable
+    public :: earliest_closing
     public :: search_none, search_root, search_horizon, time_tolerance
 
     integer, parameter :: search_none = 0    !! the gap never closes
@@ -333,6 +334,21 @@ contains
 
         u_min = sqrt(2*abs(curvature)*noise(gap%offset, gap_amplitude(flow, gap)))
     end function resolvable_speed
+
+    !> Is an approach at speed u > 0 surely not below resolvable_speed? A bound without its two
+    !> square roots (r <= |y| + |q|, and a factor 2 over the rounding of either form): nearly
+    !> every impact is far faster than the rounding level, and only a doubtful one needs
+    !> resolvable_speed itself.
+    pure logical function surely_resolvable(flow, gap, curvature, u)
+        type(flow_t), intent(in) :: flow
+        type(gap_t), intent(in) :: gap
+        real(wp), intent(in) :: curvature, u
+        real(wp) :: q
+
+        q = (gap%vy + flow%damping*gap%y)*flow%inv_gam
+        surely_resolvable = u > 0 .and. u*u > 4*abs(curvature)*noise(gap%offset, abs(gap%y) + &
+                                                      abs(q) + abs(gap%beta)*flow%forced_amp)
+    end function surely_resolvable
 
     !> Size of the moving terms of a gap: its free oscillation and its share of the drive (the
     !> amplitude that sets the rounding level of the gap in every search).

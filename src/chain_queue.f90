@@ -55,29 +55,27 @@ contains
         integer, intent(out) :: bond
         real(wp), intent(out) :: time
         logical, intent(out), optional :: tied
-        integer :: j, first
-        real(wp) :: earliest, t
+        integer :: j, first, count
+        real(wp) :: earliest
         logical :: equal
 
         if (q%scan) then
-            ! the first of the earliest: the lowest bond wins a tie, as in the heap (locals,
-            ! not the arguments, so that the loop keeps them in registers)
-            first = 0
+            ! the earliest by a minimum without branches (the compiler vectorises it; a scan
+            ! that branches on each new earliest mispredicts at random positions), then the
+            ! first bond due then: the lowest bond wins a tie, as in the heap
             earliest = q%time(0)
-            equal = .false.
             do j = 1, q%size - 1
-                t = q%time(j)
-                if (t <= earliest) then
-                    ! a tie with the earliest so far, or a new earliest (and no tie yet)
-                    equal = t == earliest
-                    if (.not. equal) then
-                        first = j
-                        earliest = t
-                    end if
-                end if
+                earliest = min(earliest, q%time(j))
             end do
+            count = 0
+            do j = 0, q%size - 1
+                count = count + merge(1, 0, q%time(j) == earliest)
+            end do
+            first = findloc(q%time, earliest, dim=1) - 1
+            if (count == 0) first = 0 ! (not a number: no event can be due)
             bond = first
-            time = earliest
+            time = q%time(first)
+            equal = count > 1
         else
             bond = q%heap(1)
             time = q%key(1)
