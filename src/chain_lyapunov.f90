@@ -183,6 +183,14 @@ contains
         rows = int(ints(6))
         acc%collapsed = int(ints(7))
         if (size(reals) < 4*k) return
+        ! (the windows done fit the cycles done; adaptive steps wait at most a unit)
+        if (acc%window > 0) then
+            if (ints(12) > ints(8)/acc%window) return
+            if (acc%qr_every > 1 .and. modulo(acc%window, max(1, acc%qr_every)) /= 0) return
+        else if (ints(12) /= 0) then
+            return
+        end if
+        if (acc%qr_every == 0 .and. ints(10) > acc%longest) return
         ip = head
         rp = 4*k
         call blocking_unpack(ints, reals, ip, rp, acc%blocks, status)
@@ -383,7 +391,10 @@ contains
         nats = acc%total/max(1_i8, acc%cycles)
         call blocking_error(acc%blocks, err, block)
         ! no error bar for an exponent of -infinity (a run with rests on the walls)
-        where (.not. ieee_is_finite(acc%total)) err = 0
+        where (.not. ieee_is_finite(acc%total))
+            err = 0
+            block = 1
+        end where
         order = descending_order(nats)
         res%bits_per_cycle = nats(order)*to_bits
         res%nats_per_time = nats(order)/period

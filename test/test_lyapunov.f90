@@ -78,6 +78,7 @@ contains
         call size_check_matches_storage(t)
         call pack_round_trip(t)
         call stderr_at_the_plateau(t)
+        call collapsed_has_no_error_bar(t)
         call finite_time_windows(t)
         call monitored_run(t, .false.)
         call monitored_run(t, .true.)
@@ -171,6 +172,38 @@ contains
         call check(t, res%stderr_cycles(1) >= run, &
                    'the plateau is read at blocks at least as long as the correlation')
     end subroutine stderr_at_the_plateau
+
+    !> A direction that collapses midway (its exponent -infinity) has no error bar: stderr 0
+    !> and blocks of one unit (docs/model.md section 7.4), whatever its units held before.
+    subroutine collapsed_has_no_error_bar(t)
+        type(tally_t), intent(inout) :: t
+        type(lyapunov_acc_t) :: acc
+        type(lyapunov_result_t) :: res
+        real(wp), allocatable :: frame(:, :)
+        integer :: q, info
+        logical :: ok
+
+        call lyapunov_start(acc, 2, 4096_i8, 1)
+        ok = .true.
+        do q = 1, 4096
+            if (q < 2000) then
+                frame = reshape([2.0_wp + modulo(q, 3), 0.0_wp, 0.3_wp, 0.5_wp], [2, 2])
+            else if (q == 2000) then
+                ! the second column parallel to the first: removed by a singular event
+                frame = reshape([2.0_wp, 0.0_wp, 1.0_wp, 0.0_wp], [2, 2])
+            else
+                frame = reshape([2.0_wp + modulo(q, 3), 0.0_wp], [2, 1])
+            end if
+            call lyapunov_step(acc, frame, info, singular=q == 2000)
+            ok = ok .and. info == 0
+        end do
+        res = lyapunov_result(acc, 1.0_wp)
+        call check(t, ok .and. acc%collapsed == 1 .and. .not. ieee_is_finite( &
+                   res%bits_per_cycle(2)), 'collapse midway: the second exponent is -infinity')
+        call check(t, res%stderr_bits(2) == 0 .and. res%stderr_cycles(2) == acc%unit .and. &
+                   res%stderr_bits(1) > 0, &
+                   'collapse midway: no error bar, blocks of one unit')
+    end subroutine collapsed_has_no_error_bar
 
     !> Finite-time exponents over windows of 100 cycles (docs/model.md section 7.10) on fig.
     !> 1c's chain, adaptive QR: the windows' mean is the exponents (to rounding); they equal the

@@ -28,8 +28,8 @@ Full spectra for N <= 256; the leading 256 exponents for N = 1024 and 4096 (i / 
 and 1/16). The damped chain of 4096 collides only within about 1040 bonds of each wall (the
 same after 3000 and 12000 cycles of transient): it is there to show what a quiet middle does.
 
-Errors: the simulator's standard errors of each exponent (20 blocks); D_KY / N by a jackknife
-over 10 blocks of the run, rebuilt from the running estimates (/lyapunov/running), with the
+Errors: the simulator's standard errors of each exponent (blocking plateau); D_KY / N by a
+jackknife over 10 blocks of the run, rebuilt from the running estimates (/lyapunov/running), with the
 stored D_KY as the value.
 """
 from __future__ import annotations
