@@ -41,7 +41,7 @@ module chain_census
     public :: census_checkpoint_monitor_t
 
     !> The checkpoint's first bytes; the number changes with its layout.
-    character(len=8), parameter :: checkpoint_magic = 'ICCENSU2'
+    character(len=8), parameter :: checkpoint_magic = 'ICCENSU3'
 
     !> Everything a census finds: per sample (filled in parallel), then the classification.
     !> Arrays are in Fortran order; h5py shows the point first.
@@ -55,10 +55,8 @@ module chain_census
         logical, allocatable :: done(:, :)            !! (samples, points)
         integer, allocatable :: periods(:, :, :)      !! (n, samples, points), 0 = none
         integer(i8), allocatable :: sites(:, :, :)    !! (n+1, samples, points) impacts/bond
-        real(wp), allocatable :: lambda1(:, :)        !! (samples, points) bits per cycle
-        real(wp), allocatable :: stderr1(:, :)        !! its standard error
         !> (k, samples, points): the k leading exponents (bits per cycle, descending; the first
-        !> is lambda1) and their standard errors
+        !> is lambda1, the one the classification uses) and their standard errors
         real(wp), allocatable :: exponents(:, :, :), exponents_stderr(:, :, :)
         real(wp), allocatable :: x(:, :, :), v(:, :, :) !! (n, samples, points) last record
         ! the classification (classify_census)
@@ -111,7 +109,6 @@ contains
         associate (ns => res%n_samples, np => res%n_points, k => res%n_exponents)
             allocate (res%values(np), res%x0(n, ns, np), res%v0(n, ns, np), res%done(ns, np))
             allocate (res%periods(n, ns, np), res%sites(n + 1, ns, np))
-            allocate (res%lambda1(ns, np), res%stderr1(ns, np))
             allocate (res%exponents(k, ns, np), res%exponents_stderr(k, ns, np))
             allocate (res%x(n, ns, np), res%v(n, ns, np))
             allocate (res%attractor(ns, np), res%mirrored(ns, np))
@@ -131,8 +128,6 @@ contains
         res%done = .false.
         res%periods = 0
         res%sites = 0
-        res%lambda1 = 0
-        res%stderr1 = 0
         res%exponents = 0
         res%exponents_stderr = 0
         res%x = 0
@@ -405,8 +400,6 @@ contains
         !$omp critical (census_results)
         res%periods(:, s, p) = periods
         res%sites(:, s, p) = sites
-        res%lambda1(s, p) = exponents(1)
-        res%stderr1(s, p) = stderr(1)
         res%exponents(:, s, p) = exponents
         res%exponents_stderr(:, s, p) = stderr
         res%x(:, s, p) = x
@@ -428,7 +421,7 @@ contains
         integer, intent(in) :: n, k
         integer, intent(out) :: nr, ni
 
-        nr = 2 + 2*n + 2*k   ! lambda1, stderr1, x(n), v(n), exponents(k), their stderrs(k)
+        nr = 2*n + 2*k       ! x(n), v(n), exponents(k), their stderrs(k)
         ni = 2 + 2*n         ! done, periods(n), sites(n+1)
     end subroutine sample_record_sizes
 
@@ -443,12 +436,10 @@ contains
 
         n = size(res%x, 1)
         k = res%n_exponents
-        reals(1) = res%lambda1(s, p)
-        reals(2) = res%stderr1(s, p)
-        reals(3:2 + n) = res%x(:, s, p)
-        reals(3 + n:2 + 2*n) = res%v(:, s, p)
-        reals(3 + 2*n:2 + 2*n + k) = res%exponents(:, s, p)
-        reals(3 + 2*n + k:2 + 2*n + 2*k) = res%exponents_stderr(:, s, p)
+        reals(1:n) = res%x(:, s, p)
+        reals(1 + n:2*n) = res%v(:, s, p)
+        reals(1 + 2*n:2*n + k) = res%exponents(:, s, p)
+        reals(1 + 2*n + k:2*n + 2*k) = res%exponents_stderr(:, s, p)
         ints(1) = merge(1_i8, 0_i8, res%done(s, p))
         ints(2:1 + n) = int(res%periods(:, s, p), i8)
         ints(2 + n:2 + 2*n) = res%sites(:, s, p)
@@ -464,12 +455,10 @@ contains
 
         n = size(res%x, 1)
         k = res%n_exponents
-        res%lambda1(s, p) = reals(1)
-        res%stderr1(s, p) = reals(2)
-        res%x(:, s, p) = reals(3:2 + n)
-        res%v(:, s, p) = reals(3 + n:2 + 2*n)
-        res%exponents(:, s, p) = reals(3 + 2*n:2 + 2*n + k)
-        res%exponents_stderr(:, s, p) = reals(3 + 2*n + k:2 + 2*n + 2*k)
+        res%x(:, s, p) = reals(1:n)
+        res%v(:, s, p) = reals(1 + n:2*n)
+        res%exponents(:, s, p) = reals(1 + 2*n:2*n + k)
+        res%exponents_stderr(:, s, p) = reals(1 + 2*n + k:2*n + 2*k)
         res%done(s, p) = ints(1) == 1
         res%periods(:, s, p) = int(ints(2:1 + n))
         res%sites(:, s, p) = ints(2 + n:2 + 2*n)
@@ -510,7 +499,8 @@ contains
             mirror = cfg%census_mirror == 'merge' .and. mirror_symmetric(point%model%spacing)
             do s = 1, res%n_samples
                 period = orbit_period(res%periods(:, s, p), point%record%max_period)
-                kind = sample_kind(period, res%lambda1(s, p), res%stderr1(s, p))
+                kind = sample_kind(period, res%exponents(1, s, p), &
+                                   res%exponents_stderr(1, s, p))
                 sites = site_fractions(res%sites(:, s, p))
                 call match_attractor(res%attractors(:res%n_attractors), p, kind, &
                                      res%periods(:, s, p), res%x(:, s, p), res%v(:, s, p), &
@@ -630,8 +620,8 @@ contains
         attractor%kind = kind
         attractor%period = period
         attractor%periods = res%periods(:, s, p)
-        attractor%lambda1 = res%lambda1(s, p)
-        attractor%stderr1 = res%stderr1(s, p)
+        attractor%lambda1 = res%exponents(1, s, p)
+        attractor%stderr1 = res%exponents_stderr(1, s, p)
         attractor%x = res%x(:, s, p)
         attractor%v = res%v(:, s, p)
         attractor%sites = sites
@@ -716,7 +706,7 @@ contains
         write (u, iostat=ios, iomsg=msg) checkpoint_magic, len(cfg%input_text), &
             cfg%input_text, res%n_points, res%n_samples, cfg%model%n, res%n_exponents
         if (ios == 0) write (u, iostat=ios, iomsg=msg) merge(1, 0, res%done), res%periods, &
-            res%sites, res%lambda1, res%stderr1, res%x0, res%v0, res%x, res%v, &
+            res%sites, res%x0, res%v0, res%x, res%v, &
             res%exponents, res%exponents_stderr
         written = 0
         if (ios == 0) inquire (unit=u, pos=written, iostat=ios, iomsg=msg)
@@ -764,7 +754,7 @@ contains
         end if
         got = res
         allocate (done(n_samples, n_points))
-        read (u, iostat=ios) done, got%periods, got%sites, got%lambda1, got%stderr1, got%x0, &
+        read (u, iostat=ios) done, got%periods, got%sites, got%x0, &
             got%v0, got%x, got%v, got%exponents, got%exponents_stderr
         close (u)
         if (ios /= 0) then
@@ -776,8 +766,6 @@ contains
         call move_alloc(got%done, res%done)
         call move_alloc(got%periods, res%periods)
         call move_alloc(got%sites, res%sites)
-        call move_alloc(got%lambda1, res%lambda1)
-        call move_alloc(got%stderr1, res%stderr1)
         call move_alloc(got%x0, res%x0)
         call move_alloc(got%v0, res%v0)
         call move_alloc(got%x, res%x)

@@ -133,7 +133,8 @@ contains
             call h5_write(f, 'census/v0', res%v0, '1', err)
             call h5_write(f, 'census/sample_attractor', res%attractor - 1, '1', err)
             call h5_write(f, 'census/mirrored', merge(1, 0, res%mirrored), '1', err)
-            call h5_write(f, 'census/lambda1', res%lambda1, 'bit', err)
+            ! (the first of each sample's exponents, a contiguous copy)
+            call h5_write(f, 'census/lambda1', res%exponents(1, :, :) + 0.0_wp, 'bit', err)
             call h5_write(f, 'census/attractor_period', periods, '1', err)
             call h5_write(f, 'census/attractor_lambda1', [(ts(a)%lambda1, a=1, na)], 'bit', err)
             call h5_write(f, 'census/attractor_lambda1_stderr', [(ts(a)%stderr1, a=1, na)], &
