@@ -170,9 +170,9 @@ contains
     !> (beta = -sign(|x|, x(1)), R(j,j) = beta), so that dorgqr can form Q from it. Unblocked
     !> loops over columns, for small frames (see qr_orthonormalise).
     pure subroutine householder_qr(r, tau)
-        real(wp), intent(inout) :: r(:, :)
+        real(wp), intent(inout), contiguous :: r(:, :)
         real(wp), intent(out) :: tau(:)
-        real(wp) :: alpha, beta, xnorm, scale, s
+        real(wp) :: alpha, beta, xnorm, scale
         integer :: m, k, j, c
 
         m = size(r, 1)
@@ -197,37 +197,99 @@ contains
             tau(j) = (beta - alpha)/beta
             r(j + 1:m, j) = r(j + 1:m, j)/(alpha - beta)
             r(j, j) = beta
-            do c = j + 1, k
-                s = tau(j)*(r(j, c) + dot_product(r(j + 1:m, j), r(j + 1:m, c)))
-                r(j, c) = r(j, c) - s
-                r(j + 1:m, c) = r(j + 1:m, c) - s*r(j + 1:m, j)
+            do c = j + 1, k - 7, 8
+                call reflect_eight(r, j, c, tau(j))
+            end do
+            do c = c, k
+                call reflect_one(r, j, c, tau(j))
             end do
         end do
     end subroutine householder_qr
 
-    !> a := a R^-1 for the upper triangle R of r (k x k of it), column by column: dtrsm's
-    !> 'R', 'U', 'N', 'N', without the library call (small frames).
-    pure subroutine solve_upper_right(r, a)
-        real(wp), intent(in) :: r(:, :)
-        real(wp), intent(inout) :: a(:, :)
-        integer :: j, l
+    !> Columns c .. c + 7 of r reflected by the reflector of column j (below row j, v;
+    !> factor tau): r(j:, c) -= tau (1, v) ((1, v) . r(j:, c)). The eight sums run side by
+    !> side, each over the rows in order, as reflect_one's: one sum alone is a chain of
+    !> additions, each waiting for the last.
+    pure subroutine reflect_eight(r, j, c, tau)
+        real(wp), intent(inout), contiguous :: r(:, :)
+        integer, intent(in) :: j, c
+        real(wp), intent(in) :: tau
+        real(wp) :: s(8), v
+        integer :: i, q
 
-        do j = 1, size(a, 2)
+        s = 0
+        do i = j + 1, size(r, 1)
+            v = r(i, j)
+            s = s + v*r(i, c:c + 7)
+        end do
+        s = tau*(r(j, c:c + 7) + s)
+        do q = 1, 8
+            r(j, c + q - 1) = r(j, c + q - 1) - s(q)
+            r(j + 1:, c + q - 1) = r(j + 1:, c + q - 1) - s(q)*r(j + 1:, j)
+        end do
+    end subroutine reflect_eight
+
+    !> Column c of r reflected by the reflector of column j.
+    pure subroutine reflect_one(r, j, c, tau)
+        real(wp), intent(inout), contiguous :: r(:, :)
+        integer, intent(in) :: j, c
+        real(wp), intent(in) :: tau
+        real(wp) :: s
+        integer :: i
+
+        s = 0
+        do i = j + 1, size(r, 1)
+            s = s + r(i, j)*r(i, c)
+        end do
+        s = tau*(r(j, c) + s)
+        r(j, c) = r(j, c) - s
+        r(j + 1:, c) = r(j + 1:, c) - s*r(j + 1:, j)
+    end subroutine reflect_one
+
+    !> a := a R^-1 for the upper triangle R of r (k x k of it), column by column: dtrsm's
+    !> 'R', 'U', 'N', 'N', without the library call (small frames). Each entry takes its
+    !> updates from columns 1, 2, ... in turn, then its division; columns are solved in pairs
+    !> (each finished column read once for both).
+    pure subroutine solve_upper_right(r, a)
+        real(wp), intent(in), contiguous :: r(:, :)
+        real(wp), intent(inout), contiguous :: a(:, :)
+        integer :: j, l, i
+
+        do j = 1, size(a, 2) - 1, 2
+            do l = 1, j - 1
+                do i = 1, size(a, 1)
+                    a(i, j) = a(i, j) - r(l, j)*a(i, l)
+                    a(i, j + 1) = a(i, j + 1) - r(l, j + 1)*a(i, l)
+                end do
+            end do
+            a(:, j) = a(:, j)/r(j, j)
+            a(:, j + 1) = (a(:, j + 1) - r(j, j + 1)*a(:, j))/r(j + 1, j + 1)
+        end do
+        if (modulo(size(a, 2), 2) == 1) then
+            j = size(a, 2)
             do l = 1, j - 1
                 a(:, j) = a(:, j) - r(l, j)*a(:, l)
             end do
             a(:, j) = a(:, j)/r(j, j)
-        end do
+        end if
     end subroutine solve_upper_right
 
-    !> Has every column of a unit length to `tolerance`?
+    !> Has every column of a unit length to `tolerance`? (Each sum of squares over the rows
+    !> in order; four columns at a time, as independent sums.)
     pure logical function unit_columns(a, tolerance)
-        real(wp), intent(in) :: a(:, :), tolerance
-        integer :: j
+        real(wp), intent(in), contiguous :: a(:, :)
+        real(wp), intent(in) :: tolerance
+        real(wp) :: s(4)
+        integer :: j, i, c
 
         unit_columns = .false.
-        do j = 1, size(a, 2)
-            if (.not. abs(sum(a(:, j)**2) - 1) < 2*tolerance) return
+        do j = 1, size(a, 2), 4
+            c = min(4, size(a, 2) - j + 1)
+            s = 0
+            do i = 1, size(a, 1)
+                s(1:c) = s(1:c) + a(i, j:j + c - 1)**2
+            end do
+            if (.not. all(abs(s(1:c) - 1) < 2*tolerance)) return
         end do
         unit_columns = .true.
     end function unit_columns
