@@ -35,7 +35,7 @@ program main
         stop 2, quiet=.true.
     case (cli_run)
     case default
-        call fail(cli%message)
+        call fail_usage(cli%message)
     end select
     monitor%quiet = cli%quiet
     call read_config(cli%input, cfg, err, cli%overrides)
@@ -192,5 +192,13 @@ contains
         write (error_unit, '(a)') 'impactchain: error: '//message
         stop 1, quiet=.true.
     end subroutine fail
+
+    !> A mistake in the command line itself (an unknown option, a missing value): exit 2.
+    subroutine fail_usage(message)
+        character(len=*), intent(in) :: message
+
+        write (error_unit, '(a)') 'impactchain: error: '//message
+        stop 2, quiet=.true.
+    end subroutine fail_usage
 
 end program main

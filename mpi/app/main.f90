@@ -36,7 +36,8 @@ program impactchain_mpi
                            write_sweep_file, save_checkpoint, load_checkpoint, remove_file, &
                            checkpoint_every, branch_record_sizes, pack_branch, unpack_branch, &
                            output_t, output_begin, output_end, output_abort, catch_interrupts, &
-                           interrupted, cli_t, parse_command_line, cli_run, config_summary, &
+                           interrupted, cli_t, parse_command_line, cli_run, cli_help, &
+                           cli_version, cli_usage, code_version, config_summary, &
                            signal_monitor_t
     implicit none
     type(config_t) :: cfg
@@ -47,6 +48,8 @@ program impactchain_mpi
     type(output_t) :: out
     type(error_t), allocatable :: err
     integer :: rank, ranks, provided, failed, left, stopping, resumed
+    !> exit code of a mistake in the command line itself (an unknown option, no input)
+    integer, parameter :: usage_error = 2
     type(cli_t) :: cli
     logical :: quiet
     logical, allocatable :: mine(:)
@@ -86,9 +89,23 @@ contains
 
     !> Read the input (every rank): a sweep or a census.
     subroutine read_input()
+        character(len=*), parameter :: usage = 'usage: impactchain-mpi [options] input.nml '// &
+                                               '(the options of impactchain --help)'
+
         cli = parse_command_line()
-        if (cli%action /= cli_run) call stop_all('usage: impactchain-mpi [options] input.nml '// &
-                                                  '(the options of impactchain --help)')
+        select case (cli%action)
+        case (cli_help, cli_version)
+            if (rank == 0 .and. cli%action == cli_help) write (output_unit, '(a)') usage
+            if (rank == 0 .and. cli%action == cli_version) &
+                write (output_unit, '(a)') 'impactchain-mpi '//code_version
+            call MPI_Finalize()
+            stop
+        case (cli_usage)
+            call stop_all(usage, usage_error)
+        case (cli_run)
+        case default
+            call stop_all(cli%message, usage_error)
+        end select
         input = cli%input
         quiet = cli%quiet
         call read_config(input, cfg, err, cli%overrides)
@@ -464,11 +481,17 @@ contains
     end function err_text
 
     !> Every rank calls this with the same message (errors every rank meets alike).
-    subroutine stop_all(message)
+    !> Report `message` (rank 0) and end every rank with exit 1, or 2 for a mistake in the
+    !> command line itself (`usage_error`).
+    subroutine stop_all(message, code)
         character(len=*), intent(in) :: message
+        integer, intent(in), optional :: code
 
         if (rank == 0) write (error_unit, '(a)') 'impactchain-mpi: error: '//message
         call MPI_Finalize()
+        if (present(code)) then
+            if (code == usage_error) stop 2, quiet=.true.
+        end if
         stop 1, quiet=.true.
     end subroutine stop_all
 

@@ -9,7 +9,7 @@ import h5py
 import numpy as np
 import pytest
 
-from simulator import impactchain_exe, run_namelist  # noqa: F401 (fixture)
+from simulator import impactchain_exe, mpi_exe, run_namelist  # noqa: F401 (fixtures)
 
 BASE = """
 &chain n = 6, amplitude = 1.7, omega = 1.5 /
@@ -89,6 +89,19 @@ def test_bad_input_is_refused(impactchain_exe, tmp_path, case):
     assert needle in result.stderr, result.stderr
     assert "Backtrace" not in result.stderr
     assert not list(tmp_path.glob("*.h5*")), "no output may be left behind"
+
+
+def test_mpi_driver_exit_codes(mpi_exe, tmp_path):
+    if mpi_exe is None:
+        pytest.skip("no MPI build (mpifort not found)")
+    mpirun = ["mpirun", "--allow-run-as-root", "--oversubscribe", "-np", "2", str(mpi_exe)]
+    for args, code, out in [(["--help"], 0, "usage: impactchain-mpi"),
+                            (["--version"], 0, "impactchain-mpi "),
+                            (["--bogus", "x.nml"], 2, ""), ([], 2, "")]:
+        result = subprocess.run([*mpirun, *args], cwd=tmp_path, capture_output=True, text=True,
+                                timeout=120)
+        assert result.returncode == code, (args, result.stdout, result.stderr)
+        assert out in result.stdout
 
 
 def test_existing_output_is_not_overwritten(impactchain_exe, tmp_path):
@@ -185,8 +198,10 @@ def test_killed_run_leaves_no_file_that_claims_completion(impactchain_exe, tmp_p
     (["--version"], 0, "impactchain 0.1.0"),
     (["--help"], 0, "usage: impactchain"),
     ([], 2, "usage: impactchain"),
-    (["--bogus", "run.nml"], 1, "unknown option '--bogus'"),
-    (["a.nml", "b.nml"], 1, "give one input file, not 'a.nml' and 'b.nml'"),
+    (["--bogus", "run.nml"], 2, "unknown option '--bogus'"),
+    (["a.nml", "b.nml"], 2, "give one input file, not 'a.nml' and 'b.nml'"),
+    (["--set"], 2, "--set needs a value"),
+    (["missing.nml"], 1, "missing.nml"),   # bad input, not a mistake in the command line
 ])
 def test_command_line(impactchain_exe, tmp_path, args, code, says):
     """The command line (chain_cli, shared with the MPI driver): options, exit codes, words."""
