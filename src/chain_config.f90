@@ -29,6 +29,8 @@ module chain_config
     integer, parameter :: max_list = 100001
     integer, parameter :: max_n = 10000000
     real(wp), parameter :: unset = -huge(1.0_wp)
+    !> An integer key not given in the input (for defaults that depend on other keys).
+    integer, parameter :: not_given = -huge(1)
     character(len=*), parameter :: group_names(8) = &
         [character(len=12) :: 'chain', 'initial', 'run', 'lyapunov', 'output', 'sweep', &
          'continuation', 'census']
@@ -491,8 +493,9 @@ contains
         jacobian = cfg%record%jacobian
         jacobian_cycles = cfg%record%jacobian_cycles
         covariant = cfg%record%covariant
-        clv_transient = cfg%record%clv_transient
-        clv_store = cfg%record%clv_store
+        ! (not given: defaults that fit the run, set below once cycles and vectors are known)
+        clv_transient = not_given
+        clv_store = not_given
         clv_save = cfg%record%clv_save
         window = cfg%record%window
         rewind (u)
@@ -512,6 +515,10 @@ contains
         cfg%record%clv_store = clv_store
         cfg%record%clv_save = clv_save
         cfg%record%window = window
+        ! (&chain and &run are read before this group)
+        if (clv_transient == not_given) &
+            cfg%record%clv_transient = int(max(1_i8, min(200_i8, cfg%record%cycles/2)))
+        if (clv_store == not_given) cfg%record%clv_store = min(4, lyapunov_vectors(cfg))
     end subroutine read_lyapunov
 
     subroutine read_output(u, cfg, err)
@@ -887,6 +894,10 @@ contains
             else if (r%qr_every > 1) then
                 call set_error(err, "&lyapunov: covariant = .true. takes a QR step at every "// &
                                "record: qr_every = "//fmt_int(r%qr_every)//" must be 0 or 1")
+            else if (r%cycles < 2) then
+                call set_error(err, "&lyapunov: covariant = .true. needs &run cycles >= 2 "// &
+                               "(records with vectors, then records over which the "// &
+                               "backward pass converges), not "//fmt_int8(r%cycles))
             else if (r%clv_transient < 1 .or. r%clv_transient >= r%cycles) then
                 call set_error(err, "&lyapunov: clv_transient = "//fmt_int(r%clv_transient)// &
                                " is outside [1, cycles - 1 = "//fmt_int8(r%cycles - 1)// &

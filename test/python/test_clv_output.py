@@ -107,6 +107,31 @@ def test_bad_keys_are_named(impactchain_exe, tmp_path, extra, needle):
     assert not list(tmp_path.glob("*.h5*"))
 
 
+@pytest.mark.parametrize("cycles, vectors, transient, stored", [
+    (10, 2, 5, 2),      # a short run: half its records converge the backward pass
+    (1000, 0, 200, 4),  # the usual defaults
+])
+def test_defaults_fit_the_run(impactchain_exe, tmp_path, cycles, vectors, transient, stored):
+    """Without clv_transient and clv_store, a covariant run of any length and any number of
+    vectors is valid: min(200, cycles / 2) records converge, min(4, k) weights are kept."""
+    text = (f"&chain n = 4, amplitude = 4.15, omega = 1.5 /\n&run cycles = {cycles} /\n"
+            f"&lyapunov covariant = .true., vectors = {vectors} /\n&output file = 'd.h5' /\n")
+    run_namelist(impactchain_exe, text, tmp_path)
+    with h5py.File(tmp_path / "d.h5") as f:
+        assert f["clv"].attrs["clv_transient"] == transient
+        assert f["clv/site_weight"].shape[1] == stored
+        assert f["clv/ipr"].shape[0] == cycles - transient
+
+
+def test_one_cycle_is_too_short(impactchain_exe, tmp_path):
+    text = ("&chain n = 4, amplitude = 4.15, omega = 1.5 /\n&run cycles = 1 /\n"
+            "&lyapunov covariant = .true. /\n&output file = 'd.h5' /\n")
+    result = run_namelist(impactchain_exe, text, tmp_path, check=False)
+    assert result.returncode == 1
+    assert "covariant = .true. needs &run cycles >= 2" in result.stderr, result.stderr
+    assert not list(tmp_path.glob("*.h5*"))
+
+
 def test_stopped_run_is_run_again_not_continued(impactchain_exe, tmp_path):
     text = RUN.format(extra="").replace("cycles = 700", "cycles = 2000000")
     (tmp_path / "input.nml").write_text(text)
