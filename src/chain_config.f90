@@ -42,7 +42,7 @@ module chain_config
     !> procedures below declare (test/python/test_namelist_errors.py checks the two agree).
     type(key_spec_t), parameter :: input_keys(*) = [ &
         key_spec_t('chain', 'n', key_integer, .false.), &
-        key_spec_t('chain', 'spacing', key_real, .true.), &
+        key_spec_t('chain', 'spacing', key_real, .true., most=max_list), &
         key_spec_t('chain', 'damping', key_real, .false.), &
         key_spec_t('chain', 'restitution', key_real, .false.), &
         key_spec_t('chain', 'amplitude', key_real, .false.), &
@@ -52,11 +52,11 @@ module chain_config
         key_spec_t('initial', 'seed', key_integer, .false.), &
         key_spec_t('initial', 'x_amp', key_real, .false.), &
         key_spec_t('initial', 'v_amp', key_real, .false.), &
-        key_spec_t('initial', 'x0', key_real, .true.), &
-        key_spec_t('initial', 'v0', key_real, .true.), &
+        key_spec_t('initial', 'x0', key_real, .true., most=max_list), &
+        key_spec_t('initial', 'v0', key_real, .true., most=max_list), &
         key_spec_t('initial', 'file', key_string, .false.), &
-        key_spec_t('run', 'transient', key_integer, .false.), &
-        key_spec_t('run', 'cycles', key_integer, .false.), &
+        key_spec_t('run', 'transient', key_integer, .false., .true.), &
+        key_spec_t('run', 'cycles', key_integer, .false., .true.), &
         key_spec_t('run', 'phase', key_real, .false.), &
         key_spec_t('run', 'record_events', key_logical, .false.), &
         key_spec_t('run', 'stick_speed', key_real, .false.), &

@@ -10,7 +10,9 @@
 !> subscripts), `!` comments, and `/` (or `&end`) closing the group. Text outside groups is
 !> ignored, as the compiler's reader ignores it.
 module chain_namelist
-    use chain_error, only: error_t, set_error, fmt_int
+    use, intrinsic :: iso_fortran_env, only: int64
+    use chain_kinds, only: wp
+    use chain_error, only: error_t, set_error, fmt_int, fmt_int8
     implicit none
     private
     public :: key_spec_t, key_integer, key_real, key_logical, key_string
@@ -23,12 +25,15 @@ module chain_namelist
     character(len=*), parameter :: type_names(4) = &
         [character(len=16) :: 'an integer', 'a number', 'a logical', 'a string']
 
-    !> One key of the schema: its group, its name, its type and whether it takes a list.
+    !> One key of the schema: its group, its name, its type, whether it takes a list, and for
+    !> an integer whether it is read into 64 bits (`wide`) rather than 32.
     type :: key_spec_t
         character(len=16) :: group = ''
         character(len=16) :: name = ''
         integer :: kind = key_real
         logical :: list = .false.
+        logical :: wide = .false.
+        integer :: most = huge(1)  !! the most values a list takes (the reader's array)
     end type key_spec_t
 
     !> One `key = values` of the text: where it starts and ends (character positions) and the
@@ -101,7 +106,7 @@ contains
         type(key_spec_t), intent(in) :: schema(:)
         type(error_t), allocatable, intent(out) :: err
         integer :: k, j
-        character(len=:), allocatable :: bad_value
+        character(len=:), allocatable :: bad_value, too_large
 
         k = find_key(schema, item%group, item%key)
         if (k == 0) then
@@ -109,9 +114,13 @@ contains
             return
         end if
         do j = item%n_tokens, 1, -1
-            if (.not. is_value_of(text(item%value_first(j):item%value_last(j)), &
-                                  schema(k)%kind)) &
-                bad_value = text(item%value_first(j):item%value_last(j))
+            associate (token => text(item%value_first(j):item%value_last(j)))
+                if (.not. is_value_of(token, schema(k)%kind)) then
+                    bad_value = token
+                else if (.not. fits(token, schema(k))) then
+                    too_large = token
+                end if
+            end associate
         end do
         if (item%subscripted .and. .not. schema(k)%list) then
             call set_error(err, where//item%written//": "//item%key//" takes one value, "// &
@@ -126,8 +135,56 @@ contains
         else if (item%n_values > 1 .and. .not. schema(k)%list) then
             call set_error(err, where//item%key//" has "//fmt_int(item%n_values)// &
                            " values; it takes one, "//trim(type_names(schema(k)%kind)))
+        else if (item%n_values > schema(k)%most) then
+            call set_error(err, where//item%key//" has "//fmt_int(item%n_values)// &
+                           " values; an input takes at most "//fmt_int(schema(k)%most))
+        else if (allocated(too_large)) then
+            call set_error(err, where//item%key//" = "//too_large//" is beyond "// &
+                           range_words(schema(k)))
         end if
     end subroutine check_item
+
+    !> Can the value `token` (of the key's type) be stored? The namelist reader's own words
+    !> for one that cannot ("Integer overflow while reading item 2") name no key, and a real
+    !> beyond double precision would be read as infinity.
+    logical function fits(token, spec)
+        character(len=*), intent(in) :: token
+        type(key_spec_t), intent(in) :: spec
+        character(len=:), allocatable :: v
+        integer(int64) :: i
+        real(wp) :: x
+        integer :: ios
+
+        fits = .true.
+        v = without_repeat(token)
+        if (len(v) == 0) return
+        select case (spec%kind)
+        case (key_integer)
+            read (v, *, iostat=ios) i
+            fits = ios == 0
+            if (fits .and. .not. spec%wide) fits = abs(i) <= huge(1)
+        case (key_real)
+            if (scan(v, '0123456789') == 0) return  ! NaN, Inf: meant as they are
+            read (v, *, iostat=ios) x
+            fits = ios == 0 .and. abs(x) < 1.0e300_wp
+        end select
+    end function fits
+
+    !> The range of the key's type, for a message.
+    pure function range_words(spec) result(words)
+        type(key_spec_t), intent(in) :: spec
+        character(len=:), allocatable :: words
+
+        if (spec%kind == key_real) then
+            words = "double precision (|x| < 1e300)"
+        else if (spec%wide) then
+            words = "the range of 64-bit integers (|"//trim(spec%name)//"| <= "// &
+                    fmt_int8(huge(1_int64))//")"
+        else
+            words = "the range of 32-bit integers (|"//trim(spec%name)//"| <= "// &
+                    fmt_int(huge(1))//")"
+        end if
+    end function range_words
 
     !> `text` with `spec` (`group.key=value`) applied: every `key = ...` of that group is
     !> removed and `key = value` is put at the end of the group (a new group at the end of the
@@ -435,13 +492,8 @@ contains
         character(len=*), intent(in) :: token
         integer, intent(in) :: kind
         character(len=:), allocatable :: v
-        integer :: star
 
-        v = token
-        star = index(v, '*')
-        if (star > 1 .and. scan(v(1:1), "'""") == 0) then
-            if (verify(v(:star - 1), '0123456789') == 0) v = v(star + 1:)
-        end if
+        v = without_repeat(token)
         if (len(v) == 0) then
             is_value_of = .true.
             return
@@ -457,6 +509,19 @@ contains
             is_value_of = .true.
         end select
     end function is_value_of
+
+    !> `token` without its repeat count (`3*0.5` -> `0.5`).
+    pure function without_repeat(token) result(v)
+        character(len=*), intent(in) :: token
+        character(len=:), allocatable :: v
+        integer :: star
+
+        v = token
+        star = index(v, '*')
+        if (star > 1 .and. scan(v(1:1), "'""") == 0) then
+            if (verify(v(:star - 1), '0123456789') == 0) v = v(star + 1:)
+        end if
+    end function without_repeat
 
     pure logical function is_integer(v)
         character(len=*), intent(in) :: v

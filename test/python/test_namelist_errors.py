@@ -38,6 +38,19 @@ MISTAKES = {
                    ["omega has 2 values; it takes one"]),
     "unclosed group": ("&chain n = 4, omega = 1.5, amplitude = 1\n", ["input.nml:1:",
                                                                       "no closing '/'"]),
+    "integer beyond 32 bits": ("&chain n = 4, omega = 1.5, amplitude = 1 /\n"
+                               "&initial kind = 'random', seed = 123456789012 /",
+                               ["input.nml:2:", "&initial", "seed = 123456789012 is beyond the "
+                                "range of 32-bit integers (|seed| <= 2147483647)"]),
+    "integer beyond 64 bits": ("&chain n = 4, omega = 1.5, amplitude = 1 /\n"
+                               "&run cycles = 99999999999999999999 /",
+                               ["input.nml:2:", "cycles = 99999999999999999999 is beyond the "
+                                "range of 64-bit integers"]),
+    "number beyond double": ("&chain n = 4, omega = 1.5, amplitude = 1e400 /",
+                             ["input.nml:1:", "amplitude = 1e400 is beyond double precision"]),
+    "list too long": ("&chain n = 4, omega = 1.5, amplitude = 1, spacing = 100002*1.0 /",
+                      ["input.nml:1:", "spacing has 100002 values; an input takes at most "
+                       "100001"]),
 }
 
 
