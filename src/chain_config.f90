@@ -926,8 +926,9 @@ contains
             call set_error(err, "&output: file must not be empty")
             return
         end if
-        call check_range(err, 'output', 'max_size_mb', cfg%max_size_mb, 0.0_wp, 1.0e9_wp, &
-                         '(0, 1e9]')
+        ! open below: 0 would refuse every run, so it is out of range like a negative value
+        call check_range(err, 'output', 'max_size_mb', cfg%max_size_mb, tiny(1.0_wp), &
+                         1.0e9_wp, '(0, 1e9]')
     end subroutine validate_output
 
     !> n, the number of oscillators, within [1, max_n].
