@@ -26,7 +26,8 @@ module chain_sweep
     use chain_engine, only: chain_t, chain_init
     use chain_model, only: set_model_parameter, parameter_units
     use chain_state, only: chain_state_t, moving_state
-    use chain_config, only: config_t, validate_config, lyapunov_vectors, check_size
+    use chain_config, only: config_t, validate_config, lyapunov_vectors, check_size, &
+                            sweep_axis_points
     use chain_record, only: memory_sink_t, record_result_t, record_cycles
     use chain_sim, only: start_chain, write_run_header, continuation_start
     use chain_output, only: output_t, output_begin, output_group, output_end, output_abort, &
@@ -102,10 +103,10 @@ contains
         type(config_t), intent(in) :: cfg
         type(sweep_plan_t) :: plan
 
-        plan%n_axis1 = axis_points(cfg%sweep_start, cfg%sweep_stop, cfg%sweep_step)
+        plan%n_axis1 = sweep_axis_points(cfg%sweep_start, cfg%sweep_stop, cfg%sweep_step)
         plan%n_axes = 1
         if (len(cfg%sweep_parameter2) > 0) then
-            plan%n_axis2 = axis_points(cfg%sweep_start2, cfg%sweep_stop2, cfg%sweep_step2)
+            plan%n_axis2 = sweep_axis_points(cfg%sweep_start2, cfg%sweep_stop2, cfg%sweep_step2)
             plan%n_axes = 2
         end if
         plan%n_points = plan%n_axis1*plan%n_axis2
@@ -118,16 +119,6 @@ contains
         end if
         plan%k = lyapunov_vectors(cfg)
     end function plan_sweep
-
-    !> Number of points from start to stop in steps of step (rounding-safe).
-    pure integer function axis_points(start, stop, step)
-        real(wp), intent(in) :: start, stop, step
-
-        axis_points = nint((stop - start)/step) + 1
-        if (start + (axis_points - 1)*step > max(start, stop) + 1.0e-9_wp*abs(step) .or. &
-            start + (axis_points - 1)*step < min(start, stop) - 1.0e-9_wp*abs(step)) &
-            axis_points = axis_points - 1
-    end function axis_points
 
     pure subroutine sweep_result_init(res, cfg, plan)
         type(sweep_result_t), intent(out) :: res

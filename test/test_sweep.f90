@@ -9,7 +9,7 @@ module test_sweep
     !$ use omp_lib, only: omp_set_num_threads
     use chain_kinds, only: wp, i8
     use chain_error, only: error_t
-    use chain_config, only: config_t, read_config
+    use chain_config, only: config_t, read_config, validate_config
     use chain_sim, only: simulate_to_file
     use chain_record, only: record_result_t
     use chain_output, only: read_final_state
@@ -39,6 +39,7 @@ contains
         type(tally_t), intent(inout) :: t
 
         call test_axes(t)
+        call test_point_limit(t)
         call test_point_config(t)
         call test_threads(t)
         call test_continuation_equals_files(t)
@@ -94,6 +95,46 @@ contains
         plan = plan_sweep(cfg)
         call check(t, plan%n_branches == 6, 'independent grid: a branch per point')
     end subroutine test_axes
+
+    !> At most 1e7 points in all: along one parameter, and in a 2-D grid the product of its
+    !> axes (each axis alone within the limit), refused when read, naming the keys.
+    subroutine test_point_limit(t)
+        type(tally_t), intent(inout) :: t
+        type(config_t) :: cfg
+        type(error_t), allocatable :: err
+
+        call config_from(cfg, "&sweep parameter = 'amplitude', start = 1.0, stop = 2.0, "// &
+                         "step = 0.5, parameter2 = 'damping', start2 = 0.1, stop2 = 0.05, "// &
+                         "step2 = -0.05 /", 'limit')
+        cfg%sweep_step = 1.0e-4_wp           ! 10001 values
+        cfg%sweep_stop2 = 0.9_wp
+        cfg%sweep_step2 = 1.0e-4_wp          ! 8001 values
+        call validate_config(cfg, err)
+        call check(t, allocated(err), 'a 10001 x 8001 grid is refused')
+        if (allocated(err)) call check(t, err%message == "&sweep: start, stop, step and "// &
+                                       "start2, stop2, step2 give 10001 x 8001 = 80018001 "// &
+                                       "points; a sweep has at most 1e7", err%message)
+        cfg%sweep_stop2 = 0.1_wp + 999*1.0e-4_wp ! 10001 x 1000 = 10010001
+        call validate_config(cfg, err)
+        call check(t, allocated(err), 'a grid just above 1e7 points is refused')
+        cfg%sweep_stop = 1.0_wp + 9999*1.0e-4_wp ! 10000 x 1000
+        call validate_config(cfg, err)
+        call check(t, .not. allocated(err), 'a grid of exactly 1e7 points is accepted')
+        ! along one parameter: 1e7 steps is 1e7 + 1 points, one too many
+        cfg%sweep_parameter2 = ''
+        cfg%sweep_start = 0
+        cfg%sweep_stop = 1
+        cfg%sweep_step = 1.0e-7_wp
+        call validate_config(cfg, err)
+        call check(t, allocated(err), '1e7 + 1 points along one parameter are refused')
+        if (allocated(err)) call check(t, err%message == "&sweep: start, stop, step give "// &
+                                       "10000001 points; a sweep has at most 1e7", err%message)
+        cfg%sweep_start = 1
+        cfg%sweep_stop = 1.0e7_wp
+        cfg%sweep_step = 1
+        call validate_config(cfg, err)
+        call check(t, .not. allocated(err), '1e7 points along one parameter are accepted')
+    end subroutine test_point_limit
 
     !> One point: the parameter set (every bond for 'spacing'), checked like any input.
     subroutine test_point_config(t)
