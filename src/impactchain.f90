@@ -41,7 +41,7 @@ module impactchain
                            sweep_point_config, run_sweep_branches, write_sweep_file, &
                            save_checkpoint, load_checkpoint, remove_file, checkpoint_every, &
                            validate_sweep_points, checkpoint_path, branch_record_sizes, &
-                           pack_branch, unpack_branch
+                           pack_branch, unpack_branch, check_sweep, check_sweep_size
     use chain_attractor, only: attractor_t, kind_names
     use chain_census, only: census_result_t, census_result_init, census_points, &
                             census_point_config, sample_start, run_sample, run_census_samples, &
@@ -78,7 +78,7 @@ module impactchain
     public :: sweep_result_init, sweep_point_config, run_sweep_branches
     public :: write_sweep_file, save_checkpoint, load_checkpoint, remove_file, checkpoint_every
     public :: validate_sweep_points, checkpoint_path, branch_record_sizes, pack_branch
-    public :: unpack_branch
+    public :: unpack_branch, check_sweep, check_sweep_size
     public :: attractor_t, kind_names, census_result_t, census_result_init, census_points
     public :: census_point_config, sample_start, run_sample, run_census_samples
     public :: classify_census, save_census_checkpoint, load_census_checkpoint

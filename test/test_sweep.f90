@@ -17,7 +17,8 @@ module test_sweep
     use chain_model, only: model_t
     use chain_sweep, only: sweep_plan_t, sweep_result_t, plan_sweep, &
                            sweep_result_init, sweep_point_config, run_sweep_branches, &
-                           save_checkpoint, load_checkpoint, remove_file
+                           save_checkpoint, load_checkpoint, remove_file, check_sweep_size, &
+                           branch_record_sizes
     use chain_monitor, only: monitor_t, stage_points
     use testing, only: tally_t, check, check_close
     implicit none
@@ -40,6 +41,7 @@ contains
 
         call test_axes(t)
         call test_point_limit(t)
+        call test_sweep_size(t)
         call test_point_config(t)
         call test_threads(t)
         call test_continuation_equals_files(t)
@@ -135,6 +137,96 @@ contains
         call validate_config(cfg, err)
         call check(t, .not. allocated(err), '1e7 points along one parameter are accepted')
     end subroutine test_point_limit
+
+    !> check_sweep_size refuses exactly what the sweep would hold, measured on the arrays
+    !> themselves: in the file /sweep's (x, collisions, periods, and with exponents their
+    !> errors, blocks and ky), in memory every array of sweep_result_t plus the largest copy
+    !> (a branch packed for a checkpoint; a 2-D sweep's x reordered for the file).
+    subroutine test_sweep_size(t)
+        type(tally_t), intent(inout) :: t
+        character(len=*), parameter :: sweeps(3) = [character(len=160) :: &
+            "&sweep parameter = 'amplitude', start = 1.0, stop = 2.0, step = 0.001 /", &
+            "&sweep parameter = 'amplitude', start = 1.0, stop = 2.0, step = 0.001, "// &
+            "mode = 'independent' /", &
+            "&sweep parameter = 'amplitude', start = 1.0, stop = 2.0, step = 0.01, "// &
+            "parameter2 = 'damping', start2 = 0.1, stop2 = 0.05, step2 = -0.05 /"]
+        character(len=*), parameter :: lyapunov(3) = [character(len=24) :: &
+            "&lyapunov vectors = 2 /", "", ""]
+        type(config_t) :: cfg
+        type(sweep_plan_t) :: plan
+        type(sweep_result_t) :: res
+        type(error_t), allocatable :: err
+        real(wp) :: file_mb, memory_mb, copy
+        integer :: j, nr, ni
+        logical :: refused_file, memory_alone, refused_memory, accepted
+
+        do j = 1, size(sweeps)
+            call config_from(cfg, trim(lyapunov(j))//new_line('a')//trim(sweeps(j)), 'size')
+            plan = plan_sweep(cfg)
+            call sweep_result_init(res, cfg, plan)
+            file_mb = real(bytes_real(res%x) + bytes_real(res%collisions) + &
+                           bytes_int(res%period), wp)
+            if (plan%k > 0) file_mb = file_mb + bytes_real(res%exponents) + &
+                                      bytes_real(res%stderr) + bytes_int8(res%stderr_block) + &
+                                      bytes_real(res%ky)
+            file_mb = file_mb/1.0e6_wp
+            call branch_record_sizes(cfg, plan, nr, ni)
+            copy = 8.0_wp*(nr + ni)
+            if (plan%n_axes == 2) copy = max(copy, real(bytes_real(res%x), wp))
+            memory_mb = (bytes_real(res%values) + bytes_real(res%x) + &
+                         bytes_real(res%collisions) + bytes_int(res%period) + &
+                         bytes_real(res%exponents) + bytes_real(res%stderr) + &
+                         bytes_int8(res%stderr_block) + bytes_real(res%ky) + &
+                         storage_size(res%done)/8*size(res%done) + copy)/1.0e6_wp
+            cfg%max_size_mb = file_mb*(1 - 1.0e-9_wp)
+            call check_sweep_size(cfg, plan, err)
+            refused_file = allocated(err)
+            if (refused_file) refused_file = index(err%message, "&sweep: the records of "// &
+                                                   "this sweep need about") == 1 .and. &
+                                             index(err%message, "in the file") > 0
+            cfg%max_size_mb = file_mb*(1 + 1.0e-9_wp)
+            call check_sweep_size(cfg, plan, err)
+            memory_alone = allocated(err)
+            if (memory_alone) memory_alone = index(err%message, "MB of memory") > 0
+            cfg%max_size_mb = memory_mb*(1 - 1.0e-9_wp)
+            call check_sweep_size(cfg, plan, err)
+            refused_memory = allocated(err)
+            if (refused_memory) refused_memory = index(err%message, "&sweep: this sweep "// &
+                                                       "needs about") == 1
+            cfg%max_size_mb = memory_mb*(1 + 1.0e-9_wp)
+            call check_sweep_size(cfg, plan, err)
+            accepted = .not. allocated(err)
+            call check(t, refused_file .and. memory_alone .and. refused_memory .and. accepted, &
+                       'sweep size '//trim(sweeps(j))//': the file and the memory counted '// &
+                       'exactly, each refused just above max_size_mb')
+        end do
+        ! the keys to change are named; a 2-D sweep's include the second axis
+        cfg%max_size_mb = 0.01_wp
+        call check_sweep_size(cfg, plan, err)
+        call check(t, allocated(err), 'a 2-D sweep over max_size_mb is refused')
+        if (allocated(err)) call check(t, index(err%message, "202 points x n x cycles") > 0 &
+                                       .and. index(err%message, "lower the points (&sweep "// &
+                                                   "start, stop, step, start2, stop2, step2)"// &
+                                                   " or &run cycles") > 0, err%message)
+    end subroutine test_sweep_size
+
+    pure integer(i8) function bytes_real(a)
+        real(wp), intent(in) :: a(..)
+
+        bytes_real = storage_size(1.0_wp)/8*int(size(a), i8)
+    end function bytes_real
+
+    pure integer(i8) function bytes_int(a)
+        integer, intent(in) :: a(..)
+
+        bytes_int = storage_size(1)/8*int(size(a), i8)
+    end function bytes_int
+
+    pure integer(i8) function bytes_int8(a)
+        integer(i8), intent(in) :: a(..)
+
+        bytes_int8 = storage_size(1_i8)/8*int(size(a), i8)
+    end function bytes_int8
 
     !> One point: the parameter set (every bond for 'spacing'), checked like any input.
     subroutine test_point_config(t)
