@@ -18,7 +18,8 @@ module test_sweep
     use chain_sweep, only: sweep_plan_t, sweep_result_t, plan_sweep, &
                            sweep_result_init, sweep_point_config, run_sweep_branches, &
                            save_checkpoint, load_checkpoint, remove_file, check_sweep_size, &
-                           branch_record_sizes
+                           branch_record_sizes, run_sweep, sweep_summary_t
+    use chain_preflight, only: check_before_run
     use chain_monitor, only: monitor_t, stage_points
     use testing, only: tally_t, check, check_close
     implicit none
@@ -42,6 +43,7 @@ contains
         call test_axes(t)
         call test_point_limit(t)
         call test_sweep_size(t)
+        call test_checks_before_run(t)
         call test_point_config(t)
         call test_threads(t)
         call test_continuation_equals_files(t)
@@ -209,6 +211,60 @@ contains
                                                    "start, stop, step, start2, stop2, step2)"// &
                                                    " or &run cycles") > 0, err%message)
     end subroutine test_sweep_size
+
+    !> check_before_run refuses, creating nothing, what run_sweep refuses before it starts:
+    !> a sweep over max_size_mb, an output in a missing directory, an existing output without
+    !> overwrite; run_sweep refuses the same with the same message and leaves no file, and
+    !> what passes the check runs.
+    subroutine test_checks_before_run(t)
+        type(tally_t), intent(inout) :: t
+        type(config_t) :: cfg
+        type(sweep_summary_t) :: summary
+        type(error_t), allocatable :: err, ran
+        character(len=:), allocatable :: tmp
+        logical :: left
+        integer :: u
+
+        tmp = temp_prefix()
+        call config_from(cfg, "&sweep parameter = 'amplitude', start = 1.0, stop = 2.0, "// &
+                         "step = 0.25 /", 'check')
+        cfg%output_file = tmp//'check.h5'
+        cfg%max_size_mb = 1.0e-4_wp
+        call check_before_run(cfg, err)
+        call run_sweep(cfg, summary, ran)
+        call check(t, allocated(err) .and. allocated(ran), 'a sweep over max_size_mb is '// &
+                   'refused by the check and by the run')
+        if (allocated(err) .and. allocated(ran)) call check(t, err%message == ran%message &
+            .and. index(err%message, '&sweep: the records of this sweep') == 1, &
+            'the same message: '//err%message)
+        cfg%max_size_mb = 4096
+        cfg%output_file = tmp//'missing/check.h5'
+        call check_before_run(cfg, err)
+        call run_sweep(cfg, summary, ran)
+        call check(t, allocated(err) .and. allocated(ran), 'an output in a missing '// &
+                   'directory is refused by the check and by the run')
+        if (allocated(err) .and. allocated(ran)) call check(t, err%message == ran%message &
+            .and. index(err%message, "the directory '"//tmp//"missing' does not exist") > 0, &
+            'the same message: '//err%message)
+        cfg%output_file = tmp//'check.h5'
+        open (newunit=u, file=cfg%output_file, status='replace', action='write')
+        close (u)
+        call check_before_run(cfg, err)
+        call run_sweep(cfg, summary, ran)
+        call check(t, allocated(err) .and. allocated(ran), 'an existing output is refused '// &
+                   'by the check and by the run')
+        if (allocated(err) .and. allocated(ran)) call check(t, err%message == ran%message &
+            .and. index(err%message, 'exists') > 0, 'the same message: '//err%message)
+        cfg%overwrite = .true.
+        call check_before_run(cfg, err)
+        call check(t, .not. allocated(err), 'with overwrite the check passes')
+        call remove_file(cfg%output_file)
+        inquire (file=tmp//'check.h5.part', exist=left)
+        call check(t, .not. left, 'no .part is left by a refused sweep')
+        call run_sweep(cfg, summary, ran)
+        call check(t, .not. allocated(ran) .and. summary%complete, 'what passes the check runs')
+        call remove_file(cfg%output_file)
+    end subroutine test_checks_before_run
 
     pure integer(i8) function bytes_real(a)
         real(wp), intent(in) :: a(..)
