@@ -9,7 +9,7 @@ program main
                            record_result_t, run_sweep, sweep_summary_t, checkpoint_path, &
                            catch_interrupts, cli_t, parse_command_line, cli_run, &
                            cli_help, cli_version, cli_usage, code_version, config_summary, &
-                           plan_sweep, validate_sweep_points, branches_t, &
+                           check_before_run, branches_t, &
                            continuation_to_file, census_result_t, census_to_file, kind_names
     use stderr_monitor, only: stderr_monitor_t, close_progress
     implicit none
@@ -41,7 +41,8 @@ program main
     call read_config(cli%input, cfg, err, cli%overrides)
     if (allocated(err)) call fail(err%message)
     if (cli%check) then
-        if (cfg%sweep) call validate_sweep_points(cfg, plan_sweep(cfg), err)
+        ! the checks the run would make before it starts, so that --check passes what runs
+        call check_before_run(cfg, err)
         if (allocated(err)) call fail(err%message)
         write (output_unit, '(a)', advance='no') config_summary(cfg)
         stop
@@ -91,7 +92,9 @@ contains
             '                         --set chain.amplitude=2.2 --set run.cycles=1000', &
             '  -o, --output file.h5   write to this file (the same as --set output.file=...)', &
             '  --overwrite            replace an existing output file', &
-            '  --check                validate the input, print it resolved, run nothing', &
+            '  --check                validate the input (and what the run checks before', &
+            '                         it starts: sizes, the output file), print it', &
+            '                         resolved, run nothing', &
             '  -q, --quiet            no progress (shown on stderr for runs over 2 s)', &
             '  -h, --help             this text', &
             '  --version              the code version'

@@ -256,9 +256,10 @@ end subroutine ic_random_start
 !> A sweep, as `fpm run` on a namelist with this &sweep group (chain_sweep, OpenMP threads over
 !> the branches: `threads`, 0 for the default), kept in memory: the arrays of the file's /sweep
 !> in the library's order, point p = i + (j - 1) n1 for index i along `parameter`, j along
-!> `parameter2`. A dry run validates every point and returns sizes = (n1, n2, k); then the
-!> caller gives nf = n, nc = cycles, npts = n1 n2, kcap = k, and x of that shape (of shape
-!> (1, 1, 1) with nf = nc = npts = 1 for the dry run: f2py refuses a size 0 there). Names are
+!> `parameter2`. A dry run checks the sweep as the CLI does (check_sweep: its sizes within
+!> max_size_mb, every point) and returns sizes = (n1, n2, k); then the caller gives nf = n,
+!> nc = cycles, npts = n1 n2, kcap = k, and x of that shape (of shape (1, 1, 1) with
+!> nf = nc = npts = 1 for the dry run: f2py refuses a size 0 there). Names are
 !> lower-case byte values; parameter2 empty for a 1-D sweep. Events and the Jacobian are not
 !> kept (as in a sweep file).
 subroutine ic_sweep(n, nsp, spacing, damping, restitution, amplitude, omega, nb, boundary, &
@@ -269,9 +270,9 @@ subroutine ic_sweep(n, nsp, spacing, damping, restitution, amplitude, omega, nb,
                     exponents, stderr_bits, stderr_cycles, ky, control, status, msg_len, &
                     message)
     use, intrinsic :: iso_c_binding, only: c_int, c_int64_t, c_double
-    use impactchain, only: i8, error_t, config_t, validate_config, check_size, plan_sweep, &
+    use impactchain, only: i8, error_t, config_t, validate_config, check_sweep, plan_sweep, &
                            sweep_plan_t, sweep_result_t, sweep_result_init, chain_state_t, &
-                           validate_sweep_points, run_sweep_branches
+                           run_sweep_branches
     use chain_bridge, only: shared_monitor_t, make_config, set_sweep, put_message, use_threads, &
                             call_ended, status_ok, status_invalid, status_internal
     implicit none
@@ -316,10 +317,10 @@ subroutine ic_sweep(n, nsp, spacing, damping, restitution, amplitude, omega, nb,
         call set_sweep(cfg, parameter, start, stop, step, mode, parameter2, start2, stop2, step2)
         call validate_config(cfg, err)
     end if
-    if (.not. allocated(err)) call check_size(cfg, err)
+    ! the CLI's checks (sizes against max_size_mb, every point), before the caller allocates x
     if (.not. allocated(err)) then
         plan = plan_sweep(cfg)
-        call validate_sweep_points(cfg, plan, err)
+        call check_sweep(cfg, plan, err)
     end if
     if (allocated(err)) then
         call put_message(err%message, status_invalid, status, msg_len, message)

@@ -19,7 +19,7 @@ module chain_census_file
     use chain_monitor, only: monitor_t
     implicit none
     private
-    public :: census_to_file, write_census_file, check_census_size
+    public :: census_to_file, write_census_file, check_census, check_census_size
 
 contains
 
@@ -37,8 +37,7 @@ contains
         type(census_checkpoint_monitor_t) :: watch
         character(len=:), allocatable :: checkpoint
 
-        if (cfg%sweep) call validate_sweep_points(cfg, plan_sweep(cfg), err)
-        if (.not. allocated(err)) call check_census_size(cfg, err)
+        call check_census(cfg, err)
         if (allocated(err)) return
         call output_begin(out, cfg%output_file, cfg%overwrite, err)
         if (allocated(err)) return
@@ -73,6 +72,18 @@ contains
         call output_end(out, .true., err)
         if (.not. allocated(err)) call remove_file(checkpoint)
     end subroutine census_to_file
+
+    !> Everything that refuses the census itself before any work: its size, and along a
+    !> sweep every point's configuration. (The output file is output_begin's, or
+    !> output_check's.)
+    subroutine check_census(cfg, err)
+        type(config_t), intent(in) :: cfg
+        type(error_t), allocatable, intent(out) :: err
+
+        call check_census_size(cfg, err)
+        if (.not. allocated(err) .and. cfg%sweep) &
+            call validate_sweep_points(cfg, plan_sweep(cfg), err)
+    end subroutine check_census
 
     !> Refuse, before anything runs, a census whose results exceed &output max_size_mb: per
     !> sample its start, state, periods, impacts per bond and k exponents with their errors (in

@@ -23,7 +23,7 @@ module chain_config
     private
     public :: config_t, read_config, validate_config, config_summary, lyapunov_vectors
     public :: max_list, fmt_real, fmt_int, sweep_parameters, set_boundary, check_size
-    public :: plane_coordinate
+    public :: plane_coordinate, sweep_axis_points
 
     !> Longest explicit list in a namelist (spacing, x0, v0); longer chains use a file start.
     integer, parameter :: max_list = 100001
@@ -34,6 +34,8 @@ module chain_config
     character(len=*), parameter :: group_names(8) = &
         [character(len=12) :: 'chain', 'initial', 'run', 'lyapunov', 'output', 'sweep', &
          'continuation', 'census']
+    !> Most points of a sweep, along one parameter or in a 2-D grid.
+    integer, parameter :: max_sweep_points = 10000000
     !> Most samples of a census (per point).
     integer, parameter :: max_samples = 10000000
     !> Most points along each side of a census plane (max_plane_points**2 <= max_samples).
@@ -926,8 +928,9 @@ contains
             call set_error(err, "&output: file must not be empty")
             return
         end if
-        call check_range(err, 'output', 'max_size_mb', cfg%max_size_mb, 0.0_wp, 1.0e9_wp, &
-                         '(0, 1e9]')
+        ! open below: 0 would refuse every run, so it is out of range like a negative value
+        call check_range(err, 'output', 'max_size_mb', cfg%max_size_mb, tiny(1.0_wp), &
+                         1.0e9_wp, '(0, 1e9]')
     end subroutine validate_output
 
     !> n, the number of oscillators, within [1, max_n].
@@ -974,8 +977,40 @@ contains
                 return
             end if
             call check_axis(err, '2', cfg%sweep_start2, cfg%sweep_stop2, cfg%sweep_step2)
+            if (allocated(err)) return
         end if
+        call check_sweep_points(err, cfg)
     end subroutine validate_sweep
+
+    !> The points of the whole sweep (in a 2-D grid the product of its axes) within
+    !> max_sweep_points; each axis is already within 1e7 steps.
+    subroutine check_sweep_points(err, cfg)
+        type(error_t), allocatable, intent(out) :: err
+        type(config_t), intent(in) :: cfg
+        integer(i8) :: n1, n2
+
+        n1 = sweep_axis_points(cfg%sweep_start, cfg%sweep_stop, cfg%sweep_step)
+        if (len(cfg%sweep_parameter2) == 0) then
+            if (n1 > max_sweep_points) call set_error(err, "&sweep: start, stop, step give "// &
+                fmt_int8(n1)//" points; a sweep has at most 1e7")
+            return
+        end if
+        n2 = sweep_axis_points(cfg%sweep_start2, cfg%sweep_stop2, cfg%sweep_step2)
+        if (n1*n2 > max_sweep_points) call set_error(err, "&sweep: start, stop, step and "// &
+            "start2, stop2, step2 give "//fmt_int8(n1)//" x "//fmt_int8(n2)//" = "// &
+            fmt_int8(n1*n2)//" points; a sweep has at most 1e7")
+    end subroutine check_sweep_points
+
+    !> Number of points from start to stop in steps of step (rounding-safe), for a checked
+    !> axis (finite, step towards stop, at most 1e7 steps).
+    pure integer function sweep_axis_points(start, stop, step) result(points)
+        real(wp), intent(in) :: start, stop, step
+
+        points = nint((stop - start)/step) + 1
+        if (start + (points - 1)*step > max(start, stop) + 1.0e-9_wp*abs(step) .or. &
+            start + (points - 1)*step < min(start, stop) - 1.0e-9_wp*abs(step)) &
+            points = points - 1
+    end function sweep_axis_points
 
     !> The start value is the one in &chain; the branch runs from it towards `stop`.
     subroutine validate_continuation(cfg, err)

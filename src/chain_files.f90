@@ -1,7 +1,8 @@
 !> Plain files on disk, written safely: a file is written under a temporary name, checked on
 !> disk for every byte written (a full disk can go unreported by buffered writes), and only
 !> then renamed over its final name (atomic on one file system). Used for the sweep
-!> checkpoint and for the copy a stopped run is continued into.
+!> checkpoint and for the copy a stopped run is continued into. Also whether a file can be
+!> made in a directory, asked before any run starts.
 !> Infrastructure, no model section.
 module chain_files
     use, intrinsic :: iso_c_binding, only: c_char, c_int, c_null_char
@@ -11,6 +12,9 @@ module chain_files
     implicit none
     private
     public :: rename_file, remove_file, copy_file, close_checked
+    public :: directory_of, is_directory, can_write_in
+
+    integer(c_int), parameter :: f_ok = 0, w_ok = 2, x_ok = 1 !! POSIX access() modes
 
     interface
         function c_rename(old, new) bind(C, name='rename') result(status)
@@ -18,6 +22,13 @@ module chain_files
             character(kind=c_char), intent(in) :: old(*), new(*)
             integer(c_int) :: status
         end function c_rename
+
+        function c_access(path, mode) bind(C, name='access') result(status)
+            import :: c_char, c_int
+            character(kind=c_char), intent(in) :: path(*)
+            integer(c_int), value :: mode
+            integer(c_int) :: status
+        end function c_access
     end interface
 
 contains
@@ -30,6 +41,36 @@ contains
         if (c_rename(from//c_null_char, to//c_null_char) /= 0) &
             call set_error(err, "output: cannot rename '"//from//"' to '"//to//"'")
     end subroutine rename_file
+
+    !> The directory a file named `path` is (or would be) in: '.' for a bare name.
+    pure function directory_of(path) result(dir)
+        character(len=*), intent(in) :: path
+        character(len=:), allocatable :: dir
+        integer :: slash
+
+        slash = index(path, '/', back=.true.)
+        if (slash == 0) then
+            dir = '.'
+        else if (slash == 1) then
+            dir = '/'
+        else
+            dir = path(:slash - 1)
+        end if
+    end function directory_of
+
+    !> `dir` exists and is a directory (its entry '.' does; a plain file has none).
+    logical function is_directory(dir)
+        character(len=*), intent(in) :: dir
+
+        is_directory = c_access(dir//'/.'//c_null_char, f_ok) == 0
+    end function is_directory
+
+    !> New files can be made in the directory `dir` (write and search permission).
+    logical function can_write_in(dir)
+        character(len=*), intent(in) :: dir
+
+        can_write_in = c_access(dir//'/.'//c_null_char, ior(w_ok, x_ok)) == 0
+    end function can_write_in
 
     !> Delete a file if it exists.
     subroutine remove_file(path)

@@ -23,7 +23,8 @@
 module chain_output
     use chain_kinds, only: wp, i8
     use chain_error, only: error_t, set_error, fmt_int, fmt_int8
-    use chain_files, only: rename_file, remove_file, copy_file
+    use chain_files, only: rename_file, remove_file, copy_file, directory_of, is_directory, &
+                           can_write_in
     use chain_model, only: model_t
     use chain_state, only: chain_state_t
     use chain_hdf5, only: h5_file_t, h5_real, h5_int, h5_int8, h5_create_file, h5_open_file, &
@@ -34,7 +35,8 @@ module chain_output
                           h5_set_scale, h5_dimensions, h5_detach_dimensions, h5_delete_attr
     implicit none
     private
-    public :: output_t, output_begin, output_header, output_strobe_write, output_events_append
+    public :: output_t, output_check, output_begin, output_header, output_strobe_write
+    public :: output_events_append
     public :: output_final, output_stats, output_periods, output_lyapunov, output_jacobian
     public :: output_clv_rows, output_clv, output_windows_write, output_truncate_windows
     public :: output_end, output_abort, read_final_state, output_group
@@ -81,6 +83,32 @@ contains
 
     ! ---- a run's file, from its start to its end ------------------------------------------
 
+    !> What output_begin refuses, checked without creating anything (so that `--check` can
+    !> ask it too): an existing file (unless overwrite), a directory that is missing or that
+    !> cannot be written to.
+    subroutine output_check(path, overwrite, err)
+        character(len=*), intent(in) :: path
+        logical, intent(in) :: overwrite
+        type(error_t), allocatable, intent(out) :: err
+        character(len=:), allocatable :: dir
+        logical :: exists
+
+        inquire (file=path, exist=exists)
+        if (exists .and. .not. overwrite) then
+            call set_error(err, "&output: file = '"//path//"' exists; choose another name "// &
+                           "or set overwrite = .true.")
+            return
+        end if
+        dir = directory_of(path)
+        if (.not. is_directory(dir)) then
+            call set_error(err, "&output: cannot create '"//path//"': the directory '"//dir// &
+                           "' does not exist")
+        else if (.not. can_write_in(dir)) then
+            call set_error(err, "&output: cannot create '"//path//"': no permission to "// &
+                           "write in the directory '"//dir//"'")
+        end if
+    end subroutine output_check
+
     !> Refuse an existing file (unless overwrite) or an unwritable place, before any run starts;
     !> then create `path.part`.
     subroutine output_begin(out, path, overwrite, err)
@@ -88,16 +116,11 @@ contains
         character(len=*), intent(in) :: path
         logical, intent(in) :: overwrite
         type(error_t), allocatable, intent(out) :: err
-        logical :: exists
 
         out%path = path
         out%part_path = path//'.part'
-        inquire (file=path, exist=exists)
-        if (exists .and. .not. overwrite) then
-            call set_error(err, "&output: file = '"//path//"' exists; choose another name "// &
-                           "or set overwrite = .true.")
-            return
-        end if
+        call output_check(path, overwrite, err)
+        if (allocated(err)) return
         call h5_create_file(out%file, out%part_path, err)
         if (allocated(err)) err%message = "&output: cannot create '"//out%part_path// &
                                           "' (missing directory or no permission to write "// &

@@ -26,18 +26,18 @@ module chain_sim
     use chain_clv, only: clv_rows_t
     use chain_monitor, only: monitor_t
     use chain_section, only: chain_at_section
-    use chain_output, only: output_t, output_begin, output_header, output_strobe_write, &
-                            output_events_append, output_final, output_stats, output_periods, &
-                            output_lyapunov, output_jacobian, output_end, output_abort, &
-                            output_clv_rows, output_clv, &
+    use chain_output, only: output_t, output_check, output_begin, output_header, &
+                            output_strobe_write, output_events_append, output_final, &
+                            output_stats, output_periods, output_lyapunov, output_jacobian, &
+                            output_end, output_abort, output_clv_rows, output_clv, &
                             read_final_state, output_truncate_strobe, resume_data_t, &
                             output_windows_write, output_truncate_windows, &
                             output_resume, read_resume, output_inspect, output_continue, &
-                            file_continuable, file_other_input
+                            file_absent, file_continuable, file_other_input
     implicit none
     private
-    public :: simulate_to_file, initial_state, start_chain, write_run_header, chain_on_section
-    public :: restart_chain, continuation_start, uniform
+    public :: simulate_to_file, check_run, initial_state, start_chain, write_run_header
+    public :: chain_on_section, restart_chain, continuation_start, uniform
 
     !> Sends records to the HDF5 file as they come.
     type, extends(record_sink_t) :: file_sink_t
@@ -205,24 +205,8 @@ contains
         type(error_t), allocatable :: err2
         integer :: found
 
-        call check_size(cfg, err)
+        call check_run(cfg, err, found)
         if (allocated(err)) return
-        call output_inspect(cfg%output_file, cfg%input_text, found)
-        if (found == file_other_input .and. .not. cfg%overwrite) then
-            call set_error(err, "&output: file = '"//cfg%output_file//"' is a run stopped "// &
-                           "early from another input (its input_namelist differs), so it "// &
-                           "cannot be continued; choose another name, or set overwrite = "// &
-                           ".true. to replace it")
-            return
-        end if
-        if (found == file_continuable .and. cfg%record%covariant .and. .not. cfg%overwrite) &
-            then
-            call set_error(err, "&output: file = '"//cfg%output_file//"' is a run with "// &
-                           "covariant vectors stopped early, which cannot be continued (the "// &
-                           "factors of its records were in scratch files); set overwrite = "// &
-                           ".true. to run it again from the start")
-            return
-        end if
         if (found == file_continuable .and. .not. cfg%record%covariant) then
             call continue_chain(cfg, chain, state, err)
             if (allocated(err)) return
@@ -254,6 +238,39 @@ contains
         call output_end(sink%out, res%complete, err2)
         if (allocated(err2)) call move_alloc(err2, err)
     end subroutine simulate_to_file
+
+    !> Every check simulate_to_file makes before it starts, creating nothing (also what
+    !> `--check` runs): the sizes, and what the output's name holds (`found`, output_inspect's
+    !> answer): a run of the same input stopped early is continued (but not one with covariant
+    !> vectors), any other file there is refused unless overwrite; then its directory.
+    subroutine check_run(cfg, err, found)
+        type(config_t), intent(in) :: cfg
+        type(error_t), allocatable, intent(out) :: err
+        integer, intent(out), optional :: found
+        integer :: holds
+
+        if (present(found)) found = file_absent
+        call check_size(cfg, err)
+        if (allocated(err)) return
+        call output_inspect(cfg%output_file, cfg%input_text, holds)
+        if (present(found)) found = holds
+        if (holds == file_other_input .and. .not. cfg%overwrite) then
+            call set_error(err, "&output: file = '"//cfg%output_file//"' is a run stopped "// &
+                           "early from another input (its input_namelist differs), so it "// &
+                           "cannot be continued; choose another name, or set overwrite = "// &
+                           ".true. to replace it")
+        else if (holds == file_continuable .and. cfg%record%covariant .and. &
+                 .not. cfg%overwrite) then
+            call set_error(err, "&output: file = '"//cfg%output_file//"' is a run with "// &
+                           "covariant vectors stopped early, which cannot be continued (the "// &
+                           "factors of its records were in scratch files); set overwrite = "// &
+                           ".true. to run it again from the start")
+        else
+            ! a continued run's file exists by design: only its directory is checked
+            call output_check(cfg%output_file, cfg%overwrite .or. (holds == file_continuable &
+                              .and. .not. cfg%record%covariant), err)
+        end if
+    end subroutine check_run
 
     !> /resume of a run stopped at a record: what the engine holds beyond /final, the tangent
     !> frame and the Lyapunov accumulator (undone by continue_chain).

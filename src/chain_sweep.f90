@@ -26,7 +26,8 @@ module chain_sweep
     use chain_engine, only: chain_t, chain_init
     use chain_model, only: set_model_parameter, parameter_units
     use chain_state, only: chain_state_t, moving_state
-    use chain_config, only: config_t, validate_config, lyapunov_vectors, check_size
+    use chain_config, only: config_t, validate_config, lyapunov_vectors, check_size, &
+                            sweep_axis_points
     use chain_record, only: memory_sink_t, record_result_t, record_cycles
     use chain_sim, only: start_chain, write_run_header, continuation_start
     use chain_output, only: output_t, output_begin, output_group, output_end, output_abort, &
@@ -39,6 +40,7 @@ module chain_sweep
     public :: sweep_plan_t, sweep_result_t, plan_sweep, sweep_point_config, run_branch
     public :: run_sweep_branches, sweep_result_init
     public :: run_sweep, write_sweep_file, sweep_summary_t, validate_sweep_points
+    public :: check_sweep, check_sweep_size
     public :: checkpoint_path
     public :: save_checkpoint, load_checkpoint, checkpoint_every
     ! (chain_files' remove_file, for the drivers that delete a finished sweep's checkpoint)
@@ -102,10 +104,10 @@ contains
         type(config_t), intent(in) :: cfg
         type(sweep_plan_t) :: plan
 
-        plan%n_axis1 = axis_points(cfg%sweep_start, cfg%sweep_stop, cfg%sweep_step)
+        plan%n_axis1 = sweep_axis_points(cfg%sweep_start, cfg%sweep_stop, cfg%sweep_step)
         plan%n_axes = 1
         if (len(cfg%sweep_parameter2) > 0) then
-            plan%n_axis2 = axis_points(cfg%sweep_start2, cfg%sweep_stop2, cfg%sweep_step2)
+            plan%n_axis2 = sweep_axis_points(cfg%sweep_start2, cfg%sweep_stop2, cfg%sweep_step2)
             plan%n_axes = 2
         end if
         plan%n_points = plan%n_axis1*plan%n_axis2
@@ -118,16 +120,6 @@ contains
         end if
         plan%k = lyapunov_vectors(cfg)
     end function plan_sweep
-
-    !> Number of points from start to stop in steps of step (rounding-safe).
-    pure integer function axis_points(start, stop, step)
-        real(wp), intent(in) :: start, stop, step
-
-        axis_points = nint((stop - start)/step) + 1
-        if (start + (axis_points - 1)*step > max(start, stop) + 1.0e-9_wp*abs(step) .or. &
-            start + (axis_points - 1)*step < min(start, stop) - 1.0e-9_wp*abs(step)) &
-            axis_points = axis_points - 1
-    end function axis_points
 
     pure subroutine sweep_result_init(res, cfg, plan)
         type(sweep_result_t), intent(out) :: res
@@ -321,9 +313,7 @@ contains
         type(checkpoint_monitor_t) :: watch
 
         plan = plan_sweep(cfg)
-        call validate_sweep_points(cfg, plan, err)
-        if (allocated(err)) return
-        call check_size(cfg, err)
+        call check_sweep(cfg, plan, err)
         if (allocated(err)) return
         call output_begin(out, cfg%output_file, cfg%overwrite, err)
         if (allocated(err)) return
@@ -371,6 +361,64 @@ contains
         call save_checkpoint(monitor%path, monitor%cfg, monitor%plan, monitor%res, &
                              monitor%starts, monitor%err)
     end subroutine save_sweep_checkpoint
+
+    !> Everything that refuses the sweep itself before any work, cheapest first: its results
+    !> against &output max_size_mb, one point's records and tangent vectors (check_size), and
+    !> every point's configuration. (The output file is output_begin's, or output_check's.)
+    subroutine check_sweep(cfg, plan, err)
+        type(config_t), intent(in) :: cfg
+        type(sweep_plan_t), intent(in) :: plan
+        type(error_t), allocatable, intent(out) :: err
+
+        call check_sweep_size(cfg, plan, err)
+        if (.not. allocated(err)) call check_size(cfg, err)
+        if (.not. allocated(err)) call validate_sweep_points(cfg, plan, err)
+    end subroutine check_sweep
+
+    !> Refuse a sweep whose results exceed &output max_size_mb, as check_size does a run's:
+    !> first /sweep in the file (x, collisions_per_cycle, period as 4-byte integers, and with
+    !> exponents exponents, stderr, stderr_block, ky_dimension), then the memory, which holds
+    !> every point's results (sweep_result_t) until the file is written, plus the largest copy
+    !> made of them: a branch packed for a checkpoint (pack_branch: 8-byte values), or in a
+    !> 2-D sweep /sweep/x reordered for the file. (The MPI driver's rank 0 also holds the
+    !> gathered branches; the per-thread records of a running point are check_size's.)
+    subroutine check_sweep_size(cfg, plan, err)
+        type(config_t), intent(in) :: cfg
+        type(sweep_plan_t), intent(in) :: plan
+        type(error_t), allocatable, intent(out) :: err
+        real(wp) :: points, n, k, records, file_mb, held, copy
+        character(len=:), allocatable :: keys
+
+        points = plan%n_points
+        n = cfg%model%n
+        k = plan%k
+        records = 8*n*real(cfg%record%cycles, wp)  ! bytes of one point's /sweep/x
+        keys = '&sweep start, stop, step'
+        if (plan%n_axes == 2) keys = keys//', start2, stop2, step2'
+        file_mb = points*(records + 8 + 4*n + merge(24*k + 8, 0.0_wp, plan%k > 0))/1.0e6_wp
+        if (file_mb > cfg%max_size_mb) then
+            call set_error(err, "&sweep: the records of this sweep need about "// &
+                           fmt_real(file_mb)//" MB in the file ("//fmt_int(plan%n_points)// &
+                           " points x n x cycles x 8 bytes, plus periods and exponents), "// &
+                           "more than &output max_size_mb = "//fmt_real(cfg%max_size_mb)// &
+                           "; lower the points ("//keys//") or &run cycles, or raise "// &
+                           "max_size_mb")
+            return
+        end if
+        ! values, x, collisions, period, exponents, stderr, stderr_block, ky, done
+        held = points*(8*plan%n_axes + records + 8 + 4*n + 24*k + 8 + 4)
+        ! pack_branch: per point 2 + n cycles + 2k reals and 1 + n + k integers; the resume
+        ! state 2n + 1 reals and n + 2 integers
+        copy = 8*(plan%points_per_branch*(3 + records/8 + n + 3*k) + 3*n + 3)
+        if (plan%n_axes == 2) copy = max(copy, points*records)
+        if ((held + copy)/1.0e6_wp > cfg%max_size_mb) &
+            call set_error(err, "&sweep: this sweep needs about "// &
+                           fmt_real((held + copy)/1.0e6_wp)//" MB of memory (every point's "// &
+                           "records, kept until the file is written, and the copy a "// &
+                           "checkpoint or the file's layout makes), more than &output "// &
+                           "max_size_mb = "//fmt_real(cfg%max_size_mb)//"; lower the points ("// &
+                           keys//") or &run cycles, or raise max_size_mb")
+    end subroutine check_sweep_size
 
     !> Validate every point before any work (an out-of-range point is an error up front).
     subroutine validate_sweep_points(cfg, plan, err)

@@ -34,22 +34,25 @@ module impactchain
     use chain_branch_file, only: continuation_guess, continuation_options, run_continuation, &
                                  continuation_to_file, write_continuation, &
                                  continuation_table_t, continuation_table, finite_or_inf
-    use chain_sim, only: simulate_to_file, start_chain, initial_state, chain_on_section, &
-                         restart_chain
+    use chain_sim, only: simulate_to_file, check_run, start_chain, initial_state, &
+                         chain_on_section, restart_chain
     use chain_sweep, only: run_sweep, sweep_summary_t, plan_sweep, sweep_plan_t, &
                            sweep_result_t, sweep_result_init, &
                            sweep_point_config, run_sweep_branches, write_sweep_file, &
                            save_checkpoint, load_checkpoint, remove_file, checkpoint_every, &
                            validate_sweep_points, checkpoint_path, branch_record_sizes, &
-                           pack_branch, unpack_branch
+                           pack_branch, unpack_branch, check_sweep, check_sweep_size
     use chain_attractor, only: attractor_t, kind_names
     use chain_census, only: census_result_t, census_result_init, census_points, &
                             census_point_config, sample_start, run_sample, run_census_samples, &
                             classify_census, save_census_checkpoint, load_census_checkpoint, &
                             census_starts, sample_record_sizes, pack_sample, unpack_sample, &
                             ensemble_statistics
-    use chain_census_file, only: census_to_file, write_census_file, check_census_size
-    use chain_output, only: code_version, output_t, output_begin, output_end, output_abort
+    use chain_census_file, only: census_to_file, write_census_file, check_census, &
+                                 check_census_size
+    use chain_preflight, only: check_before_run
+    use chain_output, only: code_version, output_t, output_check, output_begin, output_end, &
+                            output_abort
     use chain_cli, only: cli_t, parse_command_line, cli_run, cli_help, cli_version, cli_usage, &
                          cli_error
     use chain_interrupt, only: catch_interrupts, interrupted
@@ -68,6 +71,7 @@ module impactchain
     public :: stage_name
     public :: record_spec_t, clv_rows_t, clv_result_t
     public :: advance_to_point, poincare_jacobian, simulate_to_file, start_chain, initial_state
+    public :: check_run, check_before_run
     public :: chain_on_section, restart_chain
     public :: orbit_t, orbit_options_t, find_orbit, orbit_gap_minimum, impact_bonds
     public :: branch_options_t, branch_point_t, special_point_t, branches_t, follow_branches
@@ -78,13 +82,14 @@ module impactchain
     public :: sweep_result_init, sweep_point_config, run_sweep_branches
     public :: write_sweep_file, save_checkpoint, load_checkpoint, remove_file, checkpoint_every
     public :: validate_sweep_points, checkpoint_path, branch_record_sizes, pack_branch
-    public :: unpack_branch
+    public :: unpack_branch, check_sweep, check_sweep_size
     public :: attractor_t, kind_names, census_result_t, census_result_init, census_points
     public :: census_point_config, sample_start, run_sample, run_census_samples
     public :: classify_census, save_census_checkpoint, load_census_checkpoint
     public :: census_to_file, write_census_file, check_census_size, census_starts
+    public :: check_census
     public :: sample_record_sizes, pack_sample, unpack_sample, ensemble_statistics
-    public :: code_version, output_t, output_begin, output_end, output_abort
+    public :: code_version, output_t, output_check, output_begin, output_end, output_abort
     public :: cli_t, parse_command_line, cli_run, cli_help, cli_version, cli_usage, cli_error
     public :: catch_interrupts, interrupted
     public :: progress_t, progress_start, progress_update, stderr_is_terminal

@@ -9,7 +9,7 @@ module test_sweep
     !$ use omp_lib, only: omp_set_num_threads
     use chain_kinds, only: wp, i8
     use chain_error, only: error_t
-    use chain_config, only: config_t, read_config
+    use chain_config, only: config_t, read_config, validate_config
     use chain_sim, only: simulate_to_file
     use chain_record, only: record_result_t
     use chain_output, only: read_final_state
@@ -17,7 +17,9 @@ module test_sweep
     use chain_model, only: model_t
     use chain_sweep, only: sweep_plan_t, sweep_result_t, plan_sweep, &
                            sweep_result_init, sweep_point_config, run_sweep_branches, &
-                           save_checkpoint, load_checkpoint, remove_file
+                           save_checkpoint, load_checkpoint, remove_file, check_sweep_size, &
+                           branch_record_sizes, run_sweep, sweep_summary_t
+    use chain_preflight, only: check_before_run
     use chain_monitor, only: monitor_t, stage_points
     use testing, only: tally_t, check, check_close
     implicit none
@@ -39,6 +41,9 @@ contains
         type(tally_t), intent(inout) :: t
 
         call test_axes(t)
+        call test_point_limit(t)
+        call test_sweep_size(t)
+        call test_checks_before_run(t)
         call test_point_config(t)
         call test_threads(t)
         call test_continuation_equals_files(t)
@@ -94,6 +99,190 @@ contains
         plan = plan_sweep(cfg)
         call check(t, plan%n_branches == 6, 'independent grid: a branch per point')
     end subroutine test_axes
+
+    !> At most 1e7 points in all: along one parameter, and in a 2-D grid the product of its
+    !> axes (each axis alone within the limit), refused when read, naming the keys.
+    subroutine test_point_limit(t)
+        type(tally_t), intent(inout) :: t
+        type(config_t) :: cfg
+        type(error_t), allocatable :: err
+
+        call config_from(cfg, "&sweep parameter = 'amplitude', start = 1.0, stop = 2.0, "// &
+                         "step = 0.5, parameter2 = 'damping', start2 = 0.1, stop2 = 0.05, "// &
+                         "step2 = -0.05 /", 'limit')
+        cfg%sweep_step = 1.0e-4_wp           ! 10001 values
+        cfg%sweep_stop2 = 0.9_wp
+        cfg%sweep_step2 = 1.0e-4_wp          ! 8001 values
+        call validate_config(cfg, err)
+        call check(t, allocated(err), 'a 10001 x 8001 grid is refused')
+        if (allocated(err)) call check(t, err%message == "&sweep: start, stop, step and "// &
+                                       "start2, stop2, step2 give 10001 x 8001 = 80018001 "// &
+                                       "points; a sweep has at most 1e7", err%message)
+        cfg%sweep_stop2 = 0.1_wp + 999*1.0e-4_wp ! 10001 x 1000 = 10010001
+        call validate_config(cfg, err)
+        call check(t, allocated(err), 'a grid just above 1e7 points is refused')
+        cfg%sweep_stop = 1.0_wp + 9999*1.0e-4_wp ! 10000 x 1000
+        call validate_config(cfg, err)
+        call check(t, .not. allocated(err), 'a grid of exactly 1e7 points is accepted')
+        ! along one parameter: 1e7 steps is 1e7 + 1 points, one too many
+        cfg%sweep_parameter2 = ''
+        cfg%sweep_start = 0
+        cfg%sweep_stop = 1
+        cfg%sweep_step = 1.0e-7_wp
+        call validate_config(cfg, err)
+        call check(t, allocated(err), '1e7 + 1 points along one parameter are refused')
+        if (allocated(err)) call check(t, err%message == "&sweep: start, stop, step give "// &
+                                       "10000001 points; a sweep has at most 1e7", err%message)
+        cfg%sweep_start = 1
+        cfg%sweep_stop = 1.0e7_wp
+        cfg%sweep_step = 1
+        call validate_config(cfg, err)
+        call check(t, .not. allocated(err), '1e7 points along one parameter are accepted')
+    end subroutine test_point_limit
+
+    !> check_sweep_size refuses exactly what the sweep would hold, measured on the arrays
+    !> themselves: in the file /sweep's (x, collisions, periods, and with exponents their
+    !> errors, blocks and ky), in memory every array of sweep_result_t plus the largest copy
+    !> (a branch packed for a checkpoint; a 2-D sweep's x reordered for the file).
+    subroutine test_sweep_size(t)
+        type(tally_t), intent(inout) :: t
+        character(len=*), parameter :: sweeps(3) = [character(len=160) :: &
+            "&sweep parameter = 'amplitude', start = 1.0, stop = 2.0, step = 0.001 /", &
+            "&sweep parameter = 'amplitude', start = 1.0, stop = 2.0, step = 0.001, "// &
+            "mode = 'independent' /", &
+            "&sweep parameter = 'amplitude', start = 1.0, stop = 2.0, step = 0.01, "// &
+            "parameter2 = 'damping', start2 = 0.1, stop2 = 0.05, step2 = -0.05 /"]
+        character(len=*), parameter :: lyapunov(3) = [character(len=24) :: &
+            "&lyapunov vectors = 2 /", "", ""]
+        type(config_t) :: cfg
+        type(sweep_plan_t) :: plan
+        type(sweep_result_t) :: res
+        type(error_t), allocatable :: err
+        real(wp) :: file_mb, memory_mb, copy
+        integer :: j, nr, ni
+        logical :: refused_file, memory_alone, refused_memory, accepted
+
+        do j = 1, size(sweeps)
+            call config_from(cfg, trim(lyapunov(j))//new_line('a')//trim(sweeps(j)), 'size')
+            plan = plan_sweep(cfg)
+            call sweep_result_init(res, cfg, plan)
+            file_mb = real(bytes_real(res%x) + bytes_real(res%collisions) + &
+                           bytes_int(res%period), wp)
+            if (plan%k > 0) file_mb = file_mb + bytes_real(res%exponents) + &
+                                      bytes_real(res%stderr) + bytes_int8(res%stderr_block) + &
+                                      bytes_real(res%ky)
+            file_mb = file_mb/1.0e6_wp
+            call branch_record_sizes(cfg, plan, nr, ni)
+            copy = 8.0_wp*(nr + ni)
+            if (plan%n_axes == 2) copy = max(copy, real(bytes_real(res%x), wp))
+            memory_mb = (bytes_real(res%values) + bytes_real(res%x) + &
+                         bytes_real(res%collisions) + bytes_int(res%period) + &
+                         bytes_real(res%exponents) + bytes_real(res%stderr) + &
+                         bytes_int8(res%stderr_block) + bytes_real(res%ky) + &
+                         storage_size(res%done)/8*size(res%done) + copy)/1.0e6_wp
+            cfg%max_size_mb = file_mb*(1 - 1.0e-9_wp)
+            call check_sweep_size(cfg, plan, err)
+            refused_file = allocated(err)
+            if (refused_file) refused_file = index(err%message, "&sweep: the records of "// &
+                                                   "this sweep need about") == 1 .and. &
+                                             index(err%message, "in the file") > 0
+            cfg%max_size_mb = file_mb*(1 + 1.0e-9_wp)
+            call check_sweep_size(cfg, plan, err)
+            memory_alone = allocated(err)
+            if (memory_alone) memory_alone = index(err%message, "MB of memory") > 0
+            cfg%max_size_mb = memory_mb*(1 - 1.0e-9_wp)
+            call check_sweep_size(cfg, plan, err)
+            refused_memory = allocated(err)
+            if (refused_memory) refused_memory = index(err%message, "&sweep: this sweep "// &
+                                                       "needs about") == 1
+            cfg%max_size_mb = memory_mb*(1 + 1.0e-9_wp)
+            call check_sweep_size(cfg, plan, err)
+            accepted = .not. allocated(err)
+            call check(t, refused_file .and. memory_alone .and. refused_memory .and. accepted, &
+                       'sweep size '//trim(sweeps(j))//': the file and the memory counted '// &
+                       'exactly, each refused just above max_size_mb')
+        end do
+        ! the keys to change are named; a 2-D sweep's include the second axis
+        cfg%max_size_mb = 0.01_wp
+        call check_sweep_size(cfg, plan, err)
+        call check(t, allocated(err), 'a 2-D sweep over max_size_mb is refused')
+        if (allocated(err)) call check(t, index(err%message, "202 points x n x cycles") > 0 &
+                                       .and. index(err%message, "lower the points (&sweep "// &
+                                                   "start, stop, step, start2, stop2, step2)"// &
+                                                   " or &run cycles") > 0, err%message)
+    end subroutine test_sweep_size
+
+    !> check_before_run refuses, creating nothing, what run_sweep refuses before it starts:
+    !> a sweep over max_size_mb, an output in a missing directory, an existing output without
+    !> overwrite; run_sweep refuses the same with the same message and leaves no file, and
+    !> what passes the check runs.
+    subroutine test_checks_before_run(t)
+        type(tally_t), intent(inout) :: t
+        type(config_t) :: cfg
+        type(sweep_summary_t) :: summary
+        type(error_t), allocatable :: err, ran
+        character(len=:), allocatable :: tmp
+        logical :: left
+        integer :: u
+
+        tmp = temp_prefix()
+        call config_from(cfg, "&sweep parameter = 'amplitude', start = 1.0, stop = 2.0, "// &
+                         "step = 0.25 /", 'check')
+        cfg%output_file = tmp//'check.h5'
+        cfg%max_size_mb = 1.0e-4_wp
+        call check_before_run(cfg, err)
+        call run_sweep(cfg, summary, ran)
+        call check(t, allocated(err) .and. allocated(ran), 'a sweep over max_size_mb is '// &
+                   'refused by the check and by the run')
+        if (allocated(err) .and. allocated(ran)) call check(t, err%message == ran%message &
+            .and. index(err%message, '&sweep: the records of this sweep') == 1, &
+            'the same message: '//err%message)
+        cfg%max_size_mb = 4096
+        cfg%output_file = tmp//'missing/check.h5'
+        call check_before_run(cfg, err)
+        call run_sweep(cfg, summary, ran)
+        call check(t, allocated(err) .and. allocated(ran), 'an output in a missing '// &
+                   'directory is refused by the check and by the run')
+        if (allocated(err) .and. allocated(ran)) call check(t, err%message == ran%message &
+            .and. index(err%message, "the directory '"//tmp//"missing' does not exist") > 0, &
+            'the same message: '//err%message)
+        cfg%output_file = tmp//'check.h5'
+        open (newunit=u, file=cfg%output_file, status='replace', action='write')
+        close (u)
+        call check_before_run(cfg, err)
+        call run_sweep(cfg, summary, ran)
+        call check(t, allocated(err) .and. allocated(ran), 'an existing output is refused '// &
+                   'by the check and by the run')
+        if (allocated(err) .and. allocated(ran)) call check(t, err%message == ran%message &
+            .and. index(err%message, 'exists') > 0, 'the same message: '//err%message)
+        cfg%overwrite = .true.
+        call check_before_run(cfg, err)
+        call check(t, .not. allocated(err), 'with overwrite the check passes')
+        call remove_file(cfg%output_file)
+        inquire (file=tmp//'check.h5.part', exist=left)
+        call check(t, .not. left, 'no .part is left by a refused sweep')
+        call run_sweep(cfg, summary, ran)
+        call check(t, .not. allocated(ran) .and. summary%complete, 'what passes the check runs')
+        call remove_file(cfg%output_file)
+    end subroutine test_checks_before_run
+
+    pure integer(i8) function bytes_real(a)
+        real(wp), intent(in) :: a(..)
+
+        bytes_real = storage_size(1.0_wp)/8*int(size(a), i8)
+    end function bytes_real
+
+    pure integer(i8) function bytes_int(a)
+        integer, intent(in) :: a(..)
+
+        bytes_int = storage_size(1)/8*int(size(a), i8)
+    end function bytes_int
+
+    pure integer(i8) function bytes_int8(a)
+        integer(i8), intent(in) :: a(..)
+
+        bytes_int8 = storage_size(1_i8)/8*int(size(a), i8)
+    end function bytes_int8
 
     !> One point: the parameter set (every bond for 'spacing'), checked like any input.
     subroutine test_point_config(t)

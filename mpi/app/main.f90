@@ -26,13 +26,13 @@ program impactchain_mpi
                        MPI_Allreduce, MPI_Gatherv, MPI_COMM_WORLD, MPI_MAX, &
                        MPI_DOUBLE_PRECISION, MPI_INTEGER, MPI_INTEGER8, MPI_IN_PLACE, &
                        MPI_THREAD_FUNNELED
-    use impactchain, only: census_result_t, census_starts, check_census_size, &
+    use impactchain, only: census_result_t, census_starts, check_before_run, &
                            run_census_samples, classify_census, write_census_file, &
                            save_census_checkpoint, load_census_checkpoint, sample_record_sizes, &
                            pack_sample, unpack_sample, kind_names
     use impactchain, only: wp, i8, error_t, config_t, read_config, sweep_plan_t, &
                            sweep_result_t, chain_state_t, plan_sweep, sweep_result_init, &
-                           validate_sweep_points, checkpoint_path, run_sweep_branches, &
+                           checkpoint_path, run_sweep_branches, &
                            write_sweep_file, save_checkpoint, load_checkpoint, remove_file, &
                            checkpoint_every, branch_record_sizes, pack_branch, unpack_branch, &
                            output_t, output_begin, output_end, output_abort, catch_interrupts, &
@@ -139,8 +139,9 @@ contains
         integer :: b
 
         plan = plan_sweep(cfg)
-        ! every point is checked before any work (every rank alike)
-        call validate_sweep_points(cfg, plan, err)
+        ! the threaded driver's checks (sizes, every point, the output), every rank alike,
+        ! before anything is allocated or created
+        call check_before_run(cfg, err)
         if (allocated(err)) call stop_all(err%message)
         call check_only_or_open_output()
         call sweep_result_init(res, cfg, plan)
@@ -290,8 +291,7 @@ contains
     subroutine start_census()
         integer :: t
 
-        if (cfg%sweep) call validate_sweep_points(cfg, plan_sweep(cfg), err)
-        if (.not. allocated(err)) call check_census_size(cfg, err)
+        call check_before_run(cfg, err)
         if (allocated(err)) call stop_all(err%message)
         call check_only_or_open_output()
         call census_starts(census, cfg, err)

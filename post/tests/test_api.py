@@ -722,6 +722,36 @@ def test_sweep_threads_and_errors() -> None:
         api.sweep(**args, parameter2="omega")
 
 
+# Sweeps too large for memory, refused up front: (api.sweep's arguments, the &sweep group)
+TOO_LARGE: dict[str, tuple[dict[str, Any], str]] = {
+    # 5,000,001 points of 200 records, 32 GB: numpy's MemoryError before the check
+    "long axis": (dict(parameter="amplitude", start=1.0, stop=6.0, step=1e-6),
+                  "&sweep parameter = 'amplitude', start = 1.0, stop = 6.0, step = 1e-06 /"),
+    "grid": (dict(parameter="amplitude", start=1.0, stop=2.0, step=1e-4, parameter2="omega",
+                  start2=1.0, stop2=2.0, step2=1.25e-4),
+             "&sweep parameter = 'amplitude', start = 1.0, stop = 2.0, step = 0.0001, "
+             "parameter2 = 'omega', start2 = 1.0, stop2 = 2.0, step2 = 0.000125 /"),
+    "max_size_mb": (dict(parameter="amplitude", start=1.0, stop=2.0, step=1e-3,
+                         max_size_mb=0.5),
+                    "&sweep parameter = 'amplitude', start = 1.0, stop = 2.0, step = 0.001 /"),
+}
+
+
+@pytest.mark.parametrize("name", sorted(TOO_LARGE))
+def test_sweep_too_large_is_a_value_error(name: str, cli: Path, tmp_path: Path) -> None:
+    """A sweep over max_size_mb (file or memory) or over 1e7 points raises ValueError with
+    the CLI's message, from the dry run, before any array of its size is allocated."""
+    python_args, group = TOO_LARGE[name]
+    run = dict(n=4, amplitude=4.15, omega=1.5, cycles=200 if name == "long axis" else 10)
+    limit = python_args.get("max_size_mb", 4096.0)
+    expected = cli_error(cli, _sweep_namelist(group, **run, events=False, max_size_mb=limit),
+                         tmp_path)
+    assert expected.startswith("&sweep: ")
+    with pytest.raises(ValueError) as info:
+        api.sweep(**run, **python_args)
+    assert str(info.value) == expected
+
+
 def test_extension_needs_no_executable_stack() -> None:
     """The extension's ELF marks the stack non-executable: the library passes no internal
     procedures (which would need trampolines on the stack; monitors are objects), so it

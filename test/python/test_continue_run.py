@@ -105,6 +105,14 @@ def test_stopped_run_continues_bit_for_bit(impactchain_exe, tmp_path):
     assert other.returncode == 1
     assert "is a run stopped early from another input" in other.stderr, other.stderr
     assert "overwrite = .true." in other.stderr
+    # --check answers as the runs do: the same input passes (it continues the file), the
+    # other is refused with the same line
+    check = subprocess.run([str(impactchain_exe), "--check", "run.nml"], cwd=parts,
+                           capture_output=True, text=True, timeout=60)
+    assert check.returncode == 0, check.stderr
+    check = subprocess.run([str(impactchain_exe), "--check", "other.nml"], cwd=parts,
+                           capture_output=True, text=True, timeout=60)
+    assert check.returncode == 1 and check.stderr == other.stderr
     assert (parts / "run.h5").read_bytes() == stopped
     assert not (parts / "run.h5.part").exists()
 

@@ -131,6 +131,48 @@ def test_check_validates_prints_resolved_and_runs_nothing(impactchain_exe, tmp_p
     assert bad.returncode == 1 and "damping" in bad.stderr and not bad.stdout
 
 
+# Single runs --check must refuse as the run does before it starts: (arguments, message)
+REFUSED_RUNS = {
+    "size": (["--set", "run.cycles=10000000", "--set", "output.max_size_mb=1", "-o", "big.h5"],
+             "&output: the strobe records of this run need about 720.00000 MB"),
+    "missing directory": (["-o", "nodir/run.h5"],
+                          "&output: cannot create 'nodir/run.h5': the directory 'nodir' does "
+                          "not exist"),
+    "output is a file's child": (["-o", "in.nml/run.h5"],
+                                 "&output: cannot create 'in.nml/run.h5': the directory "
+                                 "'in.nml' does not exist"),
+    "max_size_mb = 0": (["--set", "output.max_size_mb=0"],
+                        "&output: max_size_mb = 0.0000000 is outside (0, 1e9]"),
+}
+
+
+@pytest.mark.parametrize("case", sorted(REFUSED_RUNS))
+def test_check_refuses_what_the_run_refuses(impactchain_exe, tmp_path, case):
+    """--check and the run give the same one line and exit status 1, creating nothing."""
+    args, message = REFUSED_RUNS[case]
+    (tmp_path / "in.nml").write_text(GOOD)
+    lines = set()
+    for check in (["--check"], []):
+        result = run(impactchain_exe, [*check, *args, "in.nml"], tmp_path, check=False)
+        assert result.returncode == 1 and not result.stdout, (check, result.stderr)
+        assert result.stderr.startswith("impactchain: error: " + message), result.stderr
+        assert result.stderr.count("\n") == 1
+        lines.add(result.stderr)
+        assert sorted(p.name for p in tmp_path.iterdir()) == ["in.nml"]
+    assert len(lines) == 1
+
+
+def test_check_refuses_an_existing_output(impactchain_exe, tmp_path):
+    (tmp_path / "in.nml").write_text(GOOD)
+    (tmp_path / "run.h5").write_bytes(b"precious")
+    refused = run(impactchain_exe, ["--check", "in.nml"], tmp_path, check=False)
+    assert refused.returncode == 1 and not refused.stdout
+    assert refused.stderr == ("impactchain: error: &output: file = 'run.h5' exists; choose "
+                              "another name or set overwrite = .true.\n")
+    run(impactchain_exe, ["--check", "--overwrite", "in.nml"], tmp_path)
+    assert (tmp_path / "run.h5").read_bytes() == b"precious"
+
+
 @pytest.mark.parametrize("args, needle, code", [
     (["--set", "chain.amplitud=3"], "did you mean 'amplitude'", 1),
     (["--set", "chain.n=4.5"], "n = 4.5 is not an integer", 1),

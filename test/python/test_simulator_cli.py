@@ -76,6 +76,8 @@ BAD_INPUTS = {
     "truncated group": ("&chain n=3, amplitude=1, omega=1.5", "&chain"),
     "size limit": ("&chain n=1000, amplitude=1, omega=1.5 /\n&run cycles=1000000 /\n"
                    "&output max_size_mb=10 /", "max_size_mb"),
+    "size limit zero": ("&chain n=3, amplitude=1, omega=1.5 /\n&output max_size_mb=0 /",
+                        "&output: max_size_mb = 0.0000000 is outside (0, 1e9]"),
 }
 
 

@@ -182,3 +182,88 @@ def test_mpi_sweep_stopped_by_sigterm_resumes(impactchain_exe, mpi_exe, tmp_path
     assert f"resumed from a checkpoint: {resumed}" in result.stdout
     assert not (threaded / "part.h5.ckpt").exists()
     assert_same_sweep(tmp_path / "whole.h5", threaded / "part.h5")
+
+
+SMALL = ("&chain n = 4, amplitude = 4.15, omega = 1.5 /\n&run cycles = 10 /\n"
+         "&output file = 'out.h5'{output} /\n&sweep parameter = 'amplitude', {sweep} /\n")
+# Sweeps refused before anything is allocated or created, by --check as by the run, each
+# with one line naming the keys to change: (input, what the message says)
+REFUSED = {
+    # 5,000,001 points (within the 1e7 of an axis) of 200 records: 32 GB of /sweep/x
+    "long axis": ("&chain n = 4, amplitude = 4.15, omega = 1.5 /\n"
+                  "&sweep parameter = 'amplitude', start = 1, stop = 6, step = 1e-6 /\n"
+                  "&output file = 'out.h5' /\n",
+                  "&sweep: the records of this sweep need about 32120.006 MB in the file "
+                  "(5000001 points x n x cycles x 8 bytes, plus periods and exponents), more "
+                  "than &output max_size_mb = 4096.0000; lower the points (&sweep start, stop, "
+                  "step) or &run cycles, or raise max_size_mb"),
+    # each axis within 1e7 points, their product not
+    "grid": (SMALL.format(output="", sweep="start = 1, stop = 2, step = 1e-4, parameter2 = "
+                          "'omega', start2 = 1, stop2 = 2, step2 = 1.25e-4"),
+             "&sweep: start, stop, step and start2, stop2, step2 give 10001 x 8001 = "
+             "80018001 points; a sweep has at most 1e7"),
+    # 100,001 points x 10 records x 4 oscillators x 8 bytes: 32 MB of /sweep/x
+    "file over max_size_mb": (SMALL.format(output=", max_size_mb = 1",
+                                           sweep="start = 1, stop = 2, step = 1e-5"),
+                              "&sweep: the records of this sweep need about 34.400344 MB in "
+                              "the file (100001 points"),
+    # the file fits (0.34 MB), the records and a checkpoint's copy of them in memory not
+    "memory over max_size_mb": (SMALL.format(output=", max_size_mb = 0.5",
+                                             sweep="start = 1, stop = 2, step = 1e-3"),
+                                "&sweep: this sweep needs about 0.74086000 MB of memory"),
+    "missing directory": (SMALL.format(output="", sweep="start = 1, stop = 2, step = 0.5")
+                          .replace("'out.h5'", "'nodir/out.h5'"),
+                          "&output: cannot create 'nodir/out.h5': the directory 'nodir' does "
+                          "not exist"),
+    "max_size_mb = 0": (SMALL.format(output=", max_size_mb = 0",
+                                     sweep="start = 1, stop = 2, step = 0.5"),
+                        "&output: max_size_mb = 0.0000000 is outside (0, 1e9]"),
+}
+
+
+@pytest.mark.parametrize("driver", ["threads", "mpi"])
+@pytest.mark.parametrize("case", sorted(REFUSED))
+def test_sweep_refused_before_anything_exists(impactchain_exe, mpi_exe, tmp_path, case,
+                                              driver):
+    """Exit status 1, one line naming the keys, no backtrace, and nothing written (no file,
+    no .part, no checkpoint), from --check and from the run, threaded and under MPI."""
+    if driver == "mpi" and mpi_exe is None:
+        pytest.skip("mpifort is not installed: the MPI test needs openmpi")
+    text, message = REFUSED[case]
+    (tmp_path / "in.nml").write_text(text)
+    command = [str(impactchain_exe)]
+    if driver == "mpi":
+        command = ["mpirun", "--allow-run-as-root", "--oversubscribe", "-np", "2",
+                   str(mpi_exe)]
+    for check in (["--check"], []):
+        result = subprocess.run([*command, "--quiet", *check, "in.nml"], cwd=tmp_path,
+                                capture_output=True, text=True, timeout=120,
+                                env=dict(os.environ, OMP_NUM_THREADS="1"))
+        assert result.returncode == 1, (check, result.stdout, result.stderr)
+        program = "impactchain-mpi" if driver == "mpi" else "impactchain"
+        errors = [line for line in result.stderr.splitlines() if line.startswith(program)]
+        assert len(errors) == 1 and errors[0].startswith(f"{program}: error: {message}"), \
+            (check, result.stderr)
+        if driver == "threads":
+            assert result.stderr == errors[0] + "\n"
+        assert "Backtrace" not in result.stderr and not result.stdout
+        assert sorted(p.name for p in tmp_path.iterdir()) == ["in.nml"], check
+
+
+def test_check_refuses_an_existing_sweep_output(impactchain_exe, tmp_path):
+    """--check refuses an output the sweep would refuse (it exists, no --overwrite), and
+    passes it with --overwrite; neither touches it."""
+    (tmp_path / "in.nml").write_text(SMALL.format(output="", sweep="start = 1, stop = 2, "
+                                                                   "step = 0.5"))
+    (tmp_path / "out.h5").write_bytes(b"precious")
+    for check in (["--check"], []):
+        result = subprocess.run([str(impactchain_exe), "--quiet", *check, "in.nml"],
+                                cwd=tmp_path, capture_output=True, text=True, timeout=120)
+        assert result.returncode == 1, result.stderr
+        assert result.stderr == ("impactchain: error: &output: file = 'out.h5' exists; "
+                                 "choose another name or set overwrite = .true.\n")
+    result = subprocess.run([str(impactchain_exe), "--check", "--overwrite", "in.nml"],
+                            cwd=tmp_path, capture_output=True, text=True, timeout=120)
+    assert result.returncode == 0 and "&sweep" in result.stdout, result.stderr
+    assert (tmp_path / "out.h5").read_bytes() == b"precious"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["in.nml", "out.h5"]
