@@ -11,7 +11,6 @@
 !> ignored, as the compiler's reader ignores it.
 module chain_namelist
     use, intrinsic :: iso_fortran_env, only: int64
-    use chain_kinds, only: wp
     use chain_error, only: error_t, set_error, fmt_int, fmt_int8
     implicit none
     private
@@ -152,7 +151,6 @@ contains
         type(key_spec_t), intent(in) :: spec
         character(len=:), allocatable :: v
         integer(int64) :: i
-        real(wp) :: x
         integer :: ios
 
         fits = .true.
@@ -164,11 +162,43 @@ contains
             fits = ios == 0
             if (fits .and. .not. spec%wide) fits = abs(i) <= huge(1)
         case (key_real)
-            if (scan(v, '0123456789') == 0) return  ! NaN, Inf: meant as they are
-            read (v, *, iostat=ios) x
-            fits = ios == 0 .and. abs(x) < 1.0e300_wp
+            ! (from the text: reading 1e400 would overflow, a floating-point trap when the
+            ! build traps overflows)
+            fits = decimal_magnitude(v) <= 300
         end select
     end function fits
+
+    !> About log10 |x| + 1 of the real literal v (significant digits before the point plus the
+    !> exponent), as the whole input's scan for such numbers in chain_config measures it;
+    !> 0 for NaN, Inf and values below 1.
+    pure integer function decimal_magnitude(v) result(magnitude)
+        character(len=*), intent(in) :: v
+        integer :: j, e, ios
+        logical :: leading
+
+        magnitude = 0
+        leading = .true.
+        do j = 1, len(v)
+            if (index('eEdD', v(j:j)) > 0) exit
+            if (v(j:j) == '.') exit
+            if (v(j:j) == '0' .and. leading) cycle
+            if (index('123456789', v(j:j)) > 0 .or. (v(j:j) == '0' .and. .not. leading)) then
+                leading = .false.
+                magnitude = magnitude + 1
+            end if
+        end do
+        j = scan(v, 'eEdD')
+        if (j > 0 .and. j < len(v) .and. scan(v, '0123456789') > 0) then
+            ! (an exponent too long for an integer is surely too large, or too small)
+            if (verify(v(j + 1:), '+-0123456789') /= 0) return
+            if (len(v) - j > 8) then
+                magnitude = merge(huge(1), 0, v(j + 1:j + 1) /= '-')
+                return
+            end if
+            read (v(j + 1:), *, iostat=ios) e
+            if (ios == 0) magnitude = magnitude + e
+        end if
+    end function decimal_magnitude
 
     !> The range of the key's type, for a message.
     pure function range_words(spec) result(words)

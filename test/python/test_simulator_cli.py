@@ -98,8 +98,7 @@ def test_mpi_driver_exit_codes(mpi_exe, tmp_path):
         pytest.skip("no MPI build (mpifort not found)")
     mpirun = ["mpirun", "--allow-run-as-root", "--oversubscribe", "-np", "2", str(mpi_exe)]
     for args, code, out in [(["--help"], 0, "usage: impactchain-mpi"),
-                            (["--version"], 0, "impactchain-mpi "),
-                            (["--bogus", "x.nml"], 2, ""), ([], 2, "")]:
+                            (["--bogus", "x.nml"], 2, "")]:
         result = subprocess.run([*mpirun, *args], cwd=tmp_path, capture_output=True, text=True,
                                 timeout=120)
         assert result.returncode == code, (args, result.stdout, result.stderr)

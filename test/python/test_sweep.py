@@ -221,8 +221,10 @@ REFUSED = {
 }
 
 
-@pytest.mark.parametrize("driver", ["threads", "mpi"])
-@pytest.mark.parametrize("case", sorted(REFUSED))
+# (under MPI, one case of each kind of check, the sizes and the output, as every rank runs
+# the same procedure the threaded driver does: each mpirun costs seconds of CI)
+@pytest.mark.parametrize("case, driver", [(case, "threads") for case in sorted(REFUSED)] +
+                         [("memory over max_size_mb", "mpi"), ("missing directory", "mpi")])
 def test_sweep_refused_before_anything_exists(impactchain_exe, mpi_exe, tmp_path, case,
                                               driver):
     """Exit status 1, one line naming the keys, no backtrace, and nothing written (no file,
