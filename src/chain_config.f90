@@ -99,8 +99,8 @@ module chain_config
         key_spec_t('census', 'v_amp', key_real, .false.), &
         key_spec_t('census', 'tolerance', key_real, .false.), &
         key_spec_t('census', 'mirror', key_string, .false.), &
-        key_spec_t('census', 'plane', key_string, .true.), &
-        key_spec_t('census', 'plane_range', key_real, .true.), &
+        key_spec_t('census', 'plane', key_string, .true., most=2), &
+        key_spec_t('census', 'plane_range', key_real, .true., most=4), &
         key_spec_t('census', 'plane_points', key_integer, .false.), &
         key_spec_t('census', 'exponents', key_integer, .false.)]
     character(len=*), parameter :: sweep_parameters(*) = model_parameters
@@ -171,8 +171,6 @@ contains
                 if (allocated(err)) return
             end do
         end if
-        call scan_number_sizes(cfg%input_text, err)
-        if (allocated(err)) return
         present_groups = [(any(groups_in(cfg%input_text) == group_names(j)), &
                            j=1, size(group_names))]
         if (.not. present_groups(1)) then
@@ -253,89 +251,6 @@ contains
             call set_error(err, trim(path)//": contains NUL bytes; not a text namelist file")
         end if
     end subroutine read_text
-
-    !> Refuse numbers beyond double precision (such as 1e400) before the namelist reader
-    !> meets them: converting one overflows, which is no way to report a typo.
-    subroutine scan_number_sizes(text, err)
-        character(len=*), intent(in) :: text
-        type(error_t), allocatable, intent(out) :: err
-        integer :: j, k, digits, exponent, sign, start
-        character(len=1) :: quote, c
-        logical :: in_number, after_point
-
-        quote = ' '
-        digits = 0
-        start = 1
-        in_number = .false.
-        after_point = .false.
-        j = 1
-        do while (j <= len(text))
-            c = text(j:j)
-            if (quote /= ' ') then
-                if (c == quote) quote = ' '
-            else if (c == '"' .or. c == "'") then
-                quote = c
-            else if (c == '!') then
-                k = index(text(j:), achar(10))
-                if (k == 0) exit
-                j = j + k - 1
-            else if (is_digit(c)) then
-                if (.not. in_number) then
-                    start = j
-                    in_number = .true.
-                    if (j > 1) in_number = .not. is_name(text(j - 1:j - 1))
-                end if
-                ! significant digits of the integer part
-                if (in_number .and. .not. after_point .and. (digits > 0 .or. c /= '0')) &
-                    digits = digits + 1
-            else if (in_number .and. c == '.') then
-                after_point = .true.
-            else if (in_number .and. index('eEdD', c) > 0) then
-                k = j + 1
-                sign = 1
-                if (k <= len(text)) then
-                    if (text(k:k) == '-') sign = -1
-                    if (text(k:k) == '-' .or. text(k:k) == '+') k = k + 1
-                end if
-                exponent = 0
-                do while (k <= len(text))
-                    if (.not. is_digit(text(k:k)) .or. exponent > 100000) exit
-                    exponent = 10*exponent + (iachar(text(k:k)) - iachar('0'))
-                    k = k + 1
-                end do
-                if (sign*exponent + digits > 300) then
-                    call set_error(err, "input: the number '"//text(start:k - 1)// &
-                                   "' is beyond double precision (|x| < 1e300)")
-                    return
-                end if
-                in_number = .false.
-                after_point = .false.
-                digits = 0
-                j = k - 1
-            else
-                if (in_number .and. digits > 300) then
-                    call set_error(err, "input: a number with more than 300 digits is beyond "// &
-                                   "double precision (|x| < 1e300)")
-                    return
-                end if
-                in_number = .false.
-                after_point = .false.
-                digits = 0
-            end if
-            j = j + 1
-        end do
-    end subroutine scan_number_sizes
-
-    pure logical function is_digit(c)
-        character(len=1), intent(in) :: c
-        is_digit = c >= '0' .and. c <= '9'
-    end function is_digit
-
-    pure logical function is_name(c)
-        character(len=1), intent(in) :: c
-        is_name = is_digit(c) .or. (c >= 'a' .and. c <= 'z') .or. (c >= 'A' .and. c <= 'Z') &
-                  .or. c == '_'
-    end function is_name
 
     subroutine read_chain(u, cfg, err)
         integer, intent(in) :: u

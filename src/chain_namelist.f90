@@ -160,7 +160,7 @@ contains
         case (key_integer)
             read (v, *, iostat=ios) i
             fits = ios == 0
-            if (fits .and. .not. spec%wide) fits = abs(i) <= huge(1)
+            if (fits .and. .not. spec%wide) fits = i >= -huge(1) - 1_int64 .and. i <= huge(1)
         case (key_real)
             ! (from the text: reading 1e400 would overflow, a floating-point trap when the
             ! build traps overflows)
@@ -168,36 +168,40 @@ contains
         end select
     end function fits
 
-    !> About log10 |x| + 1 of the real literal v (significant digits before the point plus the
-    !> exponent), as the whole input's scan for such numbers in chain_config measures it;
-    !> 0 for NaN, Inf and values below 1.
+    !> About log10 |x| + 1 of the real literal v: the place of its first significant digit
+    !> (1 for 1.5, 0 for 0.5, -2 for 0.005) plus its exponent; 0 when it has no significant
+    !> digit (zero), or no digit at all (NaN, Inf). Found from the text, as reading a value
+    !> beyond double precision would overflow (a floating-point trap in the checked build).
     pure integer function decimal_magnitude(v) result(magnitude)
         character(len=*), intent(in) :: v
-        integer :: j, e, ios
-        logical :: leading
+        integer :: j, e, first, point, mark, ios
+        character(len=:), allocatable :: exponent
 
         magnitude = 0
-        leading = .true.
-        do j = 1, len(v)
-            if (index('eEdD', v(j:j)) > 0) exit
-            if (v(j:j) == '.') exit
-            if (v(j:j) == '0' .and. leading) cycle
-            if (index('123456789', v(j:j)) > 0 .or. (v(j:j) == '0' .and. .not. leading)) then
-                leading = .false.
-                magnitude = magnitude + 1
-            end if
-        end do
-        j = scan(v, 'eEdD')
-        if (j > 0 .and. j < len(v) .and. scan(v, '0123456789') > 0) then
-            ! (an exponent too long for an integer is surely too large, or too small)
-            if (verify(v(j + 1:), '+-0123456789') /= 0) return
-            if (len(v) - j > 8) then
-                magnitude = merge(huge(1), 0, v(j + 1:j + 1) /= '-')
-                return
-            end if
-            read (v(j + 1:), *, iostat=ios) e
-            if (ios == 0) magnitude = magnitude + e
+        mark = scan(v, 'eEdD')
+        if (mark == 0) mark = len(v) + 1
+        first = scan(v(:mark - 1), '123456789')
+        if (first == 0) return
+        point = index(v(:mark - 1), '.')
+        if (point == 0) point = mark
+        ! digits from the first significant one to the point (if it comes before the point),
+        ! or minus the zeros between the point and it
+        magnitude = point - first
+        if (first > point) magnitude = point - first + 1
+        if (mark >= len(v)) return
+        exponent = v(mark + 1:)
+        j = verify(exponent, '+-')
+        if (j == 0) return
+        ! (leading zeros of the exponent stripped; one of more than 8 digits is surely beyond
+        ! any limit, one way or the other)
+        e = verify(exponent(j:), '0')
+        if (e == 0) return
+        if (len(exponent) - (j + e - 1) + 1 > 8) then
+            magnitude = merge(-huge(1), huge(1), index(exponent(:j - 1), '-') > 0)
+            return
         end if
+        read (exponent, *, iostat=ios) e
+        if (ios == 0) magnitude = magnitude + e
     end function decimal_magnitude
 
     !> The range of the key's type, for a message.
@@ -208,11 +212,10 @@ contains
         if (spec%kind == key_real) then
             words = "double precision (|x| < 1e300)"
         else if (spec%wide) then
-            words = "the range of 64-bit integers (|"//trim(spec%name)//"| <= "// &
-                    fmt_int8(huge(1_int64))//")"
+            words = "the range of 64-bit integers [-"//fmt_int8(huge(1_int64))//" - 1, "// &
+                    fmt_int8(huge(1_int64))//"]"
         else
-            words = "the range of 32-bit integers (|"//trim(spec%name)//"| <= "// &
-                    fmt_int(huge(1))//")"
+            words = "the range of 32-bit integers [-2147483648, "//fmt_int(huge(1))//"]"
         end if
     end function range_words
 
@@ -426,7 +429,9 @@ contains
         integer, intent(in) :: first, last
         type(item_t), intent(inout) :: item
 
-        item%n_values = item%n_values + repeats(token)
+        ! (saturating: counts near huge(1) must not wrap round to a small number)
+        item%n_values = int(min(int(huge(1), int64), int(item%n_values, int64) + &
+                                repeats(token)))
         item%last = last
         ! capacity doubles: a list of 10^5 values is read in linear time
         if (item%n_tokens == size(item%value_first)) then
@@ -513,8 +518,9 @@ contains
         star = index(token, '*')
         if (star < 2 .or. scan(token(1:1), "'""") > 0) return
         if (verify(token(:star - 1), '0123456789') /= 0) return
+        ! (a count too long to read is more values than any key takes)
         read (token(:star - 1), *, iostat=ios) repeats
-        if (ios /= 0) repeats = 1
+        if (ios /= 0 .or. star > 10) repeats = huge(1)
     end function repeats
 
     !> Is `token` (without its repeat count) a value of type `kind`?

@@ -36,7 +36,8 @@ module chain_sim
                             file_absent, file_continuable, file_other_input
     implicit none
     private
-    public :: simulate_to_file, check_run, initial_state, start_chain, write_run_header
+    public :: simulate_to_file, check_run, check_run_start, initial_state, start_chain
+    public :: write_run_header
     public :: chain_on_section, restart_chain, continuation_start, uniform
 
     !> Sends records to the HDF5 file as they come.
@@ -271,6 +272,25 @@ contains
                               .and. .not. cfg%record%covariant), err)
         end if
     end subroutine check_run
+
+    !> check_run, then the chain the run would start from, built and dropped: the initial
+    !> state (an overlap, a start file that does not fit) or the stopped run it would continue
+    !> (its /final and /resume). Every refusal simulate_to_file can make before it writes.
+    subroutine check_run_start(cfg, err)
+        type(config_t), intent(in) :: cfg
+        type(error_t), allocatable, intent(out) :: err
+        type(chain_t) :: chain
+        type(record_state_t) :: state
+        integer :: found
+
+        call check_run(cfg, err, found)
+        if (allocated(err)) return
+        if (found == file_continuable .and. .not. cfg%record%covariant) then
+            call continue_chain(cfg, chain, state, err)
+        else
+            call start_chain(cfg, chain, err)
+        end if
+    end subroutine check_run_start
 
     !> /resume of a run stopped at a record: what the engine holds beyond /final, the tangent
     !> frame and the Lyapunov accumulator (undone by continue_chain).

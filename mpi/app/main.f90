@@ -142,7 +142,7 @@ contains
         ! the threaded driver's checks (sizes, every point, the output), every rank alike,
         ! before anything is allocated or created
         call check_before_run(cfg, err)
-        if (allocated(err)) call stop_all(err%message)
+        call stop_if_any_failed(err)
         call check_only_or_open_output()
         call sweep_result_init(res, cfg, plan)
         allocate (starts(plan%n_branches))
@@ -292,7 +292,7 @@ contains
         integer :: t
 
         call check_before_run(cfg, err)
-        if (allocated(err)) call stop_all(err%message)
+        call stop_if_any_failed(err)
         call check_only_or_open_output()
         call census_starts(census, cfg, err)
         call agree_or_stop(err)
@@ -471,6 +471,26 @@ contains
         call MPI_Finalize()
         stop 1, quiet=.true.
     end subroutine agree_or_stop
+
+    !> The checks before a run, made on every rank: all go on, or all stop (a check of the
+    !> output's directory can fail on one node only). Rank 0's message is the one line; a
+    !> rank that failed alone says which it is.
+    subroutine stop_if_any_failed(e)
+        type(error_t), allocatable, intent(in) :: e
+        integer :: any_failed, root_failed
+
+        any_failed = merge(1, 0, allocated(e))
+        call MPI_Allreduce(MPI_IN_PLACE, any_failed, 1, MPI_INTEGER, MPI_MAX, MPI_COMM_WORLD)
+        if (any_failed == 0) return
+        root_failed = merge(1, 0, allocated(e))
+        call MPI_Bcast(root_failed, 1, MPI_INTEGER, 0, MPI_COMM_WORLD)
+        if (rank == 0 .and. allocated(e)) write (error_unit, '(a)') 'impactchain-mpi: error: '// &
+            e%message
+        if (root_failed == 0 .and. allocated(e)) write (error_unit, '(a,i0,a)') &
+            'impactchain-mpi: error (rank ', rank, '): '//e%message
+        call MPI_Finalize()
+        stop 1, quiet=.true.
+    end subroutine stop_if_any_failed
 
     function err_text(e) result(text)
         type(error_t), allocatable, intent(in) :: e

@@ -41,7 +41,7 @@ MISTAKES = {
     "integer beyond 32 bits": ("&chain n = 4, omega = 1.5, amplitude = 1 /\n"
                                "&initial kind = 'random', seed = 123456789012 /",
                                ["input.nml:2:", "&initial", "seed = 123456789012 is beyond the "
-                                "range of 32-bit integers (|seed| <= 2147483647)"]),
+                                "range of 32-bit integers [-2147483648, 2147483647]"]),
     "integer beyond 64 bits": ("&chain n = 4, omega = 1.5, amplitude = 1 /\n"
                                "&run cycles = 99999999999999999999 /",
                                ["input.nml:2:", "cycles = 99999999999999999999 is beyond the "
@@ -51,7 +51,49 @@ MISTAKES = {
     "list too long": ("&chain n = 4, omega = 1.5, amplitude = 1, spacing = 100002*1.0 /",
                       ["input.nml:1:", "spacing has 100002 values; an input takes at most "
                        "100001"]),
+    "repeat count beyond any list": ("&chain n = 4, omega = 3000000000*1.5, amplitude = 1 /",
+                                     ["input.nml:1:", "omega has 2147483647 values; it takes "
+                                      "one"]),
+    "plane range of five": ("&chain n = 4, omega = 1.5, amplitude = 1 /\n&census samples = 4,"
+                            " plane = 'x1', 'v1', plane_range = 0, 1, 0, 1, 2 /",
+                            ["input.nml:2:", "plane_range has 5 values; an input takes at most "
+                             "4"]),
+    "integer one past 32 bits": ("&chain n = 4, omega = 1.5, amplitude = 1 /\n"
+                                 "&initial kind = 'random', seed = 2147483648 /",
+                                 ["input.nml:2:", "seed = 2147483648 is beyond the range of "
+                                  "32-bit integers [-2147483648, 2147483647]"]),
 }
+
+# values at the edges of what a key holds: read, not refused
+HELD = ["&initial kind = 'random', seed = -2147483648 /",
+        "&initial kind = 'random', seed = 2147483647 /",
+        "&run cycles = 9223372036854775807, transient = 0 /",
+        "&chain n = 4, omega = 1.5, amplitude = 0e400 /",
+        "&chain n = 4, omega = 1.5, amplitude = 0.001e299 /",
+        "&chain n = 4, omega = 1.5, amplitude = 1e000000001 /"]
+
+
+@pytest.mark.parametrize("line", HELD)
+def test_values_a_key_holds_are_read(impactchain_exe, tmp_path, line):
+    group = line.split()[0]
+    text = "\n".join(line if l.startswith(group) else l for l in GOOD.splitlines())
+    (tmp_path / "in.nml").write_text(text)
+    result = subprocess.run([str(impactchain_exe), "--quiet", "--check", "--set",
+                             "output.max_size_mb=1e9", "in.nml"], cwd=tmp_path,
+                            capture_output=True, text=True, timeout=60)
+    assert "beyond" not in result.stderr and "overflow" not in result.stderr, result.stderr
+
+
+def test_check_refuses_an_overlapping_start(impactchain_exe, tmp_path):
+    """--check builds a single run's initial state, as the run does before it writes."""
+    (tmp_path / "in.nml").write_text("&chain n = 2, amplitude = 1, omega = 1.5 /\n"
+                                     "&initial kind = 'explicit', x0 = 0.9, -0.9 /\n"
+                                     "&output file = 'o.h5' /\n")
+    for check in (["--check"], []):
+        result = subprocess.run([str(impactchain_exe), "--quiet", *check, "in.nml"],
+                                cwd=tmp_path, capture_output=True, text=True, timeout=60)
+        assert result.returncode == 1 and "the gap of bond 1 is" in result.stderr, result.stderr
+        assert sorted(p.name for p in tmp_path.iterdir()) == ["in.nml"]
 
 
 @pytest.mark.parametrize("case", sorted(MISTAKES))
