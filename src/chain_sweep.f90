@@ -418,6 +418,13 @@ contains
                            "checkpoint or the file's layout makes), more than &output "// &
                            "max_size_mb = "//fmt_real(cfg%max_size_mb)//"; lower the points ("// &
                            keys//") or &run cycles, or raise max_size_mb")
+        ! (with max_size_mb raised far above its default: a branch's packed records and a
+        ! point's records are counted in default integers, by the checkpoint and MPI too)
+        if (.not. allocated(err) .and. max(copy/8, records/8) > huge(1)) &
+            call set_error(err, "&sweep: a branch of this sweep holds about "// &
+                           fmt_real(max(copy/8, records/8))//" values, more than the "// &
+                           "2147483647 its checkpoint record counts; lower the points ("// &
+                           keys//") or &run cycles")
     end subroutine check_sweep_size
 
     !> Validate every point before any work (an out-of-range point is an error up front).

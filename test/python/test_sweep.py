@@ -215,6 +215,12 @@ REFUSED = {
                           .replace("'out.h5'", "'nodir/out.h5'"),
                           "&output: cannot create 'nodir/out.h5': the directory 'nodir' does "
                           "not exist"),
+    # within a raised max_size_mb (about 24 GB), but 3e9 values in the one branch
+    "branch beyond 2**31 values": ("&chain n = 100, amplitude = 1.7, omega = 1.5 /\n"
+                                   "&run cycles = 1000000 /\n&output file = 'out.h5', "
+                                   "max_size_mb = 1e9 /\n&sweep parameter = 'amplitude', "
+                                   "start = 1, stop = 1.29, step = 0.01 /\n",
+                                   "&sweep: a branch of this sweep holds about"),
     "max_size_mb = 0": (SMALL.format(output=", max_size_mb = 0",
                                      sweep="start = 1, stop = 2, step = 0.5"),
                         "&output: max_size_mb = 0.0000000 is outside (0, 1e9]"),
