@@ -55,27 +55,24 @@ contains
         integer, intent(out) :: bond
         real(wp), intent(out) :: time
         logical, intent(out), optional :: tied
-        integer :: j, first, count
+        integer :: j, first
         real(wp) :: earliest
         logical :: equal
 
         if (q%scan) then
             ! the earliest by a minimum without branches (the compiler vectorises it; a scan
             ! that branches on each new earliest mispredicts at random positions), then the
-            ! first bond due then: the lowest bond wins a tie, as in the heap
+            ! first bond due then: the lowest bond wins a tie, as in the heap; a tie is
+            ! another bond due then, after it
             earliest = q%time(0)
             do j = 1, q%size - 1
                 earliest = min(earliest, q%time(j))
             end do
-            count = 0
-            do j = 0, q%size - 1
-                count = count + merge(1, 0, q%time(j) == earliest)
-            end do
             first = findloc(q%time, earliest, dim=1) - 1
-            if (count == 0) first = 0 ! (not a number: no event can be due)
+            if (first < 0) first = 0 ! (not a number: no event can be due)
             bond = first
             time = q%time(first)
-            equal = count > 1
+            equal = any(q%time(first + 1:) == earliest)
         else
             bond = q%heap(1)
             time = q%key(1)
