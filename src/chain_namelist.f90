@@ -170,12 +170,11 @@ contains
 
     !> About log10 |x| + 1 of the real literal v: the place of its first significant digit
     !> (1 for 1.5, 0 for 0.5, -2 for 0.005) plus its exponent; 0 when it has no significant
-    !> digit (zero), or no digit at all (NaN, Inf). Found from the text, as reading a value
-    !> beyond double precision would overflow (a floating-point trap in the checked build).
+    !> digit (zero), or no digit at all (NaN, Inf).
     pure integer function decimal_magnitude(v) result(magnitude)
         character(len=*), intent(in) :: v
-        integer :: j, e, first, point, mark, ios
-        character(len=:), allocatable :: exponent
+        integer :: first, point, mark, ios
+        integer(int64) :: e
 
         magnitude = 0
         mark = scan(v, 'eEdD')
@@ -184,24 +183,15 @@ contains
         if (first == 0) return
         point = index(v(:mark - 1), '.')
         if (point == 0) point = mark
-        ! digits from the first significant one to the point (if it comes before the point),
-        ! or minus the zeros between the point and it
+        ! digits from the first significant one to the point, or minus the zeros between the
+        ! point and it
         magnitude = point - first
-        if (first > point) magnitude = point - first + 1
+        if (first > point) magnitude = magnitude + 1
         if (mark >= len(v)) return
-        exponent = v(mark + 1:)
-        j = verify(exponent, '+-')
-        if (j == 0) return
-        ! (leading zeros of the exponent stripped; one of more than 8 digits is surely beyond
-        ! any limit, one way or the other)
-        e = verify(exponent(j:), '0')
-        if (e == 0) return
-        if (len(exponent) - (j + e - 1) + 1 > 8) then
-            magnitude = merge(-huge(1), huge(1), index(exponent(:j - 1), '-') > 0)
-            return
-        end if
-        read (exponent, *, iostat=ios) e
-        if (ios == 0) magnitude = magnitude + e
+        read (v(mark + 1:), *, iostat=ios) e
+        ! (an exponent beyond 64 bits is surely beyond any limit, one way or the other)
+        if (ios /= 0) e = merge(-huge(1), huge(1), v(mark + 1:mark + 1) == '-')
+        magnitude = int(max(-int(huge(1), int64), min(int(huge(1), int64), magnitude + e)))
     end function decimal_magnitude
 
     !> The range of the key's type, for a message.
