@@ -13,6 +13,7 @@
 !> walls.
 submodule(chain_engine) chain_engine_contact
     use chain_kinds, only: two_pi
+    use chain_phases, only: phase_asin
     use chain_queue, only: queue_set
     use chain_event_log, only: event_log_append, event_touch, event_stick
     use chain_state, only: contact_left
@@ -81,9 +82,9 @@ contains
         ! mirror image, drive shifted by half a period): A sin(wt) - a turns negative as sin
         ! falls through +ratio
         if (side == contact_left) then
-            target_phase = -asin(ratio)
+            target_phase = -phase_asin(ratio)
         else
-            target_phase = 0.5_wp*two_pi - asin(ratio)
+            target_phase = 0.5_wp*two_pi - phase_asin(ratio)
         end if
         s_release = chain%s + modulo(target_phase - chain%flow%omega*chain%s, two_pi) &
                     /chain%flow%omega

@@ -9,6 +9,7 @@
 !> once (its inelastic collapse); far more means the engine is stuck, which is reported.
 submodule(chain_engine) chain_engine_instants
     use chain_error, only: set_error, fmt_int
+    use chain_portable_math, only: portable_hypot
     use chain_state, only: contact_free
     implicit none
 
@@ -69,7 +70,7 @@ contains
         ! touching, to within the rounding of positions built from free part and drive (large
         ! near resonance)
         tol = 1.0e-12_wp + 256*epsilon(1.0_wp)*(maxval(chain%spacing) + maxval(abs(chain%x)) + &
-                                                 hypot(chain%flow%p_sin, chain%flow%q_cos))
+                                                 portable_hypot(chain%flow%p_sin, chain%flow%q_cos))
         first = max(1, bond)
         last = min(chain%n, bond + 1)
         if (chain%contact(first) /= contact_free) first = first + 1

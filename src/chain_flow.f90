@@ -12,7 +12,7 @@
 !> of a time come from the flow's tables (chain_phases, section 2.7).
 module chain_flow
     use chain_kinds, only: wp, two_pi
-    use chain_phases, only: phase_table_t, make_phase_table, free_phase, drive_phase
+    use chain_phases, only: phase_table_t, make_phase_table, free_phase, drive_phase, phase_asin
     implicit none
     private
     public :: flow_t, make_flow, forced_response, forced_response_at, acceleration_at
@@ -48,7 +48,7 @@ contains
         flow%omega = omega
         flow%gam = sqrt(1 - damping**2)
         flow%inv_gam = 1 / flow%gam
-        flow%alpha = asin(damping)
+        flow%alpha = phase_asin(damping)
         flow%period = two_pi / omega
         d2 = (1 - omega**2)**2 + (2*damping*omega)**2
         flow%p_sin = amplitude*(1 - omega**2) / d2

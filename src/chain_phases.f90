@@ -6,19 +6,23 @@
 !> searches), and the library's exp and sincos were a quarter of the time of a run. The step h
 !> is a power of two, so t = k h + r is split exactly; the table holds the library's values at
 !> k h, and the rest r (|gam r|, |b r|, |w r| <= 1/64) is turned on by Taylor polynomials
-!> accurate to 1e-19. The result differs from the library's at t by the rounding of a few
+!> accurate to 1e-19. The result differs from the exact value at t by the rounding of a few
 !> products (a few units in the last place, with no accumulation: every value comes from the
 !> table afresh). Times outside the tables (negative, or beyond their range) go to the
-!> library. Longer Taylor polynomials (up to 0.05) turn the phase of a free oscillation on by
+!> functions themselves. Every one of them, in the tables too, is chain_portable_math's
+!> (renamed exp, cos, sin here), so that the flow is the same bits on every machine. Longer Taylor polynomials (up to 0.05) turn the phase of a free oscillation on by
 !> the short steps of Halley's iteration (advance_free_phase). The kernels are private so that
 !> the compiler inlines them here (it never inlines a public procedure of the
 !> position-independent library).
 module chain_phases
+    use, intrinsic :: ieee_arithmetic, only: ieee_value, ieee_quiet_nan
     use chain_kinds, only: wp, pi
+    use chain_portable_math, only: exp => portable_exp, cos => portable_cos, &
+                                   sin => portable_sin
     implicit none
     private
     public :: phase_table_t, make_phase_table, free_phase, free_decay, drive_phase
-    public :: advance_free_phase, phase_angle
+    public :: advance_free_phase, phase_angle, phase_asin
 
     real(wp), parameter :: short_angle = 0.05_wp !! the largest argument of short_cis, short_exp
     real(wp), parameter :: table_angle = 1/32.0_wp !! the largest product of h and b, gam or w
@@ -61,8 +65,8 @@ contains
             table%free(:, k) = [exp(-damping*t), cos(gam*t), sin(gam*t)]
         end do
         table%free_limit = (last + 0.5_wp)*free_step
-        ! the largest power of two with w h <= table_angle
-        h = 2.0_wp**floor(log(table_angle/omega)/log(2.0_wp))
+        ! the largest power of two with w h <= table_angle (exponent: exactly, on any machine)
+        h = 2.0_wp**(exponent(table_angle/omega) - 1)
         do while (omega*h > table_angle)
             h = h/2
         end do
@@ -165,7 +169,8 @@ contains
     !> t = (z - j/16) / (1 + z j/16) is the argument of a Taylor polynomial (|t| <= 1/32,
     !> remainder below t**13 / 13); the octant is unfolded by a table and the sign of s, not by
     !> branches (which the data would mispredict half the time). A third of the library's
-    !> cost; (0, 0) and non-finite arguments go to the library.
+    !> cost, and the same bits on every machine. (0, 0) gives 0, or pi for c = -0, with the
+    !> sign of s; non-finite arguments give NaN.
     pure function phase_angle(c, s) result(angle)
         real(wp), intent(in) :: c, s
         real(wp) :: angle
@@ -179,9 +184,13 @@ contains
 
         ac = abs(c)
         as = abs(s)
+        if (ac == 0 .and. as == 0) then
+            angle = sign(merge(pi, 0.0_wp, sign(1.0_wp, c) < 0), s)
+            return
+        end if
         z = min(ac, as)/max(ac, as)
         if (.not. (z <= 1)) then
-            angle = atan2(s, c)
+            angle = ieee_value(angle, ieee_quiet_nan)
             return
         end if
         j = int(16*z + 0.5_wp)
@@ -194,6 +203,19 @@ contains
                 (t + (t*t2)*(a3 + t2*(a5 + t2*(a7 + t2*(a9 + t2*a11))))))
         angle = sign(angle, s)
     end function phase_angle
+
+    !> asin(x) for |x| <= 1, the angle of (sqrt((1 - x)(1 + x)), x): a few units in the last
+    !> place, the same bits on every machine; NaN outside.
+    pure function phase_asin(x) result(angle)
+        real(wp), intent(in) :: x
+        real(wp) :: angle
+
+        if (.not. (abs(x) <= 1)) then
+            angle = ieee_value(angle, ieee_quiet_nan)
+        else
+            angle = phase_angle(sqrt((1 - x)*(1 + x)), x)
+        end if
+    end function phase_asin
 
     !> (cos, sin) of an angle turned on by the angle with cosine cd and sine sd.
     pure subroutine turn(cd, sd, cos_a, sin_a)

@@ -1,8 +1,12 @@
 !> docs/model.md section 2: the closed-form flow against the analytic steady state, the semigroup
 !> property, the determinant, and an independent power-series integration of the ODE; the
-!> flow's tables of exp, cos and sin (section 2.7) against the library at every kind of time.
+!> flow's tables of exp, cos and sin (section 2.7) against the library at every kind of time,
+!> and the portable exp, cos, sin and hypot that build them against quadruple precision.
 module test_flow
+    use, intrinsic :: iso_fortran_env, only: qp => real128
     use chain_kinds, only: wp, two_pi
+    use chain_portable_math, only: portable_exp, portable_cos, portable_sin, portable_hypot, &
+                                   portable_reduction_limit
     use chain_flow, only: flow_t, make_flow, forced_response, propagator, advance_state
     use chain_phases, only: free_phase, free_decay, drive_phase, advance_free_phase, phase_angle
     use testing, only: tally_t, check, check_close
@@ -62,7 +66,62 @@ contains
         end do
         call check_phase_tables(t)
         call check_phase_angle(t)
+        call check_portable_math(t)
     end subroutine run_flow_tests
+
+    !> exp, cos and sin of chain_portable_math within 1 unit in the last place of the value
+    !> (quadruple precision's value rounded to double is the reference), hypot within 2, over
+    !> the ranges the model uses and beyond: exp on [-745, 709], cos and sin up to the
+    !> reduction limit, with points near multiples of pi/2; their special values.
+    subroutine check_portable_math(t)
+        type(tally_t), intent(inout) :: t
+        real(wp) :: x, y, u, worst_exp, worst_cos, worst_sin, worst_hypot
+        real(qp), parameter :: half_pi_q = 2*atan(1.0_qp)
+        integer :: k
+
+        worst_exp = 0
+        worst_cos = 0
+        worst_sin = 0
+        worst_hypot = 0
+        do k = 0, 200000
+            u = sin(12.9898_wp*k)*43758.5453_wp
+            u = u - floor(u)
+            x = merge(-745 + 1454*u, 40*u - 20, mod(k, 2) == 0)
+            worst_exp = max(worst_exp, ulps(portable_exp(x), exp(real(x, qp))))
+            x = merge(portable_reduction_limit*(2*u - 1), 64*(2*u - 1), mod(k, 3) == 0)
+            if (mod(k, 7) == 0) x = real(nint(x/1.5707963267948966_wp)*half_pi_q + &
+                                         1.0e-9_qp*u, wp) ! near a multiple of pi/2
+            worst_cos = max(worst_cos, ulps(portable_cos(x), cos(real(x, qp))))
+            worst_sin = max(worst_sin, ulps(portable_sin(x), sin(real(x, qp))))
+            y = merge(1.0e-200_wp, 3.0e200_wp, mod(k, 2) == 0)*(u - 0.3_wp)
+            worst_hypot = max(worst_hypot, ulps(portable_hypot(x*y, y), &
+                                                sqrt(real(x*y, qp)**2 + real(y, qp)**2)))
+        end do
+        call check(t, worst_exp <= 1, 'portable exp is within 1 ulp of the exact value')
+        call check(t, worst_cos <= 1, 'portable cos is within 1 ulp of the exact value')
+        call check(t, worst_sin <= 1, 'portable sin is within 1 ulp of the exact value')
+        call check(t, worst_hypot <= 2, 'portable hypot is within 2 ulp of the exact value')
+        if (max(worst_exp, worst_cos, worst_sin) > 1 .or. worst_hypot > 2) &
+            print '(a, 4f8.3)', '    worst ulps (exp, cos, sin, hypot): ', worst_exp, &
+                worst_cos, worst_sin, worst_hypot
+        call check(t, portable_exp(0.0_wp) == 1 .and. portable_exp(-800.0_wp) == 0 .and. &
+                   portable_exp(-1.0e-300_wp) == 1, &
+                   'portable exp: exp(0) = 1, exp(-1e-300) = 1, underflow to 0')
+        call check(t, portable_cos(0.0_wp) == 1 .and. portable_sin(0.0_wp) == 0, &
+                   'portable cos(0) = 1, sin(0) = 0')
+        x = 2*portable_reduction_limit
+        call check(t, portable_sin(x) /= portable_sin(x), &
+                   'portable sin beyond its reduction limit is NaN, not a wrong number')
+    end subroutine check_portable_math
+
+    !> |value - exact| in units in the last place of the exact value rounded to double.
+    elemental function ulps(value, exact) result(n)
+        real(wp), intent(in) :: value
+        real(qp), intent(in) :: exact
+        real(wp) :: n
+
+        n = real(abs(real(value, qp) - exact)/spacing(abs(real(exact, wp))), wp)
+    end function ulps
 
     !> phase_angle(c, s) is the library's atan2(s, c) to a few ulp of the angle, in every
     !> octant and at every scale, on the axes and diagonals, and gives acos(q) as the angle

@@ -117,7 +117,7 @@ contains
         type(orbit_t), intent(out) :: orbit
         !> only an orbit with a real multiplier outside the unit circle will do
         logical, intent(in), optional :: saddle
-        integer, parameter :: tries = 40
+        integer, parameter :: tries = 100
         type(chain_t) :: chain
         type(error_t), allocatable :: err
         type(event_log_t) :: events
