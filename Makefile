@@ -28,7 +28,7 @@ INSTALL_PKG := PATH="$(abspath $(VENV))/bin:$$PATH" $(PY) -m pip install --quiet
 DEFAULT_RUN := runs/default.h5
 
 .PHONY: all setup system-deps python-deps build run test fortran-test python-test mpi \
-        figures bench recipe-checksums api-docs clean help
+        figures bench recipe-reference api-docs clean help
 
 all: build
 
@@ -38,7 +38,7 @@ help:
 	@echo "make figures  regenerate every figure of the paper into figures/"
 	@echo "make census-figures  only the attractor censuses' figures (minutes)"
 	@echo "make bench    build with the release profile and run the benchmark table"
-	@echo "make recipe-checksums  rewrite test/recipes/checksums.json (results meant to change)"
+	@echo "make recipe-reference  rewrite test/recipes/reference.json (results meant to change)"
 	@echo "make api-docs the API reference (Fortran and Python) into docs/api/"
 
 setup: system-deps python-deps
@@ -102,10 +102,11 @@ test: fortran-test python-test
 bench: build
 	$(PY) bench/run_bench.py --fpm $(FPM)
 
-# Every recipe's results, hashed, as pytest checks them (test/python/test_recipes.py). Run it
-# only when a change is meant to alter results, and commit the manifest with that change.
-recipe-checksums: build
-	$(PY) test/recipes/recipe_checksums.py compute --jobs $$(nproc)
+# Every recipe's reference values, as pytest checks them within their tolerances
+# (test/python/test_recipes.py). Run it only when a change is meant to alter results, and
+# commit the reference with that change.
+recipe-reference: build
+	$(PY) test/recipes/recipe_reference.py compute --jobs $$(nproc)
 
 # The API reference, generated from the documentation comments: FORD for the Fortran
 # library (docs/ford.md), pdoc for the Python package; into docs/api/ (not kept in git).

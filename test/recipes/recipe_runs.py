@@ -1,25 +1,22 @@
-"""Checksums of every recipe's results, to show that a change alters no number.
+"""Run every recipe, and compare two runs' files value by value: on one machine, a change
+meant to keep every number (a refactor, a clean-up) must leave every bit of every recipe's
+output as it was.
 
 Every recipe in namelists/ is run with a given simulator in a temporary directory (the recipe
 is copied there with its `&output file` pointed at that directory, so figures/runs/ and every
-other file are left alone), and every dataset and every result attribute of its output is
-hashed: sha256 of the dtype, the shape and the raw bytes, walking all groups. A hash is stored
-as `<dtype> <shape> sha256:<hex>`, e.g. `<f8 480x16 sha256:9f2c...`, under the dataset's path
-(`/strobe/x`) or the attribute's (`/stats@impacts`; `/@complete` for the root).
+other file are left alone).
 
-    python test/recipes/recipe_checksums.py compute [--exe EXE] [--manifest FILE]
-    python test/recipes/recipe_checksums.py check   [--exe EXE] [--manifest FILE] [--keep DIR]
-    python test/recipes/recipe_checksums.py run DIR [--exe EXE]
-    python test/recipes/recipe_checksums.py compare DIR_A DIR_B
-    python test/recipes/recipe_checksums.py compare-versions DIR_V1 DIR_V2
+    python test/recipes/recipe_runs.py run DIR [--exe EXE] [--jobs N]
+    python test/recipes/recipe_runs.py compare DIR_A DIR_B
+    python test/recipes/recipe_runs.py compare-versions DIR_V1 DIR_V2
 
-`compute` writes the manifest, {recipe: {path: hash}} (default test/recipes/checksums.json;
-`make recipe-checksums` runs it with the release build). `check` computes again and compares
-with the manifest: it names every recipe and path that differs, is missing or is new, exits 1
-on any, and ends with one line, "N datasets in M recipes identical". A hash cannot say where
-two arrays differ; for that, `run` every recipe into a directory with each build (or keep a
-failing check's files with `check --keep DIR`) and `compare` the two directories: it reports
-the first differing element, how many differ and the largest absolute difference.
+`run` runs every recipe into DIR; run it with each build (`--exe` the other one, e.g. the
+previous commit's) and `compare` the two directories: every dataset and every result
+attribute, walking all groups, must hold the same bits; a difference is reported with the
+first differing element, how many differ and the largest absolute difference. Bits are a
+promise on one machine only: across machines, BLAS and libm pick other kernels, and the
+recipes are checked by value against tolerances that follow from the physics
+(`recipe_reference.py`, in `make test`).
 
 `compare-versions` does the same across a change of the file layout: DIR_V1 holds every
 recipe run by a build writing schema version 1, DIR_V2 by one writing version 2 (the
@@ -37,8 +34,6 @@ from __future__ import annotations
 
 import argparse
 import fnmatch
-import hashlib
-import json
 import os
 import re
 import subprocess
@@ -54,13 +49,12 @@ import numpy as np
 
 ROOT = Path(__file__).resolve().parents[2]
 RECIPES = ROOT / "namelists"
-MANIFEST = Path(__file__).resolve().parent / "checksums.json"
 FPM = ROOT / ".venv" / "bin" / "fpm"
 
 # What is not compared, and why: the one place. Every other dataset and attribute is. The
 # output holds no wall-clock timestamps, host names or run times (every recipe's file was
 # inspected); should one appear, it belongs here. HDF5's own object-header times are not
-# datasets or attributes, so hashing contents rather than files ignores them anyway.
+# datasets or attributes, so comparing contents rather than files ignores them anyway.
 EXCLUDED = {
     "/@code_version": "the version string of the build, not a result",
     "/@input_namelist": "the input text echoed back: it names the &output file, which this "
@@ -143,16 +137,13 @@ def redirect_output(text: str, file_name: str) -> str:
     return text[:start] + group + text[end:]
 
 
-# glibc picks its own versions of sin, cos, exp, log, ... by CPU (FMA and AVX2 ones where the
-# CPU has them), and they differ in the last bit now and then; chaotic recipes magnify that.
-# The recipes run with the baseline versions, which every x86-64 CPU has, so that the stored
-# bits hold on whichever machine runs the check.
-PORTABLE_MATH = {"GLIBC_TUNABLES": "glibc.cpu.hwcaps=-AVX2,-FMA,-FMA4,-AVX"}
-
-
-def run_recipe(exe: Path, recipe: Path, workdir: Path) -> float:
-    """Run one recipe into workdir/<name>.h5; return the wall time in seconds."""
-    name = recipe.stem
+def run_recipe(exe: Path, recipe: Path, workdir: Path,
+               env: dict[str, str | None] | None = None, extra: tuple[str, ...] = (),
+               suffix: str = "") -> float:
+    """Run one recipe into workdir/<name><suffix>.h5; return the wall time in seconds.
+    `env` changes the environment (a forced BLAS or libm kernel; None removes a variable),
+    `extra` is added to the command line (`--set` overrides)."""
+    name = recipe.stem + suffix
     output = workdir / f"{name}.h5"
     if output.exists():
         raise RecipeError(f"{name}: {output} exists; give a fresh directory")
@@ -163,9 +154,10 @@ def run_recipe(exe: Path, recipe: Path, workdir: Path) -> float:
     (workdir / f"{name}.nml").write_text(text)
     began = time.perf_counter()
     try:
-        run = subprocess.run([str(exe), "--quiet", f"{name}.nml"], cwd=workdir,
+        run = subprocess.run([str(exe), "--quiet", *extra, f"{name}.nml"], cwd=workdir,
                              capture_output=True, text=True, timeout=RUN_TIMEOUT,
-                             env={**os.environ, **PORTABLE_MATH})
+                             env={k: v for k, v in {**os.environ, **(env or {})}.items()
+                                  if v is not None})
     except subprocess.TimeoutExpired:
         raise RecipeError(f"{name}: still running after {RUN_TIMEOUT} s") from None
     seconds = time.perf_counter() - began
@@ -175,18 +167,19 @@ def run_recipe(exe: Path, recipe: Path, workdir: Path) -> float:
     return seconds
 
 
-def run_recipes(exe: Path, workdir: Path, jobs: int) -> dict[str, Path]:
+def run_recipes(exe: Path, workdir: Path, jobs: int,
+                env: dict[str, str | None] | None = None) -> dict[str, Path]:
     """Run every recipe into workdir; print the time of each and in all; {name: file}."""
     recipes = sorted(RECIPES.glob("*.nml"))
     if not recipes:
         raise RecipeError(f"no recipes in {RECIPES}")
     began = time.perf_counter()
     with ThreadPoolExecutor(max_workers=jobs) as pool:
-        seconds = list(pool.map(lambda r: run_recipe(exe, r, workdir), recipes))
+        seconds = list(pool.map(lambda r: run_recipe(exe, r, workdir, env), recipes))
     total = time.perf_counter() - began
-    for recipe, s in sorted(zip(recipes, seconds), key=lambda rs: -rs[1]):
-        print(f"  {recipe.stem:12s} {s:6.2f} s")
-    print(f"ran {len(recipes)} recipes in {total:.1f} s ({jobs} at a time)")
+    slowest = sorted(zip(recipes, seconds), key=lambda rs: -rs[1])
+    print("ran", len(recipes), f"recipes in {total:.1f} s ({jobs} at a time; slowest: "
+          + ", ".join(f"{r.stem} {s:.1f} s" for r, s in slowest[:3]) + ")")
     return {r.stem: workdir / f"{r.stem}.h5" for r in recipes}
 
 
@@ -230,65 +223,16 @@ def shape_text(shape: tuple[int, ...]) -> str:
     return "x".join(map(str, shape)) if shape else "scalar"
 
 
-def fingerprint(array: np.ndarray) -> str:
-    """`<dtype> <shape> sha256:<hex>` of the dtype, the shape and the raw bytes (C order)."""
-    digest = hashlib.sha256(f"{array.dtype.str} {array.shape}\n".encode())
-    digest.update(array.tobytes(order="C"))
-    return f"{array.dtype.str} {shape_text(array.shape)} sha256:{digest.hexdigest()}"
-
-
-def file_checksums(path: Path) -> dict[str, str]:
-    return {key: fingerprint(value) for key, value in results(path)}
-
-
-def compute(exe: Path, workdir: Path, jobs: int) -> dict[str, dict[str, str]]:
-    files = run_recipes(exe, workdir, jobs)
-    return {name: file_checksums(path) for name, path in files.items()}
-
-
-# ---- comparing ---------------------------------------------------------------------------
-
-def count(manifest: dict[str, dict[str, str]]) -> tuple[int, int]:
-    """(datasets, attributes) in a manifest."""
-    keys = [key for entries in manifest.values() for key in entries]
-    attributes = sum("@" in key for key in keys)
-    return len(keys) - attributes, attributes
-
-
 def differences(problems: list[str]) -> str:
     n = len(problems)
     return f"{n} difference{'' if n == 1 else 's'}; " if n else ""
 
 
 def summary(identical: dict[str, dict[str, str]]) -> str:
-    datasets, attributes = count(identical)
-    return (f"{datasets} datasets in {len(identical)} recipes identical "
+    keys = [key for entries in identical.values() for key in entries]
+    attributes = sum("@" in key for key in keys)
+    return (f"{len(keys) - attributes} datasets in {len(identical)} recipes identical "
             f"(and {attributes} attributes)")
-
-
-def diff_manifests(stored: dict, fresh: dict) -> tuple[list[str], dict]:
-    """The differences between two manifests, one line each, and the identical entries."""
-    problems, identical = [], {}
-    for recipe in sorted(stored.keys() | fresh.keys()):
-        if recipe not in fresh:
-            problems.append(f"{recipe}: in the manifest, but there is no "
-                            f"namelists/{recipe}.nml")
-            continue
-        if recipe not in stored:
-            problems.append(f"{recipe}: a recipe the manifest does not know")
-            continue
-        old, new = stored[recipe], fresh[recipe]
-        identical[recipe] = {k: v for k, v in new.items() if old.get(k) == v}
-        for key in sorted(old.keys() | new.keys()):
-            if key not in new:
-                problems.append(f"{recipe}: {key}: missing (the manifest has {old[key]})")
-            elif key not in old:
-                problems.append(f"{recipe}: {key}: new, not in the manifest ({new[key]})")
-            elif old[key] != new[key]:
-                was, now = old[key].rsplit(" ", 1)[0], new[key].rsplit(" ", 1)[0]
-                what = "values differ" if was == now else f"was {was}, now {now}"
-                problems.append(f"{recipe}: {key}: {what}")
-    return problems, identical
 
 
 def describe_difference(a: np.ndarray, b: np.ndarray) -> str | None:
@@ -476,20 +420,10 @@ def workdir_for(keep: Path | None) -> tuple[Path, tempfile.TemporaryDirectory | 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     commands = parser.add_subparsers(dest="command", required=True)
-    for command, text in (("compute", "run every recipe and write the manifest"),
-                          ("check", "run every recipe and compare with the manifest"),
-                          ("run", "run every recipe into DIR, to `compare` later")):
-        sub = commands.add_parser(command, help=text)
-        if command == "run":
-            sub.add_argument("keep", type=Path, metavar="DIR")
-        else:
-            sub.add_argument("--manifest", type=Path, default=MANIFEST,
-                             help=f"default: {MANIFEST.relative_to(ROOT)}")
-        if command == "check":
-            sub.add_argument("--keep", type=Path, metavar="DIR",
-                             help="run in DIR and keep the output files")
-        sub.add_argument("--exe", type=Path, help="the simulator (default: the release build)")
-        sub.add_argument("--jobs", type=int, default=1, help="recipes run at once")
+    sub = commands.add_parser("run", help="run every recipe into DIR, to `compare` later")
+    sub.add_argument("keep", type=Path, metavar="DIR")
+    sub.add_argument("--exe", type=Path, help="the simulator (default: the release build)")
+    sub.add_argument("--jobs", type=int, default=1, help="recipes run at once")
     sub = commands.add_parser("compare", help="compare two directories of output files")
     sub.add_argument("dir_a", type=Path)
     sub.add_argument("dir_b", type=Path)
@@ -505,34 +439,12 @@ def main(argv: list[str] | None = None) -> int:
         return compare_versions(args.dir_v1, args.dir_v2)
     try:
         exe = (args.exe or default_exe()).resolve()
-        workdir, temporary = workdir_for(getattr(args, "keep", None))
-        try:
-            if args.command == "run":
-                run_recipes(exe, workdir, max(1, args.jobs))
-                return 0
-            fresh = compute(exe, workdir, max(1, args.jobs))
-        finally:
-            if temporary is not None:
-                temporary.cleanup()
+        workdir, _ = workdir_for(args.keep)
+        run_recipes(exe, workdir, max(1, args.jobs))
     except RecipeError as err:
-        print(f"recipe_checksums: {err}", file=sys.stderr)
+        print(f"recipe_runs: {err}", file=sys.stderr)
         return 1
-    if args.command == "compute":
-        args.manifest.write_text(json.dumps(fresh, indent=1, sort_keys=True) + "\n")
-        datasets, attributes = count(fresh)
-        print(f"wrote {args.manifest}: {datasets} datasets and {attributes} attributes "
-              f"in {len(fresh)} recipes")
-        return 0
-    stored = json.loads(args.manifest.read_text())
-    problems, identical = diff_manifests(stored, fresh)
-    for line in problems:
-        print(line)
-    if any(line.endswith(": values differ") for line in problems):
-        print("(to see where values differ: `check --keep DIR` or `run DIR` with this build,"
-              " `run DIR_REF --exe EXE_REF` with the reference build, then"
-              " `compare DIR_REF DIR`)")
-    print(differences(problems), summary(identical), sep="")
-    return 1 if problems else 0
+    return 0
 
 
 if __name__ == "__main__":
