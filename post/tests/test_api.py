@@ -411,6 +411,24 @@ def test_random_start_errors_match_cli(cli: Path, tmp_path: Path) -> None:
     assert "x_amp" in expected
 
 
+def test_random_start_without_amplitudes_is_refused_as_by_the_cli(cli: Path,
+                                                                    tmp_path: Path) -> None:
+    """x_amp = v_amp = 0 (their defaults) would start every seed from rest: refused, with the
+    CLI's words, whether the amplitudes are left out or given as 0."""
+    expected = cli_error(cli, namelist(**BASE) + "&initial kind = 'random', seed = 3 /\n",
+                         tmp_path)
+    assert expected.startswith("&initial: kind = 'random' needs x_amp or v_amp above 0")
+    assert "x_amp in [0, half the smallest spacing = " in expected
+    assert "v_amp in [0, 1e6]" in expected
+    for amplitudes in ({}, dict(x_amp=0.0, v_amp=0.0)):
+        with pytest.raises(ValueError) as info:
+            api.random_start(4, seed=3, **amplitudes)
+        assert str(info.value) == expected
+    x1, v1 = api.random_start(4, seed=1, v_amp=0.1)  # one amplitude is enough: seeds differ
+    x2, v2 = api.random_start(4, seed=2, v_amp=0.1)
+    assert not np.any(x1) and not np.any(x2) and np.all(v1 != v2)
+
+
 def test_random_start_is_the_cli_start(cli: Path, tmp_path: Path) -> None:
     x, v = api.random_start(7, seed=11, x_amp=0.4, v_amp=2.0, spacing=0.9)
     run_cli(cli, namelist(7, 1.0, 1.5, spacing=0.9, cycles=1,

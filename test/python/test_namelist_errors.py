@@ -65,8 +65,8 @@ MISTAKES = {
 }
 
 # values at the edges of what a key holds: read, not refused
-HELD = ["&initial kind = 'random', seed = -2147483648 /",
-        "&initial kind = 'random', seed = 2147483647 /",
+HELD = ["&initial kind = 'random', seed = -2147483648, v_amp = 0.1 /",
+        "&initial kind = 'random', seed = 2147483647, v_amp = 0.1 /",
         "&run cycles = 9223372036854775807, transient = 0 /",
         "&chain n = 4, omega = 1.5, amplitude = 0e400 /",
         "&chain n = 4, omega = 1.5, amplitude = 0.001e299 /",
@@ -202,6 +202,51 @@ def test_check_refuses_what_the_run_refuses(impactchain_exe, tmp_path, case):
         lines.add(result.stderr)
         assert sorted(p.name for p in tmp_path.iterdir()) == ["in.nml"]
     assert len(lines) == 1
+
+
+# Random starts with both amplitudes 0 (&initial's defaults) are all one start, rest: a
+# study that changes only the seed would get identical runs. (input, the whole message)
+DEGENERATE_STARTS = {
+    "initial without amplitudes": (
+        "&initial kind = 'random', seed = 5 /",
+        "&initial: kind = 'random' needs x_amp or v_amp above 0 (both are 0: every seed "
+        "would start from rest); x_amp in [0, half the smallest spacing = 0.50000000), "
+        "v_amp in [0, 1e6]"),
+    "initial with amplitudes 0": (
+        "&initial kind = 'random', seed = 5, x_amp = 0, v_amp = 0.0 /",
+        "&initial: kind = 'random' needs x_amp or v_amp above 0 (both are 0: every seed "
+        "would start from rest); x_amp in [0, half the smallest spacing = 0.50000000), "
+        "v_amp in [0, 1e6]"),
+    "census with amplitudes 0": (
+        "&census samples = 3, x_amp = 0, v_amp = 0 /",
+        "&census: x_amp or v_amp must be above 0 (both are 0: every sample would start "
+        "from rest); x_amp in [0, half the smallest spacing = 0.50000000), v_amp in [0, 1e6]"),
+}
+
+
+@pytest.mark.parametrize("case", sorted(DEGENERATE_STARTS))
+def test_random_starts_without_amplitudes_are_refused(impactchain_exe, tmp_path, case):
+    line, message = DEGENERATE_STARTS[case]
+    group = line.split()[0]
+    text = "\n".join(l for l in GOOD.splitlines() if not l.startswith(group)) + "\n" + line
+    (tmp_path / "in.nml").write_text(text + "\n")
+    for check in (["--check"], []):
+        result = run(impactchain_exe, [*check, "in.nml"], tmp_path, check=False)
+        assert result.returncode == 1 and not result.stdout, (check, result.stderr)
+        assert result.stderr == "impactchain: error: " + message + "\n"
+        assert sorted(p.name for p in tmp_path.iterdir()) == ["in.nml"]
+
+
+def test_one_amplitude_makes_seeds_differ(impactchain_exe, tmp_path):
+    starts = []
+    for seed in (1, 2):
+        (tmp_path / "in.nml").write_text(GOOD.replace(
+            "seed = 3, x_amp = 0.2, v_amp = 0.2", f"seed = {seed}, v_amp = 0.2"))
+        run(impactchain_exe, ["--overwrite", "in.nml"], tmp_path)
+        with h5py.File(tmp_path / "run.h5") as f:
+            starts.append((f["initial/x"][()], f["initial/v"][()]))
+    (x1, v1), (x2, v2) = starts
+    assert not x1.any() and not x2.any() and (v1 != v2).all()
 
 
 def test_check_refuses_an_existing_output(impactchain_exe, tmp_path):
