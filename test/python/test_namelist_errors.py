@@ -2,6 +2,7 @@
 "did you mean"), and the command line's overrides, output options and --check."""
 from __future__ import annotations
 
+import os
 import re
 import subprocess
 from pathlib import Path
@@ -276,11 +277,14 @@ def test_bad_override_is_refused(impactchain_exe, tmp_path, args, needle, code):
     assert not list(tmp_path.glob("*.h5*"))
 
 
-LONG_RUN = """&chain n = 64, amplitude = 3.5, omega = 1.9 /
+# A run that is over in milliseconds: IMPACTCHAIN_PROGRESS_AFTER = 0 shows its progress from the
+# first record (not after two quiet seconds), so what is shown does not depend on the machine.
+PROGRESS_RUN = """&chain n = 8, amplitude = 3.5, omega = 1.9 /
 &initial kind = 'random', seed = 2, x_amp = 0.3, v_amp = 0.3 /
-&run cycles = 300000, record_events = .false. /
+&run cycles = 1000, record_events = .false. /
 &output file = 'long.h5' /
 """
+SHOWN_AT_ONCE = {"IMPACTCHAIN_PROGRESS_AFTER": "0"}
 
 
 def progress_lines(stream: str) -> list[str]:
@@ -288,30 +292,31 @@ def progress_lines(stream: str) -> list[str]:
 
 
 def test_progress_on_a_log_is_a_line_per_tenth(impactchain_exe, tmp_path):
-    """stderr not a terminal: a line at each tenth of the run (or each minute), no carriage
-    returns; the run is long enough (several seconds) to pass the two quiet seconds."""
-    (tmp_path / "long.nml").write_text(LONG_RUN)
+    """stderr not a terminal: a line at each tenth of the run (or each minute: never in a run
+    of milliseconds), no carriage returns; the first update is shown when the delay is 0."""
+    (tmp_path / "long.nml").write_text(PROGRESS_RUN)
     result = subprocess.run([str(impactchain_exe), "long.nml"], cwd=tmp_path,
-                            capture_output=True, text=True, timeout=300)
+                            capture_output=True, text=True, timeout=300,
+                            env={**os.environ, **SHOWN_AT_ONCE})
     assert result.returncode == 0, result.stderr
     assert "\r" not in result.stderr
     lines = progress_lines(result.stderr)
-    assert 1 <= len(lines) <= 11, result.stderr
-    assert lines[-1].startswith("impactchain: cycle 300000 / 300000 (100.0 %)")
+    assert lines[0].startswith("impactchain: cycle 1 / 1000 (0.1 %)"), result.stderr
+    assert lines[-1].startswith("impactchain: cycle 1000 / 1000 (100.0 %)"), result.stderr
     percents = [float(re.search(r"\(([\d.]+) %\)", line).group(1)) for line in lines]
-    assert all(b // 10 > a // 10 for a, b in zip(percents, percents[1:]))  # a new tenth each
+    assert percents == [0.1] + [10.0 * k for k in range(1, 11)], result.stderr
 
 
 def test_progress_on_a_terminal_is_one_updating_line(impactchain_exe, tmp_path):
     """stderr a terminal (a pseudo-terminal here): one line rewritten in place with carriage
-    returns, a single newline at the end."""
-    import os
+    returns (the first update and the last at least), a single newline at the end."""
     import pty
 
-    (tmp_path / "long.nml").write_text(LONG_RUN)
+    (tmp_path / "long.nml").write_text(PROGRESS_RUN)
     leader, follower = pty.openpty()
     proc = subprocess.Popen([str(impactchain_exe), "long.nml"], cwd=tmp_path,
-                            stdout=subprocess.DEVNULL, stderr=follower)
+                            stdout=subprocess.DEVNULL, stderr=follower,
+                            env={**os.environ, **SHOWN_AT_ONCE})
     os.close(follower)
     chunks = []
     while True:
@@ -326,7 +331,26 @@ def test_progress_on_a_terminal_is_one_updating_line(impactchain_exe, tmp_path):
     os.close(leader)
     shown = b"".join(chunks).decode()
     assert shown.count("\r") >= 2 and shown.count("\n") == 1, repr(shown[:400])
-    assert progress_lines(shown)[-1].startswith("impactchain: cycle 300000 / 300000")
+    lines = progress_lines(shown)
+    assert lines[0].startswith("impactchain: cycle 1 / 1000"), repr(shown[:400])
+    assert lines[-1].startswith("impactchain: cycle 1000 / 1000"), repr(shown[:400])
+
+
+def test_no_progress_in_the_quiet_start(impactchain_exe, tmp_path):
+    """Nothing within the first IMPACTCHAIN_PROGRESS_AFTER seconds (an hour here: longer than
+    any run of the tests), and the delay must be a number of seconds."""
+    (tmp_path / "long.nml").write_text(PROGRESS_RUN)
+    result = subprocess.run([str(impactchain_exe), "long.nml"], cwd=tmp_path,
+                            capture_output=True, text=True, timeout=300,
+                            env={**os.environ, "IMPACTCHAIN_PROGRESS_AFTER": "3600"})
+    assert result.returncode == 0 and result.stderr == "", result.stderr
+    for bad in ("soon", "-1", "nan", "1e7"):
+        result = subprocess.run([str(impactchain_exe), "--overwrite", "long.nml"],
+                                cwd=tmp_path, capture_output=True, text=True, timeout=60,
+                                env={**os.environ, "IMPACTCHAIN_PROGRESS_AFTER": bad})
+        assert result.returncode == 1 and not result.stdout, result.stderr
+        assert result.stderr == (f"impactchain: error: IMPACTCHAIN_PROGRESS_AFTER = {bad} is "
+                                 "not a number of seconds in [0, 1e6]\n")
 
 
 def test_a_long_list_is_read_and_echoed_in_full(impactchain_exe, tmp_path):
