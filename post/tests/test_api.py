@@ -604,8 +604,9 @@ def test_example_writes_a_png(tmp_path: Path) -> None:
 
 # --------------------------------------- 4. long calls: Ctrl-C, progress; sweeps from Python
 
-# A child process makes one long call (hours if never stopped); the parent sends SIGINT
-# (Ctrl-C) once the kernel runs and measures how long the call takes to raise.
+# A child process makes one long call (hours if never stopped) with a progress bar; the parent
+# sends SIGINT (Ctrl-C) once the bar shows (the kernel has reported its first unit of work, on
+# any machine) and measures how long the call takes to raise.
 _LONG_CALLS = {
     "records": "api.simulate(16, 1.7, 1.5, cycles=10**6, events=False)",
     "transient": "api.simulate(16, 1.7, 1.5, transient=10**10, cycles=2)",
@@ -632,15 +633,20 @@ print("returned", flush=True)
 def test_ctrl_c_stops_a_long_call(name: str) -> None:
     """SIGINT during a call that would run for hours raises KeyboardInterrupt promptly (the
     kernel polls a stop flag at every cycle, record and sweep point; the wait is printed)."""
+    import select
     import signal
     import time
 
-    child = subprocess.Popen([sys.executable, "-c", _CHILD.format(call=_LONG_CALLS[name])],
+    pytest.importorskip("tqdm")
+    call = _LONG_CALLS[name][:-1] + ", progress=True)"
+    child = subprocess.Popen([sys.executable, "-c", _CHILD.format(call=call)],
                              stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     try:
         assert child.stdout is not None
         assert child.stdout.readline() == "calling\n"
-        time.sleep(1.5)  # the kernel is running by now
+        assert child.stderr is not None  # the bar's first drawing: the kernel is running
+        ready, _, _ = select.select([child.stderr], [], [], 120)
+        assert ready and os.read(child.stderr.fileno(), 4096), "no progress bar"
         sent = time.monotonic()
         child.send_signal(signal.SIGINT)
         out, err = child.communicate(timeout=60)
