@@ -238,6 +238,16 @@ def test_random_starts_without_amplitudes_are_refused(impactchain_exe, tmp_path,
         assert sorted(p.name for p in tmp_path.iterdir()) == ["in.nml"]
 
 
+def test_a_census_plane_needs_no_amplitudes(impactchain_exe, tmp_path):
+    """A plane's starts vary its two coordinates and take the others from &initial: its
+    &census x_amp and v_amp are not used, and may be 0."""
+    (tmp_path / "in.nml").write_text(GOOD + "&census samples = 4, x_amp = 0, v_amp = 0, "
+                                     "plane = 'x1', 'v1', plane_range = -0.1, 0.1, -0.1, 0.1, "
+                                     "plane_points = 2 /\n")
+    result = run(impactchain_exe, ["--check", "in.nml"], tmp_path)
+    assert "plane = 'x1', 'v1'" in result.stdout, result.stdout
+
+
 def test_one_amplitude_makes_seeds_differ(impactchain_exe, tmp_path):
     starts = []
     for seed in (1, 2):
