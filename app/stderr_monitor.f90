@@ -5,6 +5,9 @@
 !> speed of the machine.
 module stderr_monitor
     use, intrinsic :: iso_fortran_env, only: error_unit, int64
+    use, intrinsic :: ieee_arithmetic, only: ieee_is_finite, ieee_overflow, &
+                                             ieee_get_halting_mode, ieee_set_halting_mode, &
+                                             ieee_set_flag
     use impactchain, only: wp, i8, monitor_t, interrupted, progress_t, progress_start, &
                            progress_update, stderr_is_terminal, stage_name, &
                            progress_quiet_start
@@ -59,14 +62,26 @@ contains
         character(len=:), allocatable, intent(out) :: message
         character(len=64) :: text
         integer :: length, status, ios
+        logical :: halting
 
         after = progress_quiet_start
         call get_environment_variable('IMPACTCHAIN_PROGRESS_AFTER', text, length, status)
         if (status == 1 .or. length == 0) return
+        ! a number beyond double precision (1e400) reads as an overflow, which the
+        ! runtime-checked build would trap: read without halting, and refuse what is not finite
+        call ieee_get_halting_mode(ieee_overflow, halting)
+        call ieee_set_halting_mode(ieee_overflow, .false.)
         read (text, *, iostat=ios) after
-        if (status /= 0 .or. ios /= 0 .or. .not. (after >= 0 .and. after <= 1.0e6_wp)) &
-            message = 'IMPACTCHAIN_PROGRESS_AFTER = '//trim(text)// &
-                      ' is not a number of seconds in [0, 1e6]'
+        call ieee_set_flag(ieee_overflow, .false.)
+        call ieee_set_halting_mode(ieee_overflow, halting)
+        if (status == 0 .and. ios == 0) then
+            ! (a NaN compared would trap there too)
+            if (ieee_is_finite(after)) then
+                if (after >= 0 .and. after <= 1.0e6_wp) return
+            end if
+        end if
+        message = 'IMPACTCHAIN_PROGRESS_AFTER = '//trim(text)// &
+                  ' is not a number of seconds in [0, 1e6]'
     end subroutine progress_after_from_environment
 
     !> Seconds since an arbitrary start.

@@ -354,7 +354,7 @@ def test_no_progress_in_the_quiet_start(impactchain_exe, tmp_path):
                             capture_output=True, text=True, timeout=300,
                             env={**os.environ, "IMPACTCHAIN_PROGRESS_AFTER": "3600"})
     assert result.returncode == 0 and result.stderr == "", result.stderr
-    for bad in ("soon", "-1", "nan", "1e7"):
+    for bad in ("soon", "-1", "nan", "inf", "1e7", "1e400"):
         result = subprocess.run([str(impactchain_exe), "--overwrite", "long.nml"],
                                 cwd=tmp_path, capture_output=True, text=True, timeout=60,
                                 env={**os.environ, "IMPACTCHAIN_PROGRESS_AFTER": bad})
