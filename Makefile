@@ -8,6 +8,7 @@ PY := $(VENV)/bin/python
 FPM := $(abspath $(VENV))/bin/fpm
 RELEASE := --profile release
 # gfortran's runtime checks: bounds, and traps on invalid operations, division by zero, overflow
+# (and a warning for each array temporary: none is expected, so one stands out in the log)
 CHECKED := --flag "-g -O1 -fcheck=all -ffpe-trap=invalid,zero,overflow -fbacktrace"
 # LAPACK: the reference one (liblapack-dev) on BLIS (libblis-serial-dev), an optimised BLAS
 # that is reentrant (sweep threads factorise their frames at the same time) and runs every call
@@ -26,6 +27,11 @@ PKG_BUILD := $(CURDIR)/build/meson-python
 INSTALL_PKG := PATH="$(abspath $(VENV))/bin:$$PATH" $(PY) -m pip install --quiet \
                --no-build-isolation --no-deps -Cbuild-dir=$(PKG_BUILD) .
 DEFAULT_RUN := runs/default.h5
+# fpm prints a line as it starts and one as it ends each file it compiles (hundreds on a fresh
+# build): left out of the log, keeping the compiler's messages, fpm's errors and its summary
+# line. (fpm writes them to stderr; sed keeps every other line, in order, and exits 0, so
+# that pipefail reports fpm's status.)
+FPM_LOG := 2>&1 | sed -u -E '/^\[ *[0-9]+%\] +[^ ]+( +done\.)?$$/d'
 
 .PHONY: all setup system-deps python-deps build run test fortran-test python-test mpi \
         figures bench recipe-reference api-docs clean help
@@ -71,7 +77,7 @@ $(PY_STAMP): requirements.txt
 	touch $@
 
 build: setup
-	$(FPM) build $(RELEASE)
+	$(FPM) build $(RELEASE) $(FPM_LOG)
 	$(INSTALL_PKG)
 
 run: build
@@ -82,14 +88,16 @@ run: build
 
 # the MPI driver of sweeps and censuses (optional for users; built and run by make test)
 mpi: build
-	cd mpi && $(FPM) build $(RELEASE) --compiler mpifort
+	cd mpi && $(FPM) build $(RELEASE) --compiler mpifort $(FPM_LOG)
 
 fortran-test: build mpi
-	$(FPM) test $(RELEASE)
+	@echo "impactchain: the Fortran tests (release build)"
+	$(FPM) test $(RELEASE) $(FPM_LOG)
 	@echo "impactchain: the same tests with runtime checks"
-	$(FPM) test $(CHECKED)
+	$(FPM) test $(CHECKED) $(FPM_LOG)
 
 python-test: build
+	@echo "impactchain: the Python tests (package and simulator, release build)"
 	IMPACTCHAIN_REQUIRE_EXTENSION=1 $(PY) -m pytest
 	@echo "impactchain: pip install of the repository into a fresh venv (a full build)"
 	$(PY) -m pytest -m install -q -rA post/tests/test_install.py

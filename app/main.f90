@@ -11,7 +11,7 @@ program main
                            cli_help, cli_version, cli_usage, code_version, config_summary, &
                            check_before_run, branches_t, &
                            continuation_to_file, census_result_t, census_to_file, kind_names
-    use stderr_monitor, only: stderr_monitor_t, close_progress
+    use stderr_monitor, only: stderr_monitor_t, close_progress, progress_after_from_environment
     implicit none
     type(config_t) :: cfg
     type(record_result_t) :: summary
@@ -21,6 +21,7 @@ program main
     type(error_t), allocatable :: err
     type(cli_t) :: cli
     type(stderr_monitor_t) :: monitor
+    character(len=:), allocatable :: message
 
     cli = parse_command_line()
     select case (cli%action)
@@ -38,6 +39,8 @@ program main
         call fail_usage(cli%message)
     end select
     monitor%quiet = cli%quiet
+    call progress_after_from_environment(monitor%after, message)
+    if (allocated(message)) call fail(message)
     call read_config(cli%input, cfg, err, cli%overrides)
     if (allocated(err)) call fail(err%message)
     if (cli%check) then
@@ -95,7 +98,8 @@ contains
             '  --check                validate the input (and what the run checks before', &
             '                         it starts: sizes, the output file), print it', &
             '                         resolved, run nothing', &
-            '  -q, --quiet            no progress (shown on stderr for runs over 2 s)', &
+            '  -q, --quiet            no progress (shown on stderr for runs over 2 s;', &
+            '                         IMPACTCHAIN_PROGRESS_AFTER=seconds changes the 2 s)', &
             '  -h, --help             this text', &
             '  --version              the code version'
     end subroutine usage

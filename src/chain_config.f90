@@ -690,6 +690,14 @@ contains
             if (allocated(err)) return
             call check_range(err, 'initial', 'v_amp', cfg%v_amp, 0.0_wp, 1.0e6_wp, '[0, 1e6]')
             if (allocated(err)) return
+            ! both 0 (their defaults) is rest whatever the seed: a study that changes only
+            ! the seed would get identical runs
+            if (cfg%x_amp == 0 .and. cfg%v_amp == 0) then
+                call set_error(err, "&initial: kind = 'random' needs x_amp or v_amp above 0 "// &
+                               "(both are 0: every seed would start from rest); "// &
+                               amplitudes_allowed(smallest))
+                return
+            end if
         end if
         if (cfg%initial_kind == 'explicit') then
             if (size(cfg%x0) /= cfg%model%n) then
@@ -999,6 +1007,14 @@ contains
         if (allocated(err)) return
         call check_range(err, 'census', 'v_amp', cfg%census_v_amp, 0.0_wp, 1.0e6_wp, '[0, 1e6]')
         if (allocated(err)) return
+        ! (a plane's starts take the coordinates off the plane from &initial, not these)
+        if (cfg%census_x_amp == 0 .and. cfg%census_v_amp == 0 .and. &
+            all(cfg%census_plane == '')) then
+            call set_error(err, "&census: x_amp or v_amp must be above 0 (both are 0: every "// &
+                           "sample would start from rest); "// &
+                           amplitudes_allowed(minval(cfg%model%spacing)))
+            return
+        end if
         call check_range(err, 'census', 'tolerance', cfg%census_tolerance, tiny(1.0_wp), &
                          1.0_wp, '(0, 1)', open_high=.true.)
         if (allocated(err)) return
@@ -1349,6 +1365,15 @@ contains
         text = merge('.true. ', '.false.', flag)
         text = trim(text)
     end function fmt_logical
+
+    !> The ranges of a random start's x_amp and v_amp, for a message.
+    pure function amplitudes_allowed(smallest_spacing) result(text)
+        real(wp), intent(in) :: smallest_spacing
+        character(len=:), allocatable :: text
+
+        text = "x_amp in [0, half the smallest spacing = "//fmt_real(0.5_wp*smallest_spacing)// &
+               "), v_amp in [0, 1e6]"
+    end function amplitudes_allowed
 
     subroutine check_range(err, group, key, value, low, high, allowed, open_high)
         type(error_t), allocatable, intent(out) :: err

@@ -94,7 +94,9 @@ contains
     !> factors telescope, Q_T = Phi Q_0 (R_T..R_1)^-1, whatever the orthogonality of the
     !> frames in between. With `keep_singular`, a with an exactly zero R(j,j) is left as it was.
     subroutine qr_orthonormalise(a, r_diag, ws, info, keep_singular)
-        real(wp), intent(inout) :: a(:, :)
+        ! contiguous, as every caller's frame is: without it gfortran 12 copies `a` into a
+        ! temporary and back for each call below that takes it contiguous, at every step
+        real(wp), intent(inout), contiguous :: a(:, :)
         real(wp), intent(out) :: r_diag(:)
         type(qr_workspace_t), intent(inout) :: ws
         integer, intent(out) :: info

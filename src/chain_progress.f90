@@ -1,7 +1,8 @@
 !> When and how a long run shows its progress: one line that updates in place on a terminal
 !> (at most four times a second), and on a log file or pipe a line at every tenth of the work
-!> or every minute, whichever comes first. Nothing is shown in a run's first two seconds. The
-!> library only decides and formats; the programs write. Infrastructure, no model section.
+!> or every minute, whichever comes first. Nothing is shown in a run's first two seconds (a
+!> program may choose another delay: progress_quiet_start is the default). The library only
+!> decides and formats; the programs write. Infrastructure, no model section.
 module chain_progress
     use, intrinsic :: iso_c_binding, only: c_int
     use chain_kinds, only: wp, i8
@@ -9,8 +10,9 @@ module chain_progress
     implicit none
     private
     public :: progress_t, progress_start, progress_update, stderr_is_terminal
+    public :: progress_quiet_start
 
-    real(wp), parameter :: quiet_start = 2       !! seconds before anything is shown
+    real(wp), parameter :: progress_quiet_start = 2 !! seconds before anything is shown
     real(wp), parameter :: terminal_every = 0.25_wp
     real(wp), parameter :: log_every = 60
 
@@ -18,6 +20,7 @@ module chain_progress
         logical :: terminal = .false.        !! update one line in place
         character(len=:), allocatable :: label !! what is counted: 'cycle', 'point'
         real(wp) :: start = 0, last = -huge(1.0_wp) !! seconds: start, last line shown
+        real(wp) :: quiet_start = progress_quiet_start !! seconds before anything is shown
         integer(i8) :: done_at_start = -1    !! work already done when the count started
         integer :: tenths_shown = 0          !! (log) tenths of the work reported
         logical :: line_open = .false.       !! (terminal) a line without its newline
@@ -38,15 +41,19 @@ contains
         stderr_is_terminal = c_isatty(2_c_int) == 1
     end function stderr_is_terminal
 
-    pure function progress_start(label, terminal, now) result(p)
+    !> A count starting at `now`; nothing is shown before `quiet_start` seconds have passed
+    !> (default progress_quiet_start; with 0 the first update is shown, then as usual).
+    pure function progress_start(label, terminal, now, quiet_start) result(p)
         character(len=*), intent(in) :: label
         logical, intent(in) :: terminal
         real(wp), intent(in) :: now !! seconds on any clock
+        real(wp), intent(in), optional :: quiet_start
         type(progress_t) :: p
 
         p%label = label
         p%terminal = terminal
         p%start = now
+        if (present(quiet_start)) p%quiet_start = quiet_start
     end function progress_start
 
     !> After `done` of `total` at time `now`: `text` is what to write now ('' for nothing);
@@ -64,7 +71,7 @@ contains
         text = ''
         if (p%done_at_start < 0) p%done_at_start = done - 1
         elapsed = now - p%start
-        if (elapsed < quiet_start) return
+        if (elapsed < p%quiet_start) return
         tenths = int((10*done)/max(total, 1_i8))
         if (p%terminal) then
             show = now - p%last >= terminal_every .or. done == total

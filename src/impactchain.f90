@@ -56,7 +56,8 @@ module impactchain
     use chain_cli, only: cli_t, parse_command_line, cli_run, cli_help, cli_version, cli_usage, &
                          cli_error
     use chain_interrupt, only: catch_interrupts, interrupted
-    use chain_progress, only: progress_t, progress_start, progress_update, stderr_is_terminal
+    use chain_progress, only: progress_t, progress_start, progress_update, stderr_is_terminal, &
+                              progress_quiet_start
     implicit none
     private
     public :: wp, i8, pi, two_pi, error_t, set_error
@@ -92,6 +93,6 @@ module impactchain
     public :: code_version, output_t, output_check, output_begin, output_end, output_abort
     public :: cli_t, parse_command_line, cli_run, cli_help, cli_version, cli_usage, cli_error
     public :: catch_interrupts, interrupted
-    public :: progress_t, progress_start, progress_update, stderr_is_terminal
+    public :: progress_t, progress_start, progress_update, stderr_is_terminal, progress_quiet_start
 
 end module impactchain

@@ -563,7 +563,9 @@ def random_start(
     [-x_amp, x_amp), v_i in [-v_amp, v_amp), from the same portable generator, so that
     ``simulate(..., x0=x, v0=v)`` equals a CLI run with that ``&initial`` group.
 
-    ``x_amp`` must be below half the smallest spacing (no overlapping start).
+    ``x_amp`` must be below half the smallest spacing (no overlapping start), and ``x_amp``
+    and ``v_amp`` must not both be 0 (every seed would be the same start, rest): ValueError
+    with the CLI's message.
 
     Returns:
         (x, v), each (n,) float64 [length, length/time].

@@ -411,6 +411,24 @@ def test_random_start_errors_match_cli(cli: Path, tmp_path: Path) -> None:
     assert "x_amp" in expected
 
 
+def test_random_start_without_amplitudes_is_refused_as_by_the_cli(cli: Path,
+                                                                    tmp_path: Path) -> None:
+    """x_amp = v_amp = 0 (their defaults) would start every seed from rest: refused, with the
+    CLI's words, whether the amplitudes are left out or given as 0."""
+    expected = cli_error(cli, namelist(**BASE) + "&initial kind = 'random', seed = 3 /\n",
+                         tmp_path)
+    assert expected.startswith("&initial: kind = 'random' needs x_amp or v_amp above 0")
+    assert "x_amp in [0, half the smallest spacing = " in expected
+    assert "v_amp in [0, 1e6]" in expected
+    for amplitudes in ({}, dict(x_amp=0.0, v_amp=0.0)):
+        with pytest.raises(ValueError) as info:
+            api.random_start(4, seed=3, **amplitudes)
+        assert str(info.value) == expected
+    x1, v1 = api.random_start(4, seed=1, v_amp=0.1)  # one amplitude is enough: seeds differ
+    x2, v2 = api.random_start(4, seed=2, v_amp=0.1)
+    assert not np.any(x1) and not np.any(x2) and np.all(v1 != v2)
+
+
 def test_random_start_is_the_cli_start(cli: Path, tmp_path: Path) -> None:
     x, v = api.random_start(7, seed=11, x_amp=0.4, v_amp=2.0, spacing=0.9)
     run_cli(cli, namelist(7, 1.0, 1.5, spacing=0.9, cycles=1,
@@ -586,8 +604,9 @@ def test_example_writes_a_png(tmp_path: Path) -> None:
 
 # --------------------------------------- 4. long calls: Ctrl-C, progress; sweeps from Python
 
-# A child process makes one long call (hours if never stopped); the parent sends SIGINT
-# (Ctrl-C) once the kernel runs and measures how long the call takes to raise.
+# A child process makes one long call (hours if never stopped) with a progress bar; the parent
+# sends SIGINT (Ctrl-C) once the bar shows (the kernel has reported its first unit of work, on
+# any machine) and measures how long the call takes to raise.
 _LONG_CALLS = {
     "records": "api.simulate(16, 1.7, 1.5, cycles=10**6, events=False)",
     "transient": "api.simulate(16, 1.7, 1.5, transient=10**10, cycles=2)",
@@ -614,15 +633,20 @@ print("returned", flush=True)
 def test_ctrl_c_stops_a_long_call(name: str) -> None:
     """SIGINT during a call that would run for hours raises KeyboardInterrupt promptly (the
     kernel polls a stop flag at every cycle, record and sweep point; the wait is printed)."""
+    import select
     import signal
     import time
 
-    child = subprocess.Popen([sys.executable, "-c", _CHILD.format(call=_LONG_CALLS[name])],
+    pytest.importorskip("tqdm")
+    call = _LONG_CALLS[name][:-1] + ", progress=True)"
+    child = subprocess.Popen([sys.executable, "-c", _CHILD.format(call=call)],
                              stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     try:
         assert child.stdout is not None
         assert child.stdout.readline() == "calling\n"
-        time.sleep(1.5)  # the kernel is running by now
+        assert child.stderr is not None  # the bar's first drawing: the kernel is running
+        ready, _, _ = select.select([child.stderr], [], [], 120)
+        assert ready and os.read(child.stderr.fileno(), 4096), "no progress bar"
         sent = time.monotonic()
         child.send_signal(signal.SIGINT)
         out, err = child.communicate(timeout=60)

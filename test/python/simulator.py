@@ -2,8 +2,10 @@
 from __future__ import annotations
 
 import os
+import select
 import shutil
 import subprocess
+import time
 from pathlib import Path
 
 import pytest
@@ -26,6 +28,34 @@ def impactchain_exe() -> Path:
     assert path.exists(), out.stdout + out.stderr
     return path
 
+
+
+def start_until_progress(exe: Path, args: list[str], cwd: Path, label: str = "cycle",
+                         env: dict[str, str] | None = None) -> tuple[subprocess.Popen, str]:
+    """Start the simulator with `args` and return once it has shown its first progress line
+    of `label` ('cycle': the records, 'point', 'sample'), with the stderr read so far. The run
+    is then past its checks and inside that work, whatever the speed of the machine: a test
+    that stops it waits for this, not for a guessed time. (IMPACTCHAIN_PROGRESS_AFTER = 0
+    shows progress from the first unit; on a pipe the next lines come a tenth apart, so the
+    pipe cannot fill.) A run that shows nothing within two minutes fails the test (a hang)."""
+    proc = subprocess.Popen([str(exe), *args], cwd=cwd, stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True,
+                            env={**(os.environ if env is None else env),
+                                 "IMPACTCHAIN_PROGRESS_AFTER": "0"})
+    assert proc.stderr is not None
+    needle = f"impactchain: {label} ".encode()
+    shown = b""
+    deadline = time.monotonic() + 120
+    while needle not in shown:
+        ready, _, _ = select.select([proc.stderr], [], [], max(0.0, deadline - time.monotonic()))
+        chunk = os.read(proc.stderr.fileno(), 4096) if ready else b""
+        if not chunk:  # ended, or silent for two minutes
+            proc.kill()
+            out, err = proc.communicate()
+            raise AssertionError(f"no '{label}' progress from {args}: "
+                                 f"{(shown.decode() + err + out)[-2000:]}")
+        shown += chunk
+    return proc, shown.decode()
 
 
 def run_namelist(exe: Path, text: str, workdir: Path, name: str = "input.nml",

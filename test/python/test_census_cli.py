@@ -20,7 +20,7 @@ import pytest
 import xarray as xr
 
 from simulator import (child_pids, impactchain_exe, mpi_exe,  # noqa: F401 (fixtures)
-                       run_namelist)
+                       run_namelist, start_until_progress)
 
 FIG3 = ("&chain n = 15, amplitude = 2.2, omega = 1.5, damping = 0.05, restitution = 0.7 /\n"
         "&run transient = 2000, cycles = 48, max_period = 8 /\n")
@@ -189,9 +189,8 @@ def test_interrupted_census_resumes_to_the_same_file(impactchain_exe, tmp_path):
     run_namelist(impactchain_exe, LONG.format(samples=samples, out="whole.h5"), tmp_path,
                  "whole.nml")
     (tmp_path / "part.nml").write_text(LONG.format(samples=samples, out="part.h5"))
-    proc = subprocess.Popen([str(impactchain_exe), "--quiet", "part.nml"], cwd=tmp_path,
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    time.sleep(1.0)
+    # stopped once a sample is done (the first progress line), long before the last
+    proc, _ = start_until_progress(impactchain_exe, ["part.nml"], tmp_path, "sample")
     proc.send_signal(signal.SIGINT)
     _, err = proc.communicate(timeout=120)
     assert proc.returncode == 3, err

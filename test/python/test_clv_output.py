@@ -7,13 +7,12 @@ from __future__ import annotations
 
 import signal
 import subprocess
-import time
 
 import h5py
 import numpy as np
 import pytest
 
-from simulator import impactchain_exe, run_namelist  # noqa: F401 (fixture)
+from simulator import impactchain_exe, run_namelist, start_until_progress  # noqa: F401
 
 RUN = """&chain n = 4, amplitude = 4.15, omega = 1.5, restitution = 0.85 /
 &initial kind = 'random', seed = 3, x_amp = 0.2, v_amp = 0.2 /
@@ -135,9 +134,7 @@ def test_one_cycle_is_too_short(impactchain_exe, tmp_path):
 def test_stopped_run_is_run_again_not_continued(impactchain_exe, tmp_path):
     text = RUN.format(extra="").replace("cycles = 700", "cycles = 2000000")
     (tmp_path / "input.nml").write_text(text)
-    run = subprocess.Popen([str(impactchain_exe), "--quiet", "input.nml"], cwd=tmp_path,
-                           stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    time.sleep(1.5)
+    run, _ = start_until_progress(impactchain_exe, ["input.nml"], tmp_path)
     run.send_signal(signal.SIGINT)
     _, stderr = run.communicate(timeout=60)
     assert run.returncode == 3, stderr

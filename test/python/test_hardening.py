@@ -6,10 +6,10 @@ run to completion with sane output (no NaN, gaps never below -1e-12) or be refus
 reason."""
 from __future__ import annotations
 
+import os
 import random
 import resource
 import subprocess
-import time
 
 import h5py
 import numpy as np
@@ -107,16 +107,17 @@ def test_corpus_is_large():
 @pytest.mark.parametrize("name", sorted(CASES))
 def test_broken_input_is_refused(impactchain_exe, tmp_path, name):
     (tmp_path / "input.nml").write_bytes(CASES[name])
-    start = time.monotonic()
-    result = subprocess.run([str(impactchain_exe), "--quiet", "input.nml"], cwd=tmp_path,
-                            capture_output=True, timeout=10)
-    elapsed = time.monotonic() - start
+    # refused before any work: with progress shown from the first unit of work (not after two
+    # quiet seconds), no progress line may appear (a measured time would test the machine)
+    result = subprocess.run([str(impactchain_exe), "input.nml"], cwd=tmp_path,
+                            capture_output=True, timeout=60,
+                            env={**os.environ, "IMPACTCHAIN_PROGRESS_AFTER": "0"})
     err = result.stderr.decode(errors="replace")
     assert result.returncode not in (0, 3), f"accepted: {name}"
     assert result.returncode > 0, f"killed by a signal: {name}: {err}"
     assert "impactchain: error:" in err, err
     assert "Backtrace" not in err and "runtime error" not in err.lower(), err
-    assert elapsed < 1.0, f"{name} took {elapsed:.2f} s"
+    assert err.count("impactchain: ") == 1, f"{name} did some work first: {err}"
     assert not [p for p in tmp_path.iterdir() if p.name != "input.nml"], "output left behind"
 
 
@@ -240,8 +241,10 @@ def test_random_chains_run_sanely(impactchain_exe, tmp_path, case):
     else:
         text, spacing, boundary = _random_chain(random.Random(1000 + case), case)
     (tmp_path / "f.nml").write_text(text)
+    # (the timeout only catches a hang: on a busy 2-core machine the longest case takes 4 s
+    # in the release build, 10 s in the runtime-checked one)
     result = subprocess.run([str(impactchain_exe), "--quiet", "f.nml"], cwd=tmp_path,
-                            capture_output=True, text=True, timeout=20)
+                            capture_output=True, text=True, timeout=600)
     assert result.returncode == 0, result.stderr + text
     with h5py.File(tmp_path / "f.h5") as f:
         x = f["strobe/x"][:]

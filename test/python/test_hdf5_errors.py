@@ -5,14 +5,12 @@ the wrong shape, each refused with a non-zero exit and no output left behind. Cy
 from __future__ import annotations
 
 import signal
-import subprocess
-import time
 
 import h5py
 import numpy as np
 import pytest
 
-from simulator import impactchain_exe, run_namelist  # noqa: F401 (fixture)
+from simulator import impactchain_exe, run_namelist, start_until_progress  # noqa: F401
 
 CHAIN = "&chain n = 4, amplitude = 1.7, omega = 1.5 /\n"
 SOURCE = (CHAIN + "&initial kind = 'random', seed = 2, x_amp = 0.3, v_amp = 0.3 /\n"
@@ -86,12 +84,7 @@ def test_cycle_count_beyond_32_bits_round_trips(impactchain_exe, tmp_path):
         "&chain n = 1, amplitude = 0.1, omega = 1.5 /\n"
         f"&run cycles = {planned}, record_events = .false. /\n"
         "&output file = 'big.h5', max_size_mb = 1e9 /\n")
-    proc = subprocess.Popen([str(impactchain_exe), "--quiet", "big.nml"], cwd=tmp_path,
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    deadline = time.time() + 20
-    while not (tmp_path / "big.h5.part").exists() and time.time() < deadline:
-        time.sleep(0.02)
-    time.sleep(0.3)
+    proc, _ = start_until_progress(impactchain_exe, ["big.nml"], tmp_path)
     proc.send_signal(signal.SIGINT)
     _, err = proc.communicate(timeout=120)
     assert proc.returncode == 3, err

@@ -2,6 +2,7 @@
 "did you mean"), and the command line's overrides, output options and --check."""
 from __future__ import annotations
 
+import os
 import re
 import subprocess
 from pathlib import Path
@@ -65,8 +66,8 @@ MISTAKES = {
 }
 
 # values at the edges of what a key holds: read, not refused
-HELD = ["&initial kind = 'random', seed = -2147483648 /",
-        "&initial kind = 'random', seed = 2147483647 /",
+HELD = ["&initial kind = 'random', seed = -2147483648, v_amp = 0.1 /",
+        "&initial kind = 'random', seed = 2147483647, v_amp = 0.1 /",
         "&run cycles = 9223372036854775807, transient = 0 /",
         "&chain n = 4, omega = 1.5, amplitude = 0e400 /",
         "&chain n = 4, omega = 1.5, amplitude = 0.001e299 /",
@@ -204,6 +205,61 @@ def test_check_refuses_what_the_run_refuses(impactchain_exe, tmp_path, case):
     assert len(lines) == 1
 
 
+# Random starts with both amplitudes 0 (&initial's defaults) are all one start, rest: a
+# study that changes only the seed would get identical runs. (input, the whole message)
+DEGENERATE_STARTS = {
+    "initial without amplitudes": (
+        "&initial kind = 'random', seed = 5 /",
+        "&initial: kind = 'random' needs x_amp or v_amp above 0 (both are 0: every seed "
+        "would start from rest); x_amp in [0, half the smallest spacing = 0.50000000), "
+        "v_amp in [0, 1e6]"),
+    "initial with amplitudes 0": (
+        "&initial kind = 'random', seed = 5, x_amp = 0, v_amp = 0.0 /",
+        "&initial: kind = 'random' needs x_amp or v_amp above 0 (both are 0: every seed "
+        "would start from rest); x_amp in [0, half the smallest spacing = 0.50000000), "
+        "v_amp in [0, 1e6]"),
+    "census with amplitudes 0": (
+        "&census samples = 3, x_amp = 0, v_amp = 0 /",
+        "&census: x_amp or v_amp must be above 0 (both are 0: every sample would start "
+        "from rest); x_amp in [0, half the smallest spacing = 0.50000000), v_amp in [0, 1e6]"),
+}
+
+
+@pytest.mark.parametrize("case", sorted(DEGENERATE_STARTS))
+def test_random_starts_without_amplitudes_are_refused(impactchain_exe, tmp_path, case):
+    line, message = DEGENERATE_STARTS[case]
+    group = line.split()[0]
+    text = "\n".join(l for l in GOOD.splitlines() if not l.startswith(group)) + "\n" + line
+    (tmp_path / "in.nml").write_text(text + "\n")
+    for check in (["--check"], []):
+        result = run(impactchain_exe, [*check, "in.nml"], tmp_path, check=False)
+        assert result.returncode == 1 and not result.stdout, (check, result.stderr)
+        assert result.stderr == "impactchain: error: " + message + "\n"
+        assert sorted(p.name for p in tmp_path.iterdir()) == ["in.nml"]
+
+
+def test_a_census_plane_needs_no_amplitudes(impactchain_exe, tmp_path):
+    """A plane's starts vary its two coordinates and take the others from &initial: its
+    &census x_amp and v_amp are not used, and may be 0."""
+    (tmp_path / "in.nml").write_text(GOOD + "&census samples = 4, x_amp = 0, v_amp = 0, "
+                                     "plane = 'x1', 'v1', plane_range = -0.1, 0.1, -0.1, 0.1, "
+                                     "plane_points = 2 /\n")
+    result = run(impactchain_exe, ["--check", "in.nml"], tmp_path)
+    assert "plane = 'x1', 'v1'" in result.stdout, result.stdout
+
+
+def test_one_amplitude_makes_seeds_differ(impactchain_exe, tmp_path):
+    starts = []
+    for seed in (1, 2):
+        (tmp_path / "in.nml").write_text(GOOD.replace(
+            "seed = 3, x_amp = 0.2, v_amp = 0.2", f"seed = {seed}, v_amp = 0.2"))
+        run(impactchain_exe, ["--overwrite", "in.nml"], tmp_path)
+        with h5py.File(tmp_path / "run.h5") as f:
+            starts.append((f["initial/x"][()], f["initial/v"][()]))
+    (x1, v1), (x2, v2) = starts
+    assert not x1.any() and not x2.any() and (v1 != v2).all()
+
+
 def test_check_refuses_an_existing_output(impactchain_exe, tmp_path):
     (tmp_path / "in.nml").write_text(GOOD)
     (tmp_path / "run.h5").write_bytes(b"precious")
@@ -231,11 +287,14 @@ def test_bad_override_is_refused(impactchain_exe, tmp_path, args, needle, code):
     assert not list(tmp_path.glob("*.h5*"))
 
 
-LONG_RUN = """&chain n = 64, amplitude = 3.5, omega = 1.9 /
+# A run that is over in milliseconds: IMPACTCHAIN_PROGRESS_AFTER = 0 shows its progress from the
+# first record (not after two quiet seconds), so what is shown does not depend on the machine.
+PROGRESS_RUN = """&chain n = 8, amplitude = 3.5, omega = 1.9 /
 &initial kind = 'random', seed = 2, x_amp = 0.3, v_amp = 0.3 /
-&run cycles = 300000, record_events = .false. /
+&run cycles = 1000, record_events = .false. /
 &output file = 'long.h5' /
 """
+SHOWN_AT_ONCE = {"IMPACTCHAIN_PROGRESS_AFTER": "0"}
 
 
 def progress_lines(stream: str) -> list[str]:
@@ -243,30 +302,31 @@ def progress_lines(stream: str) -> list[str]:
 
 
 def test_progress_on_a_log_is_a_line_per_tenth(impactchain_exe, tmp_path):
-    """stderr not a terminal: a line at each tenth of the run (or each minute), no carriage
-    returns; the run is long enough (several seconds) to pass the two quiet seconds."""
-    (tmp_path / "long.nml").write_text(LONG_RUN)
+    """stderr not a terminal: a line at each tenth of the run (or each minute: never in a run
+    of milliseconds), no carriage returns; the first update is shown when the delay is 0."""
+    (tmp_path / "long.nml").write_text(PROGRESS_RUN)
     result = subprocess.run([str(impactchain_exe), "long.nml"], cwd=tmp_path,
-                            capture_output=True, text=True, timeout=300)
+                            capture_output=True, text=True, timeout=300,
+                            env={**os.environ, **SHOWN_AT_ONCE})
     assert result.returncode == 0, result.stderr
     assert "\r" not in result.stderr
     lines = progress_lines(result.stderr)
-    assert 1 <= len(lines) <= 11, result.stderr
-    assert lines[-1].startswith("impactchain: cycle 300000 / 300000 (100.0 %)")
+    assert lines[0].startswith("impactchain: cycle 1 / 1000 (0.1 %)"), result.stderr
+    assert lines[-1].startswith("impactchain: cycle 1000 / 1000 (100.0 %)"), result.stderr
     percents = [float(re.search(r"\(([\d.]+) %\)", line).group(1)) for line in lines]
-    assert all(b // 10 > a // 10 for a, b in zip(percents, percents[1:]))  # a new tenth each
+    assert percents == [0.1] + [10.0 * k for k in range(1, 11)], result.stderr
 
 
 def test_progress_on_a_terminal_is_one_updating_line(impactchain_exe, tmp_path):
     """stderr a terminal (a pseudo-terminal here): one line rewritten in place with carriage
-    returns, a single newline at the end."""
-    import os
+    returns (the first update and the last at least), a single newline at the end."""
     import pty
 
-    (tmp_path / "long.nml").write_text(LONG_RUN)
+    (tmp_path / "long.nml").write_text(PROGRESS_RUN)
     leader, follower = pty.openpty()
     proc = subprocess.Popen([str(impactchain_exe), "long.nml"], cwd=tmp_path,
-                            stdout=subprocess.DEVNULL, stderr=follower)
+                            stdout=subprocess.DEVNULL, stderr=follower,
+                            env={**os.environ, **SHOWN_AT_ONCE})
     os.close(follower)
     chunks = []
     while True:
@@ -281,7 +341,26 @@ def test_progress_on_a_terminal_is_one_updating_line(impactchain_exe, tmp_path):
     os.close(leader)
     shown = b"".join(chunks).decode()
     assert shown.count("\r") >= 2 and shown.count("\n") == 1, repr(shown[:400])
-    assert progress_lines(shown)[-1].startswith("impactchain: cycle 300000 / 300000")
+    lines = progress_lines(shown)
+    assert lines[0].startswith("impactchain: cycle 1 / 1000"), repr(shown[:400])
+    assert lines[-1].startswith("impactchain: cycle 1000 / 1000"), repr(shown[:400])
+
+
+def test_no_progress_in_the_quiet_start(impactchain_exe, tmp_path):
+    """Nothing within the first IMPACTCHAIN_PROGRESS_AFTER seconds (an hour here: longer than
+    any run of the tests), and the delay must be a number of seconds."""
+    (tmp_path / "long.nml").write_text(PROGRESS_RUN)
+    result = subprocess.run([str(impactchain_exe), "long.nml"], cwd=tmp_path,
+                            capture_output=True, text=True, timeout=300,
+                            env={**os.environ, "IMPACTCHAIN_PROGRESS_AFTER": "3600"})
+    assert result.returncode == 0 and result.stderr == "", result.stderr
+    for bad in ("soon", "-1", "nan", "inf", "1e7", "1e400"):
+        result = subprocess.run([str(impactchain_exe), "--overwrite", "long.nml"],
+                                cwd=tmp_path, capture_output=True, text=True, timeout=60,
+                                env={**os.environ, "IMPACTCHAIN_PROGRESS_AFTER": bad})
+        assert result.returncode == 1 and not result.stdout, result.stderr
+        assert result.stderr == (f"impactchain: error: IMPACTCHAIN_PROGRESS_AFTER = {bad} is "
+                                 "not a number of seconds in [0, 1e6]\n")
 
 
 def test_a_long_list_is_read_and_echoed_in_full(impactchain_exe, tmp_path):

@@ -6,15 +6,13 @@ flags."""
 from __future__ import annotations
 
 import signal
-import subprocess
-import time
 from pathlib import Path
 
 import h5py
 import numpy as np
 import pytest
 
-from simulator import impactchain_exe, run_namelist  # noqa: F401 (fixture)
+from simulator import impactchain_exe, run_namelist, start_until_progress  # noqa: F401
 
 xr = pytest.importorskip("xarray")
 pytest.importorskip("h5netcdf")
@@ -112,12 +110,7 @@ def test_a_lyapunov_run_is_netcdf(impactchain_exe, tmp_path):
 
 def test_a_stopped_run_and_its_resume_are_netcdf(impactchain_exe, tmp_path):
     (tmp_path / "long.nml").write_text(LONG.format(out="long.h5"))
-    proc = subprocess.Popen([str(impactchain_exe), "--quiet", "long.nml"], cwd=tmp_path,
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    deadline = time.time() + 20
-    while not (tmp_path / "long.h5.part").exists() and time.time() < deadline:
-        time.sleep(0.05)
-    time.sleep(1.0)
+    proc, _ = start_until_progress(impactchain_exe, ["long.nml"], tmp_path)
     proc.send_signal(signal.SIGINT)
     _, err = proc.communicate(timeout=60)
     assert proc.returncode == 3, err

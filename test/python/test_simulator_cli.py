@@ -9,7 +9,8 @@ import h5py
 import numpy as np
 import pytest
 
-from simulator import impactchain_exe, mpi_exe, run_namelist  # noqa: F401 (fixtures)
+from simulator import (impactchain_exe, mpi_exe, run_namelist,  # noqa: F401 (fixtures)
+                       start_until_progress)
 
 BASE = """
 &chain n = 6, amplitude = 1.7, omega = 1.5 /
@@ -158,15 +159,9 @@ LONG = """
 
 
 def _start_long_run(exe, tmp_path):
-    import subprocess
-    import time
+    """The long run, once it has recorded its first cycle (on any machine)."""
     (tmp_path / "long.nml").write_text(LONG)
-    proc = subprocess.Popen([str(exe), "--quiet", "long.nml"], cwd=tmp_path,
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    deadline = time.time() + 20
-    while not (tmp_path / "long.h5.part").exists() and time.time() < deadline:
-        time.sleep(0.05)
-    time.sleep(1.0)
+    proc, _ = start_until_progress(exe, ["long.nml"], tmp_path)
     return proc
 
 

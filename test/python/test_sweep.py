@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 from simulator import (child_pids, impactchain_exe, mpi_exe,  # noqa: F401 (fixtures)
-                       run_namelist)
+                       run_namelist, start_until_progress)
 
 GRID = """
 &chain n = 6, amplitude = 2.0, omega = 1.5 /
@@ -106,9 +106,8 @@ LONG = """
 def test_interrupted_sweep_resumes_to_the_same_file(impactchain_exe, tmp_path):
     run_namelist(impactchain_exe, LONG.format(out="whole.h5"), tmp_path, "whole.nml")
     (tmp_path / "part.nml").write_text(LONG.format(out="part.h5"))
-    proc = subprocess.Popen([str(impactchain_exe), "--quiet", "part.nml"], cwd=tmp_path,
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    time.sleep(1.0)
+    # stopped once a point is done (the first progress line), long before the last
+    proc, _ = start_until_progress(impactchain_exe, ["part.nml"], tmp_path, "point")
     proc.send_signal(signal.SIGINT)
     _, err = proc.communicate(timeout=120)
     assert proc.returncode == 3, err
