@@ -23,6 +23,7 @@
 module chain_output
     use chain_kinds, only: wp, i8
     use chain_error, only: error_t, set_error, fmt_int, fmt_int8
+    use chain_files, only: lock_file, is_locked, unlock_file
     use chain_files, only: rename_file, remove_file, copy_file, directory_of, is_directory, &
                            can_write_in
     use chain_model, only: model_t
@@ -77,6 +78,7 @@ module chain_output
         integer(i8) :: n_events = 0
         logical :: events_created = .false.
         logical :: clv_created = .false.   !! /clv's per-record datasets exist
+        integer :: lock = -1 !! the descriptor holding the `.part` file's lock (lock_file)
     end type output_t
 
 contains
@@ -84,9 +86,19 @@ contains
     ! ---- a run's file, from its start to its end ------------------------------------------
 
     !> What output_begin refuses, checked without creating anything (so that `--check` can
-    !> ask it too): an existing file (unless overwrite), a directory that is missing or that
-    !> cannot be written to.
+    !> ask it too): a `.part` file that another run is writing, an existing file (unless
+    !> overwrite), a directory that is missing or that cannot be written to.
     subroutine output_check(path, overwrite, err)
+        character(len=*), intent(in) :: path
+        logical, intent(in) :: overwrite
+        type(error_t), allocatable, intent(out) :: err
+
+        call check_part(path//'.part', err)
+        if (.not. allocated(err)) call check_place(path, overwrite, err)
+    end subroutine output_check
+
+    !> output_check but for the `.part` file.
+    subroutine check_place(path, overwrite, err)
         character(len=*), intent(in) :: path
         logical, intent(in) :: overwrite
         type(error_t), allocatable, intent(out) :: err
@@ -107,7 +119,18 @@ contains
             call set_error(err, "&output: cannot create '"//path//"': no permission to "// &
                            "write in the directory '"//dir//"'")
         end if
-    end subroutine output_check
+    end subroutine check_place
+
+    !> The `.part` file a run would write: refused when another run is writing it (it holds
+    !> its lock). A `.part` left by a run that was killed is replaced.
+    subroutine check_part(part, err)
+        character(len=*), intent(in) :: part
+        type(error_t), allocatable, intent(out) :: err
+
+        if (is_locked(part)) &
+            call set_error(err, "&output: another run is writing '"//part//"' (it holds "// &
+                           "the file's lock); wait for it to end, or choose another file")
+    end subroutine check_part
 
     !> Refuse an existing file (unless overwrite) or an unwritable place, before any run starts;
     !> then create `path.part`.
@@ -121,10 +144,22 @@ contains
         out%part_path = path//'.part'
         call output_check(path, overwrite, err)
         if (allocated(err)) return
-        call h5_create_file(out%file, out%part_path, err)
-        if (allocated(err)) err%message = "&output: cannot create '"//out%part_path// &
-                                          "' (missing directory or no permission to write "// &
-                                          "there; "//err%message//")"
+        ! the lock first, before anything is truncated; then the checks again, as another
+        ! run may have ended (and written the file) in between
+        call lock_file(out%part_path, out%lock, err)
+        if (allocated(err)) then
+            err%message = "&"//err%message
+            return
+        end if
+        call check_place(path, overwrite, err)
+        if (.not. allocated(err)) call h5_create_file(out%file, out%part_path, err)
+        if (allocated(err)) then
+            call output_abort(out)
+            if (index(err%message, '&output') /= 1) &
+                err%message = "&output: cannot create '"//out%part_path// &
+                              "' (missing directory or no permission to write there; "// &
+                              err%message//")"
+        end if
     end subroutine output_begin
 
     !> Root attributes, /params, /initial.
@@ -686,8 +721,12 @@ contains
 
         call h5_write_attr(out%file, '/', 'complete', merge(1, 0, complete), err)
         call h5_close_file(out%file, err)
-        if (allocated(err)) return
+        if (allocated(err)) then
+            call output_abort(out)
+            return
+        end if
         call rename_file(out%part_path, out%path, err)
+        call unlock_file(out%lock)
     end subroutine output_end
 
     !> Close and delete the partial file after an error. The error that brought us here is
@@ -697,7 +736,8 @@ contains
         type(error_t), allocatable :: ignored
 
         call h5_close_file(out%file, ignored)
-        if (allocated(out%part_path)) call remove_file(out%part_path)
+        if (allocated(out%part_path) .and. out%lock >= 0) call remove_file(out%part_path)
+        call unlock_file(out%lock)
     end subroutine output_abort
 
     ! ---- a run stopped early, and its continuation ----------------------------------------
@@ -860,8 +900,17 @@ contains
         out%path = path
         out%part_path = path//'.part'
         out%n = n
+        call check_part(out%part_path, err)
+        if (.not. allocated(err)) call lock_file(out%part_path, out%lock, err)
+        if (allocated(err)) then
+            if (index(err%message, '&output') /= 1) err%message = "&"//err%message
+            return
+        end if
         call copy_file(path, out%part_path, err)
-        if (allocated(err)) return
+        if (allocated(err)) then
+            call output_abort(out)
+            return
+        end if
         call h5_open_file(out%file, out%part_path, writable=.true., err=err)
         do j = 1, size(results)
             call h5_exists(out%file, trim(results(j)), exists, err)
