@@ -86,8 +86,9 @@ contains
     ! ---- a run's file, from its start to its end ------------------------------------------
 
     !> What output_begin refuses, checked without creating anything (so that `--check` can
-    !> ask it too): a `.part` file that another run is writing, an existing file (unless
-    !> overwrite), a directory that is missing or that cannot be written to.
+    !> ask it too): a `.part` file that another run is writing, a directory of the output's
+    !> name, an existing file (unless overwrite), a directory that is missing or that cannot
+    !> be written to.
     subroutine output_check(path, overwrite, err)
         character(len=*), intent(in) :: path
         logical, intent(in) :: overwrite
@@ -105,6 +106,11 @@ contains
         character(len=:), allocatable :: dir
         logical :: exists
 
+        if (is_directory(path)) then
+            call set_error(err, "&output: file = '"//path//"' is a directory; give the name "// &
+                           "of a file (overwrite never replaces a directory)")
+            return
+        end if
         inquire (file=path, exist=exists)
         if (exists .and. .not. overwrite) then
             call set_error(err, "&output: file = '"//path//"' exists; choose another name "// &

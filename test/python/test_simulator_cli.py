@@ -123,6 +123,25 @@ def test_unwritable_output_directory_is_refused(impactchain_exe, tmp_path):
     assert "cannot create" in result.stderr
 
 
+@pytest.mark.parametrize("kind", ["run", "sweep"])
+def test_output_that_is_a_directory_is_refused_up_front(impactchain_exe, tmp_path, kind):
+    """Issue 30, 6: an output path that is a directory is refused by --check and by the run
+    itself before anything is computed, even with --overwrite (which never replaces a
+    directory)."""
+    (tmp_path / "run.h5").mkdir()
+    text = BASE
+    if kind == "sweep":
+        text += "&sweep parameter = 'amplitude', start = 1.5, stop = 2.5, step = 0.5 /\n"
+    (tmp_path / "input.nml").write_text(text)
+    for args in (["--check", "--overwrite"], ["--overwrite"], []):
+        result = subprocess.run([str(impactchain_exe), "--quiet", *args, "input.nml"],
+                                cwd=tmp_path, capture_output=True, text=True, timeout=60)
+        assert result.returncode == 1, (args, result.stderr)
+        assert "&output: file = 'run.h5' is a directory" in result.stderr, result.stderr
+        assert (tmp_path / "run.h5").is_dir()
+        assert not (tmp_path / "run.h5.part").exists()
+
+
 @pytest.mark.parametrize("phase", [0.0, 1.1])
 def test_continuation_is_bit_identical(impactchain_exe, tmp_path, phase):
     chain = "&chain n = 8, amplitude = 1.7, omega = 1.5 /\n"
