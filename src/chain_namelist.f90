@@ -15,7 +15,7 @@ module chain_namelist
     implicit none
     private
     public :: key_spec_t, key_integer, key_real, key_logical, key_string
-    public :: check_namelist, apply_override, schema_keys, groups_in, lower
+    public :: check_namelist, apply_override, schema_keys, groups_in, lower, same_input
 
     integer, parameter :: key_integer = 1
     integer, parameter :: key_real = 2
@@ -291,6 +291,38 @@ contains
             end = end + 1
         end do
     end function after_separator
+
+    !> Do two texts give the same input, leaving out the key `ignored` ('group.key')? Key by
+    !> key: the same groups in the same order, and in each the same keys (case-blind) with
+    !> the same values, token for token, in the same order; blanks, commas between values and
+    !> comments do not count.
+    logical function same_input(a, b, ignored)
+        character(len=*), intent(in) :: a, b, ignored
+
+        same_input = signature(a) == signature(b)
+    contains
+        function signature(text) result(sig)
+            character(len=*), intent(in) :: text
+            character(len=:), allocatable :: sig
+            type(parsed_t) :: parsed
+            integer :: g, j, t
+
+            call parse(text, parsed)
+            sig = ''
+            do g = 1, size(parsed%groups)
+                sig = sig//'&'//parsed%groups(g)%name//' '
+            end do
+            do j = 1, size(parsed%items)
+                associate (item => parsed%items(j))
+                    if (item%group//'.'//item%key == ignored) cycle
+                    sig = sig//new_line('a')//item%group//'.'//lower(item%written)//'='
+                    do t = 1, item%n_tokens
+                        sig = sig//text(item%value_first(t):item%value_last(t))//achar(0)
+                    end do
+                end associate
+            end do
+        end function signature
+    end function same_input
 
     !> The names of the groups in `text`, in order (lower case).
     function groups_in(text) result(names)

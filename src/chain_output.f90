@@ -27,6 +27,7 @@ module chain_output
     use chain_files, only: rename_file, remove_file, copy_file, directory_of, is_directory, &
                            can_write_in
     use chain_model, only: model_t
+    use chain_namelist, only: same_input
     use chain_state, only: chain_state_t
     use chain_hdf5, only: h5_file_t, h5_real, h5_int, h5_int8, h5_create_file, h5_open_file, &
                           h5_close_file, h5_is_hdf5_file, h5_create_group, h5_exists, &
@@ -878,8 +879,10 @@ contains
         ! (a run stopped early by an older version is not continued into another layout)
         if (.not. allocated(err) .and. complete == 0 .and. exists .and. &
             version == schema_version) then
-            ! (trailing blanks of the text are not stored)
-            kind = merge(file_continuable, file_other_input, text == input_text)
+            ! (trailing blanks of the text are not stored; whether a file may be replaced is
+            ! not part of what is computed, so --overwrite does not make another input)
+            kind = merge(file_continuable, file_other_input, text == input_text .or. &
+                         same_input(text, input_text, 'output.overwrite'))
         end if
         call h5_close_file(src, err)
     end subroutine output_inspect

@@ -184,3 +184,30 @@ def test_second_run_on_one_output_is_refused_and_the_first_ends_intact(impactcha
     a, b = _contents(alone / "o.h5"), _contents(tmp_path / "o.h5")
     assert sorted(a) == sorted(b)
     assert not [name for name in a if not _same(a[name], b[name])]
+
+
+def test_overwrite_continues_a_stopped_run(impactchain_exe, tmp_path):
+    """Issue 30, 5: whether a file may be replaced is not part of the input: a run stopped
+    early continues when the command adds --overwrite (or drops it), as the same command
+    does, to the file of an undisturbed run."""
+    alone = tmp_path / "alone"
+    alone.mkdir()
+    run_namelist(impactchain_exe, CONCURRENT, alone, "a.nml")
+    (tmp_path / "a.nml").write_text(CONCURRENT)
+    for first, then in (([], ["--overwrite"]), (["--overwrite"], [])):
+        (tmp_path / "o.h5").unlink(missing_ok=True)
+        proc = subprocess.Popen([str(impactchain_exe), "--quiet", *first, "a.nml"],
+                                cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                                text=True)
+        _wait_for_records(proc, tmp_path / "o.h5.part")
+        proc.send_signal(signal.SIGINT)
+        _, err = proc.communicate(timeout=120)
+        assert proc.returncode == 3, err
+        result = subprocess.run([str(impactchain_exe), "--quiet", *then, "a.nml"],
+                                cwd=tmp_path, capture_output=True, text=True, timeout=120)
+        assert result.returncode == 0, result.stderr
+        assert "continued a run stopped early after" in result.stdout, (first, then)
+        if not first:
+            a, b = _contents(alone / "o.h5"), _contents(tmp_path / "o.h5")
+            assert sorted(a) == sorted(b)
+            assert not [name for name in a if not _same(a[name], b[name])]
