@@ -12,6 +12,7 @@ module chain_config
     use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
     use chain_kinds, only: wp, i8, two_pi
     use chain_error, only: error_t, set_error, fmt_real, fmt_int, fmt_int8
+    use chain_files, only: same_file
     use chain_model, only: model_t, model_walls, model_parameters, model_parameter, &
                            set_model_parameter
     use chain_record, only: record_spec_t, vector_count
@@ -205,6 +206,12 @@ contains
         if (.not. allocated(cfg%census_mirror)) cfg%census_mirror = 'merge'
         if (.not. allocated(cfg%x0)) allocate (cfg%x0(0))
         if (.not. allocated(cfg%v0)) allocate (cfg%v0(0))
+        if (same_file(path, cfg%output_file) .or. same_file(path, cfg%output_file//'.part')) then
+            call set_error(err, "&output: file = '"//cfg%output_file//"' is the input file "// &
+                           "'"//trim(path)//"' (or its .part); overwrite never replaces the "// &
+                           "input: choose another name")
+            return
+        end if
         call validate_config(cfg, err)
     end subroutine read_config
 

@@ -5,14 +5,15 @@
 !> made in a directory, asked before any run starts.
 !> Infrastructure, no model section.
 module chain_files
-    use, intrinsic :: iso_c_binding, only: c_char, c_int, c_null_char, c_size_t, c_long
+    use, intrinsic :: iso_c_binding, only: c_char, c_int, c_null_char, c_size_t, c_long, &
+                                           c_ptr, c_associated
     use, intrinsic :: iso_fortran_env, only: byte => int8
     use chain_kinds, only: i8
     use chain_error, only: error_t, set_error, fmt_int8
     implicit none
     private
     public :: rename_file, remove_file, copy_file, close_checked
-    public :: directory_of, is_directory, can_write_in, is_symlink
+    public :: directory_of, is_directory, can_write_in, is_symlink, same_file
     public :: lock_file, is_locked, unlock_file, sync_file, sync_directory_of
 
     integer(c_int), parameter :: f_ok = 0, w_ok = 2, x_ok = 1 !! POSIX access() modes
@@ -65,6 +66,13 @@ module chain_files
             integer(c_size_t), value :: size
             integer(c_long) :: n
         end function c_readlink
+
+        function c_realpath(path, resolved) bind(C, name='realpath') result(p)
+            import :: c_char, c_ptr
+            character(kind=c_char), intent(in) :: path(*)
+            character(kind=c_char), intent(out) :: resolved(*)
+            type(c_ptr) :: p
+        end function c_realpath
     end interface
 
     !> Linux's open(2) flags (asm-generic/fcntl.h: x86-64, aarch64, riscv) and flock(2)
@@ -132,6 +140,24 @@ contains
 
         is_symlink = c_readlink(path//c_null_char, buf, 1_c_size_t) >= 0
     end function is_symlink
+
+    !> Are `a` and `b` names of one existing file (after links, `.` and `..`)?
+    logical function same_file(a, b)
+        character(len=*), intent(in) :: a, b
+        integer, parameter :: path_max = 4096
+        character(kind=c_char) :: ra(path_max), rb(path_max)
+
+        same_file = .false.
+        if (.not. c_associated(c_realpath(a//c_null_char, ra))) return
+        if (.not. c_associated(c_realpath(b//c_null_char, rb))) return
+        same_file = all(ra(:text_length(ra)) == rb(:text_length(rb))) .and. &
+                    text_length(ra) == text_length(rb)
+    contains
+        pure integer function text_length(c)
+            character(kind=c_char), intent(in) :: c(:)
+            text_length = findloc(c, c_null_char, 1) - 1
+        end function text_length
+    end function same_file
 
     !> Flush the file `path` to the disk (fsync(2)); false if it cannot be done.
     logical function sync_file(path)

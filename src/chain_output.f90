@@ -23,7 +23,7 @@
 module chain_output
     use chain_kinds, only: wp, i8
     use chain_error, only: error_t, set_error, fmt_int, fmt_int8
-    use chain_files, only: lock_file, is_locked, unlock_file
+    use chain_files, only: lock_file, is_locked, unlock_file, is_symlink
     use chain_files, only: rename_file, remove_file, copy_file, directory_of, is_directory, &
                            can_write_in
     use chain_model, only: model_t
@@ -113,6 +113,7 @@ contains
             return
         end if
         inquire (file=path, exist=exists)
+        exists = exists .or. is_symlink(path) ! (a dangling link is the user's too)
         if (exists .and. .not. overwrite) then
             call set_error(err, "&output: file = '"//path//"' exists; choose another name "// &
                            "or set overwrite = .true.")
@@ -129,14 +130,46 @@ contains
     end subroutine check_place
 
     !> The `.part` file a run would write: refused when another run is writing it (it holds
-    !> its lock). A `.part` left by a run that was killed is replaced.
+    !> its lock), or when it is not one of ours (a directory, a symbolic link, or a file that
+    !> is neither empty nor HDF5: a user's own file, which is never replaced). A `.part` left
+    !> by a run that was killed (HDF5, or not yet begun) is replaced.
     subroutine check_part(part, err)
         character(len=*), intent(in) :: part
         type(error_t), allocatable, intent(out) :: err
+        character(len=8), parameter :: signature = achar(137)//'HDF'//achar(13)//achar(10)// &
+                                                   achar(26)//achar(10)
+        character(len=8) :: head
+        integer(i8) :: bytes
+        integer :: u, ios
+        logical :: exists
 
-        if (is_locked(part)) &
+        if (is_symlink(part) .or. is_directory(part)) then
+            call set_error(err, "&output: '"//part//"' (the file a run writes before its "// &
+                           "end) is a symbolic link or a directory; remove it or choose "// &
+                           "another file")
+            return
+        end if
+        inquire (file=part, exist=exists)
+        if (.not. exists) return
+        if (is_locked(part)) then
             call set_error(err, "&output: another run is writing '"//part//"' (it holds "// &
                            "the file's lock); wait for it to end, or choose another file")
+            return
+        end if
+        inquire (file=part, size=bytes)
+        if (bytes == 0) return
+        head = ''
+        open (newunit=u, file=part, access='stream', form='unformatted', status='old', &
+              action='read', iostat=ios)
+        if (ios == 0) then
+            read (u, iostat=ios) head
+            close (u)
+        end if
+        ! (a run killed before HDF5 wrote its superblock leaves zeros where it goes)
+        if (head /= signature .and. head /= repeat(achar(0), 8)) &
+            call set_error(err, "&output: '"//part//"' exists and is not a file a run left "// &
+                           "(not HDF5); it is never replaced: move it away or choose "// &
+                           "another file")
     end subroutine check_part
 
     !> Refuse an existing file (unless overwrite) or an unwritable place, before any run starts;

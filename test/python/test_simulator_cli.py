@@ -123,6 +123,49 @@ def test_unwritable_output_directory_is_refused(impactchain_exe, tmp_path):
     assert "cannot create" in result.stderr
 
 
+def test_nothing_the_user_owns_is_replaced(impactchain_exe, tmp_path):
+    """Issue 30, 7: the input file given as the output (even with --overwrite), a user's
+    own NAME.h5.part, a symbolic link at NAME.h5.part and a dangling symbolic link at the
+    output's name (unless --overwrite) are refused, and left as they were."""
+    (tmp_path / "in.nml").write_text(BASE)
+    result = subprocess.run([str(impactchain_exe), "--quiet", "-o", "./in.nml", "--overwrite",
+                             "in.nml"], cwd=tmp_path, capture_output=True, text=True,
+                            timeout=60)
+    assert result.returncode == 1
+    assert "&output: file = './in.nml' is the input file" in result.stderr, result.stderr
+    assert (tmp_path / "in.nml").read_text() == BASE
+
+    (tmp_path / "run.h5.part").write_text("my notes")
+    for args in ([], ["--overwrite"], ["--check"]):
+        result = subprocess.run([str(impactchain_exe), "--quiet", *args, "in.nml"],
+                                cwd=tmp_path, capture_output=True, text=True, timeout=60)
+        assert result.returncode == 1, args
+        assert "'run.h5.part' exists and is not a file a run left" in result.stderr, \
+            result.stderr
+        assert (tmp_path / "run.h5.part").read_text() == "my notes"
+    (tmp_path / "run.h5.part").unlink()
+
+    (tmp_path / "run.h5.part").symlink_to(tmp_path / "elsewhere")
+    result = run_namelist(impactchain_exe, BASE, tmp_path, check=False)
+    assert result.returncode == 1 and "is a symbolic link" in result.stderr, result.stderr
+    assert not (tmp_path / "elsewhere").exists()
+    (tmp_path / "run.h5.part").unlink()
+
+    (tmp_path / "run.h5").symlink_to(tmp_path / "missing.h5")
+    result = run_namelist(impactchain_exe, BASE, tmp_path, check=False)
+    assert result.returncode == 1 and "'run.h5' exists" in result.stderr, result.stderr
+    assert (tmp_path / "run.h5").is_symlink()
+    run_namelist(impactchain_exe, BASE.replace("'run.h5' /", "'run.h5', overwrite=.true. /"),
+                 tmp_path)
+    assert not (tmp_path / "run.h5").is_symlink() and h5py.is_hdf5(tmp_path / "run.h5")
+
+    # a .part left by a killed run (HDF5, or empty) is replaced without a word
+    (tmp_path / "run.h5").unlink()
+    (tmp_path / "run.h5.part").write_bytes(b"")
+    run_namelist(impactchain_exe, BASE, tmp_path)
+    assert h5py.is_hdf5(tmp_path / "run.h5") and not (tmp_path / "run.h5.part").exists()
+
+
 @pytest.mark.parametrize("kind", ["run", "sweep"])
 def test_output_that_is_a_directory_is_refused_up_front(impactchain_exe, tmp_path, kind):
     """Issue 30, 6: an output path that is a directory is refused by --check and by the run
