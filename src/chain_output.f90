@@ -22,7 +22,8 @@
 !> Infrastructure, no model section: it writes the records of docs/model.md sections 6-7.
 module chain_output
     use chain_kinds, only: wp, i8
-    use chain_error, only: error_t, set_error, fmt_int, fmt_int8
+    use chain_error, only: error_t, set_error, fmt_int, fmt_int8, fmt_real
+    use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
     use chain_files, only: lock_file, is_locked, unlock_file, is_symlink
     use chain_files, only: rename_file, remove_file, copy_file, directory_of, is_directory, &
                            can_write_in
@@ -1033,10 +1034,61 @@ contains
         call h5_read(src, 'final/phase', phase, err) ! (read for its check: /final is whole)
         call h5_read(src, 'final/time_in_cycle', state%time, err)
         call h5_read(src, 'final/cycle', state%cycle, err)
+        if (.not. allocated(err)) call check_final(path, state, phase, err)
         state%has_schedule = .true.
         state%start_cycle = state%cycle
         state%start_time = state%time
     end subroutine read_final_group
+
+    !> Every value of /final in its range, as an explicit x0 is checked (the engine takes any
+    !> value it is given on trust): finite positions, velocities, phase and time in the cycle
+    !> (>= 0), a cycle >= 0, rests of -1, 0 or 1 (the left wall, free, the right wall), event
+    !> times >= 0 (never: the largest number) and actions 0 to 3 (chain_engine's action_*).
+    subroutine check_final(path, state, phase, err)
+        character(len=*), intent(in) :: path
+        type(chain_state_t), intent(in) :: state
+        real(wp), intent(in) :: phase
+        type(error_t), allocatable, intent(inout) :: err
+        character(len=:), allocatable :: where
+        integer :: j
+
+        where = "&initial: file = '"//path//"': /final/"
+        do j = 1, size(state%x)
+            if (.not. ieee_is_finite(state%x(j))) then
+                call set_error(err, where//"x("//fmt_int(j)//") = "//fmt_real(state%x(j))// &
+                               " is not finite; allowed: finite positions")
+                return
+            else if (.not. ieee_is_finite(state%v(j))) then
+                call set_error(err, where//"v("//fmt_int(j)//") = "//fmt_real(state%v(j))// &
+                               " is not finite; allowed: finite velocities")
+                return
+            else if (abs(state%contact(j)) > 1) then
+                call set_error(err, where//"contact("//fmt_int(j)//") = "// &
+                               fmt_int(state%contact(j))//" is not a rest; allowed: -1 (the "// &
+                               "left wall), 0 (free), 1 (the right wall)")
+                return
+            end if
+        end do
+        do j = 1, size(state%event_time)
+            if (.not. (state%event_time(j) >= 0)) then
+                call set_error(err, where//"event_time("//fmt_int(j)//") = "// &
+                               fmt_real(state%event_time(j))//"; allowed: times >= 0")
+                return
+            else if (state%event_action(j) < 0 .or. state%event_action(j) > 3) then
+                call set_error(err, where//"event_action("//fmt_int(j)//") = "// &
+                               fmt_int(state%event_action(j))//"; allowed: 0 to 3")
+                return
+            end if
+        end do
+        if (.not. (ieee_is_finite(state%time) .and. state%time >= 0)) then
+            call set_error(err, where//"time_in_cycle = "//fmt_real(state%time)// &
+                           "; allowed: finite, >= 0")
+        else if (.not. ieee_is_finite(phase)) then
+            call set_error(err, where//"phase = "//fmt_real(phase)//"; allowed: finite")
+        else if (state%cycle < 0) then
+            call set_error(err, where//"cycle = "//fmt_int8(state%cycle)//"; allowed: >= 0")
+        end if
+    end subroutine check_final
 
     !> Open an existing file read-only (`where` names the input that points at it).
     subroutine open_for_reading(path, where, src, err)

@@ -97,3 +97,27 @@ def test_cycle_count_beyond_32_bits_round_trips(impactchain_exe, tmp_path):
     assert proc.returncode == 3, err
     with h5py.File(tmp_path / "big.h5") as f:
         assert int(np.ravel(f["params"].attrs["cycles"])[0]) == planned
+
+
+# Issue 30, 10: every value of /final is validated as an explicit x0 is (before, each of these
+# was accepted; the NaN ended in the internal "please report the input").
+BAD_FINAL = [
+    ("x", lambda a: np.where(np.arange(a.size) == 1, np.nan, a), "/final/x(2) = NaN"),
+    ("v", lambda a: np.where(np.arange(a.size) == 0, np.inf, a), "/final/v(1) = Inf"),
+    ("contact", lambda a: np.where(np.arange(a.size) == 2, 7, a), "/final/contact(3) = 7"),
+    ("cycle", lambda a: np.int64(-5), "/final/cycle = -5"),
+    ("time_in_cycle", lambda a: np.float64(np.nan), "/final/time_in_cycle = NaN"),
+    ("event_time", lambda a: np.where(np.arange(a.size) == 0, -1.0, a),
+     "/final/event_time(1) = -1"),
+    ("event_action", lambda a: np.where(np.arange(a.size) == 0, 9, a),
+     "/final/event_action(1) = 9"),
+]
+
+
+@pytest.mark.parametrize("name, change, needle", BAD_FINAL, ids=[b[0] for b in BAD_FINAL])
+def test_start_file_with_a_bad_final_value_is_refused(impactchain_exe, tmp_path, name, change,
+                                                      needle):
+    (tmp_path / "start.h5").write_bytes(_source(impactchain_exe, tmp_path))
+    with h5py.File(tmp_path / "start.h5", "r+") as f:
+        f[f"final/{name}"][...] = change(f[f"final/{name}"][()])
+    _refused(impactchain_exe, tmp_path, ["file = 'start.h5'", needle, "allowed"])
