@@ -184,13 +184,21 @@ contains
         status = c_close(f)
     end function sync_directory_of
 
-    !> Move a finished file to its final name (atomic on one file system).
+    !> Move a finished file to its final name (atomic on one file system), durably: the file
+    !> is on the disk before it takes the name (fsync), and the name after (fsync of its
+    !> directory), so that a power cut or a crash of the machine cannot leave a finished name
+    !> on a file whose contents were never written.
     subroutine rename_file(from, to, err)
         character(len=*), intent(in) :: from, to
         type(error_t), allocatable, intent(out) :: err
 
-        if (c_rename(from//c_null_char, to//c_null_char) /= 0) &
+        if (.not. sync_file(from)) then
+            call set_error(err, "output: cannot flush '"//from//"' to the disk")
+        else if (c_rename(from//c_null_char, to//c_null_char) /= 0) then
             call set_error(err, "output: cannot rename '"//from//"' to '"//to//"'")
+        else if (.not. sync_directory_of(to)) then
+            call set_error(err, "output: cannot flush the directory of '"//to//"' to the disk")
+        end if
     end subroutine rename_file
 
     !> The directory a file named `path` is (or would be) in: '.' for a bare name.

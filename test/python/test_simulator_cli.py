@@ -166,6 +166,27 @@ def test_nothing_the_user_owns_is_replaced(impactchain_exe, tmp_path):
     assert h5py.is_hdf5(tmp_path / "run.h5") and not (tmp_path / "run.h5.part").exists()
 
 
+def test_finished_file_is_renamed_durably(impactchain_exe, tmp_path):
+    """Issue 30: the finished file is flushed to the disk before it takes its name, and the
+    directory after (fsync of the file, then of the directory: seen with strace). Before,
+    neither was flushed. (Checkpoints are renamed by the same function, chain_files'
+    rename_file.)"""
+    import shutil
+    if shutil.which("strace") is None:
+        pytest.skip("strace is not installed")
+    (tmp_path / "input.nml").write_text(BASE)
+    result = subprocess.run(["strace", "-f", "-e", "trace=openat,fsync,rename", "-o", "trace",
+                             str(impactchain_exe), "--quiet", "input.nml"], cwd=tmp_path,
+                            capture_output=True, text=True, timeout=60)
+    assert result.returncode == 0, result.stderr
+    calls = [line.split(None, 1)[1] for line in (tmp_path / "trace").read_text().splitlines()]
+    renamed = next(j for j, c in enumerate(calls) if c.startswith('rename("run.h5.part"'))
+    assert calls[renamed - 1].startswith("fsync(") and " = 0" in calls[renamed - 1]
+    assert 'openat(AT_FDCWD, "run.h5.part", O_RDONLY' in calls[renamed - 2]
+    assert "O_DIRECTORY" in calls[renamed + 1]
+    assert calls[renamed + 2].startswith("fsync(") and " = 0" in calls[renamed + 2]
+
+
 @pytest.mark.parametrize("kind", ["run", "sweep"])
 def test_output_that_is_a_directory_is_refused_up_front(impactchain_exe, tmp_path, kind):
     """Issue 30, 6: an output path that is a directory is refused by --check and by the run
