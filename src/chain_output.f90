@@ -23,7 +23,7 @@
 module chain_output
     use chain_kinds, only: wp, i8
     use chain_error, only: error_t, set_error, fmt_int, fmt_int8, fmt_real
-    use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
+    use, intrinsic :: ieee_arithmetic, only: ieee_is_finite, ieee_is_nan
     use chain_files, only: lock_file, is_locked, unlock_file, is_symlink
     use chain_files, only: rename_file, remove_file, copy_file, directory_of, is_directory, &
                            can_write_in
@@ -1070,7 +1070,8 @@ contains
             end if
         end do
         do j = 1, size(state%event_time)
-            if (.not. (state%event_time(j) >= 0)) then
+            ! (NaN first: an ordered comparison with it traps in the runtime-checked build)
+            if (ieee_is_nan(state%event_time(j)) .or. bad_time(state%event_time(j))) then
                 call set_error(err, where//"event_time("//fmt_int(j)//") = "// &
                                fmt_real(state%event_time(j))//"; allowed: times >= 0")
                 return
@@ -1080,7 +1081,7 @@ contains
                 return
             end if
         end do
-        if (.not. (ieee_is_finite(state%time) .and. state%time >= 0)) then
+        if (.not. ieee_is_finite(state%time) .or. bad_time(state%time)) then
             call set_error(err, where//"time_in_cycle = "//fmt_real(state%time)// &
                            "; allowed: finite, >= 0")
         else if (.not. ieee_is_finite(phase)) then
@@ -1088,6 +1089,13 @@ contains
         else if (state%cycle < 0) then
             call set_error(err, where//"cycle = "//fmt_int8(state%cycle)//"; allowed: >= 0")
         end if
+    contains
+        !> t < 0, for a t that is not NaN (asked only then: see above)
+        logical function bad_time(t)
+            real(wp), intent(in) :: t
+            bad_time = .false.
+            if (.not. ieee_is_nan(t)) bad_time = t < 0
+        end function bad_time
     end subroutine check_final
 
     !> Open an existing file read-only (`where` names the input that points at it).
