@@ -150,8 +150,8 @@ contains
         same_file = .false.
         if (.not. c_associated(c_realpath(a//c_null_char, ra))) return
         if (.not. c_associated(c_realpath(b//c_null_char, rb))) return
-        same_file = all(ra(:text_length(ra)) == rb(:text_length(rb))) .and. &
-                    text_length(ra) == text_length(rb)
+        if (text_length(ra) /= text_length(rb)) return
+        same_file = all(ra(:text_length(ra)) == rb(:text_length(rb)))
     contains
         pure integer function text_length(c)
             character(kind=c_char), intent(in) :: c(:)
