@@ -5,6 +5,7 @@
 !> the file is then closed cleanly and marked complete = 0, and the same command continues it.
 program main
     use, intrinsic :: iso_fortran_env, only: error_unit, output_unit
+    use, intrinsic :: iso_c_binding, only: c_int
     use impactchain, only: error_t, config_t, read_config, simulate_to_file, &
                            record_result_t, run_sweep, sweep_summary_t, checkpoint_path, &
                            catch_interrupts, cli_t, parse_command_line, cli_run, &
@@ -197,8 +198,26 @@ contains
         character(len=*), intent(in) :: message
 
         write (error_unit, '(a)') 'impactchain: error: '//message
-        stop 1, quiet=.true.
+        call exit_now(1)
     end subroutine fail
+
+    !> Flush what was written and end the process with `code` at once, without the exit
+    !> handlers: after a failed write (a full disk) HDF5's own handler, closing the file that
+    !> could not be closed, crashed (SIGSEGV, exit 139, the message above lost with stderr in
+    !> a file). The partial file is already deleted (output_abort).
+    subroutine exit_now(code)
+        integer, intent(in) :: code
+        interface
+            subroutine c_exit(status) bind(C, name='_exit')
+                import :: c_int
+                integer(c_int), value :: status
+            end subroutine c_exit
+        end interface
+
+        flush (output_unit)
+        flush (error_unit)
+        call c_exit(int(code, c_int))
+    end subroutine exit_now
 
     !> A mistake in the command line itself (an unknown option, a missing value): exit 2.
     subroutine fail_usage(message)

@@ -5,14 +5,16 @@
 !> made in a directory, asked before any run starts.
 !> Infrastructure, no model section.
 module chain_files
-    use, intrinsic :: iso_c_binding, only: c_char, c_int, c_null_char
+    use, intrinsic :: iso_c_binding, only: c_char, c_int, c_null_char, c_size_t, c_long, &
+                                           c_ptr, c_associated
     use, intrinsic :: iso_fortran_env, only: byte => int8
     use chain_kinds, only: i8
     use chain_error, only: error_t, set_error, fmt_int8
     implicit none
     private
     public :: rename_file, remove_file, copy_file, close_checked
-    public :: directory_of, is_directory, can_write_in
+    public :: directory_of, is_directory, can_write_in, is_symlink, same_file
+    public :: lock_file, is_locked, unlock_file, sync_file, sync_directory_of
 
     integer(c_int), parameter :: f_ok = 0, w_ok = 2, x_ok = 1 !! POSIX access() modes
 
@@ -29,17 +31,174 @@ module chain_files
             integer(c_int), value :: mode
             integer(c_int) :: status
         end function c_access
+
+        ! open(2) is variadic; its third argument (the mode) is an int, which the x86-64 and
+        ! aarch64 calling conventions pass as they pass a fixed argument
+        function c_open(path, flags, mode) bind(C, name='open') result(fd)
+            import :: c_char, c_int
+            character(kind=c_char), intent(in) :: path(*)
+            integer(c_int), value :: flags, mode
+            integer(c_int) :: fd
+        end function c_open
+
+        function c_close(fd) bind(C, name='close') result(status)
+            import :: c_int
+            integer(c_int), value :: fd
+            integer(c_int) :: status
+        end function c_close
+
+        function c_flock(fd, operation) bind(C, name='flock') result(status)
+            import :: c_int
+            integer(c_int), value :: fd, operation
+            integer(c_int) :: status
+        end function c_flock
+
+        function c_fsync(fd) bind(C, name='fsync') result(status)
+            import :: c_int
+            integer(c_int), value :: fd
+            integer(c_int) :: status
+        end function c_fsync
+
+        function c_readlink(path, buf, size) bind(C, name='readlink') result(n)
+            import :: c_char, c_size_t, c_long
+            character(kind=c_char), intent(in) :: path(*)
+            character(kind=c_char), intent(out) :: buf(*)
+            integer(c_size_t), value :: size
+            integer(c_long) :: n
+        end function c_readlink
+
+        function c_realpath(path, resolved) bind(C, name='realpath') result(p)
+            import :: c_char, c_ptr
+            character(kind=c_char), intent(in) :: path(*)
+            character(kind=c_char), intent(out) :: resolved(*)
+            type(c_ptr) :: p
+        end function c_realpath
     end interface
+
+    !> Linux's open(2) flags (asm-generic/fcntl.h: x86-64, aarch64, riscv) and flock(2)
+    !> operations.
+    integer(c_int), parameter :: o_rdonly = 0, o_rdwr = 2, o_creat = 64, o_nofollow = 131072, &
+                                 o_cloexec = 524288, o_directory = 65536
+    integer(c_int), parameter :: lock_ex = 2, lock_nb = 4
 
 contains
 
-    !> Move a finished file to its final name (atomic on one file system).
+    !> Take the exclusive lock that says "a run is writing this file": `path` (created empty
+    !> when missing, never truncated, never followed if a symbolic link) is opened and locked
+    !> with flock(2); `fd` holds the lock until unlock_file (or the process's end, however it
+    !> ends: a killed run leaves no stale lock). Another process holding it is an error that
+    !> says so, and nothing is touched.
+    subroutine lock_file(path, fd, err)
+        character(len=*), intent(in) :: path
+        integer, intent(out) :: fd
+        type(error_t), allocatable, intent(out) :: err
+        integer(c_int) :: f
+
+        fd = -1
+        f = c_open(path//c_null_char, ior(ior(o_rdwr, o_creat), ior(o_nofollow, o_cloexec)), &
+                   int(o'666', c_int))
+        if (f < 0) then
+            call set_error(err, "output: cannot create '"//path//"' (missing directory, no "// &
+                           "permission to write there, or a symbolic link)")
+            return
+        end if
+        if (c_flock(f, ior(lock_ex, lock_nb)) /= 0) then
+            f = c_close(f)
+            call set_error(err, "output: another run is writing '"//path//"' (it holds "// &
+                           "the file's lock); wait for it to end, or choose another file")
+            return
+        end if
+        fd = f
+    end subroutine lock_file
+
+    !> Does another process hold lock_file's lock on the existing file `path`? (Asked without
+    !> creating anything; a file that cannot be opened is not locked.)
+    logical function is_locked(path)
+        character(len=*), intent(in) :: path
+        integer(c_int) :: f, status
+
+        is_locked = .false.
+        f = c_open(path//c_null_char, ior(o_rdonly, ior(o_nofollow, o_cloexec)), 0_c_int)
+        if (f < 0) return
+        is_locked = c_flock(f, ior(lock_ex, lock_nb)) /= 0
+        status = c_close(f) ! (closing drops a lock just taken)
+    end function is_locked
+
+    !> Release lock_file's lock (fd < 0: none held).
+    subroutine unlock_file(fd)
+        integer, intent(inout) :: fd
+        integer(c_int) :: status
+
+        if (fd >= 0) status = c_close(int(fd, c_int))
+        fd = -1
+    end subroutine unlock_file
+
+    !> `path` is a symbolic link (dangling or not).
+    logical function is_symlink(path)
+        character(len=*), intent(in) :: path
+        character(kind=c_char) :: buf(1)
+
+        is_symlink = c_readlink(path//c_null_char, buf, 1_c_size_t) >= 0
+    end function is_symlink
+
+    !> Are `a` and `b` names of one existing file (after links, `.` and `..`)?
+    logical function same_file(a, b)
+        character(len=*), intent(in) :: a, b
+        integer, parameter :: path_max = 4096
+        character(kind=c_char) :: ra(path_max), rb(path_max)
+
+        same_file = .false.
+        if (.not. c_associated(c_realpath(a//c_null_char, ra))) return
+        if (.not. c_associated(c_realpath(b//c_null_char, rb))) return
+        if (text_length(ra) /= text_length(rb)) return
+        same_file = all(ra(:text_length(ra)) == rb(:text_length(rb)))
+    contains
+        pure integer function text_length(c)
+            character(kind=c_char), intent(in) :: c(:)
+            text_length = findloc(c, c_null_char, 1) - 1
+        end function text_length
+    end function same_file
+
+    !> Flush the file `path` to the disk (fsync(2)); false if it cannot be done.
+    logical function sync_file(path)
+        character(len=*), intent(in) :: path
+        integer(c_int) :: f, status
+
+        sync_file = .false.
+        f = c_open(path//c_null_char, ior(o_rdonly, o_cloexec), 0_c_int)
+        if (f < 0) return
+        sync_file = c_fsync(f) == 0
+        status = c_close(f)
+    end function sync_file
+
+    !> Flush the directory holding `path` (its entries: a rename into it) to the disk.
+    logical function sync_directory_of(path)
+        character(len=*), intent(in) :: path
+        integer(c_int) :: f, status
+
+        sync_directory_of = .false.
+        f = c_open(directory_of(path)//c_null_char, ior(ior(o_rdonly, o_directory), &
+                   o_cloexec), 0_c_int)
+        if (f < 0) return
+        sync_directory_of = c_fsync(f) == 0
+        status = c_close(f)
+    end function sync_directory_of
+
+    !> Move a finished file to its final name (atomic on one file system), durably: the file
+    !> is on the disk before it takes the name (fsync), and the name after (fsync of its
+    !> directory), so that a power cut or a crash of the machine cannot leave a finished name
+    !> on a file whose contents were never written.
     subroutine rename_file(from, to, err)
         character(len=*), intent(in) :: from, to
         type(error_t), allocatable, intent(out) :: err
 
-        if (c_rename(from//c_null_char, to//c_null_char) /= 0) &
+        if (.not. sync_file(from)) then
+            call set_error(err, "output: cannot flush '"//from//"' to the disk")
+        else if (c_rename(from//c_null_char, to//c_null_char) /= 0) then
             call set_error(err, "output: cannot rename '"//from//"' to '"//to//"'")
+        else if (.not. sync_directory_of(to)) then
+            call set_error(err, "output: cannot flush the directory of '"//to//"' to the disk")
+        end if
     end subroutine rename_file
 
     !> The directory a file named `path` is (or would be) in: '.' for a bare name.

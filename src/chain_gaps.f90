@@ -17,13 +17,13 @@ module chain_gaps
     private
     public :: gap_t, gap_search_t, next_gap_zero, gap_value, resolvable_speed, surely_resolvable
     public :: earliest_closing
-    public :: search_none, search_root, search_horizon, time_tolerance
+    public :: search_none, search_root, search_horizon, time_tolerance, max_steps
 
     integer, parameter :: search_none = 0    !! the gap never closes
     integer, parameter :: search_root = 1    !! the gap closes at tau
     integer, parameter :: search_horizon = 2 !! no zero before tau = horizon; search again there
     real(wp), parameter :: time_tolerance = 1.0e-13_wp !! accuracy of a located zero
-    integer, parameter :: max_steps = 200000
+    integer, parameter :: max_steps = 200000 !! steps of one search (its limit: info = 1)
     integer, parameter :: lazy_steps = 2      !! steps of a forced search before it defers
 
     type :: gap_t

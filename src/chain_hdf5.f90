@@ -23,7 +23,7 @@
 !> Infrastructure, no model section.
 module chain_hdf5
     use, intrinsic :: iso_c_binding, only: c_null_char, c_ptr, c_loc, c_char, c_size_t, &
-                                           c_f_pointer, c_associated
+                                           c_f_pointer, c_associated, c_int, c_bool
     use hdf5, only: hid_t, hsize_t, size_t, h5open_f, h5eset_auto_f, &
                     h5fcreate_f, h5fopen_f, h5fclose_f, h5fis_hdf5_f, &
                     H5F_ACC_TRUNC_F, H5F_ACC_RDWR_F, H5F_ACC_RDONLY_F, &
@@ -33,7 +33,7 @@ module chain_hdf5
                     h5sget_simple_extent_npoints_f, H5S_SCALAR_F, H5S_UNLIMITED_F, &
                     H5S_SELECT_SET_F, h5dcreate_f, h5dopen_f, h5dclose_f, h5dwrite_f, &
                     h5dread_f, h5dset_extent_f, h5dget_space_f, &
-                    h5pcreate_f, h5pset_chunk_f, h5pclose_f, H5P_DATASET_CREATE_F, &
+                    h5pcreate_f, h5pset_chunk_f, h5pclose_f, H5P_DATASET_CREATE_F, H5P_FILE_ACCESS_F, &
                     h5pset_shuffle_f, h5pset_deflate_f, H5P_DEFAULT_F, &
                     h5zfilter_avail_f, h5zget_filter_info_f, H5Z_FILTER_DEFLATE_F, &
                     H5Z_FILTER_ENCODE_ENABLED_F, &
@@ -136,6 +136,17 @@ module chain_hdf5
         module procedure read_slab_real_2d
     end interface h5_read_slab
 
+    interface
+        !> HDF5 1.10.7's switch of its own file locks (no Fortran binding before 1.14)
+        function c_h5pset_file_locking(fapl, use_locking, ignore_disabled) &
+            bind(C, name='H5Pset_file_locking') result(status)
+            import :: hid_t, c_bool, c_int
+            integer(hid_t), value :: fapl
+            logical(c_bool), value :: use_locking, ignore_disabled
+            integer(c_int) :: status
+        end function c_h5pset_file_locking
+    end interface
+
 contains
 
     ! ---- the funnel, the library, files ---------------------------------------------------
@@ -174,13 +185,36 @@ contains
         type(error_t), allocatable, intent(inout) :: err
         integer :: e
 
+        integer(hid_t) :: fapl
+
         file%path = path
         call open_library(path, err)
         if (allocated(err)) return
-        call h5fcreate_f(path, H5F_ACC_TRUNC_F, file%id, e)
+        call unlocked_access(path, fapl, err)
+        if (allocated(err)) return
+        call h5fcreate_f(path, H5F_ACC_TRUNC_F, file%id, e, access_prp=fapl)
         call check(e, 'h5fcreate_f', '/', path, err)
+        call h5pclose_f(fapl, e)
         if (allocated(err)) file%id = -1
     end subroutine h5_create_file
+
+    !> File access without HDF5's own lock: a file written is created or opened by the
+    !> program only under its own lock (chain_files' lock_file, taken before anything is
+    !> truncated), which HDF5's lock, taken on another descriptor of the same file, would
+    !> collide with.
+    subroutine unlocked_access(path, fapl, err)
+        character(len=*), intent(in) :: path
+        integer(hid_t), intent(out) :: fapl
+        type(error_t), allocatable, intent(inout) :: err
+        integer :: e
+
+        call h5pcreate_f(H5P_FILE_ACCESS_F, fapl, e)
+        call check(e, 'h5pcreate_f', 'file access', path, err)
+        if (allocated(err)) return
+        e = c_h5pset_file_locking(fapl, .false._c_bool, .true._c_bool)
+        call check(e, 'H5Pset_file_locking', 'file access', path, err)
+        if (allocated(err)) call h5pclose_f(fapl, e)
+    end subroutine unlocked_access
 
     !> An existing file, opened for reading, or for reading and writing when `writable`.
     subroutine h5_open_file(file, path, writable, err)
@@ -188,12 +222,21 @@ contains
         character(len=*), intent(in) :: path
         logical, intent(in) :: writable
         type(error_t), allocatable, intent(inout) :: err
-        integer :: e
+        integer :: e, e2
+
+        integer(hid_t) :: fapl
 
         file%path = path
         call open_library(path, err)
         if (allocated(err)) return
-        call h5fopen_f(path, merge(H5F_ACC_RDWR_F, H5F_ACC_RDONLY_F, writable), file%id, e)
+        if (writable) then
+            call unlocked_access(path, fapl, err)
+            if (allocated(err)) return
+            call h5fopen_f(path, H5F_ACC_RDWR_F, file%id, e, access_prp=fapl)
+            call h5pclose_f(fapl, e2)
+        else
+            call h5fopen_f(path, H5F_ACC_RDONLY_F, file%id, e)
+        end if
         call check(e, 'h5fopen_f', '/', path, err)
         if (allocated(err)) file%id = -1
     end subroutine h5_open_file

@@ -15,7 +15,7 @@ module chain_namelist
     implicit none
     private
     public :: key_spec_t, key_integer, key_real, key_logical, key_string
-    public :: check_namelist, apply_override, schema_keys, groups_in, lower
+    public :: check_namelist, apply_override, schema_keys, groups_in, lower, same_input
 
     integer, parameter :: key_integer = 1
     integer, parameter :: key_real = 2
@@ -41,6 +41,7 @@ module chain_namelist
         character(len=:), allocatable :: group, key, written
         integer :: line = 0, first = 0, last = 0, n_values = 0
         logical :: subscripted = .false.
+        logical :: comment_first = .false. !! a comment between `=` and the first value
         integer :: n_tokens = 0 !! value tokens, at value_first(:n_tokens), value_last(:n_tokens)
         integer, allocatable :: value_first(:), value_last(:)
     end type item_t
@@ -51,9 +52,15 @@ module chain_namelist
         integer :: line = 0, close = 0
     end type group_t
 
+    !> The text's groups and items, and the first text that belongs to neither (outside any
+    !> group: `stray`; in a group but not a value of a key: `loose`), which the reader of the
+    !> namelist would drop or fail on: positions first:last and line (first = 0: none).
     type :: parsed_t
         type(group_t), allocatable :: groups(:)
         type(item_t), allocatable :: items(:)
+        integer :: stray_first = 0, stray_last = 0, stray_line = 0
+        integer :: loose_first = 0, loose_last = 0, loose_line = 0
+        character(len=:), allocatable :: loose_group
     end type parsed_t
 
 contains
@@ -65,9 +72,16 @@ contains
         type(key_spec_t), intent(in) :: schema(:)
         type(error_t), allocatable, intent(out) :: err
         type(parsed_t) :: parsed
-        integer :: g, j
+        integer :: g, j, i
 
         call parse(text, parsed)
+        if (parsed%stray_first > 0) then
+            call set_error(err, at(source, parsed%stray_line)//"'"// &
+                           text(parsed%stray_first:parsed%stray_last)//"' is outside any "// &
+                           "group; only '&group key = value ... /' is read (start a "// &
+                           "comment with '!')")
+            return
+        end if
         do g = 1, size(parsed%groups)
             associate (group => parsed%groups(g))
                 if (.not. any(schema%group == group%name)) then
@@ -91,7 +105,32 @@ contains
                 end if
             end associate
         end do
+        if (parsed%loose_first > 0) then
+            call set_error(err, at(source, parsed%loose_line)//"&"//parsed%loose_group// &
+                           ": '"//text(parsed%loose_first:parsed%loose_last)//"' is not a "// &
+                           "value of any key (write key = value)")
+            return
+        end if
         do j = 1, size(parsed%items)
+            associate (item => parsed%items(j))
+                do i = 1, j - 1
+                    if (parsed%items(i)%group == item%group .and. &
+                        lower(parsed%items(i)%written) == lower(item%written)) then
+                        call set_error(err, at(source, item%line)//"&"//item%group//": "// &
+                                       lower(item%written)//" is given twice (first at "// &
+                                       "line "//fmt_int(parsed%items(i)%line)//"); give "// &
+                                       "each key once")
+                        return
+                    end if
+                end do
+                if (item%comment_first) then
+                    call set_error(err, at(source, item%line)//"&"//item%group//": "// &
+                                   item%written//" = is followed by a comment before its "// &
+                                   "value, which the namelist reader cannot read; put the "// &
+                                   "comment after the value")
+                    return
+                end if
+            end associate
             call check_item(at(source, parsed%items(j)%line)//"&"//parsed%items(j)%group// &
                             ": ", text, parsed%items(j), schema, err)
             if (allocated(err)) return
@@ -220,6 +259,7 @@ contains
         character(len=:), allocatable :: group, key, value, assignment
         type(parsed_t) :: parsed
         integer :: dot, eq, k, j, g
+        logical :: bad
 
         dot = index(spec, '.')
         eq = index(spec, '=')
@@ -266,6 +306,18 @@ contains
             end associate
         end if
         call parse("&"//group//" "//assignment//" /", parsed)
+        if (size(parsed%groups) /= 1 .or. size(parsed%items) /= 1 .or. &
+            parsed%loose_first > 0 .or. parsed%stray_first > 0) then
+            bad = .true.
+        else
+            bad = parsed%groups(1)%close /= len("&"//group//" "//assignment//" /")
+        end if
+        if (bad) then
+            call set_error(err, "--set "//spec//": the value would end the group, start "// &
+                           "another or comment out the rest; a value holds no '/', '&' or "// &
+                           "'!' outside quotes")
+            return
+        end if
         call check_item("--set "//spec//": &"//group//": ", "&"//group//" "//assignment// &
                         " /", parsed%items(1), schema, err)
     end subroutine apply_override
@@ -291,6 +343,38 @@ contains
             end = end + 1
         end do
     end function after_separator
+
+    !> Do two texts give the same input, leaving out the key `ignored` ('group.key')? Key by
+    !> key: the same groups in the same order, and in each the same keys (case-blind) with
+    !> the same values, token for token, in the same order; blanks, commas between values and
+    !> comments do not count.
+    logical function same_input(a, b, ignored)
+        character(len=*), intent(in) :: a, b, ignored
+
+        same_input = signature(a) == signature(b)
+    contains
+        function signature(text) result(sig)
+            character(len=*), intent(in) :: text
+            character(len=:), allocatable :: sig
+            type(parsed_t) :: parsed
+            integer :: g, j, t
+
+            call parse(text, parsed)
+            sig = ''
+            do g = 1, size(parsed%groups)
+                sig = sig//'&'//parsed%groups(g)%name//' '
+            end do
+            do j = 1, size(parsed%items)
+                associate (item => parsed%items(j))
+                    if (item%group//'.'//item%key == ignored) cycle
+                    sig = sig//new_line('a')//item%group//'.'//lower(item%written)//'='
+                    do t = 1, item%n_tokens
+                        sig = sig//text(item%value_first(t):item%value_last(t))//achar(0)
+                    end do
+                end associate
+            end do
+        end function signature
+    end function same_input
 
     !> The names of the groups in `text`, in order (lower case).
     function groups_in(text) result(names)
@@ -337,6 +421,16 @@ contains
                 pos = pos + 1
             else
                 if (text(pos:pos) == new_line('a')) line = line + 1
+                if (.not. is_separator(text(pos:pos)) .and. parsed%stray_first == 0) then
+                    parsed%stray_first = pos
+                    parsed%stray_last = pos
+                    parsed%stray_line = line
+                    do while (parsed%stray_last < len(text))
+                        if (is_separator(text(parsed%stray_last + 1:parsed%stray_last + 1))) &
+                            exit
+                        parsed%stray_last = parsed%stray_last + 1
+                    end do
+                end if
                 pos = pos + 1
             end if
         end do
@@ -349,7 +443,7 @@ contains
         type(parsed_t), intent(inout) :: parsed
         type(group_t) :: group
         type(item_t) :: item
-        integer :: first, last, token_line, next_first, next_last, next_line
+        integer :: first, last, token_line, next_first, next_last, next_line, eq
         logical :: in_item, key_follows
 
         first = pos + 1
@@ -381,9 +475,17 @@ contains
                 if (in_item) parsed%items = [parsed%items, item]
                 call start_item(group%name, text(first:last), token_line, first, item)
                 in_item = .true.
+                eq = next_last
                 call next_token(text, pos, line, next_first, next_last, next_line)
+                if (next_first > 0) item%comment_first = index(text(eq + 1:next_first - 1), &
+                                                               '!') > 0
             else if (in_item .and. text(first:last) /= '=') then
                 call add_value(text(first:last), first, last, item)
+            else if (parsed%loose_first == 0) then
+                parsed%loose_first = first
+                parsed%loose_last = last
+                parsed%loose_line = token_line
+                parsed%loose_group = group%name
             end if
             first = next_first
             last = next_last

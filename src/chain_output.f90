@@ -22,10 +22,13 @@
 !> Infrastructure, no model section: it writes the records of docs/model.md sections 6-7.
 module chain_output
     use chain_kinds, only: wp, i8
-    use chain_error, only: error_t, set_error, fmt_int, fmt_int8
+    use chain_error, only: error_t, set_error, fmt_int, fmt_int8, fmt_real
+    use, intrinsic :: ieee_arithmetic, only: ieee_is_finite, ieee_is_nan
+    use chain_files, only: lock_file, is_locked, unlock_file, is_symlink
     use chain_files, only: rename_file, remove_file, copy_file, directory_of, is_directory, &
                            can_write_in
     use chain_model, only: model_t
+    use chain_namelist, only: same_input
     use chain_state, only: chain_state_t
     use chain_hdf5, only: h5_file_t, h5_real, h5_int, h5_int8, h5_create_file, h5_open_file, &
                           h5_close_file, h5_is_hdf5_file, h5_create_group, h5_exists, &
@@ -77,6 +80,7 @@ module chain_output
         integer(i8) :: n_events = 0
         logical :: events_created = .false.
         logical :: clv_created = .false.   !! /clv's per-record datasets exist
+        integer :: lock = -1 !! the descriptor holding the `.part` file's lock (lock_file)
     end type output_t
 
 contains
@@ -84,16 +88,33 @@ contains
     ! ---- a run's file, from its start to its end ------------------------------------------
 
     !> What output_begin refuses, checked without creating anything (so that `--check` can
-    !> ask it too): an existing file (unless overwrite), a directory that is missing or that
-    !> cannot be written to.
+    !> ask it too): a `.part` file that another run is writing, a directory of the output's
+    !> name, an existing file (unless overwrite), a directory that is missing or that cannot
+    !> be written to.
     subroutine output_check(path, overwrite, err)
+        character(len=*), intent(in) :: path
+        logical, intent(in) :: overwrite
+        type(error_t), allocatable, intent(out) :: err
+
+        call check_part(path//'.part', err)
+        if (.not. allocated(err)) call check_place(path, overwrite, err)
+    end subroutine output_check
+
+    !> output_check but for the `.part` file.
+    subroutine check_place(path, overwrite, err)
         character(len=*), intent(in) :: path
         logical, intent(in) :: overwrite
         type(error_t), allocatable, intent(out) :: err
         character(len=:), allocatable :: dir
         logical :: exists
 
+        if (is_directory(path)) then
+            call set_error(err, "&output: file = '"//path//"' is a directory; give the name "// &
+                           "of a file (overwrite never replaces a directory)")
+            return
+        end if
         inquire (file=path, exist=exists)
+        exists = exists .or. is_symlink(path) ! (a dangling link is the user's too)
         if (exists .and. .not. overwrite) then
             call set_error(err, "&output: file = '"//path//"' exists; choose another name "// &
                            "or set overwrite = .true.")
@@ -107,7 +128,50 @@ contains
             call set_error(err, "&output: cannot create '"//path//"': no permission to "// &
                            "write in the directory '"//dir//"'")
         end if
-    end subroutine output_check
+    end subroutine check_place
+
+    !> The `.part` file a run would write: refused when another run is writing it (it holds
+    !> its lock), or when it is not one of ours (a directory, a symbolic link, or a file that
+    !> is neither empty nor HDF5: a user's own file, which is never replaced). A `.part` left
+    !> by a run that was killed (HDF5, or not yet begun) is replaced.
+    subroutine check_part(part, err)
+        character(len=*), intent(in) :: part
+        type(error_t), allocatable, intent(out) :: err
+        character(len=8), parameter :: signature = achar(137)//'HDF'//achar(13)//achar(10)// &
+                                                   achar(26)//achar(10)
+        character(len=8) :: head
+        integer(i8) :: bytes
+        integer :: u, ios
+        logical :: exists
+
+        if (is_symlink(part) .or. is_directory(part)) then
+            call set_error(err, "&output: '"//part//"' (the file a run writes before its "// &
+                           "end) is a symbolic link or a directory; remove it or choose "// &
+                           "another file")
+            return
+        end if
+        inquire (file=part, exist=exists)
+        if (.not. exists) return
+        if (is_locked(part)) then
+            call set_error(err, "&output: another run is writing '"//part//"' (it holds "// &
+                           "the file's lock); wait for it to end, or choose another file")
+            return
+        end if
+        inquire (file=part, size=bytes)
+        if (bytes == 0) return
+        head = ''
+        open (newunit=u, file=part, access='stream', form='unformatted', status='old', &
+              action='read', iostat=ios)
+        if (ios == 0) then
+            read (u, iostat=ios) head
+            close (u)
+        end if
+        ! (a run killed before HDF5 wrote its superblock leaves zeros where it goes)
+        if (head /= signature .and. head /= repeat(achar(0), 8)) &
+            call set_error(err, "&output: '"//part//"' exists and is not a file a run left "// &
+                           "(not HDF5); it is never replaced: move it away or choose "// &
+                           "another file")
+    end subroutine check_part
 
     !> Refuse an existing file (unless overwrite) or an unwritable place, before any run starts;
     !> then create `path.part`.
@@ -121,10 +185,22 @@ contains
         out%part_path = path//'.part'
         call output_check(path, overwrite, err)
         if (allocated(err)) return
-        call h5_create_file(out%file, out%part_path, err)
-        if (allocated(err)) err%message = "&output: cannot create '"//out%part_path// &
-                                          "' (missing directory or no permission to write "// &
-                                          "there; "//err%message//")"
+        ! the lock first, before anything is truncated; then the checks again, as another
+        ! run may have ended (and written the file) in between
+        call lock_file(out%part_path, out%lock, err)
+        if (allocated(err)) then
+            err%message = "&"//err%message
+            return
+        end if
+        call check_place(path, overwrite, err)
+        if (.not. allocated(err)) call h5_create_file(out%file, out%part_path, err)
+        if (allocated(err)) then
+            call output_abort(out)
+            if (index(err%message, '&output') /= 1) &
+                err%message = "&output: cannot create '"//out%part_path// &
+                              "' (missing directory or no permission to write there; "// &
+                              err%message//")"
+        end if
     end subroutine output_begin
 
     !> Root attributes, /params, /initial.
@@ -686,8 +762,12 @@ contains
 
         call h5_write_attr(out%file, '/', 'complete', merge(1, 0, complete), err)
         call h5_close_file(out%file, err)
-        if (allocated(err)) return
+        if (allocated(err)) then
+            call output_abort(out)
+            return
+        end if
         call rename_file(out%part_path, out%path, err)
+        call unlock_file(out%lock)
     end subroutine output_end
 
     !> Close and delete the partial file after an error. The error that brought us here is
@@ -697,7 +777,8 @@ contains
         type(error_t), allocatable :: ignored
 
         call h5_close_file(out%file, ignored)
-        if (allocated(out%part_path)) call remove_file(out%part_path)
+        if (allocated(out%part_path) .and. out%lock >= 0) call remove_file(out%part_path)
+        call unlock_file(out%lock)
     end subroutine output_abort
 
     ! ---- a run stopped early, and its continuation ----------------------------------------
@@ -832,8 +913,10 @@ contains
         ! (a run stopped early by an older version is not continued into another layout)
         if (.not. allocated(err) .and. complete == 0 .and. exists .and. &
             version == schema_version) then
-            ! (trailing blanks of the text are not stored)
-            kind = merge(file_continuable, file_other_input, text == input_text)
+            ! (trailing blanks of the text are not stored; whether a file may be replaced is
+            ! not part of what is computed, so --overwrite does not make another input)
+            kind = merge(file_continuable, file_other_input, text == input_text .or. &
+                         same_input(text, input_text, 'output.overwrite'))
         end if
         call h5_close_file(src, err)
     end subroutine output_inspect
@@ -860,8 +943,17 @@ contains
         out%path = path
         out%part_path = path//'.part'
         out%n = n
+        call check_part(out%part_path, err)
+        if (.not. allocated(err)) call lock_file(out%part_path, out%lock, err)
+        if (allocated(err)) then
+            if (index(err%message, '&output') /= 1) err%message = "&"//err%message
+            return
+        end if
         call copy_file(path, out%part_path, err)
-        if (allocated(err)) return
+        if (allocated(err)) then
+            call output_abort(out)
+            return
+        end if
         call h5_open_file(out%file, out%part_path, writable=.true., err=err)
         do j = 1, size(results)
             call h5_exists(out%file, trim(results(j)), exists, err)
@@ -942,10 +1034,69 @@ contains
         call h5_read(src, 'final/phase', phase, err) ! (read for its check: /final is whole)
         call h5_read(src, 'final/time_in_cycle', state%time, err)
         call h5_read(src, 'final/cycle', state%cycle, err)
+        if (.not. allocated(err)) call check_final(path, state, phase, err)
         state%has_schedule = .true.
         state%start_cycle = state%cycle
         state%start_time = state%time
     end subroutine read_final_group
+
+    !> Every value of /final in its range, as an explicit x0 is checked (the engine takes any
+    !> value it is given on trust): finite positions, velocities, phase and time in the cycle
+    !> (>= 0), a cycle >= 0, rests of -1, 0 or 1 (the left wall, free, the right wall), event
+    !> times >= 0 (never: the largest number) and actions 0 to 3 (chain_engine's action_*).
+    subroutine check_final(path, state, phase, err)
+        character(len=*), intent(in) :: path
+        type(chain_state_t), intent(in) :: state
+        real(wp), intent(in) :: phase
+        type(error_t), allocatable, intent(inout) :: err
+        character(len=:), allocatable :: where
+        integer :: j
+
+        where = "&initial: file = '"//path//"': /final/"
+        do j = 1, size(state%x)
+            if (.not. ieee_is_finite(state%x(j))) then
+                call set_error(err, where//"x("//fmt_int(j)//") = "//fmt_real(state%x(j))// &
+                               " is not finite; allowed: finite positions")
+                return
+            else if (.not. ieee_is_finite(state%v(j))) then
+                call set_error(err, where//"v("//fmt_int(j)//") = "//fmt_real(state%v(j))// &
+                               " is not finite; allowed: finite velocities")
+                return
+            else if (abs(state%contact(j)) > 1) then
+                call set_error(err, where//"contact("//fmt_int(j)//") = "// &
+                               fmt_int(state%contact(j))//" is not a rest; allowed: -1 (the "// &
+                               "left wall), 0 (free), 1 (the right wall)")
+                return
+            end if
+        end do
+        do j = 1, size(state%event_time)
+            ! (NaN first: an ordered comparison with it traps in the runtime-checked build)
+            if (ieee_is_nan(state%event_time(j)) .or. bad_time(state%event_time(j))) then
+                call set_error(err, where//"event_time("//fmt_int(j)//") = "// &
+                               fmt_real(state%event_time(j))//"; allowed: times >= 0")
+                return
+            else if (state%event_action(j) < 0 .or. state%event_action(j) > 3) then
+                call set_error(err, where//"event_action("//fmt_int(j)//") = "// &
+                               fmt_int(state%event_action(j))//"; allowed: 0 to 3")
+                return
+            end if
+        end do
+        if (.not. ieee_is_finite(state%time) .or. bad_time(state%time)) then
+            call set_error(err, where//"time_in_cycle = "//fmt_real(state%time)// &
+                           "; allowed: finite, >= 0")
+        else if (.not. ieee_is_finite(phase)) then
+            call set_error(err, where//"phase = "//fmt_real(phase)//"; allowed: finite")
+        else if (state%cycle < 0) then
+            call set_error(err, where//"cycle = "//fmt_int8(state%cycle)//"; allowed: >= 0")
+        end if
+    contains
+        !> t < 0, for a t that is not NaN (asked only then: see above)
+        logical function bad_time(t)
+            real(wp), intent(in) :: t
+            bad_time = .false.
+            if (.not. ieee_is_nan(t)) bad_time = t < 0
+        end function bad_time
+    end subroutine check_final
 
     !> Open an existing file read-only (`where` names the input that points at it).
     subroutine open_for_reading(path, where, src, err)

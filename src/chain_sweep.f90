@@ -339,20 +339,27 @@ contains
         if (allocated(watch%err) .and. .not. allocated(err)) call move_alloc(watch%err, err)
         summary%points_done = count(res%done)
         summary%complete = all(res%done)
+        ! (the partial file goes first: on a full disk its space is the checkpoint's room)
         if (.not. summary%complete .or. allocated(err)) then
-            call save_checkpoint(checkpoint, cfg, plan, res, starts, err2)
             call output_abort(out)
+            call save_checkpoint(checkpoint, cfg, plan, res, starts, err2)
             if (allocated(err2) .and. .not. allocated(err)) call move_alloc(err2, err)
             return
         end if
         summary%mean_collisions = sum(res%collisions)/plan%n_points
         call write_sweep_file(out, cfg, plan, res, err)
+        if (.not. allocated(err)) call output_end(out, .true., err)
         if (allocated(err)) then
+            ! every point is done: the checkpoint keeps them all, and the same command
+            ! writes the file from it without computing anything again
             call output_abort(out)
+            call save_checkpoint(checkpoint, cfg, plan, res, starts, err2)
+            if (allocated(err2)) err%message = err%message//"; the checkpoint of the "// &
+                                               "finished points could not be written either: "// &
+                                               err2%message
             return
         end if
-        call output_end(out, .true., err)
-        if (.not. allocated(err)) call remove_file(checkpoint)
+        call remove_file(checkpoint)
     end subroutine run_sweep
 
     subroutine save_sweep_checkpoint(monitor)

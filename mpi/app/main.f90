@@ -173,12 +173,10 @@ contains
         if (left == 0) return
         stopping = merge(1, 0, interrupted())
         call MPI_Allreduce(MPI_IN_PLACE, stopping, 1, MPI_INTEGER, MPI_MAX, MPI_COMM_WORLD)
-        if (rank == 0) then
-            call save_checkpoint(checkpoint, cfg, plan, res, starts, err)
-            if (allocated(err)) write (error_unit, '(a)') 'impactchain-mpi: warning: '// &
-                err%message
-            call report_progress()
-        end if
+        ! a checkpoint that cannot be written stops every rank (the previous one stays)
+        if (rank == 0) call save_checkpoint(checkpoint, cfg, plan, res, starts, err)
+        call agree_or_stop(err)
+        if (rank == 0) call report_progress()
     end subroutine run_round
 
     !> After a signal: the checkpoint is written; say how to resume and exit with status 3.
@@ -199,11 +197,17 @@ contains
     !> Rank 0 writes the one HDF5 file and deletes the checkpoint; every rank learns whether
     !> that failed (`failed`).
     subroutine finish_sweep()
+        type(error_t), allocatable :: err2
+
         if (rank == 0) then
             call write_sweep_file(out, cfg, plan, res, err)
             if (.not. allocated(err)) call output_end(out, .true., err)
             if (allocated(err)) then
+                ! every point is done: the checkpoint keeps them for the same command
                 call output_abort(out)
+                call save_checkpoint(checkpoint, cfg, plan, res, starts, err2)
+                if (allocated(err2)) err%message = err%message//"; the checkpoint of the "// &
+                    "finished points could not be written either: "//err2%message
                 write (error_unit, '(a)') 'impactchain-mpi: error: '//err%message
             else
                 call remove_file(checkpoint)
@@ -320,12 +324,10 @@ contains
         if (left == 0) return
         stopping = merge(1, 0, interrupted())
         call MPI_Allreduce(MPI_IN_PLACE, stopping, 1, MPI_INTEGER, MPI_MAX, MPI_COMM_WORLD)
-        if (rank == 0) then
-            call save_census_checkpoint(checkpoint, cfg, census, err)
-            if (allocated(err)) write (error_unit, '(a)') 'impactchain-mpi: warning: '// &
-                err%message
-            call report_census_progress()
-        end if
+        ! a checkpoint that cannot be written stops every rank (the previous one stays)
+        if (rank == 0) call save_census_checkpoint(checkpoint, cfg, census, err)
+        call agree_or_stop(err)
+        if (rank == 0) call report_census_progress()
     end subroutine census_round
 
     !> Rank 0 receives every rank's samples (done or not; a rank's own are its to report), in
@@ -390,12 +392,17 @@ contains
     !> Rank 0 classifies every sample (in sample order, as the threaded driver), writes the
     !> one HDF5 file and deletes the checkpoint; every rank learns whether that failed.
     subroutine finish_census()
+        type(error_t), allocatable :: err2
+
         if (rank == 0) then
             call classify_census(cfg, census, err)
             if (.not. allocated(err)) call write_census_file(out, cfg, census, err)
             if (.not. allocated(err)) call output_end(out, .true., err)
             if (allocated(err)) then
                 call output_abort(out)
+                call save_census_checkpoint(checkpoint, cfg, census, err2)
+                if (allocated(err2)) err%message = err%message//"; the checkpoint of the "// &
+                    "finished samples could not be written either: "//err2%message
                 write (error_unit, '(a)') 'impactchain-mpi: error: '//err%message
             else
                 call remove_file(checkpoint)

@@ -117,7 +117,7 @@ _CONTINUATION_STAGES = {**_STAGES, 3: ("orbits", "orbit")}
 #: (chain_model's parameter_units; None: dimensionless, no model_units attribute)
 _PARAMETER_UNITS = {"amplitude": "length", "omega": "1/time", "damping": "1/time",
                     "restitution": None, "spacing": "length"}
-_MAX_N = 10_000_000  # chain_config's max_n: only used to phrase errors for n beyond int32
+_MAX_N = 10_000_000  # chain_config's max_n: n is refused beyond it before any allocation
 _INT32 = (-(2**31), 2**31 - 1)
 _INT64 = (-(2**63), 2**63 - 1)
 _FIRST_EVENT_CAPACITY = (1024, 1 << 20)  # bounds of the first guess of the event count
@@ -570,7 +570,7 @@ def random_start(
     Returns:
         (x, v), each (n,) float64 [length, length/time].
     """
-    nn = _int32(n, "&chain: n", f"[1, {_MAX_N}]")
+    nn = _n(n)
     args = dict(
         n=nn,
         spacing=_spacing(spacing),
@@ -1069,7 +1069,7 @@ def _config(n: Any, amplitude: Any, omega: Any, damping: Any, restitution: Any,
             spacing: Any, boundary: Any, x0: Any, v0: Any, transient: Any, cycles: Any,
             phase: Any, stick_speed: Any, max_size_mb: Any) -> dict[str, Any]:
     """The arguments of ``ic_run`` describing one run (Python types converted only)."""
-    nn = _int32(n, "&chain: n", f"[1, {_MAX_N}]")
+    nn = _n(n)
     explicit = x0 is not None or v0 is not None
     xs = np.zeros(max(nn, 0)) if x0 is None and explicit else _vector(x0, "&initial: x0")
     return dict(
@@ -1283,6 +1283,15 @@ def _int32(value: Any, key: str, allowed: str) -> int:
     return i
 
 
+def _n(value: Any) -> int:
+    """n, refused outside the CLI's range before anything of size n is made (the kernels
+    check it too, but only after their arguments, sized by n, exist)."""
+    n = _integer(value, "n")
+    if not 1 <= n <= _MAX_N:
+        raise ValueError(f"&chain: n = {n} is outside [1, {_MAX_N}]")
+    return n
+
+
 def _int64(value: Any, key: str, allowed: str) -> int:
     i = _integer(value, key.split(": ")[-1])
     if not _INT64[0] <= i <= _INT64[1]:
@@ -1294,10 +1303,13 @@ def _vector(value: Any, key: str, length: str = "n") -> NDArray[np.float64]:
     """A 1-D float64 array (empty for None); lengths are checked by the library."""
     if value is None:
         return np.zeros(0)
+    name = key.split(": ")[-1]
+    if np.iscomplexobj(value):  # (a cast would drop the imaginary part with a warning)
+        raise TypeError(f"{name} must be an array of real numbers, not complex")
     try:
         a = np.asarray(value, dtype=np.float64)
     except (TypeError, ValueError):
-        raise TypeError(f"{key.split(': ')[-1]} must be an array of real numbers") from None
+        raise TypeError(f"{name} must be an array of real numbers") from None
     if a.ndim != 1:
         raise ValueError(f"{key} must be a 1-D array of {length} values, got shape {a.shape}")
     return np.ascontiguousarray(a)

@@ -560,7 +560,8 @@ def _example() -> Any:
 def test_example_reproduces_the_fig1c_recipe(cli: Path, tmp_path: Path) -> None:
     """The example's data are those of `fpm run -- namelists/fig1c.nml`, bit for bit."""
     text = (ROOT / "namelists" / "fig1c.nml").read_text()
-    text = re.sub(r"&output[^/]*/", "&output file = 'run.h5' /", text)
+    # (the group ends at the first '/' outside quotes: its file name holds one)
+    text = re.sub(r"&output(?:'[^']*'|[^'/])*/", "&output file = 'run.h5' /", text)
     result = run_cli(cli, text, tmp_path)
     assert result.returncode == 0, result.stderr
     sim = _example().compute()
@@ -968,3 +969,33 @@ def test_continuation_progress_shows_and_changes_nothing(
     err = capfd.readouterr().err
     assert "transient" in err and "orbits" in err, err
     xr.testing.assert_identical(quiet, shown)
+
+
+@pytest.mark.parametrize("call", [
+    lambda: api.random_start(2 * 10**9),
+    lambda: api.simulate(10**9, 1.7, 1.5),
+    lambda: api.lyapunov(10**9, 1.7, 1.5),
+], ids=["random_start", "simulate", "lyapunov"])
+def test_huge_n_is_refused_before_anything_is_allocated(call: Any) -> None:
+    """Issue 30, 9: n beyond the CLI's range is refused at once, with the CLI's message
+    (before, random_start(2*10**9) used 15 GB over 29 s before its ValueError): a limit on
+    the address space far below what n = 1e9 would take makes any allocation fail."""
+    import resource
+    import time
+    soft, hard = resource.getrlimit(resource.RLIMIT_AS)
+    started = time.time()
+    resource.setrlimit(resource.RLIMIT_AS, (8 * 2**30, hard))
+    try:
+        with pytest.raises(ValueError, match=r"^&chain: n = \d+ is outside \[1, 10000000\]$"):
+            call()
+    finally:
+        resource.setrlimit(resource.RLIMIT_AS, (soft, hard))
+    assert time.time() - started < 2
+
+
+def test_complex_x0_is_refused() -> None:
+    """Issue 30, 9: a complex x0 or v0 is refused, not cast with a numpy warning."""
+    for key in ("x0", "v0"):
+        with pytest.raises(TypeError, match=f"^{key} must be an array of real numbers, "
+                                            "not complex$"):
+            api.simulate(3, 1.7, 1.5, cycles=2, **{key: np.array([0.1, 0, 0]) + 0.5j})

@@ -5,6 +5,7 @@ the vectors' growth rates against /lyapunov), the input checked key by key, and 
 early, which is run again rather than continued."""
 from __future__ import annotations
 
+import re
 import signal
 import subprocess
 
@@ -99,8 +100,14 @@ def test_clv_read_by_impactchain_io(impactchain_exe, tmp_path):
     ("enabled = .false.", "covariant = .true. needs enabled = .true."),
 ])
 def test_bad_keys_are_named(impactchain_exe, tmp_path, extra, needle):
-    result = run_namelist(impactchain_exe, RUN.format(extra=", " + extra), tmp_path,
-                          check=False)
+    # a key of RUN's &lyapunov gets the new value in place (a key given twice is refused)
+    key = extra.split(" =")[0]
+    text = RUN.format(extra="")
+    if f"{key} = " in text:
+        text = re.sub(rf"{key} = [^,/ ]+", extra, text)
+    else:
+        text = RUN.format(extra=", " + extra)
+    result = run_namelist(impactchain_exe, text, tmp_path, check=False)
     assert result.returncode == 1
     assert needle in result.stderr, result.stderr
     assert not list(tmp_path.glob("*.h5*"))

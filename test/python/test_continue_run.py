@@ -136,3 +136,78 @@ def test_stopped_run_continues_bit_for_bit(impactchain_exe, tmp_path):
     again = run_namelist(impactchain_exe, INPUT, parts, "run.nml", check=False)
     assert again.returncode == 1 and "exists" in again.stderr
     assert (parts / "run.h5").read_bytes() == finished
+
+
+# A run long enough (a few seconds) for a second process to start while it writes.
+CONCURRENT = """&chain n = 16, amplitude = 1.7, omega = 1.5 /
+&initial kind = 'random', seed = 1, x_amp = 0.3, v_amp = 0.3 /
+&run transient = 0, cycles = 60000 /
+&output file = 'o.h5' /
+"""
+
+
+def _wait_for_records(proc: subprocess.Popen, part: Path) -> None:
+    """Wait until `proc` has written records into `part` (the file has grown)."""
+    deadline = time.time() + 60
+    while time.time() < deadline and proc.poll() is None:
+        if part.exists() and part.stat().st_size > 200_000:
+            return
+        time.sleep(0.01)
+    raise AssertionError("the first run wrote nothing: " + proc.communicate()[1])
+
+
+def test_second_run_on_one_output_is_refused_and_the_first_ends_intact(impactchain_exe,
+                                                                       tmp_path):
+    """Issue 30, 1: the second of two processes on one output (with or without --overwrite,
+    and the same input or another) is refused before it touches `NAME.h5.part`, saying that
+    another run is writing it; the first ends with the file an undisturbed run writes."""
+    alone = tmp_path / "alone"
+    alone.mkdir()
+    run_namelist(impactchain_exe, CONCURRENT, alone, "a.nml")
+    (tmp_path / "a.nml").write_text(CONCURRENT)
+    (tmp_path / "b.nml").write_text(CONCURRENT.replace("seed = 1", "seed = 2"))
+    first = subprocess.Popen([str(impactchain_exe), "--quiet", "a.nml"], cwd=tmp_path,
+                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    part = tmp_path / "o.h5.part"
+    _wait_for_records(first, part)
+    for command in (["a.nml"], ["--overwrite", "a.nml"], ["--overwrite", "b.nml"],
+                    ["--check", "--overwrite", "a.nml"]):
+        size = part.stat().st_size
+        second = subprocess.run([str(impactchain_exe), "--quiet", *command], cwd=tmp_path,
+                                capture_output=True, text=True, timeout=60)
+        assert second.returncode == 1, (command, second.stderr)
+        assert "another run is writing 'o.h5.part'" in second.stderr, second.stderr
+        assert part.stat().st_size >= size, command  # not truncated
+    out, err = first.communicate(timeout=120)
+    assert first.returncode == 0, err
+    assert not part.exists()
+    a, b = _contents(alone / "o.h5"), _contents(tmp_path / "o.h5")
+    assert sorted(a) == sorted(b)
+    assert not [name for name in a if not _same(a[name], b[name])]
+
+
+def test_overwrite_continues_a_stopped_run(impactchain_exe, tmp_path):
+    """Issue 30, 5: whether a file may be replaced is not part of the input: a run stopped
+    early continues when the command adds --overwrite (or drops it), as the same command
+    does, to the file of an undisturbed run."""
+    alone = tmp_path / "alone"
+    alone.mkdir()
+    run_namelist(impactchain_exe, CONCURRENT, alone, "a.nml")
+    (tmp_path / "a.nml").write_text(CONCURRENT)
+    for first, then in (([], ["--overwrite"]), (["--overwrite"], [])):
+        (tmp_path / "o.h5").unlink(missing_ok=True)
+        proc = subprocess.Popen([str(impactchain_exe), "--quiet", *first, "a.nml"],
+                                cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                                text=True)
+        _wait_for_records(proc, tmp_path / "o.h5.part")
+        proc.send_signal(signal.SIGINT)
+        _, err = proc.communicate(timeout=120)
+        assert proc.returncode == 3, err
+        result = subprocess.run([str(impactchain_exe), "--quiet", *then, "a.nml"],
+                                cwd=tmp_path, capture_output=True, text=True, timeout=120)
+        assert result.returncode == 0, result.stderr
+        assert "continued a run stopped early after" in result.stdout, (first, then)
+        if not first:
+            a, b = _contents(alone / "o.h5"), _contents(tmp_path / "o.h5")
+            assert sorted(a) == sorted(b)
+            assert not [name for name in a if not _same(a[name], b[name])]

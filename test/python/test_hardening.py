@@ -266,3 +266,38 @@ def test_random_chains_run_sanely(impactchain_exe, tmp_path, case):
             assert (a[1:-1] + x[:, 1:] - x[:, :-1]).min() >= -1e-9
         if boundary == "fixed":
             assert (a[0] + x[:, 0]).min() >= -1e-9 and (a[-1] - x[:, -1]).min() >= -1e-9
+
+
+NEAR_RESONANCE = {
+    "undamped, one ulp above": "&chain n=16, amplitude=1, omega=1.0000000000000002, damping=0 /",
+    "damped by 1e-300": "&chain n=16, amplitude=1, omega=1, damping=1e-300 /",
+    "a sweep crossing it": "&chain n=16, amplitude=1, omega=0.99, damping=1e-12 /\n"
+                           "&sweep parameter='omega', start=0.99, stop=1.01, step=0.005 /",
+}
+
+
+@pytest.mark.parametrize("name", sorted(NEAR_RESONANCE))
+def test_near_resonance_is_refused_before_it_runs(impactchain_exe, tmp_path, name):
+    """Issue 30, 8: what the engine's gap search cannot do (a steady response of more than
+    1e7 spacings) is refused by the validation, by --check and before anything is written,
+    naming omega, damping and the range; before, these passed --check and failed mid-run
+    with 'impact search: no convergence ... please report the input'."""
+    text = (NEAR_RESONANCE[name] + "\n&initial kind='random', seed=1, x_amp=0.3, v_amp=0.3 /"
+            "\n&run transient=0, cycles=200 /\n&output file='r.h5' /\n")
+    (tmp_path / "in.nml").write_text(text)
+    for check in (["--check"], []):
+        started = time.time()
+        result = subprocess.run([str(impactchain_exe), "--quiet", *check, "in.nml"],
+                                cwd=tmp_path, capture_output=True, text=True, timeout=120)
+        assert result.returncode == 1, result.stderr
+        assert "too near resonance" in result.stderr, result.stderr
+        assert "sqrt((1 - omega**2)**2 + (2 damping omega)**2) >= " in result.stderr
+        assert time.time() - started < 5
+        assert sorted(p.name for p in tmp_path.iterdir()) == ["in.nml"]
+
+
+def test_near_resonance_within_the_bound_runs(impactchain_exe, tmp_path):
+    """The bound's other side: a steady response of 1e6 spacings (omega = 1 - 5e-7) runs."""
+    run_namelist(impactchain_exe, "&chain n=16, amplitude=1, omega=0.9999995, damping=0 /\n"
+                 "&initial kind='random', seed=2, x_amp=0.3, v_amp=0.3 /\n"
+                 "&run transient=0, cycles=500 /\n&output file='r.h5' /\n", tmp_path)

@@ -90,3 +90,96 @@ def test_cycle_count_beyond_32_bits_round_trips(impactchain_exe, tmp_path):
     assert proc.returncode == 3, err
     with h5py.File(tmp_path / "big.h5") as f:
         assert int(np.ravel(f["params"].attrs["cycles"])[0]) == planned
+
+
+# Issue 30, 10: every value of /final is validated as an explicit x0 is (before, each of these
+# was accepted; the NaN ended in the internal "please report the input").
+BAD_FINAL = [
+    ("x", lambda a: np.where(np.arange(a.size) == 1, np.nan, a), "/final/x(2) = NaN"),
+    ("v", lambda a: np.where(np.arange(a.size) == 0, np.inf, a), "/final/v(1) = Inf"),
+    ("contact", lambda a: np.where(np.arange(a.size) == 2, 7, a), "/final/contact(3) = 7"),
+    ("cycle", lambda a: np.int64(-5), "/final/cycle = -5"),
+    ("time_in_cycle", lambda a: np.float64(np.nan), "/final/time_in_cycle = NaN"),
+    ("event_time", lambda a: np.where(np.arange(a.size) == 0, -1.0, a),
+     "/final/event_time(1) = -1"),
+    ("event_time NaN", lambda a: np.where(np.arange(a.size) == 2, np.nan, a),
+     "/final/event_time(3) = NaN"),
+    ("event_action", lambda a: np.where(np.arange(a.size) == 0, 9, a),
+     "/final/event_action(1) = 9"),
+]
+
+
+@pytest.mark.parametrize("name, change, needle", BAD_FINAL, ids=[b[0] for b in BAD_FINAL])
+def test_start_file_with_a_bad_final_value_is_refused(impactchain_exe, tmp_path, name, change,
+                                                      needle):
+    (tmp_path / "start.h5").write_bytes(_source(impactchain_exe, tmp_path))
+    with h5py.File(tmp_path / "start.h5", "r+") as f:
+        key = f"final/{name.split()[0]}"
+        f[key][...] = change(f[key][()])
+    _refused(impactchain_exe, tmp_path, ["file = 'start.h5'", needle, "allowed"])
+
+
+@pytest.fixture
+def full_disk(tmp_path):
+    """A 2 MB tmpfs as a directory to write into (root only: skipped where mount is not
+    permitted)."""
+    disk = tmp_path / "full"
+    disk.mkdir()
+    mounted = subprocess.run(["mount", "-t", "tmpfs", "-o", "size=2m", "tmpfs", str(disk)],
+                             capture_output=True, text=True)
+    if mounted.returncode != 0:
+        pytest.skip("cannot mount a tmpfs here: " + mounted.stderr.strip())
+    yield disk
+    subprocess.run(["umount", str(disk)], check=True)
+
+
+DISK_RUN = CHAIN.replace("n = 4", "n = 16") + (
+    "&initial kind = 'random', seed = 1, x_amp = 0.3, v_amp = 0.3 /\n"
+    "&run transient = 0, cycles = 20000 /\n&output file = 'full/o.h5' /\n")
+DISK_SWEEP = CHAIN.replace("n = 4", "n = 16") + (
+    "&initial kind = 'random', seed = 1, x_amp = 0.3, v_amp = 0.3 /\n"
+    "&run transient = 10, cycles = 110, record_events = .false. /\n"
+    "&sweep parameter = 'amplitude', start = 1.5, stop = 2.5, step = 0.005 /\n"
+    "&output file = 'full/s.h5' /\n")
+
+
+@pytest.mark.parametrize("text", [DISK_RUN, DISK_SWEEP], ids=["run", "sweep"])
+def test_full_disk_ends_with_the_message(impactchain_exe, tmp_path, full_disk, text):
+    """Issue 30, 2: a full disk ends the run with exit 1 and its one-line message, also with
+    stderr in a file as in a batch log; before, HDF5's exit handler crashed (SIGSEGV, exit
+    139) and the message was lost behind the backtrace. Nothing is left on the disk."""
+    (tmp_path / "in.nml").write_text(text)
+    with open(tmp_path / "log", "w") as log:
+        result = subprocess.run([str(impactchain_exe), "--quiet", "in.nml"], cwd=tmp_path,
+                                stdout=subprocess.DEVNULL, stderr=log, timeout=300)
+    stderr = (tmp_path / "log").read_text()
+    assert result.returncode == 1, stderr
+    assert stderr.startswith("impactchain: error: hdf5: ") and "Backtrace" not in stderr
+    assert len(stderr.splitlines()) == 1, stderr
+    assert not any(p.suffix == ".part" for p in full_disk.iterdir())
+
+
+def test_sweep_whose_last_write_fails_keeps_its_checkpoint(impactchain_exe, tmp_path):
+    """Issue 30, 2: every point of a sweep is done and the file cannot be written (here its
+    name became a directory while the sweep ran): the checkpoint keeps every point, and the
+    same command, once the name is free, writes the file from it without computing again.
+    Before, the sweep's points were lost. (A full tmpfs cannot show it: the checkpoint holds
+    the records uncompressed, and is larger than the file.)"""
+    text = DISK_SWEEP.replace("full/", "").replace("cycles = 110", "cycles = 400")
+    (tmp_path / "in.nml").write_text(text)
+    proc = subprocess.Popen([str(impactchain_exe), "--quiet", "in.nml"], cwd=tmp_path,
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    deadline = time.time() + 60
+    while not (tmp_path / "s.h5.part").exists() and time.time() < deadline:
+        time.sleep(0.005)
+    (tmp_path / "s.h5").mkdir()
+    _, err = proc.communicate(timeout=300)
+    assert proc.returncode == 1, err
+    assert "cannot rename 's.h5.part' to 's.h5'" in err, err
+    assert (tmp_path / "s.h5.ckpt").exists()
+    (tmp_path / "s.h5").rmdir()
+    again = subprocess.run([str(impactchain_exe), "--quiet", "in.nml"], cwd=tmp_path,
+                           capture_output=True, text=True, timeout=300)
+    assert again.returncode == 0, again.stderr
+    assert "resumed from a checkpoint: 201" in again.stdout, again.stdout
+    assert h5py.is_hdf5(tmp_path / "s.h5") and not (tmp_path / "s.h5.ckpt").exists()

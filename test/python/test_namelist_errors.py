@@ -63,6 +63,20 @@ MISTAKES = {
                                  "&initial kind = 'random', seed = 2147483648 /",
                                  ["input.nml:2:", "seed = 2147483648 is beyond the range of "
                                   "32-bit integers [-2147483648, 2147483647]"]),
+    # issue 30, 7: nothing in the file is silently dropped or replaced
+    "text after a group": ("&chain n = 4, omega = 1.5, amplitude = 1 / n = 8\n",
+                           ["input.nml:1:", "'n' is outside any group"]),
+    "text between groups": ("&chain n = 4, omega = 1.5, amplitude = 1 /\nrun cycles = 9\n"
+                            "&run cycles = 8 /", ["input.nml:2:", "'run' is outside any group"]),
+    "text before the first group": ("omega = 2\n&chain n = 4, omega = 1.5, amplitude = 1 /",
+                                    ["input.nml:1:", "'omega' is outside any group"]),
+    "value without a key": ("&chain 7, n = 4, omega = 1.5, amplitude = 1 /",
+                            ["input.nml:1:", "&chain: '7' is not a value of any key"]),
+    "key given twice": ("&chain n = 4, omega = 1.5,\n amplitude = 1, omega = 2 /",
+                        ["input.nml:2:", "&chain: omega is given twice (first at line 1)"]),
+    "comment before a value": ("&chain n = 4, omega = ! the drive\n 1.5, amplitude = 1 /",
+                               ["input.nml:1:", "&chain: omega = is followed by a comment",
+                                "put the comment after the value"]),
 }
 
 # values at the edges of what a key holds: read, not refused
@@ -276,6 +290,9 @@ def test_check_refuses_an_existing_output(impactchain_exe, tmp_path):
     (["--set", "chain.n=4.5"], "n = 4.5 is not an integer", 1),
     (["--set", "chain"], "group.key=value", 1),
     (["--set", "chian.n=3"], "did you mean &chain", 1),
+    # issue 30, 7: a value cannot close its group and open another, or comment out the rest
+    (["--set", "chain.n=4 / &run cycles=5"], "--set chain.n=4 / &run cycles=5: the value", 1),
+    (["--set", "chain.n=4 ! x"], "--set chain.n=4 ! x: the value", 1),
     (["-o"], "needs a value", 2),  # a mistake in the command line itself
 ])
 def test_bad_override_is_refused(impactchain_exe, tmp_path, args, needle, code):

@@ -124,6 +124,89 @@ def test_unwritable_output_directory_is_refused(impactchain_exe, tmp_path):
     assert "cannot create" in result.stderr
 
 
+def test_nothing_the_user_owns_is_replaced(impactchain_exe, tmp_path):
+    """Issue 30, 7: the input file given as the output (even with --overwrite), a user's
+    own NAME.h5.part, a symbolic link at NAME.h5.part and a dangling symbolic link at the
+    output's name (unless --overwrite) are refused, and left as they were."""
+    (tmp_path / "in.nml").write_text(BASE)
+    result = subprocess.run([str(impactchain_exe), "--quiet", "-o", "./in.nml", "--overwrite",
+                             "in.nml"], cwd=tmp_path, capture_output=True, text=True,
+                            timeout=60)
+    assert result.returncode == 1
+    assert "&output: file = './in.nml' is the input file" in result.stderr, result.stderr
+    assert (tmp_path / "in.nml").read_text() == BASE
+
+    (tmp_path / "run.h5.part").write_text("my notes")
+    for args in ([], ["--overwrite"], ["--check"]):
+        result = subprocess.run([str(impactchain_exe), "--quiet", *args, "in.nml"],
+                                cwd=tmp_path, capture_output=True, text=True, timeout=60)
+        assert result.returncode == 1, args
+        assert "'run.h5.part' exists and is not a file a run left" in result.stderr, \
+            result.stderr
+        assert (tmp_path / "run.h5.part").read_text() == "my notes"
+    (tmp_path / "run.h5.part").unlink()
+
+    (tmp_path / "run.h5.part").symlink_to(tmp_path / "elsewhere")
+    result = run_namelist(impactchain_exe, BASE, tmp_path, check=False)
+    assert result.returncode == 1 and "is a symbolic link" in result.stderr, result.stderr
+    assert not (tmp_path / "elsewhere").exists()
+    (tmp_path / "run.h5.part").unlink()
+
+    (tmp_path / "run.h5").symlink_to(tmp_path / "missing.h5")
+    result = run_namelist(impactchain_exe, BASE, tmp_path, check=False)
+    assert result.returncode == 1 and "'run.h5' exists" in result.stderr, result.stderr
+    assert (tmp_path / "run.h5").is_symlink()
+    run_namelist(impactchain_exe, BASE.replace("'run.h5' /", "'run.h5', overwrite=.true. /"),
+                 tmp_path)
+    assert not (tmp_path / "run.h5").is_symlink() and h5py.is_hdf5(tmp_path / "run.h5")
+
+    # a .part left by a killed run (HDF5, or empty) is replaced without a word
+    (tmp_path / "run.h5").unlink()
+    (tmp_path / "run.h5.part").write_bytes(b"")
+    run_namelist(impactchain_exe, BASE, tmp_path)
+    assert h5py.is_hdf5(tmp_path / "run.h5") and not (tmp_path / "run.h5.part").exists()
+
+
+def test_finished_file_is_renamed_durably(impactchain_exe, tmp_path):
+    """Issue 30: the finished file is flushed to the disk before it takes its name, and the
+    directory after (fsync of the file, then of the directory: seen with strace). Before,
+    neither was flushed. (Checkpoints are renamed by the same function, chain_files'
+    rename_file.)"""
+    import shutil
+    if shutil.which("strace") is None:
+        pytest.skip("strace is not installed")
+    (tmp_path / "input.nml").write_text(BASE)
+    result = subprocess.run(["strace", "-f", "-e", "trace=openat,fsync,rename", "-o", "trace",
+                             str(impactchain_exe), "--quiet", "input.nml"], cwd=tmp_path,
+                            capture_output=True, text=True, timeout=60)
+    assert result.returncode == 0, result.stderr
+    calls = [line.split(None, 1)[1] for line in (tmp_path / "trace").read_text().splitlines()]
+    renamed = next(j for j, c in enumerate(calls) if c.startswith('rename("run.h5.part"'))
+    assert calls[renamed - 1].startswith("fsync(") and " = 0" in calls[renamed - 1]
+    assert 'openat(AT_FDCWD, "run.h5.part", O_RDONLY' in calls[renamed - 2]
+    assert "O_DIRECTORY" in calls[renamed + 1]
+    assert calls[renamed + 2].startswith("fsync(") and " = 0" in calls[renamed + 2]
+
+
+@pytest.mark.parametrize("kind", ["run", "sweep"])
+def test_output_that_is_a_directory_is_refused_up_front(impactchain_exe, tmp_path, kind):
+    """Issue 30, 6: an output path that is a directory is refused by --check and by the run
+    itself before anything is computed, even with --overwrite (which never replaces a
+    directory)."""
+    (tmp_path / "run.h5").mkdir()
+    text = BASE
+    if kind == "sweep":
+        text += "&sweep parameter = 'amplitude', start = 1.5, stop = 2.5, step = 0.5 /\n"
+    (tmp_path / "input.nml").write_text(text)
+    for args in (["--check", "--overwrite"], ["--overwrite"], []):
+        result = subprocess.run([str(impactchain_exe), "--quiet", *args, "input.nml"],
+                                cwd=tmp_path, capture_output=True, text=True, timeout=60)
+        assert result.returncode == 1, (args, result.stderr)
+        assert "&output: file = 'run.h5' is a directory" in result.stderr, result.stderr
+        assert (tmp_path / "run.h5").is_dir()
+        assert not (tmp_path / "run.h5.part").exists()
+
+
 @pytest.mark.parametrize("phase", [0.0, 1.1])
 def test_continuation_is_bit_identical(impactchain_exe, tmp_path, phase):
     chain = "&chain n = 8, amplitude = 1.7, omega = 1.5 /\n"

@@ -274,3 +274,21 @@ def test_check_refuses_an_existing_sweep_output(impactchain_exe, tmp_path):
     assert result.returncode == 0 and "&sweep" in result.stdout, result.stderr
     assert (tmp_path / "out.h5").read_bytes() == b"precious"
     assert sorted(p.name for p in tmp_path.iterdir()) == ["in.nml", "out.h5"]
+
+
+def test_mpi_sweep_stops_when_its_checkpoint_cannot_be_written(mpi_exe, tmp_path):
+    """Issue 30, 2: under MPI a checkpoint that cannot be written (its temporary file's name
+    is taken by a directory) stops every rank with the error, exit 1; before, it was a
+    warning and the sweep went on without a checkpoint."""
+    if mpi_exe is None:
+        pytest.skip("mpifort is not installed: the MPI test needs openmpi")
+    (tmp_path / "part.nml").write_text(GRID2.format(out="part.h5"))
+    (tmp_path / "part.h5.ckpt.tmp").mkdir()
+    env = dict(os.environ, OMP_NUM_THREADS="1", IMPACTCHAIN_CHECKPOINT_SECONDS="0.2")
+    result = subprocess.run(["mpirun", "--allow-run-as-root", "--oversubscribe", "-np", "2",
+                             str(mpi_exe), "--quiet", "part.nml"], cwd=tmp_path, env=env,
+                            capture_output=True, text=True, timeout=300)
+    assert result.returncode == 1, result.stderr
+    assert "cannot write the checkpoint" in result.stderr, result.stderr
+    assert "warning" not in result.stderr
+    assert not (tmp_path / "part.h5").exists() and not (tmp_path / "part.h5.part").exists()
