@@ -15,7 +15,8 @@ CHECKED := --flag "-g -O1 -fcheck=all -ffpe-trap=invalid,zero,overflow -fbacktra
 # whose pkg-config file inside the wheel is put on PKG_CONFIG_PATH here. Another one:
 # `make IMPACTCHAIN_BLAS=openblas build` (Debian's libopenblas-dev: a threaded build, which
 # src/chain_blas_runtime.c pins to one thread; never libopenblas0-serial, not thread-safe),
-# `IMPACTCHAIN_BLAS="lapack blas"` (the reference ones), or a cluster module's .pc. fpm gets
+# `IMPACTCHAIN_BLAS=lapack` (Debian's liblapack-dev on the libblas.so.3 its alternatives
+# select), or a cluster module's .pc. fpm gets
 # the module's flags through FPM_LDFLAGS and FPM_CFLAGS (its Cflags name a symbol prefix, for
 # src/chain_blas_names.c), meson.build reads IMPACTCHAIN_BLAS itself.
 # `eval "$$(make -s blas-env)"` sets the same for fpm and pytest run by hand.
