@@ -8,7 +8,8 @@ PY := $(VENV)/bin/python
 FPM := $(abspath $(VENV))/bin/fpm
 RELEASE := --profile release
 # gfortran's runtime checks: bounds, and traps on invalid operations, division by zero, overflow
-CHECKED := --flag "-g -O1 -fcheck=all -ffpe-trap=invalid,zero,overflow -fbacktrace"
+CHECKED_FLAGS = -g -O1 -fcheck=all -ffpe-trap=invalid,zero,overflow -fbacktrace $(BLAS_FFLAGS)
+CHECKED = --flag "$(CHECKED_FLAGS)"
 # Which BLAS and LAPACK (README, "Which BLAS"): the pkg-config module(s) named by
 # IMPACTCHAIN_BLAS, default scipy-openblas: the scipy-openblas32 wheel of requirements.txt,
 # the OpenBLAS numpy and scipy build against (kernels for new CPUs, symbols prefixed scipy_),
@@ -33,6 +34,14 @@ BLAS_PKG_CONFIG = PKG_CONFIG_PATH="$(PKG_CONFIG_PATH)" pkg-config
 export FPM_LDFLAGS = -Wl,--push-state,--no-as-needed \
     $(shell $(BLAS_PKG_CONFIG) --libs $(IMPACTCHAIN_BLAS) 2>/dev/null) -Wl,--pop-state
 export FPM_CFLAGS = $(shell $(BLAS_PKG_CONFIG) --cflags $(IMPACTCHAIN_BLAS) 2>/dev/null)
+# fpm keeps one build directory per set of Fortran flags, but neither recompiles the C files
+# when FPM_CFLAGS changes nor relinks when FPM_LDFLAGS does: the Fortran flags carry the
+# symbol prefix and a digest of the BLAS's flags (defines, which no Fortran file uses), so
+# that builds for different BLAS never share objects or executables. --flag replaces
+# FPM_FFLAGS, so the runtime-checked flags carry them too.
+BLAS_FFLAGS = $(filter -D%,$(FPM_CFLAGS)) \
+    -DIMPACTCHAIN_BLAS_FLAGS=$(shell echo '$(FPM_LDFLAGS) $(FPM_CFLAGS)' | md5sum | cut -c1-12)
+export FPM_FFLAGS = $(BLAS_FFLAGS)
 APT_PACKAGES := gfortran libhdf5-dev liblapack-dev libblas-dev pkg-config libopenmpi-dev \
                 openmpi-bin
 PY_STAMP := $(VENV)/.requirements-installed
@@ -100,6 +109,7 @@ blas-env: blas-check
 	echo "export PKG_CONFIG_PATH='$(PKG_CONFIG_PATH)'"
 	echo "export FPM_LDFLAGS='$(FPM_LDFLAGS)'"
 	echo "export FPM_CFLAGS='$(FPM_CFLAGS)'"
+	echo "export FPM_FFLAGS='$(FPM_FFLAGS)'"
 
 build: setup blas-check
 	$(FPM) build $(RELEASE)
@@ -125,7 +135,7 @@ python-test: build
 	@echo "impactchain: pip install of the repository into a fresh venv (a full build)"
 	$(PY) -m pytest -m install -q -rA post/tests/test_install.py
 	@echo "impactchain: the simulator tests again against the runtime-checked build"
-	IMPACTCHAIN_FPM_FLAGS='-g -O1 -fcheck=all -ffpe-trap=invalid,zero,overflow -fbacktrace' \
+	IMPACTCHAIN_FPM_FLAGS='$(CHECKED_FLAGS)' \
 	    $(PY) -m pytest -q test/python
 
 test: fortran-test python-test

@@ -5,6 +5,9 @@ again, and print the Markdown block of the README's performance section.
     .venv/bin/python bench/run_bench.py [--quick] [--case NAME ...] [--rounds N]
                                         [--output FILE]
 
+(`make bench` runs it; by hand, first `eval "$(make -s blas-env)"`: the BLAS flags fpm needs,
+README "Which BLAS".)
+
 The Fortran program (`impactchain-bench`, an fpm example target built from bench/) does the
 timing; this script runs it, states every cost as a ratio to the yardsticks of the same run
 (ns per sin + cos + exp, single-core dgemm GFLOP/s) and to the scipy baseline, checks the
