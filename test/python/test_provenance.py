@@ -1,7 +1,8 @@
 """Provenance (issue #29, item 5; src/chain_provenance.f90): `impactchain --version`, the MPI
-driver's `--version`, the root attributes of every kind of output file and
-`impactchain.api.provenance()` name the code version, the compiler and its flags, the BLAS with
-its version and the kernels it selected on this CPU, and the CPU model, and agree."""
+driver's `--version`, the root attributes of every kind of output file (run, sweep,
+continuation, census) and `impactchain.api.provenance()` name the code version, the compiler
+and its flags, the BLAS with its version and the kernels it selected on this CPU, and the CPU
+model, and agree."""
 from __future__ import annotations
 
 import os
@@ -34,6 +35,13 @@ CONTINUATION = """
 &output file = 'run.h5' /
 """
 
+CENSUS = """
+&chain n = 4, amplitude = 1.7, omega = 1.5 /
+&run transient = 20, cycles = 8 /
+&census samples = 2, seed = 3, x_amp = 0.3, v_amp = 1.0 /
+&output file = 'run.h5' /
+"""
+
 
 def version_lines(command: list[str]) -> dict[str, str]:
     result = subprocess.run(command, capture_output=True, text=True, timeout=120)
@@ -61,7 +69,8 @@ def test_version_names_the_blas_and_its_kernel(impactchain_exe):
     assert level in facts["compiler_options"].split(), facts["compiler_options"]
 
 
-@pytest.mark.parametrize("text", [RUN, SWEEP, CONTINUATION], ids=["run", "sweep", "continuation"])
+@pytest.mark.parametrize("text", [RUN, SWEEP, CONTINUATION, CENSUS],
+                         ids=["run", "sweep", "continuation", "census"])
 def test_every_file_carries_the_provenance(impactchain_exe, tmp_path, text):
     facts = version_lines([str(impactchain_exe), "--version"])
     run_namelist(impactchain_exe, text, tmp_path)
