@@ -9,15 +9,42 @@ FPM := $(abspath $(VENV))/bin/fpm
 RELEASE := --profile release
 # gfortran's runtime checks: bounds, and traps on invalid operations, division by zero, overflow
 # (and a warning for each array temporary: none is expected, so one stands out in the log)
-CHECKED := --flag "-g -O1 -fcheck=all -ffpe-trap=invalid,zero,overflow -fbacktrace"
-# LAPACK: the reference one (liblapack-dev) on BLIS (libblis-serial-dev), an optimised BLAS
-# that is reentrant (sweep threads factorise their frames at the same time) and runs every call
-# on one thread (the same bits whatever the number of threads). fpm.toml and meson.build link
-# both statically by their packages' paths, so Debian's libblas.so.3 alternative (which
-# libblis4-serial, once installed, selects unless set by hand) does not matter. Debian's
-# single-threaded OpenBLAS (libopenblas0-serial) is not thread-safe (README, Performance).
-APT_PACKAGES := gfortran libhdf5-dev liblapack-dev libblas-dev libblis-serial-dev \
-                pkg-config libopenmpi-dev openmpi-bin
+CHECKED_FLAGS = -g -O1 -fcheck=all -ffpe-trap=invalid,zero,overflow -fbacktrace $(BLAS_FFLAGS)
+CHECKED = --flag "$(CHECKED_FLAGS)"
+# Which BLAS and LAPACK (README, "Which BLAS"): the pkg-config module(s) named by
+# IMPACTCHAIN_BLAS, default scipy-openblas: the scipy-openblas32 wheel of requirements.txt,
+# the OpenBLAS numpy and scipy build against (kernels for new CPUs, symbols prefixed scipy_),
+# whose pkg-config file inside the wheel is put on PKG_CONFIG_PATH here. Another one:
+# `make IMPACTCHAIN_BLAS=openblas build` (Debian's libopenblas-dev: a threaded build, which
+# src/chain_blas_runtime.c pins to one thread; never libopenblas0-serial, not thread-safe),
+# `IMPACTCHAIN_BLAS=lapack` (Debian's liblapack-dev on the libblas.so.3 its alternatives
+# select), or a cluster module's .pc. fpm gets
+# the module's flags through FPM_LDFLAGS and FPM_CFLAGS (its Cflags name a symbol prefix, for
+# src/chain_blas_names.c), meson.build reads IMPACTCHAIN_BLAS itself.
+# `eval "$$(make -s blas-env)"` sets the same for fpm and pytest run by hand.
+IMPACTCHAIN_BLAS ?= scipy-openblas
+export IMPACTCHAIN_BLAS
+SCIPY_OPENBLAS_PC = $(firstword $(wildcard \
+    $(abspath $(VENV))/lib/python3*/site-packages/scipy_openblas32/lib/pkgconfig))
+PKG_CONFIG_PATH_0 := $(PKG_CONFIG_PATH)
+export PKG_CONFIG_PATH = $(subst $(eval) ,:,$(strip $(SCIPY_OPENBLAS_PC) \
+                                                    $(subst :, ,$(PKG_CONFIG_PATH_0))))
+BLAS_PKG_CONFIG = PKG_CONFIG_PATH="$(PKG_CONFIG_PATH)" pkg-config
+# (fpm puts FPM_LDFLAGS before the objects, and gcc may link --as-needed, which would drop a
+# library named before anything needs it: --no-as-needed for the BLAS alone)
+export FPM_LDFLAGS = -Wl,--push-state,--no-as-needed \
+    $(shell $(BLAS_PKG_CONFIG) --libs $(IMPACTCHAIN_BLAS) 2>/dev/null) -Wl,--pop-state
+export FPM_CFLAGS = $(shell $(BLAS_PKG_CONFIG) --cflags $(IMPACTCHAIN_BLAS) 2>/dev/null)
+# fpm keeps one build directory per set of Fortran flags, but neither recompiles the C files
+# when FPM_CFLAGS changes nor relinks when FPM_LDFLAGS does: the Fortran flags carry the
+# symbol prefix and a digest of the BLAS's flags (defines, which no Fortran file uses), so
+# that builds for different BLAS never share objects or executables. --flag replaces
+# FPM_FFLAGS, so the runtime-checked flags carry them too.
+BLAS_FFLAGS = $(filter -D%,$(FPM_CFLAGS)) \
+    -DIMPACTCHAIN_BLAS_FLAGS=$(shell echo '$(FPM_LDFLAGS) $(FPM_CFLAGS)' | md5sum | cut -c1-12)
+export FPM_FFLAGS = $(BLAS_FFLAGS)
+APT_PACKAGES := gfortran libhdf5-dev liblapack-dev libblas-dev pkg-config libopenmpi-dev \
+                openmpi-bin
 PY_STAMP := $(VENV)/.requirements-installed
 # The Python package impactchain (post/impactchain/ and its extension impactchain._kernels,
 # built by meson-python from meson.build): installed into the venv as `pip install .` installs
@@ -33,8 +60,8 @@ DEFAULT_RUN := runs/default.h5
 # that pipefail reports fpm's status.)
 FPM_LOG := 2>&1 | sed -u -E '/^\[ *[0-9]+%\] +[^ ]+( +done\.)?$$/d'
 
-.PHONY: all setup system-deps python-deps build run test fortran-test python-test mpi \
-        figures bench recipe-reference api-docs clean help
+.PHONY: all setup system-deps python-deps blas-check blas-env build run test fortran-test \
+        python-test mpi figures bench recipe-reference api-docs clean help
 
 all: build
 
@@ -76,7 +103,21 @@ $(PY_STAMP): requirements.txt
 	$(PY) -m pip install --quiet -r requirements.txt
 	touch $@
 
-build: setup
+# the BLAS of IMPACTCHAIN_BLAS must be there before anything is compiled
+blas-check: setup
+	@$(BLAS_PKG_CONFIG) --exists $(IMPACTCHAIN_BLAS) || {
+	    echo "impactchain: pkg-config finds no '$(IMPACTCHAIN_BLAS)' (IMPACTCHAIN_BLAS;" \
+	         "PKG_CONFIG_PATH=$(PKG_CONFIG_PATH)); README, Which BLAS" >&2; exit 1; }
+
+# what the Makefile gives fpm and meson, as shell commands: eval "$$(make -s blas-env)"
+blas-env: blas-check
+	@echo "export IMPACTCHAIN_BLAS='$(IMPACTCHAIN_BLAS)'"
+	echo "export PKG_CONFIG_PATH='$(PKG_CONFIG_PATH)'"
+	echo "export FPM_LDFLAGS='$(FPM_LDFLAGS)'"
+	echo "export FPM_CFLAGS='$(FPM_CFLAGS)'"
+	echo "export FPM_FFLAGS='$(FPM_FFLAGS)'"
+
+build: setup blas-check
 	$(FPM) build $(RELEASE) $(FPM_LOG)
 	$(INSTALL_PKG)
 
@@ -102,7 +143,7 @@ python-test: build
 	@echo "impactchain: pip install of the repository into a fresh venv (a full build)"
 	$(PY) -m pytest -m install -q -rA post/tests/test_install.py
 	@echo "impactchain: the simulator tests again against the runtime-checked build"
-	IMPACTCHAIN_FPM_FLAGS='-g -O1 -fcheck=all -ffpe-trap=invalid,zero,overflow -fbacktrace' \
+	IMPACTCHAIN_FPM_FLAGS='$(CHECKED_FLAGS)' \
 	    $(PY) -m pytest -q test/python
 
 test: fortran-test python-test

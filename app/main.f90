@@ -9,7 +9,8 @@ program main
     use impactchain, only: error_t, config_t, read_config, simulate_to_file, &
                            record_result_t, run_sweep, sweep_summary_t, checkpoint_path, &
                            catch_interrupts, cli_t, parse_command_line, cli_run, &
-                           cli_help, cli_version, cli_usage, code_version, config_summary, &
+                           cli_help, cli_version, cli_usage, code_version, provenance_text, &
+                           config_summary, &
                            check_before_run, branches_t, &
                            continuation_to_file, census_result_t, census_to_file, kind_names
     use stderr_monitor, only: stderr_monitor_t, close_progress, progress_after_from_environment
@@ -30,7 +31,9 @@ program main
         call usage(output_unit)
         stop
     case (cli_version)
+        ! the version, then where this executable runs: compiler, BLAS and its kernels, CPU
         write (output_unit, '(a)') 'impactchain '//code_version
+        write (output_unit, '(a)', advance='no') provenance_text()
         stop
     case (cli_usage)
         call usage(error_unit)

@@ -1,5 +1,5 @@
 !> impactchain benchmark:
-!> `impactchain-bench [--case NAME] [--yardsticks] [--tsv] [--quick] [--list]`.
+!> `impactchain-bench [--case NAME] [--yardsticks] [--provenance] [--tsv] [--quick] [--list]`.
 !>
 !> Times the event engine through the same entry points as a real run (`start_chain`,
 !> `record_cycles` with an in-memory sink) and prints one Markdown table: collisions per cycle,
@@ -28,7 +28,7 @@ program bench
     !$ use omp_lib, only: omp_set_num_threads
     use bench_kit, only: row_t, wall_seconds, peak_memory_kib, print_machine, &
                          print_table_head, print_row_markdown, print_row_tsv
-    use bench_yardsticks, only: transcendental_ns, dgemm_gflops
+    use bench_yardsticks, only: transcendental_ns, dgemm_gflops, qr_seconds
     implicit none
 
     character(len=*), parameter :: case_names(22) = [character(len=16) :: &
@@ -38,11 +38,11 @@ program bench
         'fig10-sweep', 'fig13-scan', 'strobe', 'strobe-record', 'orbit-n16', 'orbit-n64-p8', &
         'census-fig3', 'clv-default', 'clv-n64']
     character(len=:), allocatable :: only
-    logical :: tsv, quick, yardsticks_only
+    logical :: tsv, quick, yardsticks_only, provenance_only
     real(wp) :: min_time, budget
     integer :: reps, j
 
-    call parse_arguments(only, tsv, quick, yardsticks_only)
+    call parse_arguments(only, tsv, quick, yardsticks_only, provenance_only)
     ! budget: the most a row spends on timed cycles; a row whose cycle takes seconds (the full
     ! spectrum at n = 1024) is timed in fewer repetitions, or in its calibration block alone
     min_time = 0.5_wp
@@ -54,6 +54,7 @@ program bench
         budget = 1
     end if
     call print_machine(tsv)
+    if (provenance_only) stop
     if (yardsticks_only .or. len(only) == 0) call print_yardsticks()
     if (yardsticks_only) stop
     if (.not. tsv) call print_table_head()
@@ -373,9 +374,9 @@ contains
     end subroutine case_covariant
 
     !> The yardsticks of bench_yardsticks, each measured here: ns per sin + cos + exp and the
-    !> dgemm rate at n = 256 and 512.
+    !> dgemm rate at n = 256 and 512, and a 512 x 512 QR with its Q.
     subroutine print_yardsticks()
-        real(wp) :: ns, gflops, checksum, total
+        real(wp) :: ns, gflops, checksum, total, seconds
         integer :: m
         character(len=32) :: buf
 
@@ -388,6 +389,10 @@ contains
             call print_yardstick('dgemm-'//itoa(m), gflops, 'GFLOP/s of dgemm, '//itoa(m)// &
                                  ' x '//itoa(m)//', one core')
         end do
+        call qr_seconds(512, min_time, reps, seconds, checksum)
+        total = total + checksum
+        call print_yardstick('qr-512', 1.0e3_wp*seconds, 'ms per QR of a 512 x 512 frame '// &
+                             'with its Q (qr_orthonormalise: dgeqrf, then Q), one core')
         ! every result feeds this sum, so no call can be optimised away
         if (.not. (abs(total) < huge(1.0_wp))) call fail('yardsticks: result is not finite')
         write (buf, '(es12.4)') total
@@ -778,15 +783,16 @@ contains
         write (output_unit, '(a)') line
     end subroutine print_state
 
-    subroutine parse_arguments(only, tsv, quick, yardsticks_only)
+    subroutine parse_arguments(only, tsv, quick, yardsticks_only, provenance_only)
         character(len=:), allocatable, intent(out) :: only
-        logical, intent(out) :: tsv, quick, yardsticks_only
+        logical, intent(out) :: tsv, quick, yardsticks_only, provenance_only
         integer :: j, length
         character(len=:), allocatable :: arg
         logical :: want_case
 
         only = ''
         tsv = .false.
+        provenance_only = .false.
         quick = .false.
         yardsticks_only = .false.
         want_case = .false.
@@ -809,6 +815,8 @@ contains
                     quick = .true.
                 case ('--yardsticks')
                     yardsticks_only = .true.
+                case ('--provenance')
+                    provenance_only = .true.
                 case ('--list')
                     do length = 1, size(case_names)
                         write (output_unit, '(a)') trim(case_names(length))
@@ -818,7 +826,8 @@ contains
                     write (output_unit, '(a)') 'usage: impactchain-bench [--case NAME] '// &
                         '[--yardsticks] [--tsv] [--quick] [--list]', &
                         '  Times the engine and prints a Markdown table (see bench/README.md);', &
-                        '  --yardsticks: only the machine''s yardsticks (sin+cos+exp, dgemm).'
+                        '  --yardsticks: only the yardsticks (sin+cos+exp, dgemm, QR).', &
+                        '  --provenance: only where it runs (compiler, BLAS, kernels, CPU).'
                     stop
                 case default
                     call fail("unknown argument '"//arg//"' (see --help)")

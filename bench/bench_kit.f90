@@ -4,11 +4,11 @@
 !>
 !> Timings are reported, never asserted: nothing here decides whether a number is good.
 module bench_kit
-    use, intrinsic :: iso_fortran_env, only: int64, output_unit, compiler_version
-    use impactchain, only: wp
+    use, intrinsic :: iso_fortran_env, only: int64, output_unit
+    use impactchain, only: wp, provenance_item_t, provenance
     implicit none
     private
-    public :: row_t, wall_seconds, peak_memory_kib, cpu_model, print_machine
+    public :: row_t, wall_seconds, peak_memory_kib, print_machine
     public :: print_table_head, print_row_markdown, print_row_tsv
 
     !> One measured case. Every derived number (per cycle, per collision, per unit) is computed
@@ -63,38 +63,23 @@ contains
         close (u)
     end function peak_memory_kib
 
-    !> The first "model name" of /proc/cpuinfo, or "unknown CPU".
-    function cpu_model() result(model)
-        character(len=:), allocatable :: model
-        integer :: u, ios, colon
-        character(len=512) :: line
-
-        model = 'unknown CPU'
-        open (newunit=u, file='/proc/cpuinfo', status='old', action='read', iostat=ios)
-        if (ios /= 0) return
-        do
-            read (u, '(a)', iostat=ios) line
-            if (ios /= 0) exit
-            if (index(line, 'model name') == 1) then
-                colon = index(line, ':')
-                model = trim(adjustl(line(colon + 1:)))
-                exit
-            end if
-        end do
-        close (u)
-    end function cpu_model
-
+    !> Where the bench runs, above its table: the provenance every output file carries
+    !> (chain_provenance: code version, compiler and flags, BLAS and its kernels, CPU).
     subroutine print_machine(tsv)
         logical, intent(in) :: tsv
+        type(provenance_item_t), allocatable :: items(:)
+        integer :: i
 
-        if (tsv) then
-            write (output_unit, '(a)') 'machine'//achar(9)//cpu_model()//achar(9)// &
-                compiler_version()
-        else
-            write (output_unit, '(a)') 'Machine: '//cpu_model()//', '//compiler_version()// &
-                ', one core, fpm --profile release'
-            write (output_unit, '(a)') ''
-        end if
+        items = provenance()
+        do i = 1, size(items)
+            if (tsv) then
+                write (output_unit, '(a)') 'provenance'//achar(9)//items(i)%key//achar(9)// &
+                    items(i)%value
+            else
+                write (output_unit, '(a)') items(i)%key//': '//items(i)%value
+            end if
+        end do
+        if (.not. tsv) write (output_unit, '(a)') 'one core, fpm --profile release', ''
     end subroutine print_machine
 
     subroutine print_table_head()

@@ -8,9 +8,10 @@ module bench_yardsticks
     use, intrinsic :: iso_fortran_env, only: int64
     use impactchain, only: wp
     use bench_kit, only: wall_seconds
+    use chain_lapack, only: qr_orthonormalise, qr_workspace_t
     implicit none
     private
-    public :: transcendental_ns, dgemm_gflops
+    public :: transcendental_ns, dgemm_gflops, qr_seconds
 
     interface
         subroutine dgemm(transa, transb, m, n, k, alpha, a, lda, b, ldb, beta, c, ldc)
@@ -94,5 +95,44 @@ contains
         end do
         checksum = sum([(c(i, i), i=1, n)])
     end subroutine dgemm_gflops
+
+    !> Seconds per QR factorisation of an n x n frame with its Q formed, through the library's
+    !> own qr_orthonormalise (dgeqrf, then Q; what a full Lyapunov spectrum does every QR
+    !> step), best of `reps` blocks of >= min_time after a warm-up; `checksum` sums R's
+    !> diagonal. numpy.linalg.qr (dgeqrf + dorgqr) is the comparison (bench/run_bench.py).
+    subroutine qr_seconds(n, min_time, reps, seconds, checksum)
+        integer, intent(in) :: n, reps
+        real(wp), intent(in) :: min_time
+        real(wp), intent(out) :: seconds, checksum
+        real(wp), allocatable :: a(:, :), frame(:, :), r_diag(:)
+        type(qr_workspace_t) :: ws
+        real(wp) :: t0, elapsed
+        integer :: r, i, j, calls, info
+
+        allocate (a(n, n), r_diag(n))
+        do j = 1, n
+            do i = 1, n
+                a(i, j) = 1.0_wp/(i + j) + merge(1.0_wp, 0.0_wp, i == j) + &
+                          real(mod(i*j, 7) - 3, wp)/n
+            end do
+        end do
+        frame = a
+        call qr_orthonormalise(frame, r_diag, ws, info)
+        seconds = huge(1.0_wp)
+        checksum = 0
+        do r = 1, reps
+            calls = 0
+            t0 = wall_seconds()
+            do
+                frame = a
+                call qr_orthonormalise(frame, r_diag, ws, info)
+                checksum = checksum + sum(r_diag) + info
+                calls = calls + 1
+                elapsed = wall_seconds() - t0
+                if (elapsed >= min_time) exit
+            end do
+            seconds = min(seconds, elapsed/calls)
+        end do
+    end subroutine qr_seconds
 
 end module bench_yardsticks

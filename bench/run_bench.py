@@ -5,6 +5,9 @@ again, and print the Markdown block of the README's performance section.
     .venv/bin/python bench/run_bench.py [--quick] [--case NAME ...] [--rounds N]
                                         [--output FILE]
 
+(`make bench` runs it; by hand, first `eval "$(make -s blas-env)"`: the BLAS flags fpm needs,
+README "Which BLAS".)
+
 The Fortran program (`impactchain-bench`, an fpm example target built from bench/) does the
 timing; this script runs it, states every cost as a ratio to the yardsticks of the same run
 (ns per sin + cos + exp, single-core dgemm GFLOP/s) and to the scipy baseline, checks the
@@ -207,13 +210,66 @@ def run_case(exe: Path, case: str, quick: bool) -> tuple[Row, list[float] | None
 
 
 def run_yardsticks(exe: Path, quick: bool) -> dict[str, float]:
+    """The bench's yardsticks, then numpy's own BLAS on the same sizes (keys numpy-...)."""
     args = [str(exe), "--yardsticks", "--tsv"] + (["--quick"] if quick else [])
     out = subprocess.run(args, check=True, capture_output=True, text=True).stdout
     found = {f[1]: float(f[2]) for f in (line.split("\t") for line in out.splitlines())
              if f[0] == "yardstick"}
     if "sincos-exp" not in found or not any(k.startswith("dgemm-") for k in found):
         raise SystemExit(f"run_bench: the yardsticks were not printed:\n{out}")
+    found.update(run_numpy_yardsticks(quick))
     return found
+
+
+def provenance(exe: Path) -> dict[str, str]:
+    """What the bench executable says about itself (chain_provenance: the root attributes of
+    every output file): code version, compiler and flags, BLAS and its kernels, CPU."""
+    out = subprocess.run([str(exe), "--provenance", "--tsv"], check=True,
+                         capture_output=True, text=True).stdout
+    return {f[1]: f[2] for f in (line.split("\t") for line in out.splitlines())
+            if f[0] == "provenance" and len(f) == 3}
+
+
+#: numpy's own BLAS (the fastest installable here by construction: numpy's wheel carries the
+#: OpenBLAS its project tunes for new CPUs), on one thread, on the bench's sizes: dgemm 256 and
+#: 512, and a 512 x 512 QR with its Q (numpy.linalg.qr: dgeqrf + dorgqr). Run in its own
+#: process so that the thread count is set before numpy loads its BLAS.
+NUMPY_YARDSTICKS = r"""
+import json, sys, time
+import numpy as np
+min_time, reps = float(sys.argv[1]), int(sys.argv[2])
+def best(call):
+    call()
+    out = float("inf")
+    for _ in range(reps):
+        calls, t0 = 0, time.perf_counter()
+        while True:
+            call(); calls += 1
+            elapsed = time.perf_counter() - t0
+            if elapsed >= min_time:
+                break
+        out = min(out, elapsed / calls)
+    return out
+found = {}
+for n in (256, 512):
+    i, j = np.indices((n, n)) + 1
+    a = np.asfortranarray(1.0 / (i + j)); b = np.asfortranarray((i * j % 7 - 3) / n)
+    found[f"numpy-dgemm-{n}"] = 2e-9 * n**3 / best(lambda: a @ b)
+n = 512
+i, j = np.indices((n, n)) + 1
+a = 1.0 / (i + j) + np.eye(n) + (i * j % 7 - 3) / n
+found["numpy-qr-512"] = 1e3 * best(lambda: np.linalg.qr(a))
+blas = np.show_config(mode="dicts")["Build Dependencies"]["blas"]
+found["numpy-blas"] = blas.get("openblas configuration") or f"{blas['name']} {blas['version']}"
+print(json.dumps(found))
+"""
+
+
+def run_numpy_yardsticks(quick: bool) -> dict[str, float]:
+    env = dict(os.environ, OPENBLAS_NUM_THREADS="1", OMP_NUM_THREADS="1")
+    args = [sys.executable, "-c", NUMPY_YARDSTICKS] + (["0.05", "1"] if quick else ["0.5", "3"])
+    out = subprocess.run(args, check=True, capture_output=True, text=True, env=env).stdout
+    return json.loads(out)
 
 
 def load_average() -> str:
@@ -325,6 +381,28 @@ def ratio_table(rows: list[Row], y: Yardsticks) -> list[str]:
                    f"{num(1e3 * r.us_per_cycle / s_ns)} | "
                    f"{num(r.ns_per_collision / s_ns)} | {qr} |")
     return out
+
+
+def blas_comparison(y: Yardsticks, prov: dict[str, str]) -> list[str]:
+    """The linked BLAS against numpy's own, measured in the same runs (issue #29, item 4: at
+    least 80 % of the fastest BLAS installable here, for dgemm and for a QR with its Q)."""
+    numpy_blas = next((str(r["numpy-blas"]) for r in y.runs if "numpy-blas" in r), "?")
+    out = ["", f"The linked BLAS (`{prov.get('blas', '?')}`, kernels "
+           f"`{prov.get('blas_kernel', '?')}`) against numpy's own (`{numpy_blas}`), one "
+           "thread each, best over the yardstick runs:", "",
+           "| kernel | impactchain | numpy | impactchain / numpy (>= 80 % wanted) |",
+           "|---|---:|---:|---:|"]
+    for key, what in (("dgemm-256", "dgemm 256, GFLOP/s"), ("dgemm-512", "dgemm 512, GFLOP/s")):
+        ours = max(r.get(key, 0.0) for r in y.runs)
+        theirs = max(float(r.get("numpy-" + key, 0.0)) for r in y.runs)
+        if ours and theirs:
+            out.append(f"| {what} | {ours:.2f} | {theirs:.2f} | {100 * ours / theirs:.0f} % |")
+    ours = min(r.get("qr-512", float("inf")) for r in y.runs)
+    theirs = min(float(r.get("numpy-qr-512", float("inf"))) for r in y.runs)
+    if ours < float("inf") and theirs < float("inf"):
+        out.append(f"| QR 512 x 512 with Q, ms (speed ratio) | {ours:.2f} | {theirs:.2f} | "
+                   f"{100 * theirs / ours:.0f} % |")
+    return out + [""]
 
 
 def targets(rows: dict[str, Row], y: Yardsticks, baselines: list[dict]) -> list[str]:
@@ -528,7 +606,11 @@ def main(argv=None) -> int:
     command = ".venv/bin/python bench/run_bench.py" + options
     by_name = {r.name: r for r in rows}
     timed_once = [r.name for r in rows if r.reps == 1]
-    md = ["Machine: " + cpu_line() + "; " + versions(args.fpm) + "; " + source_line() + ".",
+    prov = provenance(exe)
+    md = ["Provenance of `impactchain-bench` (the root attributes of every output file):", ""]
+    md += [f"- {k}: `{v}`" for k, v in prov.items()]
+    md += [""]
+    md += ["Machine: " + cpu_line() + "; " + versions(args.fpm) + "; " + source_line() + ".",
           "",
           "Command: " + (f"`{command}`" if options else f"`make bench` (`{command}`)")
           + ": fpm `--profile release`, one core, "
@@ -553,6 +635,7 @@ def main(argv=None) -> int:
            + ", ".join(f"{k.split('-')[1]}^2 ("
                        + " / ".join(f"{r.get(k, 0):.2f}" for r in yard_runs) + ")"
                        for k in dgemm_names), ""]
+    md += blas_comparison(y, prov)
     md += table(rows, baselines, args.quick)
     md += ["",
            "Peak memory is the process's VmHWM (whole process: code, libraries, buffers). "

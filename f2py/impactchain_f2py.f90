@@ -1,6 +1,6 @@
 !> The thin layer wrapped by f2py into `impactchain._kernels` (SHTOOLS' PythonWrapper
 !> pattern): plain external subroutines with explicit-shape c_double / c_int / c_int64_t
-!> arrays. Only these five routines cross into Python; `impactchain.api`
+!> arrays. Only these six routines cross into Python; `impactchain.api`
 !> (post/impactchain/api.py) is the interface people use.
 !>
 !> Each routine builds the `config_t` a namelist with the same values would give, checks
@@ -523,3 +523,24 @@ subroutine ic_continuation(n, nsp, spacing, damping, restitution, amplitude, ome
         call put_text(o%reason, start_reason)
     end associate
 end subroutine ic_continuation
+
+!> Where the extension runs (chain_provenance: code version, compiler and flags, BLAS and the
+!> kernels it selected, CPU model), as the `key: value` lines of `impactchain --version`,
+!> byte values in text(1:text_len) (at most 4096; longer text is cut there).
+subroutine ic_provenance(text_len, text)
+    use, intrinsic :: iso_c_binding, only: c_int
+    use impactchain, only: provenance_text
+    implicit none
+    !f2py threadsafe
+    integer(c_int), intent(out) :: text_len
+    integer(c_int), intent(out) :: text(4096)
+    character(len=:), allocatable :: lines
+    integer :: i
+
+    lines = provenance_text()
+    text = 0
+    text_len = min(len(lines), size(text))
+    do i = 1, text_len
+        text(i) = iachar(lines(i:i))
+    end do
+end subroutine ic_provenance

@@ -10,7 +10,7 @@ module chain_lapack
     private
     public :: qr_orthonormalise, qr_workspace_t, general_eigenvalues
     public :: solve_linear, qr_last_r, qr_copy_r, solve_upper_triangle, upper_product
-    public :: general_eigenvectors
+    public :: general_eigenvectors, blas_one_thread
 
     !> Triangular matrices of at most this order are solved and multiplied in plain loops.
     integer, parameter :: small_triangle = 40
@@ -75,9 +75,21 @@ module chain_lapack
             real(wp), intent(out) :: wr(*), wi(*), vl(ldvl, *), vr(ldvr, *), work(*)
             integer, intent(out) :: info
         end subroutine dgeev
+        !> src/chain_blas_runtime.c: the linked BLAS's thread count set to one
+        subroutine blas_one_thread_c() bind(c, name='impactchain_blas_one_thread')
+            implicit none
+        end subroutine blas_one_thread_c
     end interface
 
 contains
+
+    !> One thread inside every call of the linked BLAS (README, "Which BLAS"). Done when the
+    !> program is loaded, by a constructor in src/chain_blas_runtime.c, which this reference
+    !> links into every program that uses this module; call it again only if something else
+    !> (a host program) changed the BLAS's thread count, outside any parallel region.
+    subroutine blas_one_thread()
+        call blas_one_thread_c()
+    end subroutine blas_one_thread
 
     !> Replace the columns of a (m x k, m >= k) by an orthonormal basis of their span (Q of
     !> a = QR) and return the diagonal of R. info /= 0 is LAPACK's.

@@ -30,6 +30,7 @@ module chain_output
     use chain_model, only: model_t
     use chain_namelist, only: same_input
     use chain_state, only: chain_state_t
+    use chain_provenance, only: code_version, provenance_item_t, provenance
     use chain_hdf5, only: h5_file_t, h5_real, h5_int, h5_int8, h5_create_file, h5_open_file, &
                           h5_close_file, h5_is_hdf5_file, h5_create_group, h5_exists, &
                           h5_delete, h5_write_attr, h5_read_attr, h5_write, h5_read, &
@@ -51,7 +52,6 @@ module chain_output
     integer, parameter :: schema_version = 2
     !> The schema versions whose /final a run can start from (&initial kind = 'file').
     integer, parameter :: readable_versions(2) = [1, 2]
-    character(len=*), parameter :: code_version = '0.1.0'
     !> Events per chunk of the /events datasets.
     integer(i8), parameter :: event_chunk = 65536
 
@@ -200,8 +200,25 @@ contains
                 err%message = "&output: cannot create '"//out%part_path// &
                               "' (missing directory or no permission to write there; "// &
                               err%message//")"
+            return
         end if
+        call output_provenance(out, err)
+        if (allocated(err)) call output_abort(out)
     end subroutine output_begin
+
+    !> Root attributes saying where the file was made (chain_provenance: code version,
+    !> compiler and flags, BLAS and its kernels, CPU), written once for every kind of file.
+    subroutine output_provenance(out, err)
+        type(output_t), intent(inout) :: out
+        type(error_t), allocatable, intent(out) :: err
+        type(provenance_item_t), allocatable :: items(:)
+        integer :: i
+
+        items = provenance()
+        do i = 1, size(items)
+            call h5_write_attr(out%file, '/', items(i)%key, items(i)%value, err)
+        end do
+    end subroutine output_provenance
 
     !> Root attributes, /params, /initial.
     subroutine output_header(out, input_text, summary, n, spacing, damping, restitution, &
@@ -219,7 +236,6 @@ contains
         out%n = n
         associate (f => out%file)
             call h5_write_attr(f, '/', 'schema_version', schema_version, err)
-            call h5_write_attr(f, '/', 'code_version', code_version, err)
             call h5_write_attr(f, '/', 'input_namelist', input_text, err)
             call h5_write_attr(f, '/', 'resolved_namelist', summary, err)
             call h5_write_attr(f, '/', 'complete', 0, err)

@@ -51,6 +51,7 @@ module impactchain
     use chain_census_file, only: census_to_file, write_census_file, check_census, &
                                  check_census_size
     use chain_preflight, only: check_before_run
+    use chain_provenance, only: provenance_item_t, provenance, provenance_text
     use chain_output, only: code_version, output_t, output_check, output_begin, output_end, &
                             output_abort
     use chain_cli, only: cli_t, parse_command_line, cli_run, cli_help, cli_version, cli_usage, &
@@ -91,6 +92,7 @@ module impactchain
     public :: check_census
     public :: sample_record_sizes, pack_sample, unpack_sample, ensemble_statistics
     public :: code_version, output_t, output_check, output_begin, output_end, output_abort
+    public :: provenance_item_t, provenance, provenance_text
     public :: cli_t, parse_command_line, cli_run, cli_help, cli_version, cli_usage, cli_error
     public :: catch_interrupts, interrupted
     public :: progress_t, progress_start, progress_update, stderr_is_terminal, progress_quiet_start

@@ -37,7 +37,8 @@ program impactchain_mpi
                            checkpoint_every, branch_record_sizes, pack_branch, unpack_branch, &
                            output_t, output_begin, output_end, output_abort, catch_interrupts, &
                            interrupted, cli_t, parse_command_line, cli_run, cli_help, &
-                           cli_version, cli_usage, code_version, config_summary, &
+                           cli_version, cli_usage, code_version, provenance_text, &
+                           config_summary, &
                            signal_monitor_t
     implicit none
     type(config_t) :: cfg
@@ -97,7 +98,8 @@ contains
         case (cli_help, cli_version)
             if (rank == 0 .and. cli%action == cli_help) write (output_unit, '(a)') usage
             if (rank == 0 .and. cli%action == cli_version) &
-                write (output_unit, '(a)') 'impactchain-mpi '//code_version
+                write (output_unit, '(a)', advance='no') 'impactchain-mpi '//code_version// &
+                                                          new_line('a')//provenance_text()
             call MPI_Finalize()
             stop
         case (cli_usage)

@@ -90,6 +90,7 @@ __all__ = [
     "continuation",
     "periodic_orbit",
     "extension_available",
+    "provenance",
     "IMPACT",
     "STICK",
     "RELEASE",
@@ -1112,6 +1113,17 @@ def _used(cfg: dict[str, Any], boundary: str, **extra: Any) -> Mapping[str, Any]
         transient=cfg["transient"], cycles=cfg["cycles"], phase=cfg["phase"],
         stick_speed=cfg["stick_speed"], code_version=_code_version(), **extra)
     return MappingProxyType(used)
+
+
+def provenance() -> Mapping[str, str]:
+    """Where the extension runs: ``code_version``, ``compiler``, ``compiler_options``, ``blas``
+    (name, version, build), ``blas_kernel`` (the kernels the BLAS selected on this CPU) and
+    ``cpu_model``; the root attributes of the files the command line writes on this machine
+    and the lines of ``impactchain --version`` (one table: src/chain_provenance.f90).
+    (``compiler_options`` are the extension's own, which name other build directories.)"""
+    text_len, text = _extension().ic_provenance()
+    lines = bytes(np.asarray(text[:text_len]).astype(np.uint8)).decode().splitlines()
+    return MappingProxyType(dict(line.split(": ", 1) for line in lines))
 
 
 def _code_version() -> str:

@@ -82,15 +82,9 @@ RULES = {
 # What is not compared, and why. Everything else in a file is, by one of RULES; a dataset
 # the rules do not know fails the check until it is given a rule or a reason here.
 NOT_COMPARED = {
-    "/@code_version": "the version string of the build, not a result",
-    "/@input_namelist": "the input text: it names the recipe's output file, which the check "
-                        "points into a temporary directory (the inputs are compared in /params)",
-    "/@resolved_namelist": "every key as used: names the same rewritten &output file",
-    "/@compiler": "the compiler that built the program, not a result",
-    "/@compiler_options": "the compiler's flags, which name the build's directories",
-    "/@blas": "the BLAS the program ran on (name, version, build), not a result",
-    "/@blas_kernel": "the kernels the BLAS selected on the CPU, not a result",
-    "/@cpu_model": "the CPU the program ran on, not a result",
+    # the build's version and provenance, the input echoed back, what describes a dataset
+    # and HDF5's own bookkeeping: recipe_runs' list, the same for both scripts
+    **EXCLUDED,
     "/final/*": "a chaotic run's final state lies beyond the trajectory's horizon (its "
                 "statistics are compared instead); a periodic run's is compared",
     "/stats/site_counts": "a chaotic run's impacts per bond: counts along a trajectory "
@@ -121,8 +115,6 @@ NOT_COMPARED = {
                                             "holds only the mean, without the per-cycle "
                                             "series its error needs (periodic points are "
                                             "compared)",
-    # what describes a dataset, and HDF5's own bookkeeping: recipe_runs' list
-    **{key: reason for key, reason in EXCLUDED.items() if key.startswith("*@")},
     "*@_Netcdf4Dimid": "netCDF's dimension bookkeeping, not a result",
 }
 

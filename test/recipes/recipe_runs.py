@@ -57,6 +57,13 @@ FPM = ROOT / ".venv" / "bin" / "fpm"
 # datasets or attributes, so comparing contents rather than files ignores them anyway.
 EXCLUDED = {
     "/@code_version": "the version string of the build, not a result",
+    # the provenance of chain_provenance: where the file was made, not a result (the same
+    # results are made by other compilers, flags, BLAS kernels and CPUs)
+    "/@compiler": "the compiler that built the program, not a result",
+    "/@compiler_options": "the compiler's flags, which name the build's directories",
+    "/@blas": "the BLAS the program ran on (name, version, build), not a result",
+    "/@blas_kernel": "the kernels the BLAS selected on the CPU, not a result",
+    "/@cpu_model": "the CPU the program ran on, not a result",
     "/@input_namelist": "the input text echoed back: it names the &output file, which this "
                         "script points into a temporary directory",
     "/@resolved_namelist": "every key as used, echoed back: it names the same rewritten "
