@@ -5,6 +5,8 @@ the wrong shape, each refused with a non-zero exit and no output left behind. Cy
 from __future__ import annotations
 
 import signal
+import subprocess
+import time
 
 import h5py
 import numpy as np
@@ -169,10 +171,16 @@ def test_sweep_whose_last_write_fails_keeps_its_checkpoint(impactchain_exe, tmp_
     (tmp_path / "in.nml").write_text(text)
     proc = subprocess.Popen([str(impactchain_exe), "--quiet", "in.nml"], cwd=tmp_path,
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    deadline = time.time() + 60
-    while not (tmp_path / "s.h5.part").exists() and time.time() < deadline:
-        time.sleep(0.005)
+    # the sweep is held (SIGSTOP) as soon as its file is begun, while its points are
+    # computed, and its name made a directory: no race with the sweep's speed
+    deadline = time.time() + 300
+    while not (tmp_path / "s.h5.part").exists() and proc.poll() is None \
+            and time.time() < deadline:
+        time.sleep(0.001)
+    proc.send_signal(signal.SIGSTOP)
+    assert not (tmp_path / "s.h5").exists(), "the sweep ended before it could be held"
     (tmp_path / "s.h5").mkdir()
+    proc.send_signal(signal.SIGCONT)
     _, err = proc.communicate(timeout=300)
     assert proc.returncode == 1, err
     assert "cannot rename 's.h5.part' to 's.h5'" in err, err
