@@ -54,7 +54,7 @@ RULES = {
     "exact": "an input, a count, a code or a label: the same on every machine",
     "regular": f"a non-chaotic result (a periodic strobe, a periodic orbit and what is "
                f"measured on it, a converged Newton solution): rounding differences "
-               f"(1e-16 to 3e-11 measured between BLAS kernels) are damped or solved away, "
+               f"(1e-16 to 8e-11 measured between BLAS kernels) are damped or solved away, "
                f"not amplified; |d| <= {REGULAR_RTOL:g} x the largest magnitude of the value",
     "multiplier": f"Floquet multipliers, matched pairwise: {REGULAR_RTOL:g} x the point's "
                   f"largest multiplier (a rounding error dJ of the Jacobian moves every "
