@@ -24,8 +24,11 @@ CHECKED = --flag "$(CHECKED_FLAGS)"
 # `eval "$$(make -s blas-env)"` sets the same for fpm and pytest run by hand.
 IMPACTCHAIN_BLAS ?= scipy-openblas
 export IMPACTCHAIN_BLAS
-SCIPY_OPENBLAS_PC = $(firstword $(wildcard \
-    $(abspath $(VENV))/lib/python3*/site-packages/scipy_openblas32/lib/pkgconfig))
+# (looked up by the shell each time, not by make's $(wildcard), which caches a directory's
+# contents and on a fresh clone would never see the .venv that `setup` creates)
+SCIPY_OPENBLAS_PC = $(shell ls -d \
+    $(abspath $(VENV))/lib/python3*/site-packages/scipy_openblas32/lib/pkgconfig 2>/dev/null \
+    | head -n 1)
 PKG_CONFIG_PATH_0 := $(PKG_CONFIG_PATH)
 export PKG_CONFIG_PATH = $(subst $(eval) ,:,$(strip $(SCIPY_OPENBLAS_PC) \
                                                     $(subst :, ,$(PKG_CONFIG_PATH_0))))
