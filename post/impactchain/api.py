@@ -30,9 +30,12 @@ Python and the equivalent namelist / CLI output:
 Long calls (:func:`simulate`, :func:`lyapunov`, :func:`floquet`, :func:`sweep`,
 :func:`continuation`, :func:`periodic_orbit`) run the Fortran in a worker thread with the GIL
 released while this thread watches it: Ctrl-C stops the computation at its next transient
-cycle, strobe record, sweep point or orbit (within a second unless one cycle or one orbit
-alone takes longer) and raises :class:`KeyboardInterrupt`; nothing is returned from a stopped
-call. ``progress=True`` shows a tqdm progress bar (needs tqdm).
+cycle, strobe record, sweep point or orbit, or within a cycle of millions of events (within a
+second unless one orbit alone takes longer) and raises :class:`KeyboardInterrupt`; nothing is
+returned from a stopped call. The same holds for calls running in worker threads (a
+``ThreadPoolExecutor``'s): importing this module in the main thread lets Ctrl-C stop every
+running kernel, unless a program or notebook has put its own SIGINT handler in place.
+``progress=True`` shows a tqdm progress bar (needs tqdm).
 
 Argument names are the namelist keys. ``x0 = v0 = None`` is a start at rest
 (``kind='rest'``); arrays are ``kind='explicit'`` (``v0 = None`` then means v = 0).
@@ -56,7 +59,9 @@ Example::
 from __future__ import annotations
 
 import operator
+import signal
 import threading
+import time
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from types import MappingProxyType
@@ -1185,14 +1190,71 @@ def _call_run(kernels: Any, cfg: dict[str, Any], dry_run: bool, nr: int = 0, nc:
     return dict(zip(RUN_OUTPUTS, result, strict=True)) | records
 
 
+class _RunningKernels:
+    """The control arrays of the kernels running now, in any thread, so that Ctrl-C stops
+    them all: Python delivers SIGINT to the main thread only, and a kernel running in a
+    worker (a ``ThreadPoolExecutor``'s) would otherwise go on to its end while the executor
+    waits for it. A kernel that a worker starts within a second after Ctrl-C (the next task
+    an executor had queued) is stopped at once too, so that the executor's wait ends."""
+
+    _AFTER_INTERRUPT = 1.0  # seconds after Ctrl-C in which new kernels of workers stop
+
+    def __init__(self) -> None:
+        # (reentrant: the handler runs in the main thread, which may hold it then)
+        self._lock = threading.RLock()
+        self._controls: dict[int, NDArray[np.int64]] = {}
+        self._interrupted_at = -float("inf")
+
+    def __len__(self) -> int:
+        with self._lock:
+            return len(self._controls)
+
+    def add(self, control: NDArray[np.int64]) -> None:
+        with self._lock:
+            self._controls[id(control)] = control
+            if (threading.current_thread() is not threading.main_thread()
+                    and time.monotonic() - self._interrupted_at < self._AFTER_INTERRUPT):
+                control[0] = 1
+
+    def remove(self, control: NDArray[np.int64]) -> None:
+        with self._lock:
+            self._controls.pop(id(control), None)
+
+    def on_interrupt(self, signum: int, frame: Any) -> None:
+        """SIGINT: every kernel asked to stop, then Python's KeyboardInterrupt as always."""
+        with self._lock:
+            self._interrupted_at = time.monotonic()
+            for control in self._controls.values():
+                control[0] = 1
+        signal.default_int_handler(signum, frame)
+
+
+_RUNNING = _RunningKernels()
+
+
+def _stop_kernels_on_interrupt() -> None:
+    """Let Ctrl-C reach kernels in worker threads: Python's own SIGINT handler, if it is the
+    one in place, is replaced by one that also stops them (a program's or a notebook's own
+    handler is left alone). Only the main thread can set a handler: done at import there."""
+    if threading.current_thread() is not threading.main_thread():
+        return
+    if signal.getsignal(signal.SIGINT) is signal.default_int_handler:
+        signal.signal(signal.SIGINT, _RUNNING.on_interrupt)
+
+
+_stop_kernels_on_interrupt()
+
+
 def _watched(kernel: Callable[..., Any], args: dict[str, Any], progress: bool,
              stages: Mapping[int, tuple[str, str]] = _STAGES) -> Any:
     """``kernel(**args, control=...)`` in a worker thread, watched from this one.
 
     The kernel releases the GIL and polls ``control`` (int64, 4 values: chain_bridge's
-    shared_monitor_t) at every transient cycle, record and sweep point: control[0] set here
-    asks it to stop; it keeps control[1:4] = stage, done, total. Ctrl-C here (this thread
-    gets Python's signals) sets the flag, waits for the kernel to stop, and re-raises.
+    shared_monitor_t) at every transient cycle, record and sweep point, and every few
+    thousand events within a cycle: control[0] set here asks it to stop; it keeps
+    control[1:4] = stage, done, total. Ctrl-C here (this thread gets Python's signals) sets
+    the flag, waits for the kernel to stop, and re-raises; Ctrl-C while this runs in another
+    thread sets it too (_RUNNING), and the kernel's stop is raised here.
     """
     control = np.zeros(4, dtype=np.int64)
     outcome: dict[str, Any] = {}
@@ -1205,6 +1267,7 @@ def _watched(kernel: Callable[..., Any], args: dict[str, Any], progress: bool,
 
     bar = _ProgressBar(stages) if progress else None
     worker = threading.Thread(target=work, name="impactchain-kernel", daemon=True)
+    _RUNNING.add(control)
     worker.start()
     try:
         while worker.is_alive():
@@ -1216,6 +1279,7 @@ def _watched(kernel: Callable[..., Any], args: dict[str, Any], progress: bool,
         worker.join()
         raise
     finally:
+        _RUNNING.remove(control)
         if bar is not None:
             bar.close()
     if "error" in outcome:
@@ -1262,6 +1326,8 @@ def _raise_for(status: int, msg_len: int, message: NDArray[np.int32]) -> None:
         raise ValueError(text)
     if status == _STATUS_FAILED:
         raise RuntimeError(text)
+    if status == _STATUS_STOPPED:  # (Ctrl-C while the call ran in another thread)
+        raise KeyboardInterrupt(text)
     raise RuntimeError(f"impactchain extension (status {status}): {text}")
 
 

@@ -999,3 +999,42 @@ def test_complex_x0_is_refused() -> None:
         with pytest.raises(TypeError, match=f"^{key} must be an array of real numbers, "
                                             "not complex$"):
             api.simulate(3, 1.7, 1.5, cycles=2, **{key: np.array([0.1, 0, 0]) + 0.5j})
+
+
+_POOL_CHILD = """
+import sys, time
+from concurrent.futures import ThreadPoolExecutor
+from impactchain import api
+calls = [lambda: api.simulate(16, 1.7, 1.5, transient=10**10, cycles=2)] * 3
+try:
+    with ThreadPoolExecutor(2) as pool:
+        futures = [pool.submit(call) for call in calls]
+        while len(api._RUNNING) < 2:  # both workers' kernels have started
+            time.sleep(0.01)
+        print("running", flush=True)
+        for future in futures:
+            future.result()
+except KeyboardInterrupt:
+    print("KeyboardInterrupt", flush=True)
+    sys.exit(0)
+print("returned", flush=True)
+"""
+
+
+def test_ctrl_c_stops_kernels_in_a_thread_pool() -> None:
+    """Issue 30, 9: Ctrl-C stops kernels running in a ThreadPoolExecutor's workers (Python
+    gives the signal to the main thread only) and the task the executor had queued, so that
+    the executor's wait ends and KeyboardInterrupt comes out. Before, the workers' calls
+    (hours each) went on and the program hung in the executor's wait."""
+    import signal
+
+    child = subprocess.Popen([sys.executable, "-c", _POOL_CHILD], stdout=subprocess.PIPE,
+                             stderr=subprocess.PIPE, text=True)
+    try:
+        assert child.stdout is not None
+        assert child.stdout.readline() == "running\n"
+        child.send_signal(signal.SIGINT)
+        out, err = child.communicate(timeout=120)  # (hours if the kernels went on)
+    finally:
+        child.kill()
+    assert child.returncode == 0 and out.split() == ["KeyboardInterrupt"], (out, err)
