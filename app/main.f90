@@ -1,8 +1,10 @@
 !> impactchain command line: `impactchain [options] input.nml` (see usage below). Parses
 !> arguments (chain_cli),
 !> runs the library, reports progress and errors, and sets the exit code. No physics here.
-!> SIGINT / SIGTERM ask a running simulation to stop at the next strobe record (chain_interrupt);
-!> the file is then closed cleanly and marked complete = 0, and the same command continues it.
+!> SIGINT / SIGTERM ask a running simulation to stop (chain_interrupt): at once, at its last
+!> strobe record; the file is then closed cleanly and marked complete = 0, and the same command
+!> continues it. Runs also save such a file every IMPACTCHAIN_CHECKPOINT_SECONDS (default 10 s)
+!> and go on, so that a kill loses at most that.
 program main
     use, intrinsic :: iso_fortran_env, only: error_unit, output_unit
     use, intrinsic :: iso_c_binding, only: c_int
@@ -10,9 +12,11 @@ program main
                            record_result_t, run_sweep, sweep_summary_t, checkpoint_path, &
                            catch_interrupts, cli_t, parse_command_line, cli_run, &
                            cli_help, cli_version, cli_usage, code_version, provenance_text, &
+                           exit_now, seconds_from_environment, &
                            config_summary, &
                            check_before_run, branches_t, &
-                           continuation_to_file, census_result_t, census_to_file, kind_names
+                           continuation_to_file, census_result_t, census_to_file, kind_names, &
+                           wp, checkpoint_every
     use stderr_monitor, only: stderr_monitor_t, close_progress, progress_after_from_environment
     implicit none
     type(config_t) :: cfg
@@ -24,6 +28,7 @@ program main
     type(cli_t) :: cli
     type(stderr_monitor_t) :: monitor
     character(len=:), allocatable :: message
+    real(wp) :: checkpoint_seconds
 
     cli = parse_command_line()
     select case (cli%action)
@@ -44,6 +49,9 @@ program main
     end select
     monitor%quiet = cli%quiet
     call progress_after_from_environment(monitor%after, message)
+    if (allocated(message)) call fail(message)
+    call seconds_from_environment('IMPACTCHAIN_CHECKPOINT_SECONDS', real(checkpoint_every, wp), &
+                                  checkpoint_seconds, message)
     if (allocated(message)) call fail(message)
     call read_config(cli%input, cfg, err, cli%overrides)
     if (allocated(err)) call fail(err%message)
@@ -78,7 +86,7 @@ program main
         call report_sweep(sweep_summary, cfg%output_file, checkpoint_path(cfg))
         if (.not. sweep_summary%complete) stop 3, quiet=.true.
     else
-        call simulate_to_file(cfg, summary, err, monitor)
+        call simulate_to_file(cfg, summary, err, monitor, checkpoint_seconds)
         call close_progress(monitor)
         if (allocated(err)) call fail(err%message)
         call report(summary, cfg%output_file, cfg%record%covariant)
@@ -105,7 +113,12 @@ contains
             '  -q, --quiet            no progress (shown on stderr for runs over 2 s;', &
             '                         IMPACTCHAIN_PROGRESS_AFTER=seconds changes the 2 s)', &
             '  -h, --help             this text', &
-            '  --version              the code version'
+            '  --version              the code version', &
+            '', &
+            'A run is saved as it goes: every 10 s (IMPACTCHAIN_CHECKPOINT_SECONDS=seconds', &
+            'changes that) its file holds the records so far, marked complete = 0; after', &
+            'a kill, or SIGINT / SIGTERM, the same command continues it. A sweep or census', &
+            'keeps a checkpoint beside its file, and resumes from it.'
     end subroutine usage
 
     subroutine report(summary, output_file, covariant)
@@ -203,24 +216,6 @@ contains
         write (error_unit, '(a)') 'impactchain: error: '//message
         call exit_now(1)
     end subroutine fail
-
-    !> Flush what was written and end the process with `code` at once, without the exit
-    !> handlers: after a failed write (a full disk) HDF5's own handler, closing the file that
-    !> could not be closed, crashed (SIGSEGV, exit 139, the message above lost with stderr in
-    !> a file). The partial file is already deleted (output_abort).
-    subroutine exit_now(code)
-        integer, intent(in) :: code
-        interface
-            subroutine c_exit(status) bind(C, name='_exit')
-                import :: c_int
-                integer(c_int), value :: status
-            end subroutine c_exit
-        end interface
-
-        flush (output_unit)
-        flush (error_unit)
-        call c_exit(int(code, c_int))
-    end subroutine exit_now
 
     !> A mistake in the command line itself (an unknown option, a missing value): exit 2.
     subroutine fail_usage(message)

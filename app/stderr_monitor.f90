@@ -5,12 +5,10 @@
 !> speed of the machine.
 module stderr_monitor
     use, intrinsic :: iso_fortran_env, only: error_unit, int64
-    use, intrinsic :: ieee_arithmetic, only: ieee_is_finite, ieee_overflow, &
-                                             ieee_get_halting_mode, ieee_set_halting_mode, &
-                                             ieee_set_flag
     use impactchain, only: wp, i8, monitor_t, interrupted, progress_t, progress_start, &
-                           progress_update, stderr_is_terminal, stage_name, &
-                           progress_quiet_start
+                           progress_update, progress_within, stderr_is_terminal, &
+                           stage_name, stage_events, stage_records, progress_quiet_start, &
+                           seconds_from_environment
     implicit none
     private
     public :: stderr_monitor_t, close_progress, progress_after_from_environment
@@ -34,16 +32,37 @@ contains
 
         keep_going = .not. interrupted()
         if (monitor%quiet) return
+        if (stage == stage_events) then ! within the unit after the last count
+            if (monitor%stage == 0) call start_count(stage_records)
+            call progress_within(monitor%shown, done, seconds(), text)
+            call show(text)
+            return
+        end if
         if (stage /= monitor%stage) then ! a new count (the records after the transient)
             call close_progress(monitor)
-            monitor%stage = stage
-            monitor%shown = progress_start(stage_name(stage), stderr_is_terminal(), seconds(), &
-                                           monitor%after)
+            call start_count(stage)
         end if
         call progress_update(monitor%shown, done, total, seconds(), text)
-        if (len(text) == 0) return
-        write (error_unit, '(a)', advance='no') text
-        flush (error_unit)
+        call show(text)
+
+    contains
+
+        subroutine start_count(counted)
+            integer, intent(in) :: counted
+
+            monitor%stage = counted
+            monitor%shown = progress_start(stage_name(counted), stderr_is_terminal(), &
+                                           seconds(), monitor%after)
+        end subroutine start_count
+
+        subroutine show(line)
+            character(len=*), intent(in) :: line
+
+            if (len(line) == 0) return
+            write (error_unit, '(a)', advance='no') line
+            flush (error_unit)
+        end subroutine show
+
     end function stderr_keep_going
 
     !> A progress line left open on a terminal gets its newline before anything else is said.
@@ -60,28 +79,9 @@ contains
     subroutine progress_after_from_environment(after, message)
         real(wp), intent(out) :: after
         character(len=:), allocatable, intent(out) :: message
-        character(len=64) :: text
-        integer :: length, status, ios
-        logical :: halting
 
-        after = progress_quiet_start
-        call get_environment_variable('IMPACTCHAIN_PROGRESS_AFTER', text, length, status)
-        if (status == 1 .or. length == 0) return
-        ! a number beyond double precision (1e400) reads as an overflow, which the
-        ! runtime-checked build would trap: read without halting, and refuse what is not finite
-        call ieee_get_halting_mode(ieee_overflow, halting)
-        call ieee_set_halting_mode(ieee_overflow, .false.)
-        read (text, *, iostat=ios) after
-        call ieee_set_flag(ieee_overflow, .false.)
-        call ieee_set_halting_mode(ieee_overflow, halting)
-        if (status == 0 .and. ios == 0) then
-            ! (a NaN compared would trap there too)
-            if (ieee_is_finite(after)) then
-                if (after >= 0 .and. after <= 1.0e6_wp) return
-            end if
-        end if
-        message = 'IMPACTCHAIN_PROGRESS_AFTER = '//trim(text)// &
-                  ' is not a number of seconds in [0, 1e6]'
+        call seconds_from_environment('IMPACTCHAIN_PROGRESS_AFTER', progress_quiet_start, &
+                                      after, message)
     end subroutine progress_after_from_environment
 
     !> Seconds since an arbitrary start.

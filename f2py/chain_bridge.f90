@@ -10,7 +10,7 @@ module chain_bridge
     use, intrinsic :: iso_c_binding, only: c_int, c_int64_t, c_double
     use impactchain, only: wp, i8, error_t, set_error, config_t, fmt_real, fmt_int, &
                            lyapunov_vectors, event_log_t, chain_t, record_sink_t, record_result_t, &
-                           set_boundary, chain_copy_state, monitor_t
+                           set_boundary, chain_copy_state, monitor_t, stage_events
     !$ use omp_lib, only: omp_set_num_threads
     implicit none
     private
@@ -69,6 +69,9 @@ contains
         integer(c_int64_t), pointer, volatile :: control(:)
 
         control => monitor%control
+        keep_going = control(1) == 0
+        ! (within a cycle only the stop is looked at: the count stays the caller's)
+        if (stage == stage_events) return
         control(2) = stage
         control(3) = done
         control(4) = total

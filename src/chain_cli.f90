@@ -3,11 +3,18 @@
 !> plus `--help` and `--version`. `--set` (repeatable), `-o` and `--overwrite` become
 !> overrides of the input's text (chain_namelist), applied in the order given; `--check`
 !> validates the input and prints it resolved, running nothing. Returns what was asked for;
-!> the programs print and exit (library code never stops). Infrastructure, no model section.
+!> the programs print and exit (library code never stops; `exit_now` is the programs' way
+!> out after an error). Infrastructure, no model section.
 module chain_cli
+    use, intrinsic :: iso_fortran_env, only: error_unit, output_unit
+    use, intrinsic :: iso_c_binding, only: c_int
+    use, intrinsic :: ieee_arithmetic, only: ieee_is_finite, ieee_overflow, &
+                                             ieee_get_halting_mode, ieee_set_halting_mode, &
+                                             ieee_set_flag
+    use chain_kinds, only: wp
     implicit none
     private
-    public :: cli_t, parse_command_line, parse_arguments
+    public :: cli_t, parse_command_line, parse_arguments, exit_now, seconds_from_environment
     public :: cli_run, cli_help, cli_version, cli_usage, cli_error
 
     integer, parameter :: cli_run = 0     !! run the input file
@@ -28,6 +35,54 @@ module chain_cli
     end type cli_t
 
 contains
+
+    !> For the programs only: flush what was written and end the process with `code` at once,
+    !> without the exit handlers. After a failed write (a full disk) HDF5's own handler,
+    !> closing the file that could not be closed, crashed (SIGSEGV, exit 139, the message
+    !> lost with stderr in a file). A partial file is deleted before (output_abort).
+    subroutine exit_now(code)
+        integer, intent(in) :: code
+        interface
+            subroutine c_exit(status) bind(C, name='_exit')
+                import :: c_int
+                integer(c_int), value :: status
+            end subroutine c_exit
+        end interface
+
+        flush (output_unit)
+        flush (error_unit)
+        call c_exit(int(code, c_int))
+    end subroutine exit_now
+
+    !> The environment variable `name` as a number of seconds in [0, 1e6], or `default` when
+    !> it is unset or empty; `message` is allocated when it is anything else.
+    subroutine seconds_from_environment(name, default, seconds, message)
+        character(len=*), intent(in) :: name
+        real(wp), intent(in) :: default
+        real(wp), intent(out) :: seconds
+        character(len=:), allocatable, intent(out) :: message
+        character(len=64) :: text
+        integer :: length, status, ios
+        logical :: halting
+
+        seconds = default
+        call get_environment_variable(name, text, length, status)
+        if (status == 1 .or. length == 0) return
+        ! a number beyond double precision (1e400) reads as an overflow, which the
+        ! runtime-checked build would trap: read without halting, and refuse what is not finite
+        call ieee_get_halting_mode(ieee_overflow, halting)
+        call ieee_set_halting_mode(ieee_overflow, .false.)
+        read (text, *, iostat=ios) seconds
+        call ieee_set_flag(ieee_overflow, .false.)
+        call ieee_set_halting_mode(ieee_overflow, halting)
+        if (status == 0 .and. ios == 0) then
+            ! (a NaN compared would trap there too)
+            if (ieee_is_finite(seconds)) then
+                if (seconds >= 0 .and. seconds <= 1.0e6_wp) return
+            end if
+        end if
+        message = name//' = '//trim(text)//' is not a number of seconds in [0, 1e6]'
+    end subroutine seconds_from_environment
 
     !> The program's own arguments.
     function parse_command_line() result(cli)

@@ -45,6 +45,7 @@ module chain_engine
     use chain_lapack, only: qr_workspace_t
     use chain_lyapunov, only: lyapunov_acc_t
     use chain_event_log, only: event_log_t, event_log_append, event_impact, event_release
+    use chain_monitor, only: monitor_t, stage_events, events_per_poll
     implicit none
     private
     public :: chain_t, chain_init, chain_snapshot, chain_model
@@ -428,18 +429,41 @@ contains
     ! ------------------------------------------------------- the loop and the chain's start
 
     !> Process every event up to time s_target within the current cycle (s_target <= T).
-    subroutine chain_advance(chain, s_target, log, err)
+    !> With `watch`, it is told every events_per_poll events (stage_events, done = events so
+    !> far in this call) and may stop the chain there, between two events: `stopped` then
+    !> comes back .true. and the chain is left between its events, fit only to be replaced
+    !> (by the state of a record held for that, see record_cycles).
+    subroutine chain_advance(chain, s_target, log, err, watch, stopped)
         type(chain_t), intent(inout) :: chain
         real(wp), intent(in) :: s_target
         type(event_log_t), intent(inout) :: log
         type(error_t), allocatable, intent(out) :: err
-        integer :: bond
+        class(monitor_t), intent(inout), optional :: watch
+        logical, intent(out), optional :: stopped
+        integer :: bond, since_poll
+        integer(i8) :: events
         real(wp) :: time
         logical :: tied
 
+        if (present(stopped)) stopped = .false.
+        since_poll = 0
+        events = 0
         do
             call queue_top(chain%queue, bond, time, tied)
             if (time > s_target) exit
+            if (present(watch)) then
+                since_poll = since_poll + 1
+                if (since_poll == events_per_poll) then
+                    events = events + since_poll
+                    since_poll = 0
+                    ! (without `stopped` to say so, the monitor shows progress but cannot stop)
+                    if (.not. watch%keep_going(stage_events, events, 0_i8) .and. &
+                        present(stopped)) then
+                        stopped = .true.
+                        return
+                    end if
+                end if
+            end if
             if (tied) bond = first_of_ties(chain, time)
             chain%s = time
             ! events closer than the rounding of times within a cycle are simultaneous; a new

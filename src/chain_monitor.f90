@@ -17,6 +17,7 @@ module chain_monitor
     private
     public :: monitor_t, signal_monitor_t, saving_monitor_t, checkpoint_every
     public :: stage_transient, stage_records, stage_points, stage_samples, stage_backward
+    public :: stage_events, events_per_poll
     public :: stage_name
 
     integer, parameter :: stage_transient = 1 !! drive cycles of the transient (nothing recorded)
@@ -24,6 +25,10 @@ module chain_monitor
     integer, parameter :: stage_points = 3    !! finished points of a sweep
     integer, parameter :: stage_samples = 4   !! finished samples of a census (all its points)
     integer, parameter :: stage_backward = 5  !! records of the covariant vectors' backward pass
+    !> events within one stretch of a drive cycle (no total: told every events_per_poll
+    !> events, so that a cycle holding millions still shows progress and stops when asked)
+    integer, parameter :: stage_events = 6
+    integer, parameter :: events_per_poll = 4096
 
     type, abstract :: monitor_t
     contains
@@ -121,6 +126,8 @@ contains
             name = 'sample'
         case (stage_backward)
             name = 'record (backward pass)'
+        case (stage_events)
+            name = 'event'
         case default
             name = 'point'
         end select

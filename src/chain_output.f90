@@ -46,6 +46,7 @@ module chain_output
     public :: output_end, output_abort, read_final_state, output_group
     public :: schema_version, code_version, output_truncate_strobe
     public :: resume_data_t, output_resume, read_resume, output_inspect, output_continue
+    public :: output_checkpoint
     public :: file_absent, file_continuable, file_other_input, file_other
     public :: output_describe, output_index, output_unset_param
 
@@ -783,6 +784,8 @@ contains
             return
         end if
         call rename_file(out%part_path, out%path, err)
+        ! (a checkpoint's copy left by a run killed while it made one)
+        call remove_file(out%path//'.saving')
         call unlock_file(out%lock)
     end subroutine output_end
 
@@ -949,12 +952,6 @@ contains
         integer(i8), intent(in) :: n_records
         integer(i8), intent(in) :: n_windows !! finite-time windows of the whole run
         type(error_t), allocatable, intent(out) :: err
-        character(len=14), parameter :: results(6) = [character(len=14) :: 'final', 'stats', &
-                                                      'lyapunov', 'floquet', 'resume', &
-                                                      'strobe/period']
-        integer(i8), allocatable :: dims(:)
-        integer :: j
-        logical :: exists
 
         out%path = path
         out%part_path = path//'.part'
@@ -966,10 +963,50 @@ contains
             return
         end if
         call copy_file(path, out%part_path, err)
+        if (.not. allocated(err)) call reopen_part(out, n_records, n_windows, err)
+        if (allocated(err)) call output_abort(out)
+    end subroutine output_continue
+
+    !> A checkpoint of a run being written: the `.part` file, which holds a run stopped early
+    !> (results and /resume written), closed (complete = 0) and copied to the final name, then
+    !> reopened to go on as output_continue does. The lock on `.part` is held throughout, so
+    !> no other run can take the file meanwhile. On failure (a full disk) the final name
+    !> keeps the checkpoint before, and the `.part` file is deleted.
+    subroutine output_checkpoint(out, n_records, n_windows, err)
+        type(output_t), intent(inout) :: out
+        integer(i8), intent(in) :: n_records, n_windows
+        type(error_t), allocatable, intent(out) :: err
+        character(len=:), allocatable :: copy
+
+        copy = out%path//'.saving'
+        call h5_write_attr(out%file, '/', 'complete', 0, err)
+        if (.not. allocated(err)) call h5_close_file(out%file, err)
+        if (.not. allocated(err)) call copy_file(out%part_path, copy, err)
+        if (.not. allocated(err)) call rename_file(copy, out%path, err)
         if (allocated(err)) then
+            call remove_file(copy)
             call output_abort(out)
             return
         end if
+        out%events_created = .false.
+        out%n_events = 0
+        call reopen_part(out, n_records, n_windows, err)
+        if (allocated(err)) call output_abort(out)
+    end subroutine output_checkpoint
+
+    !> Open the `.part` file of a run stopped early for writing, without the results the end
+    !> of the run writes again, /strobe at `n_records` records, /finite_time at `n_windows`.
+    subroutine reopen_part(out, n_records, n_windows, err)
+        type(output_t), intent(inout) :: out
+        integer(i8), intent(in) :: n_records, n_windows
+        type(error_t), allocatable, intent(out) :: err
+        character(len=14), parameter :: results(6) = [character(len=14) :: 'final', 'stats', &
+                                                      'lyapunov', 'floquet', 'resume', &
+                                                      'strobe/period']
+        integer(i8), allocatable :: dims(:)
+        integer :: j
+        logical :: exists
+
         call h5_open_file(out%file, out%part_path, writable=.true., err=err)
         do j = 1, size(results)
             call h5_exists(out%file, trim(results(j)), exists, err)
@@ -985,8 +1022,7 @@ contains
             call h5_extent(out%file, 'events/time', dims, err)
             if (.not. allocated(err)) out%n_events = dims(1)
         end if
-        if (allocated(err)) call output_abort(out)
-    end subroutine output_continue
+    end subroutine reopen_part
 
     ! ---- a start from a file --------------------------------------------------------------
 

@@ -9,7 +9,7 @@ module chain_progress
     use chain_error, only: fmt_int8
     implicit none
     private
-    public :: progress_t, progress_start, progress_update, stderr_is_terminal
+    public :: progress_t, progress_start, progress_update, progress_within, stderr_is_terminal
     public :: progress_quiet_start
 
     real(wp), parameter :: progress_quiet_start = 2 !! seconds before anything is shown
@@ -24,6 +24,8 @@ module chain_progress
         integer(i8) :: done_at_start = -1    !! work already done when the count started
         integer :: tenths_shown = 0          !! (log) tenths of the work reported
         logical :: line_open = .false.       !! (terminal) a line without its newline
+        integer(i8) :: done = 0, total = 0   !! the last update's count
+        real(wp) :: done_time = 0            !! seconds: when it came
     end type progress_t
 
     interface
@@ -53,6 +55,7 @@ contains
         p%label = label
         p%terminal = terminal
         p%start = now
+        p%done_time = now
         if (present(quiet_start)) p%quiet_start = quiet_start
     end function progress_start
 
@@ -70,6 +73,9 @@ contains
 
         text = ''
         if (p%done_at_start < 0) p%done_at_start = done - 1
+        p%done = done
+        p%total = total
+        p%done_time = now
         elapsed = now - p%start
         if (elapsed < p%quiet_start) return
         tenths = int((10*done)/max(total, 1_i8))
@@ -90,6 +96,38 @@ contains
             text = text//new_line('a')
         end if
     end subroutine progress_update
+
+    !> Within the unit of work after the last update, which is taking long (a drive cycle of
+    !> millions of events): `events` done in it so far, at time `now`. Shown like updates
+    !> (on a terminal at most four times a second; on a log file or pipe the first at once,
+    !> then at most once a minute), so that even a unit of minutes shows it is moving.
+    pure subroutine progress_within(p, events, now, text)
+        type(progress_t), intent(inout) :: p
+        integer(i8), intent(in) :: events
+        real(wp), intent(in) :: now
+        character(len=:), allocatable, intent(out) :: text
+        character(len=:), allocatable :: unit
+
+        text = ''
+        if (now - p%start < p%quiet_start) return
+        if (p%terminal .and. now - p%last < terminal_every) return
+        if (.not. p%terminal .and. now - p%last < log_every .and. p%last > p%start) return
+        p%last = now
+        if (p%total > 0) then
+            unit = p%label//' '//fmt_int8(p%done + 1)//' / '//fmt_int8(p%total)
+        else
+            unit = 'the first '//p%label
+        end if
+        text = 'impactchain: '//unit//' under way, '//formatted('(es9.2)', real(events, wp))// &
+               ' events so far ('//formatted('(es9.2)', events/max(now - p%done_time, &
+                                                                  1.0e-9_wp))//' events/s)'
+        if (p%terminal) then
+            text = achar(13)//text//'    '
+            p%line_open = .true.
+        else
+            text = text//new_line('a')
+        end if
+    end subroutine progress_within
 
     pure function progress_text(p, done, total, elapsed) result(text)
         type(progress_t), intent(in) :: p

@@ -9,12 +9,13 @@
 module chain_record
     use chain_kinds, only: wp, i8
     use chain_error, only: error_t, set_error, fmt_int8
-    use chain_engine, only: chain_t, chain_advance, chain_sync, chain_new_cycle, &
+    use chain_engine, only: chain_t, chain_init, chain_snapshot, chain_model, chain_advance, chain_sync, chain_new_cycle, &
                             chain_set_tangent, chain_size, chain_cycle, chain_time, chain_start, &
                             chain_period, chain_section_time, chain_copy_state, chain_counts, &
                             chain_reset_counts, chain_vectors, chain_tangent_frame, &
                             chain_qr_step, chain_reorthonormalise, chain_rank_lost
-    use chain_state, only: event_counts_t
+    use chain_state, only: event_counts_t, chain_state_t
+    use chain_model, only: model_t
     use chain_event_log, only: event_log_t, event_log_init, event_log_clear, event_log_append
     use chain_lyapunov, only: lyapunov_acc_t, lyapunov_start, lyapunov_due, &
                               lyapunov_result_t, lyapunov_result, initial_frame
@@ -31,6 +32,9 @@ module chain_record
     public :: period_window, record_state_t, set_window
 
     integer, parameter :: event_flush = 65536
+    !> seconds of a cycle after which the next record is held (a stop within the next cycle
+    !> then ends the run at once, at that record)
+    real(wp), parameter :: slow_cycle = 0.1_wp
 
     !> What a run records and how (&run and &lyapunov, docs/model.md sections 6-7).
     type :: record_spec_t
@@ -168,7 +172,7 @@ contains
     !> files; a complete run then makes the backward pass, whose per-record numbers go to
     !> `sink` (put_clv) and the rest to res%clv. Such a run cannot be continued (its factors
     !> were in scratch files), and a stopped one has no vectors.
-    subroutine record_cycles(spec, chain, sink, res, err, monitor, state)
+    subroutine record_cycles(spec, chain, sink, res, err, monitor, state, hold_after)
         type(record_spec_t), intent(in) :: spec
         type(chain_t), intent(inout) :: chain
         class(record_sink_t), intent(inout) :: sink
@@ -176,6 +180,9 @@ contains
         type(error_t), allocatable, intent(out) :: err
         class(monitor_t), intent(inout), optional :: monitor
         type(record_state_t), intent(inout), optional :: state
+        !> seconds of a cycle after which the next record is held (default slow_cycle; 0:
+        !> every record, which a test of the stop within a cycle needs on any machine)
+        real(wp), intent(in), optional :: hold_after
         type(event_log_t) :: log
         type(record_state_t) :: st
         type(clv_pass_t) :: clv
@@ -186,6 +193,11 @@ contains
         real(wp) :: target_s
         integer :: m, i, w
         logical :: stop_now
+        type(chain_state_t) :: held  !! the chain at the last record, while cycles are slow
+        type(model_t) :: model
+        integer :: held_events       !! log%count at that record
+        integer(i8) :: clock_record, clock_now, clock_rate, hold_counts
+        logical :: have_held, cut
 
         if (present(state)) then
             if (state%cycles_done > 0) call move_state(state, st)
@@ -216,10 +228,35 @@ contains
         if (spec%lyapunov .and. spec%window > 0) &
             call window_buffer_start(windows, st%acc, spec%cycles/spec%window)
         first = st%cycles_done + 1
+        ! A stop asked within a cycle (a cycle of millions of events) is taken at once: the
+        ! chain goes back to the last record, held for that, and the run ends there as if
+        ! asked there. Records are held only after a slow cycle, where a copy costs nothing.
+        call system_clock(clock_record, clock_rate)
+        hold_counts = int(slow_cycle*clock_rate, i8)
+        if (present(hold_after)) hold_counts = int(hold_after*clock_rate, i8)
+        have_held = present(monitor)
+        if (have_held) call hold_record()
         do j = st%cycles_done + 1, spec%cycles
             call section_target(chain, spec%transient, spec%phase, j, target_cycle, target_s)
-            call advance_to_point(chain, target_cycle, target_s, log, err)
+            cut = .false.
+            if (have_held) then
+                call advance_to_point(chain, target_cycle, target_s, log, err, monitor, cut)
+            else
+                call advance_to_point(chain, target_cycle, target_s, log, err)
+            end if
             if (allocated(err)) exit
+            if (cut .and. j == 1) then
+                call set_error(err, "run stopped during the drive cycle of its first record, "// &
+                               "before that record: nothing was recorded")
+                exit
+            else if (cut) then
+                model = chain_model(chain)
+                call chain_init(chain, model, held, err)
+                if (allocated(err)) exit
+                log%count = held_events
+                call flush_records(int(j - first))
+                exit
+            end if
             i = int(j - first) + 1
             call chain_copy_state(chain, xbuf(:, i), vbuf(:, i))
             cbuf(i) = chain_cycle(chain)
@@ -250,15 +287,15 @@ contains
             if (present(monitor)) stop_now = .not. monitor%keep_going(stage_records, j, &
                                                                       spec%cycles)
             if (i == m .or. j == spec%cycles .or. log%count >= event_flush .or. stop_now) then
-                call sink%put_strobe(spec%cycles, first, xbuf(:, :i), vbuf(:, :i), cbuf(:i), err)
-                if (.not. allocated(err) .and. log%enabled) call sink%put_events(log, err)
-                if (.not. allocated(err) .and. allocated(windows%exponents)) &
-                    call window_buffer_flush(windows, sink, err)
+                call flush_records(i)
                 if (allocated(err)) exit
-                call event_log_clear(log)
                 first = j + 1
             end if
             if (stop_now) exit
+            call system_clock(clock_now)
+            have_held = present(monitor) .and. clock_now - clock_record >= hold_counts
+            clock_record = clock_now
+            if (have_held) call hold_record()
         end do
         if (allocated(err)) then
             call clv_close(clv)
@@ -270,8 +307,33 @@ contains
         call clv_close(clv)
         if (allocated(err)) return
         if (present(state)) call move_state(st, state)
-        if (spec%jacobian) call floquet_result(chain, spec%jacobian_cycles, res%jacobian, &
-                                              res%multipliers_re, res%multipliers_im, err)
+        ! (a run stopped early computes it when it is complete)
+        if (spec%jacobian .and. res%complete) &
+            call floquet_result(chain, spec%jacobian_cycles, res%jacobian, &
+                                res%multipliers_re, res%multipliers_im, err)
+
+    contains
+
+        !> The chain now, at a record, to go back to when a stop comes within the next cycle.
+        subroutine hold_record()
+            held = chain_snapshot(chain)
+            held%has_tangent = spec%lyapunov
+            held_events = log%count
+        end subroutine hold_record
+
+        !> The `count` records buffered since record `first`, the events and the windows, to
+        !> the sink; the buffers then start again.
+        subroutine flush_records(count)
+            integer, intent(in) :: count
+
+            if (count > 0) call sink%put_strobe(spec%cycles, first, xbuf(:, :count), &
+                                                vbuf(:, :count), cbuf(:count), err)
+            if (.not. allocated(err) .and. log%enabled) call sink%put_events(log, err)
+            if (.not. allocated(err) .and. allocated(windows%exponents)) &
+                call window_buffer_flush(windows, sink, err)
+            if (.not. allocated(err)) call event_log_clear(log)
+        end subroutine flush_records
+
     end subroutine record_cycles
 
     !> A fresh run up to its first record: the transient, counters from zero, an empty
@@ -368,7 +430,8 @@ contains
             call advance_cycles(chain, target_cycle, log, err, spec%qr_every, monitor, stopped)
             if (stopped) call say_stopped(target_cycle)
             if (allocated(err)) return
-            call advance_to_point(chain, target_cycle, target_s, log, err)
+            call advance_to_point(chain, target_cycle, target_s, log, err, monitor, stopped)
+            if (stopped) call say_stopped(target_cycle)
             if (.not. allocated(err)) call chain_reorthonormalise(chain, err)
         else
             ! whole cycles first, so that the monitor is told at each (the same steps as
@@ -376,7 +439,8 @@ contains
             call advance_cycles(chain, target_cycle, log, err, monitor=monitor, stopped=stopped)
             if (stopped) call say_stopped(target_cycle)
             if (allocated(err)) return
-            call advance_to_point(chain, target_cycle, target_s, log, err)
+            call advance_to_point(chain, target_cycle, target_s, log, err, monitor, stopped)
+            if (stopped) call say_stopped(target_cycle)
             if (.not. allocated(err) .and. spec%lyapunov) call start_tangent(chain, spec, err)
         end if
 

@@ -55,28 +55,42 @@ contains
         call chain_init(chain, model, moving_state(x, v, 0_i8, phase/model%omega), err)
     end subroutine chain_at_section
 
-    !> Run the chain to (cycle, s) and bring every oscillator there.
-    subroutine advance_to_point(chain, cycle, s, log, err)
+    !> Run the chain to (cycle, s) and bring every oscillator there. With `watch` (and
+    !> `stopped`), the monitor is told within cycles (chain_advance) and may stop the chain
+    !> between two events: `stopped` then comes back .true., the chain fit only to be replaced.
+    subroutine advance_to_point(chain, cycle, s, log, err, watch, stopped)
         type(chain_t), intent(inout) :: chain
         ! by value: a caller may pass the chain's own clock (chain_time), which moves meanwhile
         integer(i8), value :: cycle
         real(wp), value :: s
         type(event_log_t), intent(inout) :: log
         type(error_t), allocatable, intent(out) :: err
+        class(monitor_t), intent(inout), optional :: watch
+        logical, intent(out), optional :: stopped
+        logical :: cut
 
-        call advance_cycles(chain, cycle, log, err)
-        if (allocated(err)) return
-        call chain_advance(chain, s, log, err)
-        if (allocated(err)) return
+        cut = .false.
+        if (present(stopped)) then
+            call advance_cycles(chain, cycle, log, err, watch=watch, stopped=cut)
+            if (.not. cut .and. .not. allocated(err)) &
+                call chain_advance(chain, s, log, err, watch, cut)
+            stopped = cut
+        else
+            call advance_cycles(chain, cycle, log, err)
+            if (.not. allocated(err)) call chain_advance(chain, s, log, err)
+        end if
+        if (cut .or. allocated(err)) return
         call chain_sync(chain)
     end subroutine advance_to_point
 
     !> Run the chain through the ends of drive cycles up to the start of `cycle`.
     !> With `monitor` (a transient), it is told every cycle end (done = the chain's cycle,
     !> total = `monitor_total`, default `cycle`) and may stop the run there: `stopped` then
-    !> comes back .true.
+    !> comes back .true. With `watch` or `monitor`, the monitor is also told within cycles
+    !> (chain_advance) and may stop the chain between two events (`stopped` too; the chain is
+    !> then fit only to be replaced, or dropped).
     subroutine advance_cycles(chain, cycle, log, err, tangent_qr_every, monitor, stopped, &
-                              monitor_total)
+                              monitor_total, watch)
         type(chain_t), intent(inout) :: chain
         integer(i8), intent(in) :: cycle
         type(event_log_t), intent(inout) :: log
@@ -87,9 +101,11 @@ contains
         class(monitor_t), intent(inout), optional :: monitor
         logical, intent(out), optional :: stopped
         integer(i8), intent(in), optional :: monitor_total
+        class(monitor_t), intent(inout), optional :: watch
         real(wp), allocatable :: growth(:)
         integer(i8) :: total
         integer :: since, interval
+        logical :: cut
 
         total = cycle
         if (present(monitor_total)) total = monitor_total
@@ -98,8 +114,17 @@ contains
         interval = 1
         if (present(tangent_qr_every)) interval = max(1, tangent_qr_every)
         do while (chain_cycle(chain) < cycle)
-            call chain_advance(chain, chain_period(chain), log, err)
-            if (allocated(err)) return
+            ! (a stop within a cycle needs `stopped` to say so)
+            cut = .false.
+            if (present(monitor) .and. present(stopped)) then
+                call chain_advance(chain, chain_period(chain), log, err, monitor, cut)
+            else if (present(watch) .and. present(stopped)) then
+                call chain_advance(chain, chain_period(chain), log, err, watch, cut)
+            else
+                call chain_advance(chain, chain_period(chain), log, err)
+            end if
+            if (cut) stopped = .true.
+            if (cut .or. allocated(err)) return
             call chain_new_cycle(chain)
             if (present(monitor)) then
                 if (.not. monitor%keep_going(stage_transient, chain_cycle(chain), total)) then

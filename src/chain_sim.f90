@@ -24,7 +24,7 @@ module chain_sim
     use chain_record, only: record_sink_t, record_result_t, record_cycles, record_state_t, &
                             set_window, period_window
     use chain_clv, only: clv_rows_t
-    use chain_monitor, only: monitor_t
+    use chain_monitor, only: monitor_t, stage_records, checkpoint_every
     use chain_section, only: chain_at_section
     use chain_output, only: output_t, output_check, output_begin, output_header, &
                             output_strobe_write, output_events_append, output_final, &
@@ -33,10 +33,12 @@ module chain_sim
                             read_final_state, output_truncate_strobe, resume_data_t, &
                             output_windows_write, output_truncate_windows, &
                             output_resume, read_resume, output_inspect, output_continue, &
+                            output_checkpoint, &
                             file_absent, file_continuable, file_other_input
     implicit none
     private
     public :: simulate_to_file, check_run, check_run_start, initial_state, start_chain
+    public :: checkpoint_cost_share
     public :: write_run_header
     public :: chain_on_section, restart_chain, continuation_start, uniform
 
@@ -51,7 +53,46 @@ module chain_sim
         procedure :: put_windows => file_put_windows
     end type file_sink_t
 
+    !> A checkpoint of a run costs at most 1/checkpoint_cost_share of its time: the interval
+    !> between checkpoints grows to that many times the last one's cost (from the stop to the
+    !> next record: closing the file, a copy of it to go on in, reading the state back).
+    integer, parameter :: checkpoint_cost_share = 50
+
+    !> The caller's monitor, and a stop at a record whenever a checkpoint is due (`asked`
+    !> then says the stop was this monitor's: simulate_to_file saves and goes on).
+    type, extends(monitor_t) :: checkpoint_monitor_t
+        class(monitor_t), pointer :: outer => null()
+        integer(i8) :: every = huge(1_i8) !! system_clock counts between checkpoints (at least)
+        integer(i8) :: due = huge(1_i8)   !! of the next checkpoint (huge: none)
+        integer(i8) :: asked_at = -1      !! of the last stop asked for one (-1: none since)
+        logical :: asked = .false.
+    contains
+        procedure :: keep_going => checkpoint_keep_going
+    end type checkpoint_monitor_t
+
 contains
+
+    !> The caller's answer; at a record with a checkpoint due, a stop (asked). The first
+    !> record after a checkpoint sets the next one's time from what that one cost.
+    logical function checkpoint_keep_going(monitor, stage, done, total) result(keep_going)
+        class(checkpoint_monitor_t), intent(inout) :: monitor
+        integer, intent(in) :: stage
+        integer(i8), intent(in) :: done, total
+        integer(i8) :: now
+
+        keep_going = .true.
+        if (associated(monitor%outer)) keep_going = monitor%outer%keep_going(stage, done, total)
+        if (.not. keep_going .or. stage /= stage_records .or. &
+            monitor%due == huge(1_i8)) return
+        call system_clock(now)
+        if (monitor%asked_at >= 0) then
+            monitor%due = now + max(monitor%every, checkpoint_cost_share*(now - monitor%asked_at))
+            monitor%asked_at = -1
+        end if
+        monitor%asked = now >= monitor%due .and. done < total
+        if (monitor%asked) monitor%asked_at = now
+        keep_going = .not. monitor%asked
+    end function checkpoint_keep_going
 
     !> The initial state of a configuration (rest, seeded random, explicit, or an earlier run).
     subroutine initial_state(cfg, state, err)
@@ -195,15 +236,26 @@ contains
 
     !> The whole run described by `cfg`, written to cfg%output_file; or, when that file is a
     !> run of the same input stopped early, the rest of it, continued into that file.
-    subroutine simulate_to_file(cfg, res, err, monitor)
+    !>
+    !> Checkpoints: every `checkpoint_seconds` (default checkpoint_every; longer when a
+    !> checkpoint costs more than 1/checkpoint_cost_share of that) the run stops at a record
+    !> as if asked, its file is closed under the final name as a run stopped early, and the
+    !> run goes on from that file, as a second command would. A kill then loses at most the
+    !> records since, and the same command continues from there; the result is the
+    !> uninterrupted run's, bit for bit. (Not with covariant vectors: such a run cannot be
+    !> continued.)
+    subroutine simulate_to_file(cfg, res, err, monitor, checkpoint_seconds)
         type(config_t), intent(in) :: cfg
         type(record_result_t), intent(out) :: res
         type(error_t), allocatable, intent(out) :: err
-        class(monitor_t), intent(inout), optional :: monitor
+        class(monitor_t), intent(inout), optional, target :: monitor
+        real(wp), intent(in), optional :: checkpoint_seconds
         type(chain_t) :: chain
         type(file_sink_t) :: sink
         type(record_state_t) :: state
-        type(error_t), allocatable :: err2
+        type(checkpoint_monitor_t) :: watch
+        integer(i8) :: continued, clock_now, clock_rate
+        real(wp) :: every
         integer :: found
 
         call check_run(cfg, err, found)
@@ -220,10 +272,52 @@ contains
             call output_begin(sink%out, cfg%output_file, cfg%overwrite, err)
             if (allocated(err)) return
             call header_for(sink%out, cfg, chain, err)
+            if (allocated(err)) then
+                call output_abort(sink%out)
+                return
+            end if
         end if
         sink%window = cfg%record%window
-        if (.not. allocated(err)) &
-            call record_cycles(cfg%record, chain, sink, res, err, monitor, state)
+        if (present(monitor)) watch%outer => monitor
+        every = real(checkpoint_every, wp)
+        if (present(checkpoint_seconds)) every = checkpoint_seconds
+        call system_clock(clock_now, clock_rate)
+        watch%every = int(min(max(every, 0.0_wp)*clock_rate, 1.0e18_wp), i8)
+        if (.not. cfg%record%covariant) watch%due = clock_now + watch%every
+        continued = -1
+        do
+            call record_part(cfg, chain, sink, state, watch, res, err)
+            if (allocated(err)) return
+            if (continued < 0) continued = res%cycles_continued
+            if (res%complete .or. .not. watch%asked) exit
+            ! a checkpoint: the file under the final name gets the run so far, which goes on
+            ! from there as a second command would
+            call output_checkpoint(sink%out, cfg%record%cycles, planned_windows(cfg), err)
+            if (.not. allocated(err)) call continue_chain(cfg, chain, state, err)
+            if (allocated(err)) then
+                call output_abort(sink%out)
+                return
+            end if
+            watch%asked = .false.
+        end do
+        call output_end(sink%out, res%complete, err)
+        res%cycles_continued = continued
+
+    end subroutine simulate_to_file
+
+    !> Records from where the chain stands until the run ends or is stopped, then the results
+    !> (and /resume for a run stopped early, to continue it) into the `.part` file, which is
+    !> deleted on an error.
+    subroutine record_part(cfg, chain, sink, state, watch, res, err)
+        type(config_t), intent(in) :: cfg
+        type(chain_t), intent(inout) :: chain
+        type(file_sink_t), intent(inout) :: sink
+        type(record_state_t), intent(inout) :: state
+        type(checkpoint_monitor_t), intent(inout) :: watch
+        type(record_result_t), intent(out) :: res
+        type(error_t), allocatable, intent(out) :: err
+
+        call record_cycles(cfg%record, chain, sink, res, err, watch, state)
         if (.not. allocated(err)) &
             call write_results(sink%out, chain, res, cfg%record%jacobian_cycles, err)
         if (.not. allocated(err) .and. .not. res%complete) then
@@ -232,13 +326,8 @@ contains
                 call output_truncate_windows(sink%out, state%acc%windows, err)
             if (.not. allocated(err)) call write_resume(sink%out, cfg, chain, state, err)
         end if
-        if (allocated(err)) then
-            call output_abort(sink%out)
-            return
-        end if
-        call output_end(sink%out, res%complete, err2)
-        if (allocated(err2)) call move_alloc(err2, err)
-    end subroutine simulate_to_file
+        if (allocated(err)) call output_abort(sink%out)
+    end subroutine record_part
 
     !> Every check simulate_to_file makes before it starts, creating nothing (also what
     !> `--check` runs): the sizes, and what the output's name holds (`found`, output_inspect's

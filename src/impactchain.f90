@@ -25,7 +25,7 @@ module impactchain
                             record_spec_t
     use chain_clv, only: clv_rows_t, clv_result_t
     use chain_monitor, only: monitor_t, signal_monitor_t, stage_transient, stage_records, &
-                             stage_points, stage_samples, stage_name
+                             stage_points, stage_samples, stage_events, stage_name
     use chain_section, only: advance_to_point
     use chain_floquet, only: poincare_jacobian
     use chain_orbit, only: orbit_t, orbit_options_t, find_orbit, orbit_gap_minimum, impact_bonds
@@ -55,10 +55,11 @@ module impactchain
     use chain_output, only: code_version, output_t, output_check, output_begin, output_end, &
                             output_abort
     use chain_cli, only: cli_t, parse_command_line, cli_run, cli_help, cli_version, cli_usage, &
+                         exit_now, seconds_from_environment, &
                          cli_error
     use chain_interrupt, only: catch_interrupts, interrupted
-    use chain_progress, only: progress_t, progress_start, progress_update, stderr_is_terminal, &
-                              progress_quiet_start
+    use chain_progress, only: progress_t, progress_start, progress_update, progress_within, &
+                              stderr_is_terminal, progress_quiet_start
     implicit none
     private
     public :: wp, i8, pi, two_pi, error_t, set_error
@@ -69,7 +70,7 @@ module impactchain
     public :: chain_velocities, chain_copy_state, chain_contacts, chain_counts
     public :: record_sink_t, memory_sink_t, record_result_t, record_cycles
     public :: monitor_t, signal_monitor_t, stage_transient, stage_records, stage_points
-    public :: stage_samples
+    public :: stage_samples, stage_events
     public :: stage_name
     public :: record_spec_t, clv_rows_t, clv_result_t
     public :: advance_to_point, poincare_jacobian, simulate_to_file, start_chain, initial_state
@@ -94,7 +95,9 @@ module impactchain
     public :: code_version, output_t, output_check, output_begin, output_end, output_abort
     public :: provenance_item_t, provenance, provenance_text
     public :: cli_t, parse_command_line, cli_run, cli_help, cli_version, cli_usage, cli_error
+    public :: exit_now, seconds_from_environment
     public :: catch_interrupts, interrupted
-    public :: progress_t, progress_start, progress_update, stderr_is_terminal, progress_quiet_start
+    public :: progress_t, progress_start, progress_update, progress_within, stderr_is_terminal
+    public :: progress_quiet_start
 
 end module impactchain

@@ -15,7 +15,7 @@ module test_lyapunov
                             chain_positions, chain_velocities, chain_counts, chain_reset_counts
     use chain_event_log, only: event_log_t, event_log_init
     use chain_config, only: config_t, check_size
-    use chain_record, only: record_cycles, memory_sink_t, record_result_t
+    use chain_record, only: record_cycles, memory_sink_t, record_result_t, record_state_t
     use chain_section, only: advance_to_point
     use chain_floquet, only: poincare_jacobian, floquet_multipliers
     use chain_lyapunov, only: ky_dimension, lyapunov_acc_t, &
@@ -26,7 +26,7 @@ module test_lyapunov
     use test_engine, only: make_chain
     use test_invariants, only: check_sum_rule
     use test_chains, only: flow_of
-    use chain_monitor, only: monitor_t, stage_transient, stage_records
+    use chain_monitor, only: monitor_t, stage_transient, stage_records, stage_events
     use testing, only: tally_t, check, check_close
     implicit none
     private
@@ -42,6 +42,15 @@ module test_lyapunov
     contains
         procedure :: keep_going => watching_keep_going
     end type watching_monitor_t
+
+    !> Asks to stop at its `stop_at`-th look within a cycle after record `after` (and counts
+    !> those looks).
+    type, extends(monitor_t) :: cutting_monitor_t
+        integer(i8) :: after = 0, records = 0
+        integer :: stop_at = 0, looks = 0
+    contains
+        procedure :: keep_going => cutting_keep_going
+    end type cutting_monitor_t
 
 contains
 
@@ -82,6 +91,7 @@ contains
         call finite_time_windows(t)
         call monitored_run(t, .false.)
         call monitored_run(t, .true.)
+        call stop_within_a_cycle(t)
     end subroutine run_lyapunov_tests
 
     !> An accumulator packed to plain arrays and unpacked goes on exactly as the original
@@ -405,6 +415,61 @@ contains
                                        'which says where: '//err%message)
     end subroutine monitored_run
 
+    !> A stop asked within a drive cycle (a dense elastic chain: about 18000 impacts per cycle,
+    !> so the monitor is told several times within each) ends the run at the record before,
+    !> as a stop there would: the records so far and the chain are the uninterrupted run's,
+    !> and the run continued from `state` ends as that run, bit for bit (records, counts,
+    !> exponents). Records are held at every record here (hold_after = 0), as the run does
+    !> after a slow cycle, so that this holds on any machine.
+    subroutine stop_within_a_cycle(t)
+        type(tally_t), intent(inout) :: t
+        type(chain_t) :: plain_chain, chain
+        type(config_t) :: cfg
+        type(record_result_t) :: plain, res
+        type(memory_sink_t) :: plain_sink, sink, rest
+        type(record_state_t) :: state
+        type(cutting_monitor_t) :: cut
+        type(error_t), allocatable :: err
+
+        cfg = spectrum_config(40, 0_i8, 5_i8, 4)
+        call make_chain(plain_chain, 40, 1.7_wp, 1.5_wp, 0.0_wp, 1.0_wp, .true., 1.0e-4_wp, &
+                        0.3_wp, err, spacing=1.0e-3_wp)
+        call record_cycles(cfg%record, plain_chain, plain_sink, plain, err)
+        call check(t, .not. allocated(err) .and. plain%impacts > 5*3*4096, &
+                   'stop within a cycle: a chain of more than three looks per cycle')
+        if (allocated(err)) return
+        cut = cutting_monitor_t(after=2, stop_at=2)
+        call make_chain(chain, 40, 1.7_wp, 1.5_wp, 0.0_wp, 1.0_wp, .true., 1.0e-4_wp, &
+                        0.3_wp, err, spacing=1.0e-3_wp)
+        call record_cycles(cfg%record, chain, sink, res, err, cut, state, hold_after=0.0_wp)
+        call check(t, .not. allocated(err) .and. .not. res%complete .and. &
+                   res%cycles_done == 2 .and. cut%looks == 2, &
+                   'a stop asked within cycle 3 ends the run at record 2')
+        if (allocated(err)) return
+        call check(t, all(sink%x(:, :2) == plain_sink%x(:, :2)) .and. &
+                   all(chain_positions(chain) == plain_sink%x(:, 2)), &
+                   'its records and its chain are the whole run''s at record 2, bit for bit')
+        call record_cycles(cfg%record, chain, rest, res, err, state=state)
+        call check(t, .not. allocated(err) .and. res%complete, 'the stopped run continues')
+        if (allocated(err)) return
+        call check(t, all(rest%x(:, 3:) == plain_sink%x(:, 3:)) .and. &
+                   res%impacts == plain%impacts .and. &
+                   all(res%lyapunov%bits_per_cycle == plain%lyapunov%bits_per_cycle), &
+                   'to the whole run''s records, counts and exponents, bit for bit')
+    end subroutine stop_within_a_cycle
+
+    logical function cutting_keep_going(monitor, stage, done, total) result(keep_going)
+        class(cutting_monitor_t), intent(inout) :: monitor
+        integer, intent(in) :: stage
+        integer(i8), intent(in) :: done, total
+
+        keep_going = .true.
+        if (stage == stage_records) monitor%records = done
+        if (stage /= stage_events .or. monitor%records < monitor%after) return
+        monitor%looks = monitor%looks + 1
+        keep_going = monitor%looks < monitor%stop_at
+    end function cutting_keep_going
+
     logical function watching_keep_going(monitor, stage, done, total) result(keep_going)
         class(watching_monitor_t), intent(inout) :: monitor
         integer, intent(in) :: stage
@@ -418,6 +483,9 @@ contains
         case (stage_records)
             monitor%in_order = monitor%in_order .and. done == monitor%record_calls + 1
             monitor%record_calls = monitor%record_calls + 1
+        case (stage_events) ! (within a long cycle: not counted)
+            keep_going = .true.
+            return
         case default
             monitor%in_order = .false.
         end select

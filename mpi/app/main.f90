@@ -30,6 +30,7 @@ program impactchain_mpi
                            run_census_samples, classify_census, write_census_file, &
                            save_census_checkpoint, load_census_checkpoint, sample_record_sizes, &
                            pack_sample, unpack_sample, kind_names
+    use impactchain, only: exit_now, seconds_from_environment
     use impactchain, only: wp, i8, error_t, config_t, read_config, sweep_plan_t, &
                            sweep_result_t, chain_state_t, plan_sweep, sweep_result_init, &
                            checkpoint_path, run_sweep_branches, &
@@ -84,7 +85,7 @@ program impactchain_mpi
         call finish_sweep()
     end if
     call MPI_Finalize()
-    if (failed /= 0) stop 1, quiet=.true.
+    if (failed /= 0) call exit_now(1)
 
 contains
 
@@ -193,7 +194,7 @@ contains
                 'same command again to resume from '//checkpoint
         end if
         call MPI_Finalize()
-        stop 3, quiet=.true.
+        call exit_now(3)
     end subroutine stop_interrupted
 
     !> Rank 0 writes the one HDF5 file and deletes the checkpoint; every rank learns whether
@@ -453,18 +454,15 @@ contains
 
     ! ---- shared ----------------------------------------------------------------------------
 
-    !> Seconds per round: checkpoint_every, or IMPACTCHAIN_CHECKPOINT_SECONDS when set.
+    !> Seconds per round: checkpoint_every, or IMPACTCHAIN_CHECKPOINT_SECONDS when set (0: as
+    !> short as a round can usefully be, a hundredth of a second).
     real(wp) function round_length() result(seconds)
-        character(len=64) :: text
-        integer :: length, status, ios
+        character(len=:), allocatable :: message
 
-        seconds = checkpoint_every
-        call get_environment_variable('IMPACTCHAIN_CHECKPOINT_SECONDS', text, length, status)
-        if (status /= 0 .or. length == 0) return
-        read (text, *, iostat=ios) seconds
-        if (ios /= 0 .or. .not. (seconds > 0 .and. seconds <= 1.0e6_wp)) &
-            call stop_all('IMPACTCHAIN_CHECKPOINT_SECONDS = '//trim(text)// &
-                          ' must be a number of seconds in (0, 1e6]')
+        call seconds_from_environment('IMPACTCHAIN_CHECKPOINT_SECONDS', real(checkpoint_every, &
+                                      wp), seconds, message)
+        if (allocated(message)) call stop_all(message)
+        seconds = max(seconds, 0.01_wp)
     end function round_length
 
     !> All ranks learn whether any failed; a failing rank prints its own message.
@@ -478,7 +476,7 @@ contains
         if (failed == 0) return
         if (rank == 0) call output_abort(out)
         call MPI_Finalize()
-        stop 1, quiet=.true.
+        call exit_now(1)
     end subroutine agree_or_stop
 
     !> The checks before a run, made on every rank: all go on, or all stop (a check of the
@@ -498,7 +496,7 @@ contains
         if (root_failed == 0 .and. allocated(e)) write (error_unit, '(a,i0,a)') &
             'impactchain-mpi: error (rank ', rank, '): '//e%message
         call MPI_Finalize()
-        stop 1, quiet=.true.
+        call exit_now(1)
     end subroutine stop_if_any_failed
 
     function err_text(e) result(text)
@@ -519,9 +517,9 @@ contains
         if (rank == 0) write (error_unit, '(a)') 'impactchain-mpi: error: '//message
         call MPI_Finalize()
         if (present(code)) then
-            if (code == usage_error) stop 2, quiet=.true.
+            if (code == usage_error) call exit_now(2)
         end if
-        stop 1, quiet=.true.
+        call exit_now(1)
     end subroutine stop_all
 
 end program impactchain_mpi

@@ -6,6 +6,7 @@ A finished file is still refused without overwrite, and a stopped run of another
 refused with a message saying so; neither is touched."""
 from __future__ import annotations
 
+import os
 import signal
 import subprocess
 import time
@@ -211,3 +212,68 @@ def test_overwrite_continues_a_stopped_run(impactchain_exe, tmp_path):
             a, b = _contents(alone / "o.h5"), _contents(tmp_path / "o.h5")
             assert sorted(a) == sorted(b)
             assert not [name for name in a if not _same(a[name], b[name])]
+
+
+def test_killed_run_continues_from_its_last_checkpoint_bit_for_bit(impactchain_exe, tmp_path):
+    """Issue 30, 3: a run killed (SIGKILL: the OOM killer, a scheduler's hard limit) keeps
+    the records of its last checkpoint under the final name, marked complete = 0, and the
+    same command continues from there to the file of an uninterrupted run, bit for bit
+    (exponents, finite-time exponents, events and the Jacobian on). Checkpoints come every
+    IMPACTCHAIN_CHECKPOINT_SECONDS seconds (here 0: as often as their cost allows); a run that
+    makes them, uninterrupted, writes the same file too. Before, the `.part` file of a killed
+    run was all there was (unreadable), and the rerun started at cycle 0."""
+    whole, saved, killed = (tmp_path / name for name in ("whole", "saved", "killed"))
+    for folder in (whole, saved, killed):
+        folder.mkdir()
+        (folder / "run.nml").write_text(INPUT)
+    env = {**os.environ, "IMPACTCHAIN_CHECKPOINT_SECONDS": "1e6"}
+    subprocess.run([str(impactchain_exe), "--quiet", "run.nml"], cwd=whole, env=env,
+                   check=True, capture_output=True, timeout=300)
+    env["IMPACTCHAIN_CHECKPOINT_SECONDS"] = "0"
+    subprocess.run([str(impactchain_exe), "--quiet", "run.nml"], cwd=saved, env=env,
+                   check=True, capture_output=True, timeout=300)
+
+    proc = subprocess.Popen([str(impactchain_exe), "--quiet", "run.nml"], cwd=killed, env=env,
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    deadline = time.time() + 120
+    # a second checkpoint: the file under the final name has been replaced at least once
+    first_size = None
+    while time.time() < deadline and proc.poll() is None:
+        if (killed / "run.h5").exists():
+            size = (killed / "run.h5").stat().st_size
+            first_size = size if first_size is None else first_size
+            if size > first_size:
+                break
+        time.sleep(0.005)
+    proc.kill()
+    proc.communicate()
+    assert proc.returncode == -signal.SIGKILL, "the run ended before it could be killed"
+    with h5py.File(killed / "run.h5") as f:
+        assert int(np.ravel(f.attrs["complete"])[0]) == 0
+        done = int(f["stats/cycles_done"][()])
+        assert 0 < done < CYCLES and "resume" in f
+    result = run_namelist(impactchain_exe, INPUT, killed, "run.nml")
+    assert f"continued a run stopped early after {done} records" in result.stdout
+
+    a = _contents(whole / "run.h5")
+    for other in (saved, killed):
+        b = _contents(other / "run.h5")
+        assert sorted(a) == sorted(b)
+        different = [name for name in a if not _same(a[name], b[name])]
+        assert not different, (other.name, different)
+        assert not (other / "run.h5.part").exists()
+        assert not (other / "run.h5.saving").exists()
+
+
+def test_checkpoint_interval_from_the_environment_is_checked(impactchain_exe, tmp_path):
+    """IMPACTCHAIN_CHECKPOINT_SECONDS must be a number of seconds; anything else is refused
+    before the run starts, naming the variable and its range."""
+    (tmp_path / "run.nml").write_text(INPUT)
+    for bad in ("soon", "-1", "nan", "1e400"):
+        result = subprocess.run([str(impactchain_exe), "--quiet", "run.nml"], cwd=tmp_path,
+                                env={**os.environ, "IMPACTCHAIN_CHECKPOINT_SECONDS": bad},
+                                capture_output=True, text=True, timeout=60)
+        assert result.returncode == 1, bad
+        assert (f"IMPACTCHAIN_CHECKPOINT_SECONDS = {bad} is not a number of seconds in "
+                "[0, 1e6]") in result.stderr, result.stderr
+        assert not list(tmp_path.glob("run.h5*"))

@@ -4,6 +4,7 @@ the wrong shape, each refused with a non-zero exit and no output left behind. Cy
 64-bit in the file, as in memory (they may reach 1e12)."""
 from __future__ import annotations
 
+import os
 import signal
 import subprocess
 import time
@@ -12,7 +13,7 @@ import h5py
 import numpy as np
 import pytest
 
-from simulator import impactchain_exe, run_namelist, start_until_progress  # noqa: F401
+from simulator import impactchain_exe, mpi_exe, run_namelist, start_until_progress  # noqa: F401
 
 CHAIN = "&chain n = 4, amplitude = 1.7, omega = 1.5 /\n"
 SOURCE = (CHAIN + "&initial kind = 'random', seed = 2, x_amp = 0.3, v_amp = 0.3 /\n"
@@ -158,6 +159,50 @@ def test_full_disk_ends_with_the_message(impactchain_exe, tmp_path, full_disk, t
     assert result.returncode == 1, stderr
     assert stderr.startswith("impactchain: error: hdf5: ") and "Backtrace" not in stderr
     assert len(stderr.splitlines()) == 1, stderr
+    assert not any(p.suffix == ".part" for p in full_disk.iterdir())
+
+
+def test_full_disk_keeps_the_last_checkpoint_of_a_run(impactchain_exe, tmp_path, full_disk):
+    """Issue 30, 2 and 3: a run that fills the disk ends with its message and exit 1, and
+    the file under its name keeps the records of its last checkpoint (complete = 0); once
+    there is room, the same command continues it to the file of a run that never failed."""
+    text = DISK_RUN.replace("cycles = 20000", "cycles = 40000")
+    whole = tmp_path / "whole"
+    (whole / "full").mkdir(parents=True)
+    run_namelist(impactchain_exe, text, whole, "in.nml")
+    (tmp_path / "in.nml").write_text(text)
+    env = {**os.environ, "IMPACTCHAIN_CHECKPOINT_SECONDS": "0"}
+    result = subprocess.run([str(impactchain_exe), "--quiet", "in.nml"], cwd=tmp_path,
+                            env=env, capture_output=True, text=True, timeout=300)
+    assert result.returncode == 1, result.stderr
+    assert result.stderr.startswith("impactchain: error: ") and "Backtrace" not in result.stderr
+    assert sorted(p.name for p in full_disk.iterdir()) == ["o.h5"]
+    with h5py.File(full_disk / "o.h5") as f:
+        assert int(np.ravel(f.attrs["complete"])[0]) == 0
+        done = int(f["stats/cycles_done"][()])
+        assert 0 < done < 40000
+    subprocess.run(["mount", "-o", "remount,size=40m", str(full_disk)], check=True)
+    again = run_namelist(impactchain_exe, text, tmp_path, "in.nml")
+    assert f"continued a run stopped early after {done} records" in again.stdout
+    with h5py.File(whole / "full" / "o.h5") as a, h5py.File(full_disk / "o.h5") as b:
+        for name in ("strobe/x", "strobe/v", "events/time", "stats/site_counts", "final/x"):
+            assert np.array_equal(a[name][()], b[name][()]), name
+
+
+def test_full_disk_ends_an_mpi_sweep_with_the_message(mpi_exe, tmp_path, full_disk):
+    """Issue 30, 2: under MPI too, a full disk ends every rank with exit 1 and the one-line
+    message (before, rank 0 crashed in HDF5's exit handler after MPI_Finalize: SIGSEGV)."""
+    if mpi_exe is None:
+        pytest.skip("no MPI build (mpifort not installed)")
+    (tmp_path / "in.nml").write_text(DISK_SWEEP)
+    with open(tmp_path / "log", "w") as log:
+        result = subprocess.run(["mpirun", "--allow-run-as-root", "--oversubscribe", "-np",
+                                 "2", str(mpi_exe), "--quiet", "in.nml"], cwd=tmp_path,
+                                stdout=subprocess.DEVNULL, stderr=log, timeout=300)
+    stderr = (tmp_path / "log").read_text()
+    assert result.returncode == 1, stderr
+    assert "impactchain-mpi: error: hdf5: " in stderr, stderr
+    assert "SIGSEGV" not in stderr and "Backtrace" not in stderr, stderr
     assert not any(p.suffix == ".part" for p in full_disk.iterdir())
 
 
