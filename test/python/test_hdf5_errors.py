@@ -214,14 +214,10 @@ def test_sweep_whose_last_write_fails_keeps_its_checkpoint(impactchain_exe, tmp_
     the records uncompressed, and is larger than the file.)"""
     text = DISK_SWEEP.replace("full/", "").replace("cycles = 110", "cycles = 400")
     (tmp_path / "in.nml").write_text(text)
-    proc = subprocess.Popen([str(impactchain_exe), "--quiet", "in.nml"], cwd=tmp_path,
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    # the sweep is held (SIGSTOP) as soon as its file is begun, while its points are
-    # computed, and its name made a directory: no race with the sweep's speed
-    deadline = time.time() + 300
-    while not (tmp_path / "s.h5.part").exists() and proc.poll() is None \
-            and time.time() < deadline:
-        time.sleep(0.001)
+    # the sweep is held (SIGSTOP) once it shows its first point, while its points are
+    # computed (its file begun and checked long before), and its name made a directory: no
+    # race with the sweep's speed
+    proc, _ = start_until_progress(impactchain_exe, ["in.nml"], tmp_path, label="point")
     proc.send_signal(signal.SIGSTOP)
     assert not (tmp_path / "s.h5").exists(), "the sweep ended before it could be held"
     (tmp_path / "s.h5").mkdir()
