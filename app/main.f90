@@ -8,15 +8,13 @@
 program main
     use, intrinsic :: iso_fortran_env, only: error_unit, output_unit
     use, intrinsic :: iso_c_binding, only: c_int
-    use impactchain, only: error_t, config_t, read_config, simulate_to_file, &
-                           record_result_t, run_sweep, sweep_summary_t, checkpoint_path, &
-                           catch_interrupts, cli_t, parse_command_line, cli_run, &
-                           cli_help, cli_version, cli_usage, code_version, provenance_text, &
-                           exit_now, seconds_from_environment, &
-                           config_summary, &
-                           check_before_run, branches_t, &
-                           continuation_to_file, census_result_t, census_to_file, kind_names, &
-                           wp, checkpoint_every
+    use impactchain, only: error_t, config_t, read_config, simulate_to_file, record_result_t, &
+                           run_sweep, sweep_summary_t, code_version, provenance_text, &
+                           config_summary, check_before_run, branches_t, continuation_to_file, &
+                           census_result_t, census_to_file, kind_names, wp
+    use impactchain_drivers, only: checkpoint_path, catch_interrupts, cli_t, parse_command_line, &
+                                   cli_run, cli_help, cli_version, cli_usage, exit_now, &
+                                   seconds_from_environment, checkpoint_every
     use stderr_monitor, only: stderr_monitor_t, close_progress, progress_after_from_environment
     implicit none
     type(config_t) :: cfg

@@ -5,10 +5,10 @@
 !> speed of the machine.
 module stderr_monitor
     use, intrinsic :: iso_fortran_env, only: error_unit, int64
-    use impactchain, only: wp, i8, monitor_t, interrupted, progress_t, progress_start, &
-                           progress_update, progress_within, stderr_is_terminal, &
-                           stage_name, stage_events, stage_records, progress_quiet_start, &
-                           seconds_from_environment
+    use impactchain, only: wp, i8, monitor_t, stage_name, stage_events, stage_records
+    use impactchain_drivers, only: interrupted, progress_t, progress_start, progress_update, &
+                                   progress_within, stderr_is_terminal, progress_quiet_start, &
+                                   seconds_from_environment
     implicit none
     private
     public :: stderr_monitor_t, close_progress, progress_after_from_environment

@@ -15,16 +15,15 @@
 !> kept in memory only where a sweep would keep them.
 program bench
     use, intrinsic :: iso_fortran_env, only: int64, output_unit, error_unit
-    use impactchain, only: wp, i8, error_t, config_t, validate_config, chain_t, &
-                           event_log_t, memory_sink_t, record_result_t, record_cycles, &
-                           start_chain, &
+    use impactchain, only: wp, i8, error_t, config_t, validate_config, chain_t, event_log_t, &
+                           memory_sink_t, record_result_t, record_cycles, start_chain, &
                            restart_chain, advance_to_point, event_counts_t, chain_cycle, &
                            chain_start, chain_period, chain_positions, chain_velocities, &
                            chain_copy_state, chain_contacts, chain_counts
-    use impactchain, only: branch_options_t, branches_t, follow_branches, continuation_guess, &
-                           fmt_int
-    use impactchain, only: census_result_t, census_result_init, run_census_samples, &
-                           classify_census
+    use impactchain, only: branch_options_t, branches_t, follow_branches
+    use impactchain_drivers, only: continuation_guess, fmt_int
+    use impactchain, only: census_result_t
+    use impactchain_drivers, only: census_result_init, run_census_samples, classify_census
     !$ use omp_lib, only: omp_set_num_threads
     use bench_kit, only: row_t, wall_seconds, peak_memory_kib, print_machine, &
                          print_table_head, print_row_markdown, print_row_tsv

@@ -8,9 +8,10 @@
 !> number comes from `chain_record` / `chain_sweep`, exactly as for the CLI.
 module chain_bridge
     use, intrinsic :: iso_c_binding, only: c_int, c_int64_t, c_double
-    use impactchain, only: wp, i8, error_t, set_error, config_t, fmt_real, fmt_int, &
-                           lyapunov_vectors, event_log_t, chain_t, record_sink_t, record_result_t, &
-                           set_boundary, chain_copy_state, monitor_t, stage_events
+    use impactchain, only: wp, i8, error_t, config_t, lyapunov_vectors, event_log_t, chain_t, &
+                           record_sink_t, record_result_t, chain_copy_state, monitor_t, &
+                           stage_events
+    use impactchain_drivers, only: set_error, fmt_real, fmt_int, set_boundary
     !$ use omp_lib, only: omp_set_num_threads
     implicit none
     private

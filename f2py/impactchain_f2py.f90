@@ -54,7 +54,8 @@ subroutine ic_run(n, nsp, spacing, damping, restitution, amplitude, omega, nb, b
                   window_cycle, control, status, msg_len, message)
     use, intrinsic :: iso_c_binding, only: c_int, c_int64_t, c_double
     use impactchain, only: i8, error_t, config_t, validate_config, chain_t, record_result_t, &
-                           record_cycles, check_size, start_chain
+                           record_cycles, start_chain
+    use impactchain_drivers, only: check_size
     use chain_bridge, only: array_sink_t, shared_monitor_t, make_config, put_message, &
                             run_sizes_ok, put_run_results, call_ended, status_ok, &
                             status_invalid, status_capacity, status_internal
@@ -156,7 +157,8 @@ subroutine ic_jacobian(nsp, spacing, damping, restitution, amplitude, omega, nb,
                        dry_run, mj, jac, status, msg_len, message)
     use, intrinsic :: iso_c_binding, only: c_int, c_double
     use impactchain, only: wp, i8, error_t, config_t, validate_config, chain_t, &
-                           chain_on_section, poincare_jacobian, check_size
+                           chain_on_section, poincare_jacobian
+    use impactchain_drivers, only: check_size
     use chain_bridge, only: make_config, put_message, status_ok, &
                             status_invalid, status_failed, status_internal
     implicit none
@@ -270,9 +272,9 @@ subroutine ic_sweep(n, nsp, spacing, damping, restitution, amplitude, omega, nb,
                     exponents, stderr_bits, stderr_cycles, ky, control, status, msg_len, &
                     message)
     use, intrinsic :: iso_c_binding, only: c_int, c_int64_t, c_double
-    use impactchain, only: i8, error_t, config_t, validate_config, check_sweep, plan_sweep, &
-                           sweep_plan_t, sweep_result_t, sweep_result_init, chain_state_t, &
-                           run_sweep_branches
+    use impactchain, only: i8, error_t, config_t, validate_config, chain_state_t
+    use impactchain_drivers, only: check_sweep, plan_sweep, sweep_plan_t, sweep_result_t, &
+                                   sweep_result_init, run_sweep_branches
     use chain_bridge, only: shared_monitor_t, make_config, set_sweep, put_message, use_threads, &
                             call_ended, status_ok, status_invalid, status_internal
     implicit none
@@ -382,9 +384,9 @@ subroutine ic_continuation(n, nsp, spacing, damping, restitution, amplitude, ome
                            start_bonds, start_min_gap, start_min_impact_speed, start_reason, &
                            control, status, msg_len, message)
     use, intrinsic :: iso_c_binding, only: c_int, c_int64_t, c_double
-    use impactchain, only: i8, error_t, config_t, validate_config, branches_t, &
-                           run_continuation, continuation_table_t, continuation_table, &
-                           impact_bonds, finite_or_inf
+    use impactchain, only: i8, error_t, config_t, validate_config, branches_t, run_continuation, &
+                           impact_bonds
+    use impactchain_drivers, only: continuation_table_t, continuation_table, finite_or_inf
     use chain_bridge, only: shared_monitor_t, make_config, set_continuation, put_message, &
                             put_text, call_ended, status_ok, status_invalid, status_capacity, &
                             status_internal

@@ -26,21 +26,21 @@ program impactchain_mpi
                        MPI_Allreduce, MPI_Gatherv, MPI_COMM_WORLD, MPI_MAX, &
                        MPI_DOUBLE_PRECISION, MPI_INTEGER, MPI_INTEGER8, MPI_IN_PLACE, &
                        MPI_THREAD_FUNNELED
-    use impactchain, only: census_result_t, census_starts, check_before_run, &
-                           run_census_samples, classify_census, write_census_file, &
-                           save_census_checkpoint, load_census_checkpoint, sample_record_sizes, &
-                           pack_sample, unpack_sample, kind_names
-    use impactchain, only: exit_now, seconds_from_environment
-    use impactchain, only: wp, i8, error_t, config_t, read_config, sweep_plan_t, &
-                           sweep_result_t, chain_state_t, plan_sweep, sweep_result_init, &
-                           checkpoint_path, run_sweep_branches, &
-                           write_sweep_file, save_checkpoint, load_checkpoint, remove_file, &
-                           checkpoint_every, branch_record_sizes, pack_branch, unpack_branch, &
-                           output_t, output_begin, output_end, output_abort, catch_interrupts, &
-                           interrupted, cli_t, parse_command_line, cli_run, cli_help, &
-                           cli_version, cli_usage, code_version, provenance_text, &
-                           config_summary, &
-                           signal_monitor_t
+    use impactchain, only: census_result_t, check_before_run, kind_names
+    use impactchain_drivers, only: census_starts, run_census_samples, classify_census, &
+                                   write_census_file, save_census_checkpoint, &
+                                   load_census_checkpoint, sample_record_sizes, pack_sample, &
+                                   unpack_sample
+    use impactchain_drivers, only: exit_now, seconds_from_environment
+    use impactchain, only: wp, i8, error_t, config_t, read_config, chain_state_t, code_version, &
+                           provenance_text, config_summary, signal_monitor_t
+    use impactchain_drivers, only: sweep_plan_t, sweep_result_t, plan_sweep, sweep_result_init, &
+                                   checkpoint_path, run_sweep_branches, write_sweep_file, &
+                                   save_checkpoint, load_checkpoint, remove_file, &
+                                   checkpoint_every, branch_record_sizes, pack_branch, &
+                                   unpack_branch, output_t, output_begin, output_end, &
+                                   output_abort, catch_interrupts, interrupted, cli_t, &
+                                   parse_command_line, cli_run, cli_help, cli_version, cli_usage
     implicit none
     type(config_t) :: cfg
     type(sweep_plan_t) :: plan

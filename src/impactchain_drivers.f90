@@ -1,0 +1,41 @@
+!> What the programs of this project need beyond the public API (`impactchain`): the shared
+!> command line and exit, the interrupt flag and progress lines (app/), the MPI driver's
+!> sweep and census rounds, checkpoints, packing and file writing (mpi/), the Python layer's
+!> continuation tables and argument checks (f2py/). Not an API for other projects: these
+!> names follow the drivers. It implements nothing itself.
+module impactchain_drivers
+    use chain_error, only: set_error
+    use chain_config, only: fmt_real, fmt_int, check_size, set_boundary
+    use chain_branch_file, only: continuation_guess, continuation_table_t, continuation_table, &
+                                 finite_or_inf
+    use chain_sweep, only: plan_sweep, sweep_plan_t, sweep_result_t, sweep_result_init, &
+                           run_sweep_branches, write_sweep_file, save_checkpoint, &
+                           load_checkpoint, remove_file, checkpoint_every, checkpoint_path, &
+                           branch_record_sizes, pack_branch, unpack_branch, check_sweep
+    use chain_census, only: census_result_init, run_census_samples, classify_census, &
+                            save_census_checkpoint, load_census_checkpoint, census_starts, &
+                            sample_record_sizes, pack_sample, unpack_sample
+    use chain_census_file, only: write_census_file
+    use chain_output, only: output_t, output_begin, output_end, output_abort
+    use chain_cli, only: cli_t, parse_command_line, cli_run, cli_help, cli_version, cli_usage, &
+                         exit_now, seconds_from_environment
+    use chain_interrupt, only: catch_interrupts, interrupted
+    use chain_progress, only: progress_t, progress_start, progress_update, progress_within, &
+                              stderr_is_terminal, progress_quiet_start
+    implicit none
+    private
+    public :: set_error, fmt_real, fmt_int, check_size, set_boundary, continuation_guess
+    public :: continuation_table_t, continuation_table, finite_or_inf, plan_sweep
+    public :: sweep_plan_t, sweep_result_t, sweep_result_init, run_sweep_branches
+    public :: write_sweep_file, save_checkpoint, load_checkpoint, remove_file
+    public :: checkpoint_every, checkpoint_path, branch_record_sizes, pack_branch
+    public :: unpack_branch, check_sweep, census_result_init, run_census_samples
+    public :: classify_census, save_census_checkpoint, load_census_checkpoint
+    public :: write_census_file, census_starts, sample_record_sizes, pack_sample
+    public :: unpack_sample, output_t, output_begin, output_end, output_abort, cli_t
+    public :: parse_command_line, cli_run, cli_help, cli_version, cli_usage, exit_now
+    public :: seconds_from_environment, catch_interrupts, interrupted, progress_t
+    public :: progress_start, progress_update, progress_within, stderr_is_terminal
+    public :: progress_quiet_start
+
+end module impactchain_drivers
