@@ -1539,16 +1539,17 @@ contains
         end associate
     end subroutine check_clv_size
 
-    !> `run.nml` -> `run.h5` in the current directory.
+    !> `dir/run.nml` -> `dir/run.h5`: next to the input, wherever the program runs.
     pure function default_output(path) result(out)
         character(len=*), intent(in) :: path
         character(len=:), allocatable :: out
         integer :: slash, dot
 
         slash = index(path, '/', back=.true.)
-        out = path(slash + 1:)
-        dot = index(out, '.', back=.true.)
-        if (dot > 1) out = out(:dot - 1)
+        dot = index(path, '.', back=.true.)
+        out = path
+        ! (a dot of the directory's name, or a name that starts with one, is no extension)
+        if (dot > slash + 1) out = path(:dot - 1)
         out = out//'.h5'
     end function default_output
 

@@ -22,6 +22,8 @@ import sys
 import time
 from pathlib import Path
 
+import h5py
+import numpy as np
 import pytest
 
 import impactchain
@@ -102,4 +104,17 @@ def test_pip_install_in_a_fresh_venv(tmp_path: Path) -> None:
 
     usage = _run([python, "-m", "impactchain", "--help"], outside, env, 300).stdout
     assert usage.startswith("usage: python -m impactchain")
+
+    # the simulator on the PATH the install gives (issue 32, 4): from another directory, its
+    # file next to the input, the same records as the package's kernels
+    inputs = tmp_path / "inputs"
+    inputs.mkdir()
+    (inputs / "small.nml").write_text("&chain n = 6, amplitude = 1.7, omega = 1.5 /\n"
+                                      "&run transient = 10, cycles = 20 /\n")
+    path_env = {**env, "PATH": f"{venv / 'bin'}{os.pathsep}{env.get('PATH', '')}"}
+    ran = _run(["impactchain", "--quiet", "../inputs/small.nml"], outside, path_env, 300)
+    assert "wrote ../inputs/small.h5" in ran.stdout
+    with h5py.File(inputs / "small.h5") as f:
+        records = f["strobe/x"][()]
+    assert np.array_equal(records, api.simulate(6, 1.7, 1.5, transient=10, cycles=20).x)
     print(f"fresh venv + pip install of the repository: {built:.0f} s")

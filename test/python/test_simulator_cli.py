@@ -3,13 +3,16 @@ the key and a non-zero exit and no output file, overwrite protection, and bit-id
 continuation from a file."""
 from __future__ import annotations
 
+import os
+import shutil
 import subprocess
+from pathlib import Path
 
 import h5py
 import numpy as np
 import pytest
 
-from simulator import (impactchain_exe, mpi_exe, run_namelist,  # noqa: F401 (fixtures)
+from simulator import (ROOT, impactchain_exe, mpi_exe, run_namelist,  # noqa: F401 (fixtures)
                        start_until_progress)
 
 BASE = """
@@ -339,3 +342,92 @@ def test_resolved_namelist_reads_back(impactchain_exe, tmp_path, text):
         assert len(names) > 5
         for name in names:
             np.testing.assert_array_equal(a[name][()], b[name][()], err_msg=name)
+
+
+def _installed(name: str) -> Path:
+    program = ROOT / ".venv" / "bin" / name
+    if not program.exists():
+        pytest.skip(f"{name} is not installed in .venv (make build installs it)")
+    return program
+
+
+def test_the_programs_on_the_path_run_from_any_directory(impactchain_exe, tmp_path):
+    """Issue 32, 4: after `make` the simulator and the MPI driver are programs of the venv
+    (`.venv/bin`, on the PATH once it is active; `pip install .` installs them likewise): run
+    from another directory, each writes its file next to its input, and the simulator's
+    records are those of the fpm build, bit for bit (the same flags: meson.build)."""
+    if os.environ.get("IMPACTCHAIN_FPM_FLAGS"):
+        pytest.skip("compared with the release build, in the release pass of the tests")
+    simulator = _installed("impactchain")
+    inputs, elsewhere = tmp_path / "inputs", tmp_path / "elsewhere"
+    inputs.mkdir()
+    elsewhere.mkdir()
+    text = ("&chain n = 8, amplitude = 1.7, omega = 1.5 /\n"
+            "&initial kind = 'random', seed = 1, x_amp = 0.3, v_amp = 0.3 /\n"
+            "&run transient = 10, cycles = 50 /\n")
+    (inputs / "run.nml").write_text(text)
+    ran = subprocess.run([str(simulator), "--quiet", "../inputs/run.nml"], cwd=elsewhere,
+                         capture_output=True, text=True, timeout=120)
+    assert ran.returncode == 0, ran.stderr
+    assert "wrote ../inputs/run.h5" in ran.stdout
+    assert not list(elsewhere.iterdir())
+    subprocess.run([str(impactchain_exe), "--quiet", "run.nml", "-o", "fpm.h5"], cwd=inputs,
+                   check=True, capture_output=True, timeout=120)
+    with h5py.File(inputs / "run.h5") as a, h5py.File(inputs / "fpm.h5") as b:
+        for name in ("strobe/x", "strobe/v", "events/time", "final/x"):
+            assert np.array_equal(a[name][()], b[name][()]), name
+
+    if shutil.which("mpirun") is None:
+        return
+    driver = _installed("impactchain-mpi")
+    (inputs / "sweep.nml").write_text(text + "&sweep parameter = 'amplitude', start = 1.5, "
+                                      "stop = 1.7, step = 0.05, mode = 'independent' /\n")
+    ran = subprocess.run(["mpirun", "--allow-run-as-root", "--oversubscribe", "-np", "2",
+                          str(driver), "--quiet", "../inputs/sweep.nml"], cwd=elsewhere,
+                         capture_output=True, text=True, timeout=300)
+    assert ran.returncode == 0, ran.stderr
+    assert "wrote ../inputs/sweep.h5" in ran.stdout and "on 2 ranks" in ran.stdout
+    assert not list(elsewhere.iterdir())
+
+
+def _readme_block_after(marker: str) -> str:
+    """The first ```sh block of README.md after the line holding `marker`."""
+    text = (ROOT / "README.md").read_text()
+    rest = text[text.index(marker):]
+    start = rest.index("```sh\n") + len("```sh\n")
+    return rest[start:rest.index("```", start)]
+
+
+def test_the_readmes_mpi_commands_run_as_written(tmp_path):
+    """Issue 32, 4: the README's MPI command and its Slurm job script run as written (with 2
+    ranks; the job's `srun` as `mpirun -np 2`, its /path/to/impactchain this repository), from
+    the namelist's directory, each writing its sweep next to it."""
+    if os.environ.get("IMPACTCHAIN_FPM_FLAGS"):
+        pytest.skip("the installed programs are the release build: run in that pass")
+    _installed("impactchain-mpi")
+    if shutil.which("mpirun") is None:
+        pytest.skip("no mpirun")
+    sweep = ("&chain n = 8, amplitude = 1.7, omega = 1.5 /\n"
+             "&initial kind = 'random', seed = 1, x_amp = 0.3, v_amp = 0.3 /\n"
+             "&run transient = 10, cycles = 40 /\n&sweep parameter = 'amplitude', "
+             "start = 1.5, stop = 1.7, step = 0.05, mode = 'independent' /\n")
+    (tmp_path / "input.nml").write_text(sweep)
+    (tmp_path / "sweep.nml").write_text(sweep)
+    command = _readme_block_after("MPI driver `impactchain-mpi` is built")
+    assert "mpirun -np 4 impactchain-mpi input.nml" in command
+    job = _readme_block_after("Under Slurm, one task per rank")
+    assert "srun impactchain-mpi sweep.nml" in job
+    scripts = {"command": command.replace("-np 4", "-np 2").replace("/path/to/impactchain",
+                                                                     str(ROOT)),
+               "job": job.replace("/path/to/impactchain", str(ROOT)).replace(
+                   "srun ", "mpirun -np 2 ")}
+    # (mpirun as root, on a machine of fewer cores than ranks: allowed through its environment)
+    env = {**os.environ, "OMPI_ALLOW_RUN_AS_ROOT": "1", "OMPI_ALLOW_RUN_AS_ROOT_CONFIRM": "1",
+           "OMPI_MCA_rmaps_base_oversubscribe": "1"}
+    for name, script in scripts.items():
+        (tmp_path / f"{name}.sh").write_text(script)
+        ran = subprocess.run(["bash", "-e", f"{name}.sh"], cwd=tmp_path, env=env,
+                             capture_output=True, text=True, timeout=300)
+        assert ran.returncode == 0, (name, ran.stderr)
+        assert "on 2 ranks" in ran.stdout, (name, ran.stdout)
+    assert (tmp_path / "input.h5").exists() and (tmp_path / "sweep.h5").exists()
