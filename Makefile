@@ -16,11 +16,11 @@ CHECKED = --flag "$(CHECKED_FLAGS)"
 # the OpenBLAS numpy and scipy build against (kernels for new CPUs, symbols prefixed scipy_),
 # whose pkg-config file inside the wheel is put on PKG_CONFIG_PATH here. Another one:
 # `make IMPACTCHAIN_BLAS=openblas build` (Debian's libopenblas-dev: a threaded build, which
-# src/chain_blas_runtime.c pins to one thread; never libopenblas0-serial, not thread-safe),
+# src/base/chain_blas_runtime.c pins to one thread; never libopenblas0-serial, not thread-safe),
 # `IMPACTCHAIN_BLAS=lapack` (Debian's liblapack-dev on the libblas.so.3 its alternatives
 # select), or a cluster module's .pc. fpm gets
 # the module's flags through FPM_LDFLAGS and FPM_CFLAGS (its Cflags name a symbol prefix, for
-# src/chain_blas_names.c), meson.build reads IMPACTCHAIN_BLAS itself.
+# src/base/chain_blas_names.c), meson.build reads IMPACTCHAIN_BLAS itself.
 # `eval "$$(make -s blas-env)"` sets the same for fpm and pytest run by hand.
 IMPACTCHAIN_BLAS ?= scipy-openblas
 export IMPACTCHAIN_BLAS

@@ -1124,7 +1124,7 @@ def provenance() -> Mapping[str, str]:
     """Where the extension runs: ``code_version``, ``compiler``, ``compiler_options``, ``blas``
     (name, version, build), ``blas_kernel`` (the kernels the BLAS selected on this CPU) and
     ``cpu_model``; the root attributes of the files the command line writes on this machine
-    and the lines of ``impactchain --version`` (one table: src/chain_provenance.f90).
+    and the lines of ``impactchain --version`` (one table: src/base/chain_provenance.f90).
     (``compiler_options`` are the extension's own, which name other build directories.)"""
     text_len, text = _extension().ic_provenance()
     lines = bytes(np.asarray(text[:text_len]).astype(np.uint8)).decode().splitlines()

@@ -126,7 +126,7 @@ def test_mistake_is_reported_where_and_how(impactchain_exe, tmp_path, case):
 def test_schema_lists_exactly_the_namelist_keys():
     """chain_config's table of keys and types is the namelist statements' keys, group by
     group (a key added in one place and not the other fails here)."""
-    source = (ROOT / "src" / "chain_config.f90").read_text()
+    source = (ROOT / "src" / "runs" / "chain_config.f90").read_text()
     statements = {}
     for match in re.finditer(r"namelist /(\w+)/((?:[^\n]*&\s*\n)*[^\n]*)", source):
         names = re.sub(r"&\s*\n", " ", match.group(2)).replace(",", " ").split()

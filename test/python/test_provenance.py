@@ -1,4 +1,4 @@
-"""Provenance (issue #29, item 5; src/chain_provenance.f90): `impactchain --version`, the MPI
+"""Provenance (issue #29, item 5; src/base/chain_provenance.f90): `impactchain --version`, the MPI
 driver's `--version`, the root attributes of every kind of output file (run, sweep,
 continuation, census) and `impactchain.api.provenance()` name the code version, the compiler
 and its flags, the BLAS with its version and the kernels it selected on this CPU, and the CPU

@@ -5,7 +5,7 @@
 !> driver's print it, the bench prints it above its table and the Python package returns it
 !> (`impactchain.api.provenance()`), so the four always agree.
 !>
-!> The BLAS and the CPU are asked at run time (src/chain_blas_runtime.c): the same executable
+!> The BLAS and the CPU are asked at run time (src/base/chain_blas_runtime.c): the same executable
 !> may run on another machine, where the BLAS selects other kernels and results that go
 !> through it (Lyapunov exponents, continuation) change in their last bits.
 !> Infrastructure, no model section.

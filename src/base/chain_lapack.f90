@@ -75,7 +75,7 @@ module chain_lapack
             real(wp), intent(out) :: wr(*), wi(*), vl(ldvl, *), vr(ldvr, *), work(*)
             integer, intent(out) :: info
         end subroutine dgeev
-        !> src/chain_blas_runtime.c: the linked BLAS's thread count set to one
+        !> src/base/chain_blas_runtime.c: the linked BLAS's thread count set to one
         subroutine blas_one_thread_c() bind(c, name='impactchain_blas_one_thread')
             implicit none
         end subroutine blas_one_thread_c
@@ -84,7 +84,7 @@ module chain_lapack
 contains
 
     !> One thread inside every call of the linked BLAS (README, "Which BLAS"). Done when the
-    !> program is loaded, by a constructor in src/chain_blas_runtime.c, which this reference
+    !> program is loaded, by a constructor in src/base/chain_blas_runtime.c, which this reference
     !> links into every program that uses this module; call it again only if something else
     !> (a host program) changed the BLAS's thread count, outside any parallel region.
     subroutine blas_one_thread()

@@ -1,0 +1,41 @@
+"""Issue 31, 1: the folders of src/ are layers whose `use`s point one way
+(test/check_layers.py); a back-edge fails the check, naming the file, the module and both
+layers."""
+from __future__ import annotations
+
+import shutil
+import subprocess
+import sys
+
+from simulator import ROOT
+
+CHECKER = ROOT / "test" / "check_layers.py"
+
+
+def _check(root) -> subprocess.CompletedProcess:
+    return subprocess.run([sys.executable, str(CHECKER), str(root)], capture_output=True,
+                          text=True, timeout=60)
+
+
+def test_the_tree_has_no_back_edge():
+    result = _check(ROOT)
+    assert result.returncode == 0, result.stderr
+
+
+def test_a_back_edge_fails(tmp_path):
+    shutil.copytree(ROOT / "src", tmp_path / "src")
+    flow = tmp_path / "src" / "model" / "chain_flow.f90"
+    # the model made to use the engine, which stands above it
+    flow.write_text(flow.read_text().replace("    use chain_kinds,",
+                                             "    use chain_engine, only: chain_t\n"
+                                             "    use chain_kinds,", 1))
+    (tmp_path / "app").mkdir()
+    (tmp_path / "app" / "main.f90").write_text("program p\n    use chain_sim\nend program p\n")
+    result = _check(tmp_path)
+    assert result.returncode == 1
+    lines = result.stderr.splitlines()
+    assert ("check_layers: src/model/chain_flow.f90: uses chain_engine (layer engine), which "
+            "layer model may not use (it may use: base)") in lines, lines
+    assert any(line.startswith("check_layers: app/main.f90: uses chain_sim (layer runs)")
+               for line in lines), lines
+    assert len(lines) == 2
