@@ -5,6 +5,9 @@ The format is the output's extension (``.png``, ``.pdf``, ``.svg``) or ``--forma
 file carries the code version, the input namelists and the source file names in its
 metadata (:func:`impactchain.figures.metadata`).
 
+``python -m impactchain examples DIR`` copies the recipes of the paper's figures
+(``namelists/``) and the example scripts into DIR.
+
 Errors in the input (missing file, wrong schema, data the figure needs but the run did
 not record) and bad options print one line ``impactchain: error: ...`` on stderr and exit
 with status 2 without writing anything.
@@ -14,6 +17,7 @@ from __future__ import annotations
 
 import argparse
 import os
+import shutil
 import sys
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
@@ -361,6 +365,13 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("files", nargs=1, metavar="FILE.h5")
     _output_options(p, "output prefix, e.g. figs/run (figs/run.pdf: PDF files)")
     _all_options(p)
+    p = sub.add_parser("examples", help="copy the recipes of the paper's figures and the "
+                                        "example scripts into DIR",
+                       description="Copy the recipes of the paper's figures (namelists/) "
+                                   "and the example scripts into DIR; an existing file is "
+                                   "never replaced without --overwrite.")
+    p.add_argument("directory", metavar="DIR")
+    p.add_argument("--overwrite", action="store_true", help="replace files that exist")
     return parser
 
 
@@ -371,7 +382,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     """Run the CLI; return the exit status."""
     args = build_parser().parse_args(argv)
     try:
-        if args.figure == "all":
+        if args.figure == "examples":
+            _copy_examples(Path(args.directory), args.overwrite)
+        elif args.figure == "all":
             _make_all(args)
         else:
             _make_one(COMMANDS[args.figure], args)
@@ -379,6 +392,31 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(f"impactchain: error: {exc}", file=sys.stderr)
         return EXIT_ERROR
     return 0
+
+
+EXAMPLES = Path(__file__).resolve().parent / "examples"
+
+
+def _copy_examples(target: Path, overwrite: bool) -> None:
+    """The installed examples (recipes in namelists/, scripts) into ``target``: all or
+    nothing, and nothing the user has replaced without ``overwrite``."""
+    if not EXAMPLES.is_dir():
+        raise CliError("this installation has no examples (the package was built without "
+                       "them)")
+    if target.exists() and not target.is_dir():
+        raise CliError(f"{target} exists and is not a directory")
+    files = sorted(p.relative_to(EXAMPLES) for p in EXAMPLES.rglob("*")
+                   if p.is_file() and "__pycache__" not in p.parts)
+    taken = [str(target / f) for f in files if (target / f).exists()]
+    if taken and not overwrite:
+        raise CliError(f"{len(taken)} file(s) exist, e.g. {taken[0]}; nothing was copied "
+                       "(--overwrite replaces them)")
+    for f in files:
+        (target / f).parent.mkdir(parents=True, exist_ok=True)
+        shutil.copyfile(EXAMPLES / f, target / f)
+    print(f"impactchain: copied {len(files)} files into {target} (the recipes in "
+          f"{target / 'namelists'}; run one with: impactchain {target / 'namelists'}"
+          "/default.nml)")
 
 
 def _make_one(command: Command, args: argparse.Namespace) -> None:

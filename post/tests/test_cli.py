@@ -351,3 +351,30 @@ def test_clv_errors(make_run: MakeRun, run_file: Path, tmp_path: Path,
     assert "skipped clv-space-time" in capsys.readouterr().err
     assert (tmp_path / "b_clv_ipr.png").exists()
     assert not (tmp_path / "b_clv_space_time.png").exists()
+
+
+def test_examples_are_copied_out_and_never_over_a_users_file(tmp_path: Path) -> None:
+    """Issue 32, 6 (the recipes and scripts; the tutorials are to come): `python -m
+    impactchain examples DIR` copies the installed recipes of the paper's figures and the
+    example scripts; a second time it refuses, naming a file that exists and copying
+    nothing, unless --overwrite."""
+    root = Path(__file__).resolve().parents[2]
+    target = tmp_path / "mine"
+    done = subprocess.run([sys.executable, "-m", "impactchain", "examples", str(target)],
+                          capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0, done.stderr
+    recipes = sorted(p.name for p in (root / "namelists").glob("*.nml"))
+    assert sorted(p.name for p in (target / "namelists").glob("*.nml")) == recipes
+    assert ((target / "namelists" / "default.nml").read_text()
+            == (root / "namelists" / "default.nml").read_text())
+    assert (target / "fig1c_space_amplitude.py").exists()
+    (target / "namelists" / "default.nml").write_text("! my own\n")
+    again = subprocess.run([sys.executable, "-m", "impactchain", "examples", str(target)],
+                           capture_output=True, text=True, timeout=120)
+    assert again.returncode == 2 and "nothing was copied (--overwrite" in again.stderr
+    assert (target / "namelists" / "default.nml").read_text() == "! my own\n"
+    forced = subprocess.run([sys.executable, "-m", "impactchain", "examples", str(target),
+                             "--overwrite"], capture_output=True, text=True, timeout=120)
+    assert forced.returncode == 0, forced.stderr
+    assert ((target / "namelists" / "default.nml").read_text()
+            == (root / "namelists" / "default.nml").read_text())
