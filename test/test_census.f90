@@ -22,7 +22,7 @@ module test_census
     use chain_engine, only: chain_t, chain_positions, chain_velocities
     use chain_record, only: memory_sink_t, record_result_t, record_cycles
     use chain_sim, only: initial_state, start_chain
-    use chain_sweep, only: remove_file
+    use chain_files, only: remove_file
     use chain_attractor, only: attractor_t, kind_periodic, kind_chaotic, kind_aperiodic, &
                                orbit_period, sample_kind, mirror_image, mirror_symmetric, &
                                states_close, orbit_offset, match_attractor, site_fractions

@@ -10,12 +10,14 @@ module impactchain_drivers
                                  finite_or_inf
     use chain_sweep, only: plan_sweep, sweep_plan_t, sweep_result_t, sweep_result_init, &
                            run_sweep_branches, write_sweep_file, save_checkpoint, &
-                           load_checkpoint, remove_file, checkpoint_every, checkpoint_path, &
+                           load_checkpoint, checkpoint_path, &
                            branch_record_sizes, pack_branch, unpack_branch, check_sweep
     use chain_census, only: census_result_init, run_census_samples, classify_census, &
                             save_census_checkpoint, load_census_checkpoint, census_starts, &
                             sample_record_sizes, pack_sample, unpack_sample
     use chain_census_file, only: write_census_file
+    use chain_files, only: remove_file
+    use chain_monitor, only: checkpoint_every
     use chain_output, only: output_t, output_begin, output_end, output_abort
     use chain_cli, only: cli_t, parse_command_line, cli_run, cli_help, cli_version, cli_usage, &
                          exit_now, seconds_from_environment

@@ -7,7 +7,8 @@ module chain_census_file
     use chain_config, only: config_t
     use chain_model, only: parameter_units
     use chain_sim, only: write_run_header
-    use chain_sweep, only: checkpoint_path, validate_sweep_points, plan_sweep, remove_file
+    use chain_sweep, only: checkpoint_path, validate_sweep_points, plan_sweep
+    use chain_files, only: remove_file
     use chain_census, only: census_result_t, census_starts, run_census_samples, &
                             classify_census, save_census_checkpoint, load_census_checkpoint, &
                             census_checkpoint_monitor_t, census_points

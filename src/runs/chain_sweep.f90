@@ -34,7 +34,7 @@ module chain_sweep
                             output_describe, output_index, output_unset_param
     use chain_hdf5, only: h5_write, h5_write_attr, h5_set_scale, h5_create_dimension
     use chain_files, only: rename_file, remove_file, close_checked
-    use chain_monitor, only: monitor_t, stage_points, saving_monitor_t, checkpoint_every
+    use chain_monitor, only: monitor_t, stage_points, saving_monitor_t
     implicit none
     private
     public :: sweep_plan_t, sweep_result_t, plan_sweep, sweep_point_config, run_branch
@@ -42,9 +42,8 @@ module chain_sweep
     public :: run_sweep, write_sweep_file, sweep_summary_t, validate_sweep_points
     public :: check_sweep, check_sweep_size
     public :: checkpoint_path
-    public :: save_checkpoint, load_checkpoint, checkpoint_every
+    public :: save_checkpoint, load_checkpoint
     ! (chain_files' remove_file, for the drivers that delete a finished sweep's checkpoint)
-    public :: remove_file
     public :: branch_record_sizes, pack_branch, unpack_branch
 
     !> The checkpoint's first bytes; the number changes with the layout of pack_branch.
