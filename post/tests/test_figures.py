@@ -286,6 +286,83 @@ def test_ky_dimension_is_never_computed_from_the_exponents(make_run: MakeRun) ->
         figures.ky_dimension([run])
 
 
+def _partial_sweep(make_run: MakeRun, name: str, k: int, ky: list[float]) -> Run:
+    """A sweep of n = 4 (2n = 8) with k exponents per point and the given stored
+    dimensions (the simulator stores k where the partial sums never turned negative)."""
+    path = make_run(name, n=4, strobe=False, events=False,
+                    sweep={"points": len(ky), "exponents": k})
+    with h5py.File(path, "r+") as f:
+        f["sweep/ky_dimension"][...] = ky
+    return read_run(path)
+
+
+def test_ky_dimension_from_a_partial_spectrum_is_a_lower_bound(make_run: MakeRun) -> None:
+    """Issue 32, 8: with vectors = 1 the stored 1.0 wherever lambda1 >= 0 is a lower bound
+    (docs/model.md 7.5): those points are marked and named in the legend, and the title says
+    how many of the 2n exponents were computed."""
+    run = _partial_sweep(make_run, "one.h5", 1, [0.0, 1.0, 1.0, 0.0, 1.0])
+    (ax,) = figures.ky_dimension([run]).axes
+    (line,) = _lines(ax, "ky")
+    np.testing.assert_array_equal(line.get_ydata(), [0.0, 1.0, 1.0, 0.0, 1.0])
+    (bound,) = _lines(ax, "lower-bound")
+    assert run.sweep is not None
+    np.testing.assert_array_equal(bound.get_xdata(), run.sweep.values[[1, 2, 4]])
+    np.testing.assert_array_equal(bound.get_ydata(), [1.0, 1.0, 1.0])
+    legend = ax.get_legend()
+    assert legend is not None
+    assert [t.get_text() for t in legend.get_texts()] == ["lower bound (1 of 8 exponents)"]
+    assert "from 1 of 8 exponents; open triangles: lower bounds" in ax.get_title()
+
+
+def test_ky_dimension_below_the_partial_count_is_not_a_bound(make_run: MakeRun) -> None:
+    """A partial sum that turned negative within the k exponents gives the dimension itself:
+    nothing marked, but the title still says the spectrum is partial; a full spectrum says
+    nothing of it."""
+    run = _partial_sweep(make_run, "three.h5", 3, [0.0, 1.5, 2.9])
+    (ax,) = figures.ky_dimension([run]).axes
+    assert not _lines(ax, "lower-bound") and ax.get_legend() is None
+    assert "from 3 of 8 exponents" in ax.get_title()
+    assert "lower bound" not in ax.get_title()
+    full = _partial_sweep(make_run, "full.h5", 8, [0.0, 8.0, 2.5])
+    (ax,) = figures.ky_dimension([full]).axes
+    assert not _lines(ax, "lower-bound") and "exponents" not in ax.get_title()
+
+
+def test_ky_dimension_lower_bounds_on_a_2d_sweep(make_run: MakeRun) -> None:
+    path = make_run("two.h5", n=4, strobe=False, events=False,
+                    sweep={"points": 4, "exponents": 2, "parameter2": "omega"})
+    with h5py.File(path, "r+") as f:
+        f["sweep/ky_dimension"][...] = [2.0, 1.3, 0.0, 2.0]
+    ax = _plots(figures.ky_dimension([read_run(path)]))[0]
+    bound = _scatter(ax, "lower-bound")
+    assert len(bound.get_offsets()) == 2
+    assert "from 2 of 8 exponents" in ax.get_title()
+
+
+def test_lyapunov_title_says_how_many_of_the_spectrum(make_run: MakeRun) -> None:
+    """The exponents figure of a partial spectrum: 'the largest 1 of 8', not 'all 1'."""
+    run = _partial_sweep(make_run, "one.h5", 1, [0.0, 1.0, 1.0])
+    title = figures.lyapunov([run]).get_suptitle()
+    assert title.startswith("the largest 1 of 8 Lyapunov exponents"), title
+    full = _partial_sweep(make_run, "full.h5", 8, [0.0, 8.0, 2.5])
+    assert figures.lyapunov([full]).get_suptitle().startswith("all 8 Lyapunov exponents")
+
+
+def test_spectrum_of_a_partial_spectrum_says_lower_bound(make_run: MakeRun) -> None:
+    path = make_run("partial.h5", n=4, lyapunov=True)
+    with h5py.File(path, "r+") as f:
+        g = f["lyapunov"]
+        for name in ("exponents", "exponents_per_time", "stderr", "running"):
+            data, attrs = g[name][..., :2], dict(g[name].attrs)
+            del g[name]
+            g[name] = data
+            g[name].attrs.update(attrs)
+        g.attrs["ky_dimension"] = 2.0
+    left = _plots(figures.spectrum(read_run(path)))[0]
+    assert left.get_title().startswith("$D_{KY}$ $\\geq$ 2.000 (a lower bound: 2 of 8 "
+                                       "exponents)"), left.get_title()
+
+
 # ---------------------------------------------------------------------------- spectrum
 
 
