@@ -54,6 +54,7 @@ from matplotlib.cm import ScalarMappable
 from matplotlib.collections import LineCollection
 from matplotlib.colors import BoundaryNorm, ListedColormap
 from matplotlib.figure import Figure, SubFigure
+from matplotlib.font_manager import FontProperties
 from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
 from matplotlib.ticker import MaxNLocator
@@ -697,12 +698,47 @@ def poincare(run: RunLike, site: int = 1, cycles: int | None = None,
     fig, ax = _one_axes(ax, 6.0, 5.0, "poincare")
     points = ax.scatter(x, v, c=cycle, cmap="viridis", s=14, linewidths=0, gid="section")
     _parent(ax).colorbar(points, ax=ax, label=_cycle_label(run))
+    ax.xaxis.set_major_locator(_SpacedLocator())
     ax.set_xlabel(_label("displacement", _unit(run, "strobe/x"), f"x_{{{site}}}"))
     ax.set_ylabel(_label("velocity", _unit(run, "strobe/v"), f"v_{{{site}}}"))
     ax.set_title(f"{_title(run)}\noscillator {site}, section phase "
                  f"{run.params.phase:.3g} rad, {x.size} cycles", fontsize="medium")
     _record_sources(fig, [run])
     return fig
+
+
+class _SpacedLocator(MaxNLocator):
+    """Ticks of an x axis far enough apart for their labels. Matplotlib's automatic ticks
+    allow for labels three characters wide, so labels such as -0.875 at steps of 0.025 run
+    together (figure 8); this takes fewer ticks, with the same steps, until the widest label
+    (estimated at 0.65 em a character) and an em between labels fit between two ticks."""
+
+    STEPS = (1.0, 2.0, 2.5, 5.0, 10.0)
+
+    def __init__(self) -> None:
+        super().__init__(nbins="auto", steps=list(self.STEPS))
+
+    def tick_values(self, vmin: float, vmax: float) -> np.ndarray:
+        ticks = super().tick_values(vmin, vmax)
+        axis = self.axis
+        if axis is None or axis.axes is None or not vmax != vmin:
+            return ticks
+        low, high = sorted((vmin, vmax))
+        length = abs(axis.axes.bbox.width)
+        em = (FontProperties(size=matplotlib.rcParams["xtick.labelsize"]).get_size_in_points()
+              * axis.axes.get_figure(root=True).dpi / 72.0)
+        bins = len(ticks)
+        while bins > 1:
+            shown = ticks[(ticks >= low) & (ticks <= high)]
+            if shown.size < 2:
+                break
+            labels = axis.major.formatter.format_ticks(list(shown))
+            room = (shown[1] - shown[0]) / (high - low) * length
+            if room >= (0.65 * max(len(label) for label in labels) + 1.0) * em:
+                break
+            bins -= 1
+            ticks = MaxNLocator(nbins=bins, steps=list(self.STEPS)).tick_values(vmin, vmax)
+        return ticks
 
 
 # ---------------------------------------------------------------------------- bifurcation
@@ -1531,8 +1567,9 @@ def branches(run: RunLike | Sequence[RunLike], over: RunLike | None = None, site
                          f"x_{{{site}}}"))
     summary = (_continuation_summary(cont0) if len(conts) == 1 else
                f"{sum(c.n_points for c in conts)} orbits from {len(conts)} starts")
+    # (wrapped to the figure: the end reasons of a continuation run long)
     ax.set_title(f"{_title(first, skip=cont0.parameter)}\noscillator {site}; {summary}",
-                 fontsize="medium")
+                 fontsize="medium", wrap=True)
     _record_sources(fig, shown)
     return fig
 
@@ -1563,7 +1600,7 @@ def multipliers(run: RunLike, ax: Axes | None = None) -> Figure:
     ax.set_xlabel(_parameter_label(cont.parameter))
     ax.set_ylabel(_label("largest Floquet multiplier", "1", r"|\mu|_{\max}"))
     ax.set_title(f"{_title(run, skip=cont.parameter)}\n{_continuation_summary(cont)}",
-                 fontsize="medium")
+                 fontsize="medium", wrap=True)
     _record_sources(fig, [run])
     return fig
 

@@ -11,15 +11,18 @@ import h5py
 import numpy as np
 import pytest
 from matplotlib.axes import Axes
+from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.collections import LineCollection, PathCollection
 from matplotlib.colors import to_rgba
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
+from matplotlib.text import Text
 
 from impactchain import figures
 from impactchain.analysis import period_label
 from impactchain.io import Run, SchemaError, read_run
 from impactchain.shockwave import build_shock_waves
+from test_continuation import write_continuation
 
 MakeRun = Callable[..., Path]
 
@@ -913,3 +916,78 @@ def test_clv_figures_label_units_and_draw_into_given_axes(make_run: MakeRun) -> 
     assert _lines(ax, "ipr-mean") and ax.get_xlabel() == "covariant vector index $j$ [1]"
     with pytest.raises(figures.FigureError, match="draws into 2 axes, 1 given"):
         figures.clv_space_time(run, vector=[1, 2], ax=Figure().add_subplot())
+
+
+# ------------------------------------------------------------------ what fits the figure
+
+
+def _unreadable(fig: Figure) -> list[str]:
+    """What a reader cannot read, measured with the Agg renderer as a PNG is drawn: text
+    reaching beyond the figure's edges, and tick labels of one axis that touch or overlap
+    (only the ticks inside the axis' view are drawn)."""
+    FigureCanvasAgg(fig)
+    fig.canvas.draw()
+    renderer = fig.canvas.get_renderer()
+    edge = fig.bbox
+    found = []
+    ticks: list[Text] = []
+    for ax in fig.axes:
+        for axis, i in ((ax.xaxis, 0), (ax.yaxis, 1)):
+            low, high = sorted(axis.get_view_interval())
+            slack = 1e-9 * (high - low)
+            drawn = [t for t in axis.get_ticklabels() if t.get_visible() and t.get_text()
+                     and low - slack <= t.get_position()[i] <= high + slack]
+            ticks += axis.get_ticklabels()
+            boxes = sorted((t.get_window_extent(renderer) for t in drawn),
+                           key=(lambda b: b.x0) if i == 0 else (lambda b: b.y0))
+            for a, b in zip(boxes, boxes[1:]):
+                apart = b.x0 - a.x1 if i == 0 else b.y0 - a.y1
+                if apart <= 0:
+                    found.append(f"{ax.get_label() or 'axes'}: tick labels {apart:.1f} px apart")
+            for t in drawn:
+                box = t.get_window_extent(renderer)
+                if box.x0 < edge.x0 or box.x1 > edge.x1 or box.y0 < edge.y0 or box.y1 > edge.y1:
+                    found.append(f"tick label {t.get_text()!r} beyond the figure")
+    for t in fig.findobj(Text):
+        if t in ticks or not t.get_visible() or not t.get_text():
+            continue
+        box = t.get_window_extent(renderer)
+        if (box.x0 < edge.x0 - 0.5 or box.x1 > edge.x1 + 0.5 or box.y0 < edge.y0 - 0.5
+                or box.y1 > edge.y1 + 0.5):
+            found.append(f"{t.get_text()!r} reaches {box.x0:.0f}..{box.x1:.0f} px of "
+                         f"0..{edge.x1:.0f}")
+    return found
+
+
+LONG_END_REASON = ("branch 0 (period 1): grazing at amplitude = 1.8141825: the impacts change "
+                   "there, the branch ends\nbranch 1 (period 2): Newton failed on the doubled "
+                   "orbit at amplitude = 2.4355114: no decrease of the residual along the "
+                   "Newton step (halved 12 times)")
+
+
+@pytest.mark.parametrize("draw", ["branches", "multipliers"])
+def test_continuation_titles_fit_the_figure(tmp_path: Path, draw: str) -> None:
+    """Issue 32, 8: a continuation's end reasons, one a branch, are long; the title that
+    quotes them is wrapped to the figure instead of running off both edges."""
+    path = write_continuation(tmp_path / "cont.h5")
+    with h5py.File(path, "r+") as f:
+        f["continuation"].attrs["end_reason"] = LONG_END_REASON
+    fig = getattr(figures, draw)(read_run(path))
+    assert _unreadable(fig) == []
+    assert "the branch ends" in fig.axes[0].get_title()  # wrapped when drawn, not cut
+
+
+def test_poincare_tick_labels_stand_apart(make_run: MakeRun) -> None:
+    """Figure 8's section: x from -0.91 to -0.72 took ticks every 0.025 whose labels
+    (-0.900, -0.875, ...) ran together; fewer ticks, each label readable."""
+    path = make_run("section.h5", n=16, records=50)
+    with h5py.File(path, "r+") as f:
+        x, v = f["strobe/x"][...], f["strobe/v"][...]
+        x[:, 0] = np.linspace(-0.91, -0.7245, x.shape[0])
+        v[:, 0] = np.linspace(-2.137, -2.046, v.shape[0])
+        f["strobe/x"][...], f["strobe/v"][...] = x, v
+    fig = figures.poincare(read_run(path), site=1)
+    assert _unreadable(fig) == []
+    (ax,) = _plots(fig)
+    low, high = ax.get_xlim()
+    assert len([t for t in ax.get_xticks() if low <= t <= high]) >= 3
