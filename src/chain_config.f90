@@ -111,11 +111,11 @@ module chain_config
     !> w omega, K restitution, b damping (n is the key itself). Keys are case-blind, so the
     !> paper's A and a are one name to the reader, which the message says.
     type(alias_t), parameter :: paper_symbols(*) = [ &
-        alias_t('chain', 'A', 'amplitude', 'drive amplitude'), &
-        alias_t('chain', 'a', 'spacing', 'spacing'), &
-        alias_t('chain', 'w', 'omega', 'drive frequency'), &
-        alias_t('chain', 'K', 'restitution', 'coefficient of restitution'), &
-        alias_t('chain', 'b', 'damping', 'damping coefficient')]
+        alias_t('chain', 'A', 'amplitude', "the paper's drive amplitude"), &
+        alias_t('chain', 'a', 'spacing', "the paper's spacing"), &
+        alias_t('chain', 'w', 'omega', "the paper's drive frequency"), &
+        alias_t('chain', 'K', 'restitution', "the paper's coefficient of restitution"), &
+        alias_t('chain', 'b', 'damping', "the paper's damping coefficient")]
 
     type :: config_t
         !> &chain, and &run stick_speed: everything the dynamics depends on

@@ -45,7 +45,7 @@ module chain_namelist
         character(len=16) :: group = ''
         character(len=16) :: symbol = ''  !! as it is written where it comes from (case kept)
         character(len=16) :: key = ''     !! the key of `group` it stands for
-        character(len=48) :: meaning = '' !! what it stands for, for the message
+        character(len=48) :: meaning = '' !! what it stands for, for the message: "the ..."
     end type alias_t
 
     !> One `key = values` of the text: where it starts and ends (character positions) and the
@@ -174,7 +174,8 @@ contains
             associate (item => parsed%items(j))
                 if (find_key(schema, item%group, item%key) > 0) cycle
                 n_unknown = n_unknown + 1
-                if (.not. any(groups == item%group)) groups = [groups, item%group]
+                if (.not. any(groups == item%group)) &
+                    groups = [character(len=16) :: groups, item%group]
                 lines = lines//new_line('a')//"  "//at(source, item%line)//"&"//item%group// &
                         ": "//unknown_key(schema, item%group, name_of(item), aliases)
             end associate
@@ -811,7 +812,7 @@ contains
         text = ". The keys of &"//group//" are "//listed(schema_keys(schema, group), '')
     end function keys_of
 
-    !> " (did you mean 'key'? S is the paper's ...)" when `written` is an alias (case-blind,
+    !> " (did you mean 'key'? S is <meaning>)" when `written` is an alias (case-blind,
     !> as the reader is; the alias written in the same case first), or nothing. Aliases that
     !> differ only in case are one name to the reader: then every key it may mean is named.
     function alias_hint(aliases, group, written) result(text)
@@ -832,13 +833,13 @@ contains
         associate (a => aliases(best))
             text = " (did you mean '"//trim(a%key)//"'"
             if (a%group /= group) text = text//", a key of &"//trim(a%group)
-            text = text//"? "//trim(a%symbol)//" is the paper's "//trim(a%meaning)
+            text = text//"? "//trim(a%symbol)//" is "//trim(a%meaning)
             if (n_same > 1) then
                 text = text//"; keys are case-blind, so "//trim(a%symbol)
                 keys = "'"//trim(a%key)//"'"
                 do j = 1, size(aliases)
                     if (j == best .or. lower(trim(aliases(j)%symbol)) /= lower(written)) cycle
-                    text = text//" and "//trim(aliases(j)%symbol)//" (the paper's "// &
+                    text = text//" and "//trim(aliases(j)%symbol)//" ("// &
                            trim(aliases(j)%meaning)//")"
                     keys = keys//" or '"//trim(aliases(j)%key)//"'"
                 end do
