@@ -10,7 +10,8 @@ program main
     use, intrinsic :: iso_c_binding, only: c_int
     use impactchain, only: error_t, config_t, read_config, simulate_to_file, record_result_t, &
                            run_sweep, sweep_summary_t, code_version, provenance_text, &
-                           config_summary, check_before_run, branches_t, continuation_to_file, &
+                           config_summary, check_before_run, branches_t, orbit_t, &
+                           continuation_to_file, &
                            census_result_t, census_to_file, kind_names, wp
     use impactchain_drivers, only: checkpoint_path, catch_interrupts, cli_t, parse_command_line, &
                                    cli_run, cli_help, cli_version, cli_usage, exit_now, &
@@ -70,7 +71,7 @@ program main
                 'was written'
             stop 3, quiet=.true.
         end if
-        call report_branches(branches, cfg%output_file)
+        call report_branches(branches, cfg%output_file, cfg%cont_max_points == 1)
     else if (cfg%census) then
         call census_to_file(cfg, census, err, monitor)
         call close_progress(monitor)
@@ -192,10 +193,12 @@ contains
     end subroutine report_census
 
     !> Points and special points found, and why each branch ended (a Newton failure is a
-    !> result: the file then says so too).
-    subroutine report_branches(res, output_file)
+    !> result: the file then says so too). `newton_only` (max_points = 1): what Newton found
+    !> too, the orbit being the result.
+    subroutine report_branches(res, output_file, newton_only)
         type(branches_t), intent(in) :: res
         character(len=*), intent(in) :: output_file
+        logical, intent(in) :: newton_only
         integer :: j
 
         write (output_unit, '(a)') 'impactchain: wrote '//output_file
@@ -205,8 +208,35 @@ contains
             write (output_unit, '(a,es22.14,a,i0,a)') '  '//res%specials(j)%kind//' at ', &
                 res%specials(j)%value, ' (point ', res%specials(j)%point - 1, ')'
         end do
+        if (newton_only) call report_newton(res%start)
         write (output_unit, '(a)') '  '//res%end_reason
     end subroutine report_branches
+
+    !> Newton's outcome: converged or not, its steps and last residual; for a converged orbit
+    !> its stability (stable: every Floquet multiplier inside the unit circle), the largest
+    !> multiplier modulus and the impacts per period.
+    subroutine report_newton(orbit)
+        type(orbit_t), intent(in) :: orbit
+        real(wp), allocatable :: modulus(:)
+        real(wp) :: residual
+
+        residual = huge(1.0_wp)
+        if (allocated(orbit%residuals)) residual = orbit%residuals(ubound(orbit%residuals, 1))
+        write (output_unit, '(a,i0,a,es8.2)') '  converged: '// &
+            trim(merge('yes', 'no ', orbit%converged))//', Newton steps ', orbit%iterations, &
+            ', residual |P(z) - z| / (1 + |z|) = ', residual
+        if (.not. orbit%converged) then
+            write (output_unit, '(a)') '  stability: unknown (no orbit converged)'
+            return
+        end if
+        modulus = hypot(orbit%multipliers_re, orbit%multipliers_im)
+        write (output_unit, '(a,i0,a,i0,a,g0.6)') '  stability: '// &
+            trim(merge('unstable', 'stable  ', maxval(modulus) >= 1))//', ', &
+            count(modulus > 1), ' of ', size(modulus), ' Floquet multipliers outside the '// &
+            'unit circle, largest modulus ', maxval(modulus)
+        write (output_unit, '(a,i0,a,i0,a)') '  impacts per period: ', orbit%impacts, &
+            ' (period ', orbit%cycles, ')'
+    end subroutine report_newton
 
     subroutine fail(message)
         character(len=*), intent(in) :: message

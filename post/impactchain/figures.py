@@ -48,11 +48,13 @@ from typing import Any, Protocol, Union, runtime_checkable
 import matplotlib
 import numpy as np
 from matplotlib import colormaps
+from matplotlib.artist import Artist
 from matplotlib.axes import Axes
 from matplotlib.cm import ScalarMappable
 from matplotlib.collections import LineCollection
 from matplotlib.colors import BoundaryNorm, ListedColormap
 from matplotlib.figure import Figure, SubFigure
+from matplotlib.font_manager import FontProperties
 from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
 from matplotlib.ticker import MaxNLocator
@@ -696,12 +698,47 @@ def poincare(run: RunLike, site: int = 1, cycles: int | None = None,
     fig, ax = _one_axes(ax, 6.0, 5.0, "poincare")
     points = ax.scatter(x, v, c=cycle, cmap="viridis", s=14, linewidths=0, gid="section")
     _parent(ax).colorbar(points, ax=ax, label=_cycle_label(run))
+    ax.xaxis.set_major_locator(_SpacedLocator())
     ax.set_xlabel(_label("displacement", _unit(run, "strobe/x"), f"x_{{{site}}}"))
     ax.set_ylabel(_label("velocity", _unit(run, "strobe/v"), f"v_{{{site}}}"))
     ax.set_title(f"{_title(run)}\noscillator {site}, section phase "
                  f"{run.params.phase:.3g} rad, {x.size} cycles", fontsize="medium")
     _record_sources(fig, [run])
     return fig
+
+
+class _SpacedLocator(MaxNLocator):
+    """Ticks of an x axis far enough apart for their labels. Matplotlib's automatic ticks
+    allow for labels three characters wide, so labels such as -0.875 at steps of 0.025 run
+    together (figure 8); this takes fewer ticks, with the same steps, until the widest label
+    (estimated at 0.65 em a character) and an em between labels fit between two ticks."""
+
+    STEPS = (1.0, 2.0, 2.5, 5.0, 10.0)
+
+    def __init__(self) -> None:
+        super().__init__(nbins="auto", steps=list(self.STEPS))
+
+    def tick_values(self, vmin: float, vmax: float) -> np.ndarray:
+        ticks = super().tick_values(vmin, vmax)
+        axis = self.axis
+        if axis is None or axis.axes is None or not vmax != vmin:
+            return ticks
+        low, high = sorted((vmin, vmax))
+        length = abs(axis.axes.bbox.width)
+        em = (FontProperties(size=matplotlib.rcParams["xtick.labelsize"]).get_size_in_points()
+              * axis.axes.get_figure(root=True).dpi / 72.0)
+        bins = len(ticks)
+        while bins > 1:
+            shown = ticks[(ticks >= low) & (ticks <= high)]
+            if shown.size < 2:
+                break
+            labels = axis.major.formatter.format_ticks(list(shown))
+            room = (shown[1] - shown[0]) / (high - low) * length
+            if room >= (0.65 * max(len(label) for label in labels) + 1.0) * em:
+                break
+            bins -= 1
+            ticks = MaxNLocator(nbins=bins, steps=list(self.STEPS)).tick_values(vmin, vmax)
+        return ticks
 
 
 # ---------------------------------------------------------------------------- bifurcation
@@ -820,8 +857,8 @@ def lyapunov(runs: RunLike | Sequence[RunLike], k: int = 10, with_bifurcation: b
         bar.ax.set_gid("colorbar-index")
         bar.minorticks_off()
     if owned:
-        total = max(s.exponents.shape[1] for s in sweeps)  # type: ignore[union-attr]
-        which = f"all {shown}" if shown == total else f"the largest {shown}"
+        full = max(2 * run.params.n for run in runs)
+        which = f"all {shown}" if shown == full else f"the largest {shown} of {full}"
         errors = [s.stderr[:, :shown] for s in sweeps if s.stderr is not None]
         note = ""
         if errors:
@@ -899,6 +936,11 @@ def ky_dimension(runs: RunLike | Sequence[RunLike], labels: Sequence[str] | None
     sweep is drawn as a scatter coloured by the dimension, with a colour bar. ``ax``: one
     Axes. ``ylim``: a range shared with other figures (1-D sweeps; the title says how many
     values fall outside it).
+
+    From a partial spectrum (``&lyapunov vectors`` = k < 2n) the title says "k of 2n
+    exponents", and a point whose partial sums stay >= 0 through all k exponents (the stored
+    value is then k) is only a lower bound of the dimension: it is marked (open triangles)
+    and named in the legend.
     """
     runs = _as_runs(runs, ("sweep", "sweep/ky_dimension"), "ky-dimension")
     if not runs:
@@ -911,32 +953,74 @@ def ky_dimension(runs: RunLike | Sequence[RunLike], labels: Sequence[str] | None
              for name in (run.sweep.parameter, run.sweep.parameter2) if name}
     names = list(labels) if labels is not None else run_labels(runs, skip=swept)
     dimension_label = _label("Kaplan-Yorke dimension", "1", "D_{KY}")
+    overlaid = len(runs) > 1 or labels is not None
+    bounds: list[Artist] = []
+    partial: list[str] = []
     for run, colour, name in zip(runs, colours, names):
         sweep = _sweep(run)
         dimension = _sweep_ky(run, sweep)
+        computed, full = _spectrum_size(run, sweep)
+        bound = _ky_lower_bound(dimension, computed, full)
+        if computed < full and f"{computed} of {full}" not in partial:
+            partial.append(f"{computed} of {full}")
+        what = f"lower bound ({computed} of {full} exponents)"
         if sweep.is_2d:
             if len(runs) > 1:
                 raise FigureError("ky-dimension overlays only 1-D sweeps")
             points = ax.scatter(sweep.values[:, 0], sweep.values[:, 1], c=dimension,
                                 cmap="magma", s=16, linewidths=0, gid="ky")
             _parent(ax).colorbar(points, ax=ax, label=dimension_label)
+            if bound.any():
+                bounds.append(ax.scatter(sweep.values[bound, 0], sweep.values[bound, 1],
+                                         marker="^", s=30, facecolors="none", edgecolors="k",
+                                         linewidths=0.6, label=what, gid="lower-bound"))
             ax.set_xlabel(_parameter_label(sweep.parameter))
             ax.set_ylabel(_parameter_label(sweep.parameter2))
         else:
             ax.plot(sweep.values, dimension, color=colour, linewidth=0.9, label=name,
                     gid="ky", **_sweep_style(sweep.values, marker="."))
+            if bound.any():
+                (marks,) = ax.plot(sweep.values[bound], dimension[bound], linestyle="none",
+                                   marker="^", markersize=5, markerfacecolor="none",
+                                   color=colour, label=f"{name}: {what}" if name else what,
+                                   gid="lower-bound")
+                bounds.append(marks)
             ax.set_xlabel(_parameter_label(sweep.parameter))
             ax.set_ylabel(dimension_label)
             ax.set_ylim(bottom=0.0)
-    if len(runs) > 1 or labels is not None:
+    if overlaid:
         ax.legend(fontsize="small")
+    elif bounds:
+        ax.legend(handles=bounds, fontsize="small")
     differing = _differing_parameters(runs)
     note = ""
+    if partial:
+        note = f"\nfrom {' and '.join(partial)} exponents"
+        if bounds:
+            note += "; open triangles: lower bounds"
     if not any(_sweep(run).is_2d for run in runs):
-        note = _outside(ax, ylim, [_sweep_ky(run, _sweep(run)) for run in runs])
+        note += _outside(ax, ylim, [_sweep_ky(run, _sweep(run)) for run in runs])
     ax.set_title(_title(runs[0], skip=(*swept, *differing)) + note, fontsize="medium")
     _record_sources(fig, runs)
     return fig
+
+
+def _spectrum_size(run: Run, sweep: Sweep) -> tuple[int, int]:
+    """(k, 2n): the exponents computed at each point of a sweep, and the full spectrum's."""
+    full = 2 * run.params.n
+    if sweep.exponents is None:
+        return full, full
+    return int(sweep.exponents.shape[1]), full
+
+
+def _ky_lower_bound(dimension: np.ndarray, computed: int, full: int) -> np.ndarray:
+    """Where a stored Kaplan-Yorke dimension is only a lower bound: from a partial spectrum
+    (computed < full), the points whose partial sums stayed >= 0 through every computed
+    exponent, for which the simulator stores the number computed (docs/model.md 7.5)."""
+    dimension = np.asarray(dimension, dtype=float)
+    if computed >= full:
+        return np.zeros(dimension.shape, dtype=bool)
+    return dimension >= computed
 
 
 def _differing_parameters(runs: Sequence[Run]) -> list[str]:
@@ -984,6 +1068,10 @@ def spectrum(run: RunLike, ax: Axes | Sequence[Axes] | None = None) -> Figure:
     left.set_xlabel(_label("exponent index", "1", "j"))
     left.set_ylabel(_label("Lyapunov exponent", unit, r"\lambda_j"))
     summary = f"$D_{{KY}}$ = {lyap.ky_dimension:.3f}"
+    full = 2 * run.params.n
+    if _ky_lower_bound(np.array(lyap.ky_dimension), lyap.exponents.size, full):
+        summary = (f"$D_{{KY}}$ $\\geq$ {lyap.ky_dimension:.3f} (a lower bound: "
+                   f"{lyap.exponents.size} of {full} exponents)")
     if math.isfinite(lyap.positive_sum):
         summary += f", sum of positive = {lyap.positive_sum:.3g} {unit}"
     left.set_title(f"{summary}\nbars: $\\pm$1 standard error", fontsize="small")
@@ -1479,8 +1567,9 @@ def branches(run: RunLike | Sequence[RunLike], over: RunLike | None = None, site
                          f"x_{{{site}}}"))
     summary = (_continuation_summary(cont0) if len(conts) == 1 else
                f"{sum(c.n_points for c in conts)} orbits from {len(conts)} starts")
+    # (wrapped to the figure: the end reasons of a continuation run long)
     ax.set_title(f"{_title(first, skip=cont0.parameter)}\noscillator {site}; {summary}",
-                 fontsize="medium")
+                 fontsize="medium", wrap=True)
     _record_sources(fig, shown)
     return fig
 
@@ -1511,7 +1600,7 @@ def multipliers(run: RunLike, ax: Axes | None = None) -> Figure:
     ax.set_xlabel(_parameter_label(cont.parameter))
     ax.set_ylabel(_label("largest Floquet multiplier", "1", r"|\mu|_{\max}"))
     ax.set_title(f"{_title(run, skip=cont.parameter)}\n{_continuation_summary(cont)}",
-                 fontsize="medium")
+                 fontsize="medium", wrap=True)
     _record_sources(fig, [run])
     return fig
 

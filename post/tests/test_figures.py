@@ -11,15 +11,18 @@ import h5py
 import numpy as np
 import pytest
 from matplotlib.axes import Axes
+from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.collections import LineCollection, PathCollection
 from matplotlib.colors import to_rgba
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
+from matplotlib.text import Text
 
 from impactchain import figures
 from impactchain.analysis import period_label
 from impactchain.io import Run, SchemaError, read_run
 from impactchain.shockwave import build_shock_waves
+from test_continuation import write_continuation
 
 MakeRun = Callable[..., Path]
 
@@ -284,6 +287,83 @@ def test_ky_dimension_is_never_computed_from_the_exponents(make_run: MakeRun) ->
     assert run.sweep is not None and run.sweep.exponents is not None
     with pytest.raises(figures.FigureError, match="no Kaplan-Yorke dimensions"):
         figures.ky_dimension([run])
+
+
+def _partial_sweep(make_run: MakeRun, name: str, k: int, ky: list[float]) -> Run:
+    """A sweep of n = 4 (2n = 8) with k exponents per point and the given stored
+    dimensions (the simulator stores k where the partial sums never turned negative)."""
+    path = make_run(name, n=4, strobe=False, events=False,
+                    sweep={"points": len(ky), "exponents": k})
+    with h5py.File(path, "r+") as f:
+        f["sweep/ky_dimension"][...] = ky
+    return read_run(path)
+
+
+def test_ky_dimension_from_a_partial_spectrum_is_a_lower_bound(make_run: MakeRun) -> None:
+    """Issue 32, 8: with vectors = 1 the stored 1.0 wherever lambda1 >= 0 is a lower bound
+    (docs/model.md 7.5): those points are marked and named in the legend, and the title says
+    how many of the 2n exponents were computed."""
+    run = _partial_sweep(make_run, "one.h5", 1, [0.0, 1.0, 1.0, 0.0, 1.0])
+    (ax,) = figures.ky_dimension([run]).axes
+    (line,) = _lines(ax, "ky")
+    np.testing.assert_array_equal(line.get_ydata(), [0.0, 1.0, 1.0, 0.0, 1.0])
+    (bound,) = _lines(ax, "lower-bound")
+    assert run.sweep is not None
+    np.testing.assert_array_equal(bound.get_xdata(), run.sweep.values[[1, 2, 4]])
+    np.testing.assert_array_equal(bound.get_ydata(), [1.0, 1.0, 1.0])
+    legend = ax.get_legend()
+    assert legend is not None
+    assert [t.get_text() for t in legend.get_texts()] == ["lower bound (1 of 8 exponents)"]
+    assert "from 1 of 8 exponents; open triangles: lower bounds" in ax.get_title()
+
+
+def test_ky_dimension_below_the_partial_count_is_not_a_bound(make_run: MakeRun) -> None:
+    """A partial sum that turned negative within the k exponents gives the dimension itself:
+    nothing marked, but the title still says the spectrum is partial; a full spectrum says
+    nothing of it."""
+    run = _partial_sweep(make_run, "three.h5", 3, [0.0, 1.5, 2.9])
+    (ax,) = figures.ky_dimension([run]).axes
+    assert not _lines(ax, "lower-bound") and ax.get_legend() is None
+    assert "from 3 of 8 exponents" in ax.get_title()
+    assert "lower bound" not in ax.get_title()
+    full = _partial_sweep(make_run, "full.h5", 8, [0.0, 8.0, 2.5])
+    (ax,) = figures.ky_dimension([full]).axes
+    assert not _lines(ax, "lower-bound") and "exponents" not in ax.get_title()
+
+
+def test_ky_dimension_lower_bounds_on_a_2d_sweep(make_run: MakeRun) -> None:
+    path = make_run("two.h5", n=4, strobe=False, events=False,
+                    sweep={"points": 4, "exponents": 2, "parameter2": "omega"})
+    with h5py.File(path, "r+") as f:
+        f["sweep/ky_dimension"][...] = [2.0, 1.3, 0.0, 2.0]
+    ax = _plots(figures.ky_dimension([read_run(path)]))[0]
+    bound = _scatter(ax, "lower-bound")
+    assert len(bound.get_offsets()) == 2
+    assert "from 2 of 8 exponents" in ax.get_title()
+
+
+def test_lyapunov_title_says_how_many_of_the_spectrum(make_run: MakeRun) -> None:
+    """The exponents figure of a partial spectrum: 'the largest 1 of 8', not 'all 1'."""
+    run = _partial_sweep(make_run, "one.h5", 1, [0.0, 1.0, 1.0])
+    title = figures.lyapunov([run]).get_suptitle()
+    assert title.startswith("the largest 1 of 8 Lyapunov exponents"), title
+    full = _partial_sweep(make_run, "full.h5", 8, [0.0, 8.0, 2.5])
+    assert figures.lyapunov([full]).get_suptitle().startswith("all 8 Lyapunov exponents")
+
+
+def test_spectrum_of_a_partial_spectrum_says_lower_bound(make_run: MakeRun) -> None:
+    path = make_run("partial.h5", n=4, lyapunov=True)
+    with h5py.File(path, "r+") as f:
+        g = f["lyapunov"]
+        for name in ("exponents", "exponents_per_time", "stderr", "running"):
+            data, attrs = g[name][..., :2], dict(g[name].attrs)
+            del g[name]
+            g[name] = data
+            g[name].attrs.update(attrs)
+        g.attrs["ky_dimension"] = 2.0
+    left = _plots(figures.spectrum(read_run(path)))[0]
+    assert left.get_title().startswith("$D_{KY}$ $\\geq$ 2.000 (a lower bound: 2 of 8 "
+                                       "exponents)"), left.get_title()
 
 
 # ---------------------------------------------------------------------------- spectrum
@@ -836,3 +916,78 @@ def test_clv_figures_label_units_and_draw_into_given_axes(make_run: MakeRun) -> 
     assert _lines(ax, "ipr-mean") and ax.get_xlabel() == "covariant vector index $j$ [1]"
     with pytest.raises(figures.FigureError, match="draws into 2 axes, 1 given"):
         figures.clv_space_time(run, vector=[1, 2], ax=Figure().add_subplot())
+
+
+# ------------------------------------------------------------------ what fits the figure
+
+
+def _unreadable(fig: Figure) -> list[str]:
+    """What a reader cannot read, measured with the Agg renderer as a PNG is drawn: text
+    reaching beyond the figure's edges, and tick labels of one axis that touch or overlap
+    (only the ticks inside the axis' view are drawn)."""
+    FigureCanvasAgg(fig)
+    fig.canvas.draw()
+    renderer = fig.canvas.get_renderer()
+    edge = fig.bbox
+    found = []
+    ticks: list[Text] = []
+    for ax in fig.axes:
+        for axis, i in ((ax.xaxis, 0), (ax.yaxis, 1)):
+            low, high = sorted(axis.get_view_interval())
+            slack = 1e-9 * (high - low)
+            drawn = [t for t in axis.get_ticklabels() if t.get_visible() and t.get_text()
+                     and low - slack <= t.get_position()[i] <= high + slack]
+            ticks += axis.get_ticklabels()
+            boxes = sorted((t.get_window_extent(renderer) for t in drawn),
+                           key=(lambda b: b.x0) if i == 0 else (lambda b: b.y0))
+            for a, b in zip(boxes, boxes[1:]):
+                apart = b.x0 - a.x1 if i == 0 else b.y0 - a.y1
+                if apart <= 0:
+                    found.append(f"{ax.get_label() or 'axes'}: tick labels {apart:.1f} px apart")
+            for t in drawn:
+                box = t.get_window_extent(renderer)
+                if box.x0 < edge.x0 or box.x1 > edge.x1 or box.y0 < edge.y0 or box.y1 > edge.y1:
+                    found.append(f"tick label {t.get_text()!r} beyond the figure")
+    for t in fig.findobj(Text):
+        if t in ticks or not t.get_visible() or not t.get_text():
+            continue
+        box = t.get_window_extent(renderer)
+        if (box.x0 < edge.x0 - 0.5 or box.x1 > edge.x1 + 0.5 or box.y0 < edge.y0 - 0.5
+                or box.y1 > edge.y1 + 0.5):
+            found.append(f"{t.get_text()!r} reaches {box.x0:.0f}..{box.x1:.0f} px of "
+                         f"0..{edge.x1:.0f}")
+    return found
+
+
+LONG_END_REASON = ("branch 0 (period 1): grazing at amplitude = 1.8141825: the impacts change "
+                   "there, the branch ends\nbranch 1 (period 2): Newton failed on the doubled "
+                   "orbit at amplitude = 2.4355114: no decrease of the residual along the "
+                   "Newton step (halved 12 times)")
+
+
+@pytest.mark.parametrize("draw", ["branches", "multipliers"])
+def test_continuation_titles_fit_the_figure(tmp_path: Path, draw: str) -> None:
+    """Issue 32, 8: a continuation's end reasons, one a branch, are long; the title that
+    quotes them is wrapped to the figure instead of running off both edges."""
+    path = write_continuation(tmp_path / "cont.h5")
+    with h5py.File(path, "r+") as f:
+        f["continuation"].attrs["end_reason"] = LONG_END_REASON
+    fig = getattr(figures, draw)(read_run(path))
+    assert _unreadable(fig) == []
+    assert "the branch ends" in fig.axes[0].get_title()  # wrapped when drawn, not cut
+
+
+def test_poincare_tick_labels_stand_apart(make_run: MakeRun) -> None:
+    """Figure 8's section: x from -0.91 to -0.72 took ticks every 0.025 whose labels
+    (-0.900, -0.875, ...) ran together; fewer ticks, each label readable."""
+    path = make_run("section.h5", n=16, records=50)
+    with h5py.File(path, "r+") as f:
+        x, v = f["strobe/x"][...], f["strobe/v"][...]
+        x[:, 0] = np.linspace(-0.91, -0.7245, x.shape[0])
+        v[:, 0] = np.linspace(-2.137, -2.046, v.shape[0])
+        f["strobe/x"][...], f["strobe/v"][...] = x, v
+    fig = figures.poincare(read_run(path), site=1)
+    assert _unreadable(fig) == []
+    (ax,) = _plots(fig)
+    low, high = ax.get_xlim()
+    assert len([t for t in ax.get_xticks() if low <= t <= high]) >= 3

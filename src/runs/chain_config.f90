@@ -20,7 +20,7 @@ module chain_config
     use chain_lyapunov, only: running_rows
     use chain_clv, only: clv_scratch_bytes
     use chain_namelist, only: key_spec_t, key_integer, key_real, key_logical, key_string, &
-                              check_namelist, apply_override, groups_in, lower
+                              alias_t, check_namelist, apply_override, groups_in, lower
     implicit none
     private
     public :: config_t, read_config, validate_config, config_summary, lyapunov_vectors
@@ -106,6 +106,16 @@ module chain_config
         key_spec_t('census', 'plane_points', key_integer, .false.), &
         key_spec_t('census', 'exponents', key_integer, .false.)]
     character(len=*), parameter :: sweep_parameters(*) = model_parameters
+    !> The paper's symbols for the keys of &chain (docs/model.md section 1), named in the
+    !> message that refuses one (`&chain A = 1.7` is an unknown key): A amplitude, a spacing,
+    !> w omega, K restitution, b damping (n is the key itself). Keys are case-blind, so the
+    !> paper's A and a are one name to the reader, which the message says.
+    type(alias_t), parameter :: paper_symbols(*) = [ &
+        alias_t('chain', 'A', 'amplitude', "the paper's drive amplitude"), &
+        alias_t('chain', 'a', 'spacing', "the paper's spacing"), &
+        alias_t('chain', 'w', 'omega', "the paper's drive frequency"), &
+        alias_t('chain', 'K', 'restitution', "the paper's coefficient of restitution"), &
+        alias_t('chain', 'b', 'damping', "the paper's damping coefficient")]
 
     type :: config_t
         !> &chain, and &run stick_speed: everything the dynamics depends on
@@ -165,11 +175,12 @@ contains
 
         call read_text(path, cfg%input_text, err)
         if (allocated(err)) return
-        call check_namelist(path, cfg%input_text, input_keys, err)
+        call check_namelist(path, cfg%input_text, input_keys, err, paper_symbols)
         if (allocated(err)) return
         if (present(overrides)) then
             do j = 1, size(overrides)
-                call apply_override(cfg%input_text, trim(overrides(j)), input_keys, err)
+                call apply_override(cfg%input_text, trim(overrides(j)), input_keys, err, &
+                                    paper_symbols)
                 if (allocated(err)) return
             end do
         end if

@@ -1,7 +1,9 @@
 !> The text of a namelist input, read as a person wrote it: groups, keys and values with the
 !> line each is on. It checks an input against a schema (the groups, their keys and each key's
 !> type) before the compiler's namelist reader sees it, so that a mistake is reported as
-!> `file:line: &group: ...` with the valid keys and a "did you mean", and it applies command
+!> `file:line: &group: ...` with the valid keys and a "did you mean" (every unknown key of the
+!> input at once, each with the nearest key or, for another name of a key such as a symbol of
+!> the paper, the key it stands for), and it applies command
 !> line overrides (`group.key=value`) to the text, so that the file's echo of the input is the
 !> input actually run. Infrastructure, no model section.
 !>
@@ -14,7 +16,7 @@ module chain_namelist
     use chain_error, only: error_t, set_error, fmt_int, fmt_int8
     implicit none
     private
-    public :: key_spec_t, key_integer, key_real, key_logical, key_string
+    public :: key_spec_t, key_integer, key_real, key_logical, key_string, alias_t
     public :: check_namelist, apply_override, schema_keys, groups_in, lower, same_input
 
     integer, parameter :: key_integer = 1
@@ -34,6 +36,17 @@ module chain_namelist
         logical :: wide = .false.
         integer :: most = huge(1)  !! the most values a list takes (the reader's array)
     end type key_spec_t
+
+    !> Another name a person may write for a key, such as a symbol of the paper: never read
+    !> as the key (the reader would then take a mistake for a value), only named in the
+    !> message that refuses it. Keys are case-blind, so two symbols that differ only in case
+    !> (`A` and `a`) are one name: the message names every key it may stand for.
+    type :: alias_t
+        character(len=16) :: group = ''
+        character(len=16) :: symbol = ''  !! as it is written where it comes from (case kept)
+        character(len=16) :: key = ''     !! the key of `group` it stands for
+        character(len=48) :: meaning = '' !! what it stands for, for the message: "the ..."
+    end type alias_t
 
     !> One `key = values` of the text: where it starts and ends (character positions) and the
     !> line it starts on.
@@ -66,11 +79,13 @@ module chain_namelist
 contains
 
     !> Every group known, none twice, every one closed; every key of its group, with values of
-    !> its type (one value unless it takes a list). `source` names the text in messages.
-    subroutine check_namelist(source, text, schema, err)
+    !> its type (one value unless it takes a list). `source` names the text in messages;
+    !> `aliases`, other names of keys that the message for an unknown key names.
+    subroutine check_namelist(source, text, schema, err, aliases)
         character(len=*), intent(in) :: source, text
         type(key_spec_t), intent(in) :: schema(:)
         type(error_t), allocatable, intent(out) :: err
+        type(alias_t), intent(in), optional :: aliases(:)
         type(parsed_t) :: parsed
         integer :: g, j, i
 
@@ -111,6 +126,8 @@ contains
                            "value of any key (write key = value)")
             return
         end if
+        call check_keys(source, parsed, schema, err, aliases)
+        if (allocated(err)) return
         do j = 1, size(parsed%items)
             associate (item => parsed%items(j))
                 do i = 1, j - 1
@@ -137,6 +154,54 @@ contains
         end do
     end subroutine check_namelist
 
+    !> Every item's key is a key of its group; else every unknown key is named, each on its
+    !> line with its "did you mean", then the keys of each group concerned (one unknown key:
+    !> one line, as the other messages).
+    subroutine check_keys(source, parsed, schema, err, aliases)
+        character(len=*), intent(in) :: source
+        type(parsed_t), intent(in) :: parsed
+        type(key_spec_t), intent(in) :: schema(:)
+        type(error_t), allocatable, intent(out) :: err
+        type(alias_t), intent(in), optional :: aliases(:)
+        character(len=:), allocatable :: lines, keys
+        character(len=16), allocatable :: groups(:)
+        integer :: j, n_unknown
+
+        lines = ''
+        allocate (groups(0))
+        n_unknown = 0
+        do j = 1, size(parsed%items)
+            associate (item => parsed%items(j))
+                if (find_key(schema, item%group, item%key) > 0) cycle
+                n_unknown = n_unknown + 1
+                if (.not. any(groups == item%group)) &
+                    groups = [character(len=16) :: groups, item%group]
+                lines = lines//new_line('a')//"  "//at(source, item%line)//"&"//item%group// &
+                        ": "//unknown_key(schema, item%group, name_of(item), aliases)
+            end associate
+        end do
+        if (n_unknown == 0) return
+        if (n_unknown == 1) then
+            call set_error(err, lines(4:)//keys_of(schema, trim(groups(1))))
+            return
+        end if
+        lines = source//": "//fmt_int(n_unknown)//" unknown keys:"//lines
+        do j = 1, size(groups)
+            keys = keys_of(schema, trim(groups(j)))
+            lines = lines//new_line('a')//keys(3:)
+        end do
+        call set_error(err, lines)
+    end subroutine check_keys
+
+    !> The key of `item` as written, without a subscript (its case kept).
+    pure function name_of(item) result(name)
+        type(item_t), intent(in) :: item
+        character(len=:), allocatable :: name
+
+        name = item%written
+        if (item%subscripted) name = name(:index(name, '(') - 1)
+    end function name_of
+
     !> `where` starts the message (file:line: &group: ).
     subroutine check_item(where, text, item, schema, err)
         character(len=*), intent(in) :: where, text
@@ -148,7 +213,8 @@ contains
 
         k = find_key(schema, item%group, item%key)
         if (k == 0) then
-            call set_error(err, where//unknown_key(schema, item%group, item%key))
+            call set_error(err, where//unknown_key(schema, item%group, name_of(item))// &
+                           keys_of(schema, item%group))
             return
         end if
         do j = item%n_tokens, 1, -1
@@ -250,12 +316,14 @@ contains
 
     !> `text` with `spec` (`group.key=value`) applied: every `key = ...` of that group is
     !> removed and `key = value` is put at the end of the group (a new group at the end of the
-    !> text if there is none). A string value may be given without quotes.
-    subroutine apply_override(text, spec, schema, err)
+    !> text if there is none). A string value may be given without quotes. `aliases`: as for
+    !> check_namelist.
+    subroutine apply_override(text, spec, schema, err, aliases)
         character(len=:), allocatable, intent(inout) :: text
         character(len=*), intent(in) :: spec
         type(key_spec_t), intent(in) :: schema(:)
         type(error_t), allocatable, intent(out) :: err
+        type(alias_t), intent(in), optional :: aliases(:)
         character(len=:), allocatable :: group, key, value, assignment
         type(parsed_t) :: parsed
         integer :: dot, eq, k, j, g
@@ -280,7 +348,8 @@ contains
         k = find_key(schema, group, key)
         if (k == 0) then
             call set_error(err, "--set "//spec//": &"//group//": "// &
-                           unknown_key(schema, group, key))
+                           unknown_key(schema, group, trim(adjustl(spec(dot + 1:eq - 1))), &
+                                       aliases)//keys_of(schema, group))
             return
         end if
         if (schema(k)%kind == key_string .and. scan(value, "'""") == 0) &
@@ -712,21 +781,73 @@ contains
         text = source//":"//fmt_int(line)//": "
     end function at
 
-    function unknown_key(schema, group, key) result(text)
+    !> "unknown key 'written'" and what it may have meant: the key an alias stands for, or
+    !> the nearest key of the group, and the group that has a key of that name.
+    function unknown_key(schema, group, written, aliases) result(text)
         type(key_spec_t), intent(in) :: schema(:)
-        character(len=*), intent(in) :: group, key
-        character(len=:), allocatable :: text
+        character(len=*), intent(in) :: group, written
+        type(alias_t), intent(in), optional :: aliases(:)
+        character(len=:), allocatable :: text, key, hint
         integer :: j
 
-        text = "unknown key '"//key//"'"//suggestion(key, schema_keys(schema, group), "'")
+        key = lower(written)
+        hint = ''
+        if (present(aliases)) hint = alias_hint(aliases, group, written)
+        if (len(hint) == 0) hint = suggestion(key, schema_keys(schema, group), "'")
+        text = "unknown key '"//written//"'"//hint
         do j = 1, size(schema)
             if (schema(j)%name == key .and. schema(j)%group /= group) then
                 text = text//" ('"//key//"' is a key of &"//trim(schema(j)%group)//")"
                 exit
             end if
         end do
-        text = text//". The keys of &"//group//" are "//listed(schema_keys(schema, group), '')
     end function unknown_key
+
+    !> ". The keys of &group are ..."
+    pure function keys_of(schema, group) result(text)
+        type(key_spec_t), intent(in) :: schema(:)
+        character(len=*), intent(in) :: group
+        character(len=:), allocatable :: text
+
+        text = ". The keys of &"//group//" are "//listed(schema_keys(schema, group), '')
+    end function keys_of
+
+    !> " (did you mean 'key'? S is <meaning>)" when `written` is an alias (case-blind,
+    !> as the reader is; the alias written in the same case first), or nothing. Aliases that
+    !> differ only in case are one name to the reader: then every key it may mean is named.
+    function alias_hint(aliases, group, written) result(text)
+        type(alias_t), intent(in) :: aliases(:)
+        character(len=*), intent(in) :: group, written
+        character(len=:), allocatable :: text, keys
+        integer :: j, best, n_same
+
+        text = ''
+        best = 0
+        n_same = 0
+        do j = 1, size(aliases)
+            if (lower(trim(aliases(j)%symbol)) /= lower(written)) cycle
+            n_same = n_same + 1
+            if (best == 0 .or. trim(aliases(j)%symbol) == written) best = j
+        end do
+        if (best == 0) return
+        associate (a => aliases(best))
+            text = " (did you mean '"//trim(a%key)//"'"
+            if (a%group /= group) text = text//", a key of &"//trim(a%group)
+            text = text//"? "//trim(a%symbol)//" is "//trim(a%meaning)
+            if (n_same > 1) then
+                text = text//"; keys are case-blind, so "//trim(a%symbol)
+                keys = "'"//trim(a%key)//"'"
+                do j = 1, size(aliases)
+                    if (j == best .or. lower(trim(aliases(j)%symbol)) /= lower(written)) cycle
+                    text = text//" and "//trim(aliases(j)%symbol)//" ("// &
+                           trim(aliases(j)%meaning)//")"
+                    keys = keys//" or '"//trim(aliases(j)%key)//"'"
+                end do
+                text = text//" are one name here: write "//keys
+            end if
+        end associate
+        text = text//")"
+    end function alias_hint
 
     !> " (did you mean 'x'?)" (or &x) for the candidate nearest to `word` (at most two edits,
     !> and fewer than half its letters), or nothing.

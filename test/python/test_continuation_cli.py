@@ -1,7 +1,9 @@
 """The command line's continuation runs (`&continuation`): bad input named with its key and the
 allowed range, exit 1 and no file; a Newton failure written as a result; the /continuation
-group's layout; an existing output never overwritten."""
+group's layout; an existing output never overwritten; what Newton alone found, told."""
 from __future__ import annotations
+
+import re
 
 import h5py
 import numpy as np
@@ -107,3 +109,83 @@ def test_existing_output_is_kept(impactchain_exe, tmp_path):
     assert result.returncode == 1
     assert "exists" in result.stderr
     assert (tmp_path / "keep.h5").read_bytes() == b"mine"
+
+
+NEWTON_ONLY = ("&continuation parameter = 'amplitude', max_points = 1 /\n"
+               "&output file = 'orbit.h5' /\n")
+
+
+def newton_summary(stdout: str) -> dict[str, str]:
+    """The lines 'converged: ...', 'stability: ...', 'impacts per period: ...' by their
+    first word(s)."""
+    found = {}
+    for line in stdout.splitlines():
+        name, _, rest = line.strip().partition(": ")
+        if name in ("converged", "stability", "impacts per period"):
+            found[name] = rest
+    return found
+
+
+def check_against_the_file(stdout: str, path, stable: bool) -> None:
+    """The summary says what the file holds of its one orbit."""
+    told = newton_summary(stdout)
+    with h5py.File(path) as f:
+        c = f["continuation"]
+        assert c["values"].shape == (1,)
+        modulus = np.hypot(c["multipliers_re"][0], c["multipliers_im"][0])
+        residual = float(c["residual"][0])
+        impacts = int(c["impacts_per_period"][0])
+        assert bool(c["stable"][0]) == stable
+    steps = re.fullmatch(r"yes, Newton steps (\d+), residual \|P\(z\) - z\| / \(1 \+ \|z\|\) "
+                         r"= (\S+)", told["converged"])
+    assert steps, told
+    assert float(steps.group(2)) == pytest.approx(residual, rel=0.01)
+    outside = int((modulus > 1).sum())
+    assert (outside > 0) == (not stable)
+    want = (f"{'stable' if stable else 'unstable'}, {outside} of {modulus.size} Floquet "
+            f"multipliers outside the unit circle, largest modulus ")
+    assert told["stability"].startswith(want), told
+    assert float(told["stability"][len(want):]) == pytest.approx(modulus.max(), rel=1e-5)
+    assert told["impacts per period"] == f"{impacts} (period 1)"
+
+
+def test_newton_only_tells_a_stable_orbit(impactchain_exe, tmp_path):
+    """Issue 32, 8: max_points = 1 says whether Newton converged (steps, residual), the
+    orbit's stability with its multipliers outside the unit circle and the largest modulus,
+    and its impacts per period (figure 10's chain at A = 3, from rest: stable, 8 impacts)."""
+    text = CHAIN.replace("amplitude = 1.0", "amplitude = 3.0") + NEWTON_ONLY
+    result = run_namelist(impactchain_exe, text, tmp_path)
+    check_against_the_file(result.stdout, tmp_path / "orbit.h5", stable=True)
+
+
+def test_newton_only_tells_an_unstable_orbit(impactchain_exe, tmp_path):
+    """The unstable orbit at A = 3 beyond the fold at A = 2.885 (figure 10's chain: found by
+    following the branch from rest round the fold), started from its state: unstable, a
+    complex pair outside the unit circle."""
+    text = CHAIN.replace("amplitude = 1.0", "amplitude = 3.0")
+    fold = text + ("&continuation parameter = 'amplitude', stop = 2.0, step = -0.05 /\n"
+                   "&output file = 'fold.h5' /\n")
+    run_namelist(impactchain_exe, fold, tmp_path, name="fold.nml")
+    with h5py.File(tmp_path / "fold.h5") as f:
+        c = f["continuation"]
+        assert c["values"][-1] == 3.0 and not c["stable"][-1]
+        x, v = c["x"][-1], c["v"][-1]
+    start = ("&initial kind = 'explicit', x0 = " + ", ".join(repr(float(a)) for a in x) +
+             ", v0 = " + ", ".join(repr(float(a)) for a in v) + " /\n")
+    text = text.replace("transient = 5", "transient = 0") + start + NEWTON_ONLY
+    result = run_namelist(impactchain_exe, text, tmp_path)
+    check_against_the_file(result.stdout, tmp_path / "orbit.h5", stable=False)
+    assert "unstable, 2 of 16" in result.stdout
+
+
+def test_newton_only_tells_a_failure(impactchain_exe, tmp_path):
+    """Newton that does not converge (A = 6, the attractor not period 1): 'no', its steps
+    and last residual, and no stability."""
+    text = CHAIN.replace("amplitude = 1.0", "amplitude = 6.0").replace("transient = 5",
+                                                                        "transient = 250")
+    result = run_namelist(impactchain_exe, text + NEWTON_ONLY, tmp_path)
+    told = newton_summary(result.stdout)
+    assert re.fullmatch(r"no, Newton steps \d+, residual .* = \d\.\d\dE[-+]\d\d",
+                        told["converged"]), told
+    assert told["stability"] == "unknown (no orbit converged)"
+    assert "impacts per period" not in told

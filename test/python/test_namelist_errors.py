@@ -285,11 +285,78 @@ def test_check_refuses_an_existing_output(impactchain_exe, tmp_path):
     assert (tmp_path / "run.h5").read_bytes() == b"precious"
 
 
+def unknown_key_lines(stderr: str) -> list[str]:
+    return [line.strip() for line in stderr.splitlines() if "unknown key '" in line]
+
+
+def test_the_papers_symbols_are_named_with_their_keys(impactchain_exe, tmp_path):
+    """Issue 32, 8: a namelist in the paper's symbols is refused with every symbol named at
+    once, each with the key it stands for; A is also the paper's a (keys are case-blind), and
+    the message says so."""
+    result = run_namelist(impactchain_exe, "&chain n = 4, A = 1.7, w = 1.5, K = 0.7, "
+                          "b = 0.05 /\n&output file = 'paper.h5' /\n", tmp_path, check=False)
+    assert result.returncode == 1
+    assert "input.nml: 4 unknown keys:" in result.stderr, result.stderr
+    assert unknown_key_lines(result.stderr) == [
+        "input.nml:1: &chain: unknown key 'A' (did you mean 'amplitude'? A is the paper's "
+        "drive amplitude; keys are case-blind, so A and a (the paper's spacing) are one name "
+        "here: write 'amplitude' or 'spacing')",
+        "input.nml:1: &chain: unknown key 'w' (did you mean 'omega'? w is the paper's drive "
+        "frequency)",
+        "input.nml:1: &chain: unknown key 'K' (did you mean 'restitution'? K is the paper's "
+        "coefficient of restitution)",
+        "input.nml:1: &chain: unknown key 'b' (did you mean 'damping'? b is the paper's "
+        "damping coefficient)"]
+    assert "The keys of &chain are n, spacing, damping, restitution, amplitude, omega, " \
+           "boundary" in result.stderr
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["input.nml"]
+
+
+@pytest.mark.parametrize("written, key, other", [("a", "spacing", "amplitude"),
+                                                 ("A", "amplitude", "spacing"),
+                                                 ("W", "omega", None),
+                                                 ("k", "restitution", None)])
+def test_a_symbol_of_either_case_names_its_key(impactchain_exe, tmp_path, written, key, other):
+    """The symbol written in the paper's case is the first guess; the other case of a symbol
+    that has one (a, A) is named as well, since the reader cannot tell them apart."""
+    result = run_namelist(impactchain_exe, f"&chain n = 4, omega = 1.5, amplitude = 1, "
+                          f"{written}(1) = 1 /", tmp_path, check=False)
+    assert result.returncode == 1
+    (line,) = unknown_key_lines(result.stderr)
+    assert f"unknown key '{written}' (did you mean '{key}'?" in line, line
+    assert ("case-blind" in line) == (other is not None), line
+    if other:
+        assert f"write '{key}' or '{other}'" in line, line
+    assert not list(tmp_path.glob("*.h5*"))
+
+
+def test_every_unknown_key_is_named_at_once(impactchain_exe, tmp_path):
+    """Misspelt keys in two groups: all of them, each with the nearest key by edit distance,
+    then the keys of both groups; a key of another group says which."""
+    text = ("&chain n = 4, amplitud = 1,\n omgea = 1.5, dampign = 0.1 /\n"
+            "&run cycels = 3, damping = 0.2, xyzzy = 1 /\n&output file = 'bad.h5' /\n")
+    result = run_namelist(impactchain_exe, text, tmp_path, check=False)
+    assert result.returncode == 1
+    assert "input.nml: 6 unknown keys:" in result.stderr, result.stderr
+    assert unknown_key_lines(result.stderr) == [
+        "input.nml:1: &chain: unknown key 'amplitud' (did you mean 'amplitude'?)",
+        "input.nml:2: &chain: unknown key 'omgea' (did you mean 'omega'?)",
+        "input.nml:2: &chain: unknown key 'dampign' (did you mean 'damping'?)",
+        "input.nml:3: &run: unknown key 'cycels' (did you mean 'cycles'?)",
+        "input.nml:3: &run: unknown key 'damping' ('damping' is a key of &chain)",
+        "input.nml:3: &run: unknown key 'xyzzy'"]
+    assert "The keys of &chain are n, spacing" in result.stderr
+    assert "The keys of &run are transient, cycles" in result.stderr
+    assert not list(tmp_path.glob("*.h5*"))
+
+
 @pytest.mark.parametrize("args, needle, code", [
     (["--set", "chain.amplitud=3"], "did you mean 'amplitude'", 1),
     (["--set", "chain.n=4.5"], "n = 4.5 is not an integer", 1),
     (["--set", "chain"], "group.key=value", 1),
     (["--set", "chian.n=3"], "did you mean &chain", 1),
+    (["--set", "chain.A=3"], "unknown key 'A' (did you mean 'amplitude'? A is the paper's "
+     "drive amplitude", 1),
     # issue 30, 7: a value cannot close its group and open another, or comment out the rest
     (["--set", "chain.n=4 / &run cycles=5"], "--set chain.n=4 / &run cycles=5: the value", 1),
     (["--set", "chain.n=4 ! x"], "--set chain.n=4 ! x: the value", 1),
