@@ -38,6 +38,11 @@ def _allowed(root: Path) -> dict[str, list[str]]:
 def check(root: Path) -> list[str]:
     """Every back-edge under root, one line each (empty: none)."""
     allowed = _allowed(root)
+    problems = [f"{path.relative_to(root)}: a source outside every layer (each sits in a "
+                f"folder of src/ whose README.md has a 'Uses:' line)"
+                for path in sorted((root / "src").rglob("*"))
+                if path.suffix in (".f90", ".F90", ".c")
+                and path.relative_to(root / "src").parts[0] not in allowed]
     home: dict[str, str] = {}          # module -> its layer
     sources: list[tuple[Path, str]] = []
     for layer in allowed:
@@ -50,7 +55,6 @@ def check(root: Path) -> list[str]:
         for path in sorted((root / folder).glob("*.[fF]90")) if (root / folder).is_dir() else []:
             sources.append((path, folder))
             allowed[folder] = may
-    problems = []
     for path, layer in sources:
         text = path.read_text()
         uses = {m.group(1).lower() for m in _USE.finditer(text)}

@@ -39,3 +39,14 @@ def test_a_back_edge_fails(tmp_path):
     assert any(line.startswith("check_layers: app/main.f90: uses chain_sim (layer runs)")
                for line in lines), lines
     assert len(lines) == 2
+
+
+def test_a_source_outside_the_layers_fails(tmp_path):
+    shutil.copytree(ROOT / "src", tmp_path / "src")
+    (tmp_path / "src" / "chain_loose.f90").write_text("module chain_loose\nend module\n")
+    (tmp_path / "src" / "extra").mkdir()
+    (tmp_path / "src" / "extra" / "chain_extra.c").write_text("int x;\n")
+    result = _check(tmp_path)
+    assert result.returncode == 1
+    assert [line.split(":")[1].strip() for line in result.stderr.splitlines()] == [
+        "src/chain_loose.f90", "src/extra/chain_extra.c"], result.stderr
