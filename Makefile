@@ -11,7 +11,7 @@ RELEASE := --profile release
 # (and a warning for each array temporary: none is expected, so one stands out in the log)
 CHECKED_FLAGS = -g -O1 -fcheck=all -ffpe-trap=invalid,zero,overflow -fbacktrace $(BLAS_FFLAGS)
 CHECKED = --flag "$(CHECKED_FLAGS)"
-# Which BLAS and LAPACK (README, "Which BLAS"): the pkg-config module(s) named by
+# Which BLAS and LAPACK (docs/performance.md, "Which BLAS"): the pkg-config module(s) named by
 # IMPACTCHAIN_BLAS, default scipy-openblas: the scipy-openblas32 wheel of requirements.txt,
 # the OpenBLAS numpy and scipy build against (kernels for new CPUs, symbols prefixed scipy_),
 # whose pkg-config file inside the wheel is put on PKG_CONFIG_PATH here. Another one:

@@ -1,5 +1,5 @@
 /* The BLAS and LAPACK routines impactchain calls, under the names of a BLAS whose symbols carry
- * a prefix (README, "Which BLAS").
+ * a prefix (docs/performance.md, "Which BLAS").
  *
  * The scipy-openblas32 wheel (the OpenBLAS that numpy and scipy build against) exports
  * `scipy_dgemm_`, `scipy_dgeqrf_`, ... so that it never clashes with another BLAS in the same

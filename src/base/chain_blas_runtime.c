@@ -1,5 +1,5 @@
 /* Which BLAS the program runs on, the kernels it selected on this CPU, and one thread inside
- * every BLAS call (README, "Which BLAS"; the provenance of chain_provenance).
+ * every BLAS call (docs/performance.md, "Which BLAS"; the provenance of chain_provenance).
  *
  * The BLAS is whatever the build linked (IMPACTCHAIN_BLAS): its entry points are weak
  * references, so each one is null unless the linked library defines it, and one file serves

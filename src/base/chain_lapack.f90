@@ -83,7 +83,7 @@ module chain_lapack
 
 contains
 
-    !> One thread inside every call of the linked BLAS (README, "Which BLAS"). Done when the
+    !> One thread inside every call of the linked BLAS (docs/performance.md, "Which BLAS"). Done when the
     !> program is loaded, by a constructor in src/base/chain_blas_runtime.c, which this reference
     !> links into every program that uses this module; call it again only if something else
     !> (a host program) changed the BLAS's thread count, outside any parallel region.

@@ -1,5 +1,5 @@
 !> Where a result was made: the code's version, the compiler and its flags, the BLAS with its
-!> version and the kernels it selected on this CPU, and the CPU's model (README, "Which BLAS"
+!> version and the kernels it selected on this CPU, and the CPU's model (docs/performance.md, "Which BLAS"
 !> and "Output"). One table, `provenance()`: every output file carries it as root attributes
 !> (chain_output's output_begin, which every writer calls), `impactchain --version` and the MPI
 !> driver's print it, the bench prints it above its table and the Python package returns it

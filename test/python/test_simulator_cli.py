@@ -391,8 +391,9 @@ def test_the_programs_on_the_path_run_from_any_directory(impactchain_exe, tmp_pa
 
 
 def _readme_block_after(marker: str) -> str:
-    """The first ```sh block of README.md after the line holding `marker`."""
-    text = (ROOT / "README.md").read_text()
+    """The first ```sh block of the sweeps guide (docs/sweeps.md) after the line holding
+    `marker`."""
+    text = (ROOT / "docs" / "sweeps.md").read_text()
     rest = text[text.index(marker):]
     start = rest.index("```sh\n") + len("```sh\n")
     return rest[start:rest.index("```", start)]
