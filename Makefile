@@ -214,11 +214,13 @@ census-figures: build
 	$(MAKE) --no-print-directory figure-files FIGURES="$(CENSUS_FIGURES)"
 
 $(RUNS)/%.h5: namelists/%.nml
-	@echo "impactchain: running $<"
+	@mkdir -p $(@D)
+	echo "impactchain: running $<"
 	$(SIM) $<
 
 $(RUNS)/census_%.h5: $(CENSUS)/census_%.nml
-	@echo "impactchain: running $<"
+	@mkdir -p $(@D)
+	echo "impactchain: running $<"
 	$(SIM) $<
 
 figures/census_fig3_plane.png: $(RUNS)/census_fig3_plane.h5
