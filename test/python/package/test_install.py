@@ -44,9 +44,10 @@ def test_imports_the_installed_package() -> None:
         "`pip install .`) and keep python/ off sys.path")
     assert not installed.is_relative_to(ROOT / "python")
     assert importlib.metadata.version("impactchain") == impactchain.__version__
-    stale = [p.name for p in sorted(SOURCE.glob("*.py"))
-             if not (installed / p.name).is_file()
-             or (installed / p.name).read_bytes() != p.read_bytes()]
+    sources = [p.relative_to(SOURCE) for p in sorted(SOURCE.rglob("*.py"))]
+    stale = [str(p) for p in sources
+             if not (installed / p).is_file()
+             or (installed / p).read_bytes() != (SOURCE / p).read_bytes()]
     assert not stale, (f"the installed impactchain ({installed}) is out of date: {stale} "
                        "differ from python/impactchain/; run `make build` (or `pip install .`)")
     if api.extension_available() or "IMPACTCHAIN_REQUIRE_EXTENSION" in os.environ:
@@ -56,7 +57,9 @@ def test_imports_the_installed_package() -> None:
 
 def test_bare_import_reaches_every_module() -> None:
     """``import impactchain`` then ``impactchain.api`` etc. (imported on first use)."""
-    names = sorted(p.stem for p in SOURCE.glob("*.py") if not p.stem.startswith("_"))
+    modules = [p.stem for p in SOURCE.glob("*.py")]
+    packages = [p.name for p in SOURCE.iterdir() if (p / "__init__.py").is_file()]
+    names = sorted(name for name in modules + packages if not name.startswith("_"))
     assert names == sorted(impactchain._SUBMODULES)
     for name in names:
         assert getattr(impactchain, name).__name__ == f"impactchain.{name}"
