@@ -49,7 +49,7 @@ export FPM_FFLAGS = $(BLAS_FFLAGS)
 APT_PACKAGES := gfortran libhdf5-dev liblapack-dev libblas-dev pkg-config libopenmpi-dev \
                 openmpi-bin
 PY_STAMP := $(VENV)/.requirements-installed
-# The Python package impactchain (post/impactchain/ and its extension impactchain._kernels,
+# The Python package impactchain (python/impactchain/ and its extension impactchain._kernels,
 # built by meson-python from meson.build): installed into the venv as `pip install .` installs
 # it anywhere, from a build directory kept between runs, so that a rebuild compiles only what
 # changed (nothing changed: a few seconds). meson and ninja come from the venv.
@@ -144,10 +144,10 @@ python-test: build
 	@echo "impactchain: the Python tests (package and simulator, release build)"
 	IMPACTCHAIN_REQUIRE_EXTENSION=1 $(PY) -m pytest
 	@echo "impactchain: pip install of the repository into a fresh venv (a full build)"
-	$(PY) -m pytest -m install -q -rA post/tests/test_install.py
+	$(PY) -m pytest -m install -q -rA test/python/package/test_install.py
 	@echo "impactchain: the simulator tests again against the runtime-checked build"
 	IMPACTCHAIN_FPM_FLAGS='$(CHECKED_FLAGS)' \
-	    $(PY) -m pytest -q test/python
+	    $(PY) -m pytest -q test/python --ignore=test/python/package
 
 test: fortran-test python-test
 

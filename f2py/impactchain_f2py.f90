@@ -1,7 +1,7 @@
 !> The thin layer wrapped by f2py into `impactchain._kernels` (SHTOOLS' PythonWrapper
 !> pattern): plain external subroutines with explicit-shape c_double / c_int / c_int64_t
 !> arrays. Only these six routines cross into Python; `impactchain.api`
-!> (post/impactchain/api.py) is the interface people use.
+!> (python/impactchain/api.py) is the interface people use.
 !>
 !> Each routine builds the `config_t` a namelist with the same values would give, checks
 !> it with the library's `validate_config` (so errors carry the CLI's messages), and calls the

@@ -175,7 +175,7 @@ def test_a_2d_sweep_is_netcdf(impactchain_exe, tmp_path):
 def test_a_run_starts_from_the_final_state_of_either_version(impactchain_exe, tmp_path):
     """&initial kind = 'file' reads /final and /params of schema version 1 (fixed-length
     strings, one-element arrays) and of version 2 alike: the same state, the same run."""
-    data = Path(__file__).resolve().parents[2] / "post" / "tests" / "data"
+    data = Path(__file__).resolve().parent / "package" / "data"
     records = {}
     for version in (1, 2):
         text = ("&chain n = 3, amplitude = 1.7, omega = 1.5 /\n"

@@ -4,14 +4,14 @@ The space-amplitude plot of 16 oscillators (A = 1.7, w = 1.5, b = 0.05, K = 0.7,
 walls): the displacement of every oscillator at the Poincare section, one line per drive
 cycle, for 200 cycles after a transient, from the seeded random start of
 ``namelists/fig1c.nml``. The numbers are bit-identical to ``fpm run --profile release --
-namelists/fig1c.nml`` (post/tests/test_api.py checks it). The figure is the gallery's own,
+namelists/fig1c.nml`` (test/python/package/test_api.py checks it). The figure is the gallery's own,
 ``impactchain.figures.space_amplitude``, which takes the in-memory result as it takes a file;
 the PNG's metadata hold the equivalent input namelist.
 
 Usage, with the package installed (``pip install .`` or ``make``), from any directory::
 
-    .venv/bin/python post/examples/fig1c_space_amplitude.py fig1c.png
-    .venv/bin/python post/examples/fig1c_space_amplitude.py fig1c.png --amplitude 1.8
+    .venv/bin/python examples/python/fig1c_space_amplitude.py fig1c.png
+    .venv/bin/python examples/python/fig1c_space_amplitude.py fig1c.png --amplitude 1.8
 """
 
 from __future__ import annotations

@@ -27,7 +27,7 @@ import pytest
 
 matplotlib.use("Agg")
 
-ROOT = Path(__file__).resolve().parents[2]
+ROOT = Path(__file__).resolve().parents[3]
 FPM = ROOT / ".venv" / "bin" / "fpm"
 
 

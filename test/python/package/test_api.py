@@ -11,9 +11,9 @@ What these tests demonstrate:
    CLI's message (``test_errors_match_cli``); Python-only misuse raises TypeError /
    ValueError with a clear message (``test_python_side_errors``).
 3. No leaks: 10,000 short calls do not grow the process's resident memory (``test_no_leak``).
-4. The example post/examples/fig1c_space_amplitude.py reproduces its recipe bit for bit
+4. The example examples/python/fig1c_space_amplitude.py reproduces its recipe bit for bit
    and draws with the gallery's figure function. (That ``pip install`` builds the extension
-   in a fresh environment is post/tests/test_install.py's; ``make test`` installs the package
+   in a fresh environment is test/python/package/test_install.py's; ``make test`` installs the package
    before running pytest.)
 5. Long calls stop on Ctrl-C and show progress; sweeps and continuations of periodic orbits
    return the CLI file's groups (``/sweep``, ``/continuation``) as xarray reads them, bit for
@@ -43,9 +43,9 @@ import pytest
 from impactchain import api
 from impactchain.testing import assert_sum_rule
 
-ROOT = Path(__file__).resolve().parents[2]
+ROOT = Path(__file__).resolve().parents[3]
 FPM = ROOT / ".venv" / "bin" / "fpm"
-EXAMPLE = ROOT / "post" / "examples" / "fig1c_space_amplitude.py"
+EXAMPLE = ROOT / "examples" / "python" / "fig1c_space_amplitude.py"
 
 pytestmark = pytest.mark.skipif(
     not api.extension_available() and "IMPACTCHAIN_REQUIRE_EXTENSION" not in os.environ,

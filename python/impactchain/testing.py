@@ -1,6 +1,6 @@
 """Invariants every run of the simulator satisfies, as assertions for test suites.
 
-The one place the Python tests (``post/tests``, ``test/python``) check them, so that every
+The one place the Python tests (``test/python/package``, ``test/python``) check them, so that every
 suite applies the same rule with the same tolerance.
 """
 

@@ -358,7 +358,7 @@ def test_examples_are_copied_out_and_never_over_a_users_file(tmp_path: Path) -> 
     impactchain examples DIR` copies the installed recipes of the paper's figures and the
     example scripts; a second time it refuses, naming a file that exists and copying
     nothing, unless --overwrite."""
-    root = Path(__file__).resolve().parents[2]
+    root = Path(__file__).resolve().parents[3]
     target = tmp_path / "mine"
     done = subprocess.run([sys.executable, "-m", "impactchain", "examples", str(target)],
                           capture_output=True, text=True, timeout=120)

@@ -1,4 +1,4 @@
-"""impactchain.io reads the simulator's files of schema versions 1 and 2 (post/tests/data: the same
+"""impactchain.io reads the simulator's files of schema versions 1 and 2 (test/python/package/data: the same
 two inputs written by both) into the same numbers; version 2 also opens group by group in
 xarray with named dimensions and coordinates."""
 

@@ -2,7 +2,7 @@
 repository builds a working extension in a fresh environment.
 
 ``test_imports_the_installed_package`` (always): ``impactchain`` comes from site-packages, not
-from post/impactchain/ of the source tree, its Python files are those of the tree (an
+from python/impactchain/ of the source tree, its Python files are those of the tree (an
 install that is out of date says so here rather than by failing elsewhere), and the compiled
 extension sits next to them.
 
@@ -29,8 +29,8 @@ import pytest
 import impactchain
 from impactchain import api
 
-ROOT = Path(__file__).resolve().parents[2]
-SOURCE = ROOT / "post" / "impactchain"
+ROOT = Path(__file__).resolve().parents[3]
+SOURCE = ROOT / "python" / "impactchain"
 PROBE = ("import sys, impactchain; "
          "assert impactchain.api.extension_available(), 'no extension'; "
          "print(impactchain.__file__); "
@@ -41,14 +41,15 @@ def test_imports_the_installed_package() -> None:
     installed = Path(impactchain.__file__).resolve().parent
     assert installed != SOURCE, (
         "impactchain is imported from the source tree; install it (`make build` or "
-        "`pip install .`) and keep post/ off sys.path")
-    assert not installed.is_relative_to(ROOT / "post")
+        "`pip install .`) and keep python/ off sys.path")
+    assert not installed.is_relative_to(ROOT / "python")
     assert importlib.metadata.version("impactchain") == impactchain.__version__
-    stale = [p.name for p in sorted(SOURCE.glob("*.py"))
-             if not (installed / p.name).is_file()
-             or (installed / p.name).read_bytes() != p.read_bytes()]
+    sources = [p.relative_to(SOURCE) for p in sorted(SOURCE.rglob("*.py"))]
+    stale = [str(p) for p in sources
+             if not (installed / p).is_file()
+             or (installed / p).read_bytes() != (SOURCE / p).read_bytes()]
     assert not stale, (f"the installed impactchain ({installed}) is out of date: {stale} "
-                       "differ from post/impactchain/; run `make build` (or `pip install .`)")
+                       "differ from python/impactchain/; run `make build` (or `pip install .`)")
     if api.extension_available() or "IMPACTCHAIN_REQUIRE_EXTENSION" in os.environ:
         assert api.extension_available()
         assert Path(api._kernels.__file__).resolve().parent == installed
@@ -56,7 +57,9 @@ def test_imports_the_installed_package() -> None:
 
 def test_bare_import_reaches_every_module() -> None:
     """``import impactchain`` then ``impactchain.api`` etc. (imported on first use)."""
-    names = sorted(p.stem for p in SOURCE.glob("*.py") if not p.stem.startswith("_"))
+    modules = [p.stem for p in SOURCE.glob("*.py")]
+    packages = [p.name for p in SOURCE.iterdir() if (p / "__init__.py").is_file()]
+    names = sorted(name for name in modules + packages if not name.startswith("_"))
     assert names == sorted(impactchain._SUBMODULES)
     for name in names:
         assert getattr(impactchain, name).__name__ == f"impactchain.{name}"
