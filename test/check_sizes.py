@@ -20,6 +20,7 @@ a full stop) the marker excuses nothing.
 from __future__ import annotations
 
 import ast
+import os
 import re
 import sys
 from pathlib import Path
@@ -27,10 +28,10 @@ from pathlib import Path
 MAX_FILE = 600        #: lines of a source file
 MAX_PROCEDURE = 100   #: lines of a procedure, less those it contains
 MARKER = "Size:"      #: the start of the header's sentence that excuses a file
+MIN_WORDS = 5         #: of that sentence, to say why rather than that
 FORTRAN = ("src", "app", "mpi", "f2py")  #: folders whose Fortran is checked
 SKIPPED = {"build", ".venv", ".git"}
 
-MIN_WORDS = 5         #: of the marker's sentence, to say why rather than that
 _SENTENCE = re.compile(re.escape(MARKER) + r"\s*(.*?\.)(?:\s|$)")
 
 _PREFIX = (r"(?:(?:pure|impure|elemental|recursive|non_recursive|module|integer|real|logical"
@@ -167,9 +168,10 @@ def sources(root: Path) -> list[Path]:
 
     files = [p for folder in FORTRAN if (root / folder).is_dir()
              for p in sorted((root / folder).rglob("*")) if p.suffix in (".f90", ".F90")]
-    for init in sorted(root.rglob("impactchain/__init__.py")):
-        if kept(init):
-            files += sorted(init.parent.rglob("*.py"))
+    for folder, dirs, names in os.walk(root):
+        dirs[:] = sorted(d for d in dirs if d not in SKIPPED and not d.startswith("."))
+        if Path(folder).name == "impactchain" and "__init__.py" in names:
+            files += sorted(Path(folder).rglob("*.py"))
     return [p for p in files if kept(p)]
 
 
@@ -184,10 +186,10 @@ def check(root: Path) -> tuple[list[str], list[str]]:
         over = [f"{name}: {lines} lines (at most {MAX_FILE})"] if lines > MAX_FILE else []
         over += [f"{name}:{first}: procedure {proc} has {length} lines (at most {MAX_PROCEDURE})"
                  for proc, first, length in procedures if length > MAX_PROCEDURE]
-        why = reason(path, text)
-        if over and why:
+        why = reason(path, text) if over else None
+        if why:
             excused.append(f"{name}: {lines} lines, excused: {why}")
-        elif over:
+        else:
             problems += over
     return problems, excused
 
