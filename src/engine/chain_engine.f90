@@ -19,6 +19,9 @@
 !> - chain_engine_tangent: the tangent frame (sections 4.7 and 7);
 !> - chain_engine_state: a chain's state out and in, and what the library reads of a chain.
 !>
+!> Size: this file holds the type, the interfaces of its submodules and the whole event loop
+!> with what calls its steps, since a loop split across files would lose gfortran's inlining.
+!>
 !> Design for speed: every moving oscillator keeps the free part of its motion, (x - xp,
 !> v - vp), referred back to one common time, the epoch. Its state at any later time s is then
 !> one 2x2 product with the propagator M(s - epoch), which is computed once per event time and

@@ -3,20 +3,21 @@
 !> Poincare-map Jacobian. The CLI sends records to an HDF5 file, sweeps and the Python
 !> extension keep them in memory; all go through `record_cycles`, so their numbers agree bit for
 !> bit.
-!> Where the records are taken: chain_section; the Jacobian and multipliers: chain_floquet;
+!> Where the records are taken: chain_section; where they go: chain_record_sink (its sink types
+!> come with record_cycles, which takes them); the Jacobian and multipliers: chain_floquet;
 !> covariant Lyapunov vectors (the factors kept at every record, the backward pass at the end,
 !> docs/model.md section 14): chain_clv.
 module chain_record
     use chain_kinds, only: wp, i8
     use chain_error, only: error_t, set_error, fmt_int8
-    use chain_engine, only: chain_t, chain_init, chain_snapshot, chain_model, chain_advance, chain_sync, chain_new_cycle, &
-                            chain_set_tangent, chain_size, chain_cycle, chain_time, chain_start, &
-                            chain_period, chain_section_time, chain_copy_state, chain_counts, &
+    use chain_engine, only: chain_t, chain_init, chain_snapshot, chain_model, &
+                            chain_set_tangent, chain_size, chain_cycle, chain_time, &
+                            chain_period, chain_copy_state, chain_counts, &
                             chain_reset_counts, chain_vectors, chain_tangent_frame, &
                             chain_qr_step, chain_reorthonormalise, chain_rank_lost
     use chain_state, only: event_counts_t, chain_state_t
     use chain_model, only: model_t
-    use chain_event_log, only: event_log_t, event_log_init, event_log_clear, event_log_append
+    use chain_event_log, only: event_log_t, event_log_init
     use chain_lyapunov, only: lyapunov_acc_t, lyapunov_start, lyapunov_due, &
                               lyapunov_result_t, lyapunov_result, initial_frame
     use chain_period, only: detect_period
@@ -25,6 +26,8 @@ module chain_record
     use chain_monitor, only: monitor_t, stage_records, stage_backward
     use chain_clv, only: clv_pass_t, clv_rows_t, clv_result_t, clv_start, clv_forward, &
                          clv_backward_begin, clv_backward_rows, clv_result, clv_close
+    use chain_record_sink, only: record_sink_t, memory_sink_t, record_chunk_t, chunk_start, &
+                                 chunk_flush, chunk_take_window, window_buffer_start
     implicit none
     private
     public :: record_sink_t, memory_sink_t, record_result_t, record_cycles
@@ -63,54 +66,6 @@ module chain_record
         integer :: window = 0
     end type record_spec_t
 
-    !> Where strobe records and events go, chunk by chunk.
-    type, abstract :: record_sink_t
-    contains
-        procedure(put_strobe_i), deferred :: put_strobe
-        procedure(put_events_i), deferred :: put_events
-        !> per-record numbers of covariant vectors, a block at a time, last block first
-        !> (by default dropped)
-        procedure :: put_clv => discard_clv
-        !> finite-time exponents, a chunk of windows at a time (by default dropped)
-        procedure :: put_windows => discard_windows
-    end type record_sink_t
-
-    abstract interface
-        subroutine put_strobe_i(sink, n_records, first, x, v, cycle, err)
-            import :: record_sink_t, wp, i8, error_t
-            class(record_sink_t), intent(inout) :: sink
-            integer(i8), intent(in) :: n_records, first
-            real(wp), intent(in), contiguous :: x(:, :), v(:, :) !! records are whole columns
-            integer(i8), intent(in), contiguous :: cycle(:)
-            type(error_t), allocatable, intent(out) :: err
-        end subroutine put_strobe_i
-        subroutine put_events_i(sink, log, err)
-            import :: record_sink_t, event_log_t, error_t
-            class(record_sink_t), intent(inout) :: sink
-            type(event_log_t), intent(in) :: log
-            type(error_t), allocatable, intent(out) :: err
-        end subroutine put_events_i
-    end interface
-
-    !> Keeps every record in memory: x(n, cycles), v(n, cycles), and all events; the
-    !> per-record numbers of covariant vectors (records with vectors in order, clv_rows_t's
-    !> arrays whole); and the finite-time exponents (k, windows) with their cycles.
-    type, extends(record_sink_t) :: memory_sink_t
-        logical :: keep_strobe = .true.
-        real(wp), allocatable :: x(:, :), v(:, :)
-        integer(i8), allocatable :: cycle(:)
-        type(event_log_t) :: events
-        integer(i8), allocatable :: clv_cycle(:)
-        real(wp), allocatable :: clv_ipr(:, :), clv_site_weight(:, :, :), clv_min_angle(:)
-        real(wp), allocatable :: window_exponents(:, :)
-        integer(i8), allocatable :: window_cycle(:)
-    contains
-        procedure :: put_strobe => memory_put_strobe
-        procedure :: put_events => memory_put_events
-        procedure :: put_clv => memory_put_clv
-        procedure :: put_windows => memory_put_windows
-    end type memory_sink_t
-
     !> Where record_cycles stands after a record, beyond the chain itself (which is then at that
     !> record, synced): with both, a stopped run continues bit for bit.
     type :: record_state_t
@@ -120,13 +75,16 @@ module chain_record
                                                   !! ring (record j at modulo(j - 1, window) + 1)
     end type record_state_t
 
-    !> Finite-time exponents held for the sink: windows first .. first + count - 1 of `total`.
-    type :: window_buffer_t
-        integer(i8) :: total = 0, first = 1, seen = 0
-        integer :: count = 0
-        real(wp), allocatable :: exponents(:, :)  !! exponents(k, chunk), bits per cycle
-        integer(i8), allocatable :: cycle(:)      !! drive cycle at each window's end
-    end type window_buffer_t
+    !> The chain at the last record, held after a slow cycle: a stop asked within the next
+    !> cycle (a cycle of millions of events) takes the run back there at once, as if asked
+    !> there. Beside a slow cycle the copy costs nothing.
+    type :: held_record_t
+        logical :: on = .false.      !! a record is held: the monitor may cut the next cycle
+        type(chain_state_t) :: state
+        integer :: events = 0        !! the event log's count at that record
+        integer(i8) :: clock = 0     !! system_clock at the last record
+        integer(i8) :: slow = 0      !! clock counts of a slow cycle
+    end type held_record_t
 
     type :: record_result_t
         integer(i8) :: cycles_done = 0
@@ -183,21 +141,90 @@ contains
         !> seconds of a cycle after which the next record is held (default slow_cycle; 0:
         !> every record, which a test of the stop within a cycle needs on any machine)
         real(wp), intent(in), optional :: hold_after
-        type(event_log_t) :: log
         type(record_state_t) :: st
         type(clv_pass_t) :: clv
-        real(wp), allocatable :: xbuf(:, :), vbuf(:, :)
-        integer(i8), allocatable :: cbuf(:)
-        type(window_buffer_t) :: windows
-        integer(i8) :: j, target_cycle, first
+        type(record_chunk_t) :: chunk
+        type(held_record_t) :: held
+        integer(i8) :: j, target_cycle
         real(wp) :: target_s
-        integer :: m, i, w
-        logical :: stop_now
-        type(chain_state_t) :: held  !! the chain at the last record, while cycles are slow
-        type(model_t) :: model
-        integer :: held_events       !! log%count at that record
-        integer(i8) :: clock_record, clock_now, clock_rate, hold_counts
-        logical :: have_held, cut
+        integer :: i
+        logical :: stop_now, cut
+
+        call start_records(spec, chain, st, clv, err, monitor, state)
+        if (allocated(err)) return
+        res%cycles_continued = st%cycles_done
+        res%cycles_done = st%cycles_done
+        call chunk_start(chunk, chain_size(chain), int(max(1_i8, min(spec%cycles - &
+                         st%cycles_done, int(2**20/chain_size(chain), i8)))), &
+                         st%cycles_done + 1, spec%record_events)
+        if (spec%lyapunov .and. spec%window > 0) &
+            call window_buffer_start(chunk%windows, st%acc, spec%cycles/spec%window)
+        call hold_start(held, present(monitor), hold_after)
+        if (held%on) call hold(held, spec, chain, chunk%log)
+        do j = st%cycles_done + 1, spec%cycles
+            call section_target(chain, spec%transient, spec%phase, j, target_cycle, target_s)
+            cut = .false.
+            if (held%on) then
+                call advance_to_point(chain, target_cycle, target_s, chunk%log, err, monitor, cut)
+            else
+                call advance_to_point(chain, target_cycle, target_s, chunk%log, err)
+            end if
+            if (allocated(err)) exit
+            if (cut .and. j == 1) then
+                call set_error(err, "run stopped during the drive cycle of its first record, "// &
+                               "before that record: nothing was recorded")
+                exit
+            else if (cut) then
+                call back_to_held(held, chain, chunk%log, err)
+                if (.not. allocated(err)) &
+                    call chunk_flush(chunk, spec%cycles, int(j - chunk%first), sink, err)
+                exit
+            end if
+            i = int(j - chunk%first) + 1
+            call keep_record(chain, j, chunk, i, st)
+            call tangent_at_record(spec, chain, st%acc, clv, j, chunk%cycle(i), err)
+            if (allocated(err)) exit
+            call chunk_take_window(chunk, st%acc, chunk%cycle(i), sink, err)
+            if (allocated(err)) exit
+            res%cycles_done = j
+            st%cycles_done = j
+            stop_now = .false.
+            if (present(monitor)) stop_now = .not. monitor%keep_going(stage_records, j, &
+                                                                      spec%cycles)
+            if (i == size(chunk%cycle) .or. j == spec%cycles .or. &
+                chunk%log%count >= event_flush .or. stop_now) then
+                call chunk_flush(chunk, spec%cycles, i, sink, err)
+                if (allocated(err)) exit
+            end if
+            if (stop_now) exit
+            call hold_if_slow(held, present(monitor), spec, chain, chunk%log)
+        end do
+        if (allocated(err)) then
+            call clv_close(clv)
+            return
+        end if
+        call summarise_run(spec, chain, st, res)
+        if (spec%lyapunov .and. spec%covariant .and. res%complete) &
+            call covariant_pass(clv, st%acc, sink, res, err, monitor)
+        call clv_close(clv)
+        if (allocated(err)) return
+        if (present(state)) call move_state(st, state)
+        ! (a run stopped early computes it when it is complete)
+        if (spec%jacobian .and. res%complete) &
+            call floquet_result(chain, spec%jacobian_cycles, res%jacobian, &
+                                res%multipliers_re, res%multipliers_im, err)
+    end subroutine record_cycles
+
+    !> The run's state before its next record: that of the stopped run in `state`, or a fresh
+    !> one after the transient; with covariant vectors, their forward pass opened.
+    subroutine start_records(spec, chain, st, clv, err, monitor, state)
+        type(record_spec_t), intent(in) :: spec
+        type(chain_t), intent(inout) :: chain
+        type(record_state_t), intent(inout) :: st
+        type(clv_pass_t), intent(inout) :: clv
+        type(error_t), allocatable, intent(out) :: err
+        class(monitor_t), intent(inout), optional :: monitor
+        type(record_state_t), intent(inout), optional :: state
 
         if (present(state)) then
             if (state%cycles_done > 0) call move_state(state, st)
@@ -215,126 +242,101 @@ contains
             call clv_start(clv, chain_size(chain), chain_vectors(chain), spec%cycles, &
                            spec%clv_transient, min(spec%clv_store, chain_vectors(chain)), &
                            spec%clv_save, err)
-            if (allocated(err)) then
-                call clv_close(clv)
-                return
-            end if
+            if (allocated(err)) call clv_close(clv)
         end if
-        call event_log_init(log, spec%record_events, 1024)
-        res%cycles_continued = st%cycles_done
-        res%cycles_done = st%cycles_done
-        m = int(max(1_i8, min(spec%cycles - st%cycles_done, int(2**20/chain_size(chain), i8))))
-        allocate (xbuf(chain_size(chain), m), vbuf(chain_size(chain), m), cbuf(m))
-        if (spec%lyapunov .and. spec%window > 0) &
-            call window_buffer_start(windows, st%acc, spec%cycles/spec%window)
-        first = st%cycles_done + 1
-        ! A stop asked within a cycle (a cycle of millions of events) is taken at once: the
-        ! chain goes back to the last record, held for that, and the run ends there as if
-        ! asked there. Records are held only after a slow cycle, where a copy costs nothing.
-        call system_clock(clock_record, clock_rate)
-        hold_counts = int(slow_cycle*clock_rate, i8)
-        if (present(hold_after)) hold_counts = int(hold_after*clock_rate, i8)
-        have_held = present(monitor)
-        if (have_held) call hold_record()
-        do j = st%cycles_done + 1, spec%cycles
-            call section_target(chain, spec%transient, spec%phase, j, target_cycle, target_s)
-            cut = .false.
-            if (have_held) then
-                call advance_to_point(chain, target_cycle, target_s, log, err, monitor, cut)
-            else
-                call advance_to_point(chain, target_cycle, target_s, log, err)
-            end if
-            if (allocated(err)) exit
-            if (cut .and. j == 1) then
-                call set_error(err, "run stopped during the drive cycle of its first record, "// &
-                               "before that record: nothing was recorded")
-                exit
-            else if (cut) then
-                model = chain_model(chain)
-                call chain_init(chain, model, held, err)
-                if (allocated(err)) exit
-                log%count = held_events
-                call flush_records(int(j - first))
-                exit
-            end if
-            i = int(j - first) + 1
-            call chain_copy_state(chain, xbuf(:, i), vbuf(:, i))
-            cbuf(i) = chain_cycle(chain)
-            w = int(modulo(j - 1, int(size(st%xwin, 2), i8))) + 1
-            st%xwin(:, w) = xbuf(:, i)
-            st%vwin(:, w) = vbuf(:, i)
-            if (spec%lyapunov .and. spec%covariant) then
-                call covariant_step(chain, st%acc, clv, j, cbuf(i), err)
-                if (allocated(err)) exit
-            else if (spec%lyapunov) then
-                ! (adaptive steps also come at the first section after a rest or a collapse:
-                ! the step looks for the lost directions, as every cycle did)
-                if (lyapunov_due(st%acc, j, j == spec%cycles) .or. &
-                    (spec%qr_every == 0 .and. chain_rank_lost(chain))) then
-                    call chain_qr_step(chain, st%acc, int(j - st%acc%cycles), err)
-                    if (allocated(err)) exit
-                end if
-            end if
-            if (allocated(windows%exponents)) then
-                call window_buffer_take(windows, st%acc, cbuf(i))
-                if (windows%count == size(windows%cycle)) call window_buffer_flush(windows, &
-                                                                                   sink, err)
-                if (allocated(err)) exit
-            end if
-            res%cycles_done = j
-            st%cycles_done = j
-            stop_now = .false.
-            if (present(monitor)) stop_now = .not. monitor%keep_going(stage_records, j, &
-                                                                      spec%cycles)
-            if (i == m .or. j == spec%cycles .or. log%count >= event_flush .or. stop_now) then
-                call flush_records(i)
-                if (allocated(err)) exit
-                first = j + 1
-            end if
-            if (stop_now) exit
-            call system_clock(clock_now)
-            have_held = present(monitor) .and. clock_now - clock_record >= hold_counts
-            clock_record = clock_now
-            if (have_held) call hold_record()
-        end do
-        if (allocated(err)) then
-            call clv_close(clv)
-            return
+    end subroutine start_records
+
+    !> Record j, the chain's state now, into column i of the chunk and the period ring.
+    subroutine keep_record(chain, j, chunk, i, st)
+        type(chain_t), intent(in) :: chain
+        integer(i8), intent(in) :: j
+        type(record_chunk_t), intent(inout) :: chunk
+        integer, intent(in) :: i
+        type(record_state_t), intent(inout) :: st
+        integer :: w
+
+        call chain_copy_state(chain, chunk%x(:, i), chunk%v(:, i))
+        chunk%cycle(i) = chain_cycle(chain)
+        w = int(modulo(j - 1, int(size(st%xwin, 2), i8))) + 1
+        st%xwin(:, w) = chunk%x(:, i)
+        st%vwin(:, w) = chunk%v(:, i)
+    end subroutine keep_record
+
+    !> The tangent frame's step at record j (drive cycle `cycle`), if one is due: every record
+    !> with covariant vectors, else when the accumulator's schedule says.
+    subroutine tangent_at_record(spec, chain, acc, clv, j, cycle, err)
+        type(record_spec_t), intent(in) :: spec
+        type(chain_t), intent(inout) :: chain
+        type(lyapunov_acc_t), intent(inout) :: acc
+        type(clv_pass_t), intent(inout) :: clv
+        integer(i8), intent(in) :: j, cycle
+        type(error_t), allocatable, intent(out) :: err
+
+        if (spec%lyapunov .and. spec%covariant) then
+            call covariant_step(chain, acc, clv, j, cycle, err)
+        else if (spec%lyapunov) then
+            ! (adaptive steps also come at the first section after a rest or a collapse:
+            ! the step looks for the lost directions, as every cycle did)
+            if (lyapunov_due(acc, j, j == spec%cycles) .or. &
+                (spec%qr_every == 0 .and. chain_rank_lost(chain))) &
+                call chain_qr_step(chain, acc, int(j - acc%cycles), err)
         end if
-        call summarise_run(spec, chain, st, res)
-        if (spec%lyapunov .and. spec%covariant .and. res%complete) &
-            call covariant_pass(clv, st%acc, sink, res, err, monitor)
-        call clv_close(clv)
+    end subroutine tangent_at_record
+
+    !> Hold records from now on after a slow cycle (`slow` seconds, default slow_cycle) when
+    !> a monitor can stop the run; the first from the start.
+    subroutine hold_start(held, monitored, slow)
+        type(held_record_t), intent(out) :: held
+        logical, intent(in) :: monitored
+        real(wp), intent(in), optional :: slow
+        integer(i8) :: rate
+
+        call system_clock(held%clock, rate)
+        held%slow = int(slow_cycle*rate, i8)
+        if (present(slow)) held%slow = int(slow*rate, i8)
+        held%on = monitored
+    end subroutine hold_start
+
+    !> The chain now, at a record, to go back to when a stop comes within the next cycle.
+    subroutine hold(held, spec, chain, log)
+        type(held_record_t), intent(inout) :: held
+        type(record_spec_t), intent(in) :: spec
+        type(chain_t), intent(in) :: chain
+        type(event_log_t), intent(in) :: log
+
+        held%state = chain_snapshot(chain)
+        held%state%has_tangent = spec%lyapunov
+        held%events = log%count
+    end subroutine hold
+
+    !> Hold this record if the cycle before it was slow (and a monitor can stop the run).
+    subroutine hold_if_slow(held, monitored, spec, chain, log)
+        type(held_record_t), intent(inout) :: held
+        logical, intent(in) :: monitored
+        type(record_spec_t), intent(in) :: spec
+        type(chain_t), intent(in) :: chain
+        type(event_log_t), intent(in) :: log
+        integer(i8) :: now
+
+        call system_clock(now)
+        held%on = monitored .and. now - held%clock >= held%slow
+        held%clock = now
+        if (held%on) call hold(held, spec, chain, log)
+    end subroutine hold_if_slow
+
+    !> The chain and the event log back at the held record.
+    subroutine back_to_held(held, chain, log, err)
+        type(held_record_t), intent(in) :: held
+        type(chain_t), intent(inout) :: chain
+        type(event_log_t), intent(inout) :: log
+        type(error_t), allocatable, intent(out) :: err
+        type(model_t) :: model
+
+        model = chain_model(chain)
+        call chain_init(chain, model, held%state, err)
         if (allocated(err)) return
-        if (present(state)) call move_state(st, state)
-        ! (a run stopped early computes it when it is complete)
-        if (spec%jacobian .and. res%complete) &
-            call floquet_result(chain, spec%jacobian_cycles, res%jacobian, &
-                                res%multipliers_re, res%multipliers_im, err)
-
-    contains
-
-        !> The chain now, at a record, to go back to when a stop comes within the next cycle.
-        subroutine hold_record()
-            held = chain_snapshot(chain)
-            held%has_tangent = spec%lyapunov
-            held_events = log%count
-        end subroutine hold_record
-
-        !> The `count` records buffered since record `first`, the events and the windows, to
-        !> the sink; the buffers then start again.
-        subroutine flush_records(count)
-            integer, intent(in) :: count
-
-            if (count > 0) call sink%put_strobe(spec%cycles, first, xbuf(:, :count), &
-                                                vbuf(:, :count), cbuf(:count), err)
-            if (.not. allocated(err) .and. log%enabled) call sink%put_events(log, err)
-            if (.not. allocated(err) .and. allocated(windows%exponents)) &
-                call window_buffer_flush(windows, sink, err)
-            if (.not. allocated(err)) call event_log_clear(log)
-        end subroutine flush_records
-
-    end subroutine record_cycles
+        log%count = held%events
+    end subroutine back_to_held
 
     !> A fresh run up to its first record: the transient, counters from zero, an empty
     !> Lyapunov accumulator and period window.
@@ -567,131 +569,6 @@ contains
             state%vwin(:, w) = v(:, i)
         end do
     end subroutine set_window
-
-    subroutine memory_put_strobe(sink, n_records, first, x, v, cycle, err)
-        class(memory_sink_t), intent(inout) :: sink
-        integer(i8), intent(in) :: n_records, first
-        real(wp), intent(in), contiguous :: x(:, :), v(:, :)
-        integer(i8), intent(in), contiguous :: cycle(:)
-        type(error_t), allocatable, intent(out) :: err
-        integer(i8) :: last
-
-        if (.not. sink%keep_strobe) return
-        if (.not. allocated(sink%x)) then
-            allocate (sink%x(size(x, 1), n_records), sink%v(size(x, 1), n_records))
-            allocate (sink%cycle(n_records))
-        end if
-        last = first + size(x, 2) - 1
-        sink%x(:, first:last) = x
-        sink%v(:, first:last) = v
-        sink%cycle(first:last) = cycle
-    end subroutine memory_put_strobe
-
-    !> Finite-time exponents of a run of `total` windows: a chunk of at most 1 MiB held for the
-    !> sink (each record's QR step ends at most one window).
-    pure subroutine window_buffer_start(buf, acc, total)
-        type(window_buffer_t), intent(out) :: buf
-        type(lyapunov_acc_t), intent(in) :: acc
-        integer(i8), intent(in) :: total
-        integer :: chunk
-
-        chunk = int(max(1_i8, min(total, 131072_i8/acc%k)))
-        allocate (buf%exponents(acc%k, chunk), buf%cycle(chunk))
-        buf%total = total
-        buf%seen = acc%windows
-        buf%first = acc%windows + 1
-    end subroutine window_buffer_start
-
-    !> The window the last QR step ended, if it ended one, at drive cycle `cycle`, in bits per
-    !> cycle.
-    pure subroutine window_buffer_take(buf, acc, cycle)
-        type(window_buffer_t), intent(inout) :: buf
-        type(lyapunov_acc_t), intent(in) :: acc
-        integer(i8), intent(in) :: cycle
-
-        if (acc%windows == buf%seen) return
-        buf%seen = acc%windows
-        buf%count = buf%count + 1
-        buf%exponents(:, buf%count) = acc%window_last/log(2.0_wp)
-        buf%cycle(buf%count) = cycle
-    end subroutine window_buffer_take
-
-    !> The held windows to the sink.
-    subroutine window_buffer_flush(buf, sink, err)
-        type(window_buffer_t), intent(inout) :: buf
-        class(record_sink_t), intent(inout) :: sink
-        type(error_t), allocatable, intent(out) :: err
-
-        if (buf%count == 0) return
-        call sink%put_windows(buf%total, buf%first, buf%exponents(:, :buf%count), &
-                              buf%cycle(:buf%count), err)
-        buf%first = buf%first + buf%count
-        buf%count = 0
-    end subroutine window_buffer_flush
-
-    !> A sink that keeps no finite-time exponents.
-    subroutine discard_windows(sink, n_windows, first, exponents, cycle, err)
-        class(record_sink_t), intent(inout) :: sink
-        integer(i8), intent(in) :: n_windows, first
-        real(wp), intent(in), contiguous :: exponents(:, :)
-        integer(i8), intent(in), contiguous :: cycle(:)
-        type(error_t), allocatable, intent(out) :: err
-    end subroutine discard_windows
-
-    subroutine memory_put_windows(sink, n_windows, first, exponents, cycle, err)
-        class(memory_sink_t), intent(inout) :: sink
-        integer(i8), intent(in) :: n_windows, first
-        real(wp), intent(in), contiguous :: exponents(:, :)
-        integer(i8), intent(in), contiguous :: cycle(:)
-        type(error_t), allocatable, intent(out) :: err
-        integer(i8) :: last
-
-        if (.not. allocated(sink%window_cycle)) &
-            allocate (sink%window_exponents(size(exponents, 1), n_windows), &
-                      sink%window_cycle(n_windows))
-        last = first + size(cycle) - 1
-        sink%window_exponents(:, first:last) = exponents
-        sink%window_cycle(first:last) = cycle
-    end subroutine memory_put_windows
-
-    !> A sink that keeps no covariant vectors.
-    subroutine discard_clv(sink, rows, err)
-        class(record_sink_t), intent(inout) :: sink
-        type(clv_rows_t), intent(in) :: rows
-        type(error_t), allocatable, intent(out) :: err
-    end subroutine discard_clv
-
-    subroutine memory_put_clv(sink, rows, err)
-        class(memory_sink_t), intent(inout) :: sink
-        type(clv_rows_t), intent(in) :: rows
-        type(error_t), allocatable, intent(out) :: err
-        integer(i8) :: last
-
-        if (.not. allocated(sink%clv_cycle)) then
-            allocate (sink%clv_cycle(rows%total), sink%clv_min_angle(rows%total))
-            allocate (sink%clv_ipr(size(rows%ipr, 1), rows%total))
-            allocate (sink%clv_site_weight(size(rows%site_weight, 1), &
-                                           size(rows%site_weight, 2), rows%total))
-        end if
-        last = rows%first + rows%count - 1
-        sink%clv_cycle(rows%first:last) = rows%cycle
-        sink%clv_ipr(:, rows%first:last) = rows%ipr
-        sink%clv_site_weight(:, :, rows%first:last) = rows%site_weight
-        sink%clv_min_angle(rows%first:last) = rows%min_angle
-    end subroutine memory_put_clv
-
-    subroutine memory_put_events(sink, log, err)
-        class(memory_sink_t), intent(inout) :: sink
-        type(event_log_t), intent(in) :: log
-        type(error_t), allocatable, intent(out) :: err
-        integer :: j
-
-        if (.not. sink%events%enabled) call event_log_init(sink%events, .true., 1024)
-        do j = 1, log%count
-            call event_log_append(sink%events, log%time(j), log%site(j), log%speed(j), &
-                                  log%kind(j))
-        end do
-    end subroutine memory_put_events
 
     !> Records kept in memory for period detection: enough to see every period up to
     !> max_period repeat several times, and no more (memory is n x window x 16 bytes).

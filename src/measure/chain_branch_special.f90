@@ -1,0 +1,256 @@
+!> The special points of a branch (docs/model.md section 12.3): between two points, a fold (the
+!> tangent's parameter component changes sign), a period doubling (det(J + I) does) or a
+!> Neimark-Sacker point (complex multipliers leave the unit circle), each located by regula
+!> falsi on the arclength and confirmed by its multiplier; and a grazing, where the impacts per
+!> bond change, located by bisection. Each is stored as a point of the branch.
+module chain_branch_special
+    use chain_kinds, only: wp
+    use chain_error, only: error_t, fmt_real
+    use chain_orbit, only: orbit_t
+    use chain_branch_points, only: cursor_t, setting_t, branches_t, special_kinds, store, &
+                                   add_special
+    use chain_branch_corrector, only: correct
+    implicit none
+    private
+    public :: locate_specials, locate_grazing, grazing_reason
+
+contains
+
+    !> Between `here` and `next` (arclength h apart): a fold where the tangent's parameter
+    !> component changes sign, a period doubling where det(J + I) does, a Neimark-Sacker
+    !> point where the number of complex multipliers outside the unit circle changes. Each
+    !> is located and, when the located orbit confirms it (a multiplier within 1e-6 of +1,
+    !> of -1, or a complex pair within 1e-6 of the unit circle: a complex pair that leaves
+    !> the circle by turning real is no Neimark-Sacker point), stored as a point (in the
+    !> order of arclength).
+    subroutine locate_specials(set, here, h, next, res, err)
+        type(setting_t), intent(in) :: set
+        type(cursor_t), intent(in) :: here, next
+        real(wp), intent(in) :: h
+        type(branches_t), intent(inout) :: res
+        type(error_t), allocatable, intent(out) :: err
+        type(cursor_t) :: found(3)
+        real(wp) :: at(3)
+        logical :: seen(3)
+        integer :: k, j, m, rank
+
+        m = size(here%y) - 1
+        seen(1) = here%tangent(m + 1)*next%tangent(m + 1) < 0
+        seen(2) = (here%det_plus < 0) .neqv. (next%det_plus < 0)
+        seen(3) = here%unstable_pairs /= next%unstable_pairs
+        at = huge(1.0_wp)
+        ! (the first pair to cross: pairs of a symmetric chain come twice and cross together)
+        rank = min(here%unstable_pairs, next%unstable_pairs) + 1
+        do k = 1, 3
+            if (.not. seen(k)) cycle
+            call locate(set, here, h, k, rank, found(k), at(k), err)
+            if (allocated(err)) return
+            seen(k) = confirmed(found(k)%orbit, k)
+        end do
+        do j = 1, count(seen)
+            k = minloc(at, 1, mask=seen)
+            call store(set, found(k), res, err)
+            if (allocated(err)) return
+            call add_special(res, res%n_points, special_kinds(k), found(k)%y(m + 1))
+            seen(k) = .false.
+        end do
+    end subroutine locate_specials
+
+    !> The zero of test function `kind` (1 fold, 2 period doubling, 3 Neimark-Sacker) on the
+    !> branch between arclength 0 (`here`) and h, by regula falsi (Illinois) on the arclength,
+    !> each trial corrected onto the branch; to 1e-11 in the parameter or a bracket of 1e-9.
+    subroutine locate(set, here, h, kind, rank, found, s_found, err)
+        type(setting_t), intent(in) :: set
+        type(cursor_t), intent(in) :: here
+        real(wp), intent(in) :: h
+        integer, intent(in) :: kind, rank
+        type(cursor_t), intent(out) :: found
+        real(wp), intent(out) :: s_found
+        type(error_t), allocatable, intent(out) :: err
+        type(cursor_t) :: trial
+        character(len=:), allocatable :: failure
+        real(wp) :: s_lo, s_hi, f_lo, f_hi, s, f, mu_lo, mu_hi
+        integer :: k, iterations, side, m
+        logical :: ok
+
+        m = size(here%y) - 1
+        s_lo = 0
+        f_lo = test_value(here, kind, rank, here%tangent)
+        mu_lo = here%y(m + 1)
+        s_hi = h
+        call correct(set, here, h, trial, ok, iterations, failure, err)
+        if (allocated(err)) return
+        f_hi = test_value(trial, kind, rank, here%tangent)
+        mu_hi = trial%y(m + 1)
+        found = trial
+        s_found = h
+        side = 0
+        do k = 1, 60
+            if (abs(s_hi - s_lo) <= 1.0e-9_wp .or. (abs(mu_hi - mu_lo) <= 1.0e-11_wp .and. &
+                                                     kind /= 1)) exit
+            s = s_hi - f_hi*(s_hi - s_lo)/(f_hi - f_lo)
+            if (.not. (s > min(s_lo, s_hi) .and. s < max(s_lo, s_hi))) s = (s_lo + s_hi)/2
+            call correct(set, here, s, trial, ok, iterations, failure, err)
+            if (allocated(err)) return
+            if (.not. ok) exit
+            f = test_value(trial, kind, rank, here%tangent)
+            found = trial
+            s_found = s
+            if (f == 0) exit
+            if ((f < 0) .eqv. (f_hi < 0)) then
+                s_hi = s
+                f_hi = f
+                mu_hi = trial%y(m + 1)
+                if (side == 1) f_lo = f_lo/2
+                side = 1
+            else
+                s_lo = s
+                f_lo = f
+                mu_lo = trial%y(m + 1)
+                if (side == -1) f_hi = f_hi/2
+                side = -1
+            end if
+        end do
+    end subroutine locate
+
+    !> The test function `kind` at c: the tangent's parameter component (fold), det(J + I)
+    !> (period doubling), or |mu| - 1 of the complex pair of rank `rank` by modulus (the first
+    !> that crosses when the count outside the circle goes up from rank - 1, or down to it;
+    !> -1 when c has fewer complex pairs) (Neimark-Sacker).
+    pure real(wp) function test_value(c, kind, rank, reference) result(f)
+        type(cursor_t), intent(in) :: c
+        integer, intent(in) :: kind, rank
+        real(wp), intent(in) :: reference(:)
+        real(wp), allocatable :: moduli(:)
+        integer :: j
+
+        select case (kind)
+        case (1)
+            f = c%tangent(size(c%tangent))
+            ! (correct orients every trial's tangent along the reference)
+            if (dot_product(c%tangent, reference) < 0) f = -f
+        case (2)
+            f = c%det_plus
+        case default
+            associate (re => c%orbit%multipliers_re, im => c%orbit%multipliers_im)
+                moduli = pack(hypot(re, im), im > 0)
+            end associate
+            f = -1
+            if (size(moduli) < rank) return
+            do j = 1, rank
+                f = maxval(moduli)
+                moduli(maxloc(moduli, 1)) = -1
+            end do
+            f = f - 1
+        end select
+    end function test_value
+
+    !> The located orbit has the multiplier of special point `kind` to 1e-6.
+    pure logical function confirmed(orbit, kind)
+        type(orbit_t), intent(in) :: orbit
+        integer, intent(in) :: kind
+        real(wp), parameter :: within = 1.0e-6_wp
+
+        associate (re => orbit%multipliers_re, im => orbit%multipliers_im)
+            select case (kind)
+            case (1)
+                confirmed = minval(hypot(re - 1, im)) < within
+            case (2)
+                confirmed = minval(hypot(re + 1, im)) < within
+            case default
+                confirmed = minval(abs(hypot(re, im) - 1), mask=im /= 0) < within
+            end select
+        end associate
+    end function confirmed
+
+    !> The impacts change within arclength h of `here`: bisection on the arclength for the
+    !> last orbit with the impacts of `here` (a trial where Newton fails counts as changed),
+    !> to 1e-11 in the parameter. It is stored as a grazing point, unconditionally or, with
+    !> `grazed`, only when its smallest gap or impact speed is below 1e-4 (else Newton failed
+    !> for another reason than a grazing and nothing is stored).
+    subroutine locate_grazing(set, here, h, res, err, grazed)
+        type(setting_t), intent(in) :: set
+        type(cursor_t), intent(in) :: here
+        real(wp), intent(in) :: h
+        type(branches_t), intent(inout) :: res
+        type(error_t), allocatable, intent(out) :: err
+        logical, intent(out), optional :: grazed
+        real(wp), parameter :: vanishing = 1.0e-4_wp
+        type(cursor_t) :: trial, last_same
+        character(len=:), allocatable :: failure
+        real(wp) :: s_lo, s_hi, s, mu_lo, mu_hi, value
+        integer :: k, iterations, m
+        logical :: ok
+
+        m = size(here%y) - 1
+        s_lo = 0
+        s_hi = h
+        mu_lo = here%y(m + 1)
+        mu_hi = here%y(m + 1) + h*here%tangent(m + 1)
+        last_same = here
+        do k = 1, 80
+            if (abs(mu_hi - mu_lo) <= 1.0e-11_wp .and. abs(s_hi - s_lo) <= 1.0e-6_wp) exit
+            s = (s_lo + s_hi)/2
+            call correct(set, here, s, trial, ok, iterations, failure, err)
+            if (allocated(err)) return
+            if (ok) ok = all(trial%impacts == here%impacts)
+            if (ok) then
+                s_lo = s
+                mu_lo = trial%y(m + 1)
+                last_same = trial
+            else
+                s_hi = s
+                mu_hi = here%y(m + 1) + s*here%tangent(m + 1)
+                if (allocated(trial%y)) mu_hi = trial%y(m + 1)
+            end if
+        end do
+        if (present(grazed)) then
+            grazed = min(last_same%orbit%min_gap, last_same%orbit%min_impact_speed) < vanishing
+            if (.not. grazed) return
+        end if
+        value = grazing_value(here, last_same)
+        call store(set, last_same, res, err)
+        if (.not. allocated(err)) call add_special(res, res%n_points, 'grazing', value)
+    end subroutine locate_grazing
+
+    !> Where the grazing monitor of the last orbit with the old impacts (its smallest gap or
+    !> impact speed, whichever is smaller) reaches zero, by the secant through it and the
+    !> branch's point before the bisection: as an impact vanishes its saltation grows as
+    !> 1 / speed, and Newton stops converging before the speed is zero, so the last orbit
+    !> stands some 1e-5 short of the grazing. The orbit's own parameter when the secant does
+    !> not apply (a monitor that did not decrease, or a root farther than the two points'
+    !> distance).
+    pure real(wp) function grazing_value(before, last) result(value)
+        type(cursor_t), intent(in) :: before, last
+        real(wp) :: g_last, g_before, mu_last, mu_before
+        integer :: m
+
+        m = size(last%y) - 1
+        mu_last = last%y(m + 1)
+        mu_before = before%y(m + 1)
+        value = mu_last
+        if (last%orbit%min_impact_speed < last%orbit%min_gap) then
+            g_last = last%orbit%min_impact_speed
+            g_before = before%orbit%min_impact_speed
+        else
+            g_last = last%orbit%min_gap
+            g_before = before%orbit%min_gap
+        end if
+        if (.not. (g_before > g_last .and. g_last >= 0 .and. g_before < huge(1.0_wp))) return
+        if (abs(g_last*(mu_last - mu_before)/(g_last - g_before)) > abs(mu_last - mu_before)) &
+            return
+        value = mu_last - g_last*(mu_last - mu_before)/(g_last - g_before)
+    end function grazing_value
+
+    !> Why a branch ended at the grazing just stored.
+    function grazing_reason(set, res) result(reason)
+        type(setting_t), intent(in) :: set
+        type(branches_t), intent(in) :: res
+        character(len=:), allocatable :: reason
+
+        reason = "grazing at "//set%opt%parameter//" = "// &
+                 fmt_real(res%specials(res%n_specials)%value)// &
+                 ": the impacts change there, the branch ends"
+    end function grazing_reason
+
+end module chain_branch_special
