@@ -24,7 +24,7 @@ module suites
     character(len=*), parameter :: suite_names(*) = [character(len=10) :: &
         'flow', 'gaps', 'impact', 'queue', 'engine', 'lyapunov', 'corners', & ! test/main.f90
         'invariants', 'hdf5', 'orbit', 'branch', 'clv', &
-        'sweep', 'checkpoint', 'census'] ! test/sweeps.f90
+        'sweep', 'checkpoint', 'census', 'taskfarm'] ! test/sweeps.f90
 
     abstract interface
         !> The checks of one suite, added to the tally.

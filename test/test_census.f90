@@ -27,9 +27,10 @@ module test_census
                                orbit_period, sample_kind, mirror_image, mirror_symmetric, &
                                states_close, orbit_offset, match_attractor, site_fractions
     use chain_census, only: census_result_t, census_result_init, census_point_config, &
-                            run_census_samples, classify_census, save_census_checkpoint, &
-                            load_census_checkpoint, census_starts, plane_value, &
-                            ensemble_statistics, sample_record_sizes, pack_sample, unpack_sample
+                            run_census_samples, census_starts, plane_value
+    use chain_census_classify, only: classify_census, ensemble_statistics
+    use chain_census_checkpoint, only: save_census_checkpoint, load_census_checkpoint, &
+                                       sample_record_sizes, pack_sample, unpack_sample
     use chain_monitor, only: monitor_t, stage_samples
     use test_chains, only: flow_of
     use test_invariants, only: check_sum_rule

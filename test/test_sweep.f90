@@ -16,9 +16,9 @@ module test_sweep
     use chain_state, only: chain_state_t
     use chain_model, only: model_t
     use chain_sweep, only: sweep_plan_t, sweep_result_t, plan_sweep, &
-                           sweep_result_init, sweep_point_config, run_sweep_branches, &
-                           save_checkpoint, load_checkpoint, check_sweep_size, &
-                           branch_record_sizes, run_sweep, sweep_summary_t
+                           sweep_result_init, sweep_point_config, check_sweep_size
+    use chain_sweep_run, only: run_sweep_branches, run_sweep, sweep_summary_t
+    use chain_sweep_checkpoint, only: save_checkpoint, load_checkpoint, branch_record_sizes
     use chain_files, only: remove_file
     use chain_preflight, only: check_before_run
     use chain_monitor, only: monitor_t, stage_points

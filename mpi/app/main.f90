@@ -18,14 +18,18 @@
 !> or the threaded driver) resumes without redoing finished points. When every point is done,
 !> rank 0 writes the one HDF5 file and deletes the checkpoint.
 !>
+!> Either kind is a list of tasks (a sweep's branches, a census's samples) run by one loop of
+!> rounds (run_round) and gathered by one gather (mpi_task_gather); what differs is their
+!> start, their records and their file.
+!>
 !> Usage: mpirun -np 4 impactchain-mpi [options] input.nml, with the options of impactchain
 !> (--set, -o, --overwrite, --check, --quiet).
 program impactchain_mpi
     use, intrinsic :: iso_fortran_env, only: error_unit, output_unit, int64
     use mpi_f08, only: MPI_Init_thread, MPI_Finalize, MPI_Comm_rank, MPI_Comm_size, MPI_Bcast, &
-                       MPI_Allreduce, MPI_Gatherv, MPI_COMM_WORLD, MPI_MAX, &
-                       MPI_DOUBLE_PRECISION, MPI_INTEGER, MPI_INTEGER8, MPI_IN_PLACE, &
+                       MPI_Allreduce, MPI_COMM_WORLD, MPI_MAX, MPI_INTEGER, MPI_IN_PLACE, &
                        MPI_THREAD_FUNNELED
+    use mpi_task_gather, only: owns_task, owned_tasks, gather_records, record_slot
     use impactchain, only: census_result_t, check_before_run, kind_names
     use impactchain_drivers, only: census_starts, run_census_samples, classify_census, &
                                    write_census_file, save_census_checkpoint, &
@@ -50,6 +54,9 @@ program impactchain_mpi
     type(output_t) :: out
     type(error_t), allocatable :: err
     integer :: rank, ranks, provided, failed, left, stopping, resumed
+    integer :: n_tasks       !! a sweep's branches, or a census's samples (all its points)
+    integer :: total         !! of the units counted (`unit`): a sweep's points, or n_tasks
+    character(len=:), allocatable :: what, unit  !! 'sweep', 'point' or 'census', 'sample'
     !> exit code of a mistake in the command line itself (an unknown option, no input)
     integer, parameter :: usage_error = 2
     type(cli_t) :: cli
@@ -65,25 +72,17 @@ program impactchain_mpi
     call read_input()
     if (cfg%census) then
         call start_census()
-        call catch_interrupts()
-        call system_clock(clock_start, clock_rate)
-        do
-            call census_round()
-            if (left == 0) exit
-            if (stopping /= 0) call stop_interrupted('census', 'samples', size(census%done))
-        end do
-        call finish_census()
     else
         call start_sweep()
-        call catch_interrupts()
-        call system_clock(clock_start, clock_rate)
-        do
-            call run_round()
-            if (left == 0) exit
-            if (stopping /= 0) call stop_interrupted('sweep', 'points', plan%n_points)
-        end do
-        call finish_sweep()
     end if
+    call catch_interrupts()
+    call system_clock(clock_start, clock_rate)
+    do
+        call run_round()
+        if (left == 0) exit
+        if (stopping /= 0) call stop_interrupted()
+    end do
+    call finish()
     call MPI_Finalize()
     if (failed /= 0) call exit_now(1)
 
@@ -136,8 +135,10 @@ contains
         if (failed /= 0) call stop_all(err_text(err))
     end subroutine check_only_or_open_output
 
+    ! ---- a sweep ---------------------------------------------------------------------------
+
     !> Check the sweep, refuse an existing output (rank 0) and load the checkpoint
-    !> (every rank, so that every rank can own any branch).
+    !> (every rank, so that every rank can own any branch). Its tasks are its branches.
     subroutine start_sweep()
         integer :: b
 
@@ -153,148 +154,47 @@ contains
         call load_checkpoint(checkpoint, cfg, plan, res, starts, err)
         call agree_or_stop(err)
         resumed = count(res%done)
-        mine = [(modulo(b - 1, ranks) == rank, b=1, plan%n_branches)]
+        n_tasks = plan%n_branches
+        mine = [(owns_task(b, rank, ranks), b=1, n_tasks)]
+        what = 'sweep'
+        unit = 'point'
+        total = plan%n_points
         if (rank == 0 .and. plan%n_branches < ranks .and. .not. quiet) &
             write (error_unit, '(a,i0,a,i0,a)') 'impactchain-mpi: note: ', plan%n_branches, &
             ' branches for ', ranks, ' ranks, so some ranks stay idle (a continuation along '// &
             'one parameter is one branch: add parameter2 or use mode = ''independent'')'
     end subroutine start_sweep
 
-    !> One round: every rank works on its branches until the round ends, rank 0 gathers the
-    !> results, and (unless every point is done) writes the checkpoint. Sets `left` (points
-    !> not done) and `stopping` (a signal reached some rank).
-    subroutine run_round()
-        type(signal_monitor_t) :: round ! ends the round after round_seconds, or on a signal
-
-        call system_clock(clock_round)
-        round%deadline = clock_round + int(round_seconds*clock_rate, int64)
-        call run_sweep_branches(cfg, plan, res, starts, err, mine=mine, monitor=round)
-        call agree_or_stop(err)
-        call collect_on_root()
-        left = count(.not. res%done)
-        call MPI_Bcast(left, 1, MPI_INTEGER, 0, MPI_COMM_WORLD)
-        if (left == 0) return
-        stopping = merge(1, 0, interrupted())
-        call MPI_Allreduce(MPI_IN_PLACE, stopping, 1, MPI_INTEGER, MPI_MAX, MPI_COMM_WORLD)
-        ! a checkpoint that cannot be written stops every rank (the previous one stays)
-        if (rank == 0) call save_checkpoint(checkpoint, cfg, plan, res, starts, err)
-        call agree_or_stop(err)
-        if (rank == 0) call report_progress()
-    end subroutine run_round
-
-    !> After a signal: the checkpoint is written; say how to resume and exit with status 3.
-    subroutine stop_interrupted(what, units, total)
-        character(len=*), intent(in) :: what, units
-        integer, intent(in) :: total
-
-        if (rank == 0) then
-            call output_abort(out)
-            write (error_unit, '(a,i0,a,i0,a)') 'impactchain-mpi: the '//what//' was '// &
-                'stopped after ', total - left, ' of ', total, ' '//units//'; run the '// &
-                'same command again to resume from '//checkpoint
-        end if
-        call MPI_Finalize()
-        call exit_now(3)
-    end subroutine stop_interrupted
-
-    !> Rank 0 writes the one HDF5 file and deletes the checkpoint; every rank learns whether
-    !> that failed (`failed`).
-    subroutine finish_sweep()
-        type(error_t), allocatable :: err2
-
-        if (rank == 0) then
-            call write_sweep_file(out, cfg, plan, res, err)
-            if (.not. allocated(err)) call output_end(out, .true., err)
-            if (allocated(err)) then
-                ! every point is done: the checkpoint keeps them for the same command
-                call output_abort(out)
-                call save_checkpoint(checkpoint, cfg, plan, res, starts, err2)
-                if (allocated(err2)) err%message = err%message//"; the checkpoint of the "// &
-                    "finished points could not be written either: "//err2%message
-                write (error_unit, '(a)') 'impactchain-mpi: error: '//err%message
-            else
-                call remove_file(checkpoint)
-                write (output_unit, '(a)') 'impactchain-mpi: wrote '//cfg%output_file
-                write (output_unit, '(a,i0,a,i0,a,i0,a)') '  sweep points ', plan%n_points, &
-                    ' on ', ranks, ' ranks (resumed from a checkpoint: ', resumed, ')'
-            end if
-        end if
-        failed = merge(1, 0, allocated(err))
-        call MPI_Bcast(failed, 1, MPI_INTEGER, 0, MPI_COMM_WORLD)
-    end subroutine finish_sweep
-
     !> Rank 0 receives every rank's branches: their points (results and done flags) and the
-    !> states they resume from, in the layout of chain_sweep's pack_branch (the checkpoint's).
-    !> Values travel as they are (no arithmetic), so bit for bit.
-    subroutine collect_on_root()
+    !> states they resume from, in the layout of pack_branch (the checkpoint's).
+    subroutine collect_branches()
         real(wp), allocatable :: rsend(:), rrecv(:)
         integer(i8), allocatable :: isend(:), irecv(:)
-        integer :: nr, ni, r, c, owned(0:ranks - 1), rcounts(0:ranks - 1), icounts(0:ranks - 1)
-        integer :: rdispl(0:ranks - 1), idispl(0:ranks - 1), ro, io, b
+        integer :: nr, ni, c, b, s
 
         call branch_record_sizes(cfg, plan, nr, ni)
-        owned = 0
-        do b = 1, plan%n_branches
-            owned(modulo(b - 1, ranks)) = owned(modulo(b - 1, ranks)) + 1
-        end do
-        rcounts = owned*nr
-        icounts = owned*ni
-        rdispl(0) = 0
-        idispl(0) = 0
-        do r = 1, ranks - 1
-            rdispl(r) = rdispl(r - 1) + rcounts(r - 1)
-            idispl(r) = idispl(r - 1) + icounts(r - 1)
-        end do
-        allocate (rsend(rcounts(rank)), isend(icounts(rank)))
+        allocate (rsend(owned_tasks(n_tasks, rank, ranks)*nr))
+        allocate (isend(owned_tasks(n_tasks, rank, ranks)*ni))
         c = 0
-        do b = 1, plan%n_branches
-            if (.not. mine(b)) cycle
+        do b = rank + 1, n_tasks, ranks
             call pack_branch(cfg, plan, res, starts, b, rsend(c*nr + 1:(c + 1)*nr), &
                              isend(c*ni + 1:(c + 1)*ni))
             c = c + 1
         end do
-        if (rank == 0) then
-            allocate (rrecv(sum(rcounts)), irecv(sum(icounts)))
-        else
-            allocate (rrecv(1), irecv(1))
-        end if
-        call MPI_Gatherv(rsend, rcounts(rank), MPI_DOUBLE_PRECISION, rrecv, rcounts, rdispl, &
-                         MPI_DOUBLE_PRECISION, 0, MPI_COMM_WORLD)
-        call MPI_Gatherv(isend, icounts(rank), MPI_INTEGER8, irecv, icounts, idispl, &
-                         MPI_INTEGER8, 0, MPI_COMM_WORLD)
+        call gather_records(n_tasks, nr, ni, rsend, isend, rrecv, irecv)
         if (rank /= 0) return
-        ! rank r's branches arrive in increasing order from displacement r
-        do r = 0, ranks - 1
-            ro = rdispl(r)
-            io = idispl(r)
-            do b = r + 1, plan%n_branches, ranks
-                call unpack_branch(cfg, plan, b, rrecv(ro + 1:ro + nr), irecv(io + 1:io + ni), &
-                                   res, starts)
-                ro = ro + nr
-                io = io + ni
-            end do
+        do b = 1, n_tasks
+            s = record_slot(b, n_tasks, ranks)
+            call unpack_branch(cfg, plan, b, rrecv(s*nr + 1:(s + 1)*nr), &
+                               irecv(s*ni + 1:(s + 1)*ni), res, starts)
         end do
-    end subroutine collect_on_root
-
-    !> Points done / total, rate and time left (rank 0, stderr; at most once a round).
-    subroutine report_progress()
-        integer(int64) :: now
-        real(wp) :: elapsed, rate
-        integer :: done
-
-        if (quiet) return
-        call system_clock(now)
-        elapsed = real(now - clock_start, wp)/clock_rate
-        done = plan%n_points - left
-        rate = (done - resumed)/max(elapsed, 1.0e-9_wp)
-        write (error_unit, '(a,i0,a,i0,a,es9.2,a,f9.1,a)') 'impactchain-mpi: point ', done, &
-            ' / ', plan%n_points, ', ', rate, ' points/s, ', left/max(rate, 1.0e-9_wp), ' s left'
-    end subroutine report_progress
+    end subroutine collect_branches
 
     ! ---- a census ------------------------------------------------------------------------
 
     !> Check the census, refuse an existing output (rank 0), make the starts and load the
-    !> checkpoint (every rank alike).
+    !> checkpoint (every rank alike). Its tasks are its samples (task order: sample s of point
+    !> p is task s + samples (p - 1)).
     subroutine start_census()
         integer :: t
 
@@ -308,77 +208,37 @@ contains
         call agree_or_stop(err)
         resumed = count(census%done)
         census%resumed = resumed
-        mine = [(modulo(t - 1, ranks) == rank, t=1, size(census%done))]
+        n_tasks = size(census%done)
+        mine = [(owns_task(t, rank, ranks), t=1, n_tasks)]
+        what = 'census'
+        unit = 'sample'
+        total = n_tasks
     end subroutine start_census
 
-    !> One round of a census: every rank runs its samples until the round ends, rank 0
-    !> gathers them and (unless every sample is done) writes the checkpoint. Sets `left`
-    !> (samples not done) and `stopping`.
-    subroutine census_round()
-        type(signal_monitor_t) :: round
-
-        call system_clock(clock_round)
-        round%deadline = clock_round + int(round_seconds*clock_rate, int64)
-        call run_census_samples(cfg, census, err, round, mine)
-        call agree_or_stop(err)
-        call collect_samples_on_root()
-        left = count(.not. census%done)
-        call MPI_Bcast(left, 1, MPI_INTEGER, 0, MPI_COMM_WORLD)
-        if (left == 0) return
-        stopping = merge(1, 0, interrupted())
-        call MPI_Allreduce(MPI_IN_PLACE, stopping, 1, MPI_INTEGER, MPI_MAX, MPI_COMM_WORLD)
-        ! a checkpoint that cannot be written stops every rank (the previous one stays)
-        if (rank == 0) call save_census_checkpoint(checkpoint, cfg, census, err)
-        call agree_or_stop(err)
-        if (rank == 0) call report_census_progress()
-    end subroutine census_round
-
     !> Rank 0 receives every rank's samples (done or not; a rank's own are its to report), in
-    !> the layout of pack_sample. Values travel as they are, so bit for bit.
-    subroutine collect_samples_on_root()
+    !> the layout of pack_sample.
+    subroutine collect_samples()
         real(wp), allocatable :: rsend(:), rrecv(:)
         integer(i8), allocatable :: isend(:), irecv(:)
-        integer :: nr, ni, r, c, t, tasks, rcounts(0:ranks - 1), icounts(0:ranks - 1)
-        integer :: rdispl(0:ranks - 1), idispl(0:ranks - 1), owned(0:ranks - 1)
+        integer :: nr, ni, c, t, s
 
         call sample_record_sizes(cfg%model%n, cfg%census_exponents, nr, ni)
-        tasks = size(census%done)
-        owned = [((tasks - r + ranks - 1)/ranks, r=0, ranks - 1)]
-        rcounts = owned*nr
-        icounts = owned*ni
-        rdispl(0) = 0
-        idispl(0) = 0
-        do r = 1, ranks - 1
-            rdispl(r) = rdispl(r - 1) + rcounts(r - 1)
-            idispl(r) = idispl(r - 1) + icounts(r - 1)
-        end do
-        allocate (rsend(rcounts(rank)), isend(icounts(rank)))
+        allocate (rsend(owned_tasks(n_tasks, rank, ranks)*nr))
+        allocate (isend(owned_tasks(n_tasks, rank, ranks)*ni))
         c = 0
-        do t = rank + 1, tasks, ranks
+        do t = rank + 1, n_tasks, ranks
             call pack_sample(census, sample_of(t), point_of(t), rsend(c*nr + 1:(c + 1)*nr), &
                              isend(c*ni + 1:(c + 1)*ni))
             c = c + 1
         end do
-        if (rank == 0) then
-            allocate (rrecv(sum(rcounts)), irecv(sum(icounts)))
-        else
-            allocate (rrecv(1), irecv(1))
-        end if
-        call MPI_Gatherv(rsend, rcounts(rank), MPI_DOUBLE_PRECISION, rrecv, rcounts, rdispl, &
-                         MPI_DOUBLE_PRECISION, 0, MPI_COMM_WORLD)
-        call MPI_Gatherv(isend, icounts(rank), MPI_INTEGER8, irecv, icounts, idispl, &
-                         MPI_INTEGER8, 0, MPI_COMM_WORLD)
+        call gather_records(n_tasks, nr, ni, rsend, isend, rrecv, irecv)
         if (rank /= 0) return
-        do r = 0, ranks - 1
-            c = 0
-            do t = r + 1, tasks, ranks
-                call unpack_sample(rrecv(rdispl(r) + c*nr + 1:rdispl(r) + (c + 1)*nr), &
-                                   irecv(idispl(r) + c*ni + 1:idispl(r) + (c + 1)*ni), &
-                                   sample_of(t), point_of(t), census)
-                c = c + 1
-            end do
+        do t = 1, n_tasks
+            s = record_slot(t, n_tasks, ranks)
+            call unpack_sample(rrecv(s*nr + 1:(s + 1)*nr), irecv(s*ni + 1:(s + 1)*ni), &
+                               sample_of(t), point_of(t), census)
         end do
-    end subroutine collect_samples_on_root
+    end subroutine collect_samples
 
     pure integer function sample_of(t)
         integer, intent(in) :: t
@@ -392,35 +252,10 @@ contains
         point_of = (t - 1)/census%n_samples + 1
     end function point_of
 
-    !> Rank 0 classifies every sample (in sample order, as the threaded driver), writes the
-    !> one HDF5 file and deletes the checkpoint; every rank learns whether that failed.
-    subroutine finish_census()
-        type(error_t), allocatable :: err2
-
-        if (rank == 0) then
-            call classify_census(cfg, census, err)
-            if (.not. allocated(err)) call write_census_file(out, cfg, census, err)
-            if (.not. allocated(err)) call output_end(out, .true., err)
-            if (allocated(err)) then
-                call output_abort(out)
-                call save_census_checkpoint(checkpoint, cfg, census, err2)
-                if (allocated(err2)) err%message = err%message//"; the checkpoint of the "// &
-                    "finished samples could not be written either: "//err2%message
-                write (error_unit, '(a)') 'impactchain-mpi: error: '//err%message
-            else
-                call remove_file(checkpoint)
-                call report_census()
-            end if
-        end if
-        failed = merge(1, 0, allocated(err))
-        call MPI_Bcast(failed, 1, MPI_INTEGER, 0, MPI_COMM_WORLD)
-    end subroutine finish_census
-
     !> The attractors found, as the threaded driver reports them.
     subroutine report_census()
         integer :: a, p
 
-        write (output_unit, '(a)') 'impactchain-mpi: wrote '//cfg%output_file
         write (output_unit, '(a,i0,a,i0,a,i0,a,i0,a,i0,a)') '  samples ', census%n_samples, &
             ' at ', census%n_points, ' point(s) on ', ranks, &
             ' ranks (resumed from a checkpoint: ', resumed, '), attractors ', &
@@ -436,8 +271,99 @@ contains
         end do
     end subroutine report_census
 
-    !> Samples done / total, rate and time left (rank 0, stderr; at most once a round).
-    subroutine report_census_progress()
+    ! ---- the rounds, either kind -----------------------------------------------------------
+
+    !> One round: every rank works on its tasks until the round ends, rank 0 gathers the
+    !> results, and (unless every task is done) writes the checkpoint. Sets `left` (points or
+    !> samples not done) and `stopping` (a signal reached some rank).
+    subroutine run_round()
+        type(signal_monitor_t) :: round ! ends the round after round_seconds, or on a signal
+
+        call system_clock(clock_round)
+        round%deadline = clock_round + int(round_seconds*clock_rate, int64)
+        if (cfg%census) then
+            call run_census_samples(cfg, census, err, round, mine)
+            call agree_or_stop(err)
+            call collect_samples()
+            left = count(.not. census%done)
+        else
+            call run_sweep_branches(cfg, plan, res, starts, err, mine=mine, monitor=round)
+            call agree_or_stop(err)
+            call collect_branches()
+            left = count(.not. res%done)
+        end if
+        call MPI_Bcast(left, 1, MPI_INTEGER, 0, MPI_COMM_WORLD)
+        if (left == 0) return
+        stopping = merge(1, 0, interrupted())
+        call MPI_Allreduce(MPI_IN_PLACE, stopping, 1, MPI_INTEGER, MPI_MAX, MPI_COMM_WORLD)
+        ! a checkpoint that cannot be written stops every rank (the previous one stays)
+        if (rank == 0) call save_progress(err)
+        call agree_or_stop(err)
+        if (rank == 0) call report_progress()
+    end subroutine run_round
+
+    !> Rank 0 writes the checkpoint of the work gathered.
+    subroutine save_progress(e)
+        type(error_t), allocatable, intent(out) :: e
+
+        if (cfg%census) then
+            call save_census_checkpoint(checkpoint, cfg, census, e)
+        else
+            call save_checkpoint(checkpoint, cfg, plan, res, starts, e)
+        end if
+    end subroutine save_progress
+
+    !> After a signal: the checkpoint is written; say how to resume and exit with status 3.
+    subroutine stop_interrupted()
+        if (rank == 0) then
+            call output_abort(out)
+            write (error_unit, '(a,i0,a,i0,a)') 'impactchain-mpi: the '//what//' was '// &
+                'stopped after ', total - left, ' of ', total, ' '//unit//'s; run the '// &
+                'same command again to resume from '//checkpoint
+        end if
+        call MPI_Finalize()
+        call exit_now(3)
+    end subroutine stop_interrupted
+
+    !> Rank 0 (a census: classifies every sample, in sample order as the threaded driver)
+    !> writes the one HDF5 file and deletes the checkpoint; every rank learns whether that
+    !> failed (`failed`).
+    subroutine finish()
+        type(error_t), allocatable :: err2
+
+        if (rank == 0) then
+            if (cfg%census) then
+                call classify_census(cfg, census, err)
+                if (.not. allocated(err)) call write_census_file(out, cfg, census, err)
+            else
+                call write_sweep_file(out, cfg, plan, res, err)
+            end if
+            if (.not. allocated(err)) call output_end(out, .true., err)
+            if (allocated(err)) then
+                ! every task is done: the checkpoint keeps them for the same command
+                call output_abort(out)
+                call save_progress(err2)
+                if (allocated(err2)) err%message = err%message//"; the checkpoint of the "// &
+                    "finished "//unit//"s could not be written either: "//err2%message
+                write (error_unit, '(a)') 'impactchain-mpi: error: '//err%message
+            else
+                call remove_file(checkpoint)
+                write (output_unit, '(a)') 'impactchain-mpi: wrote '//cfg%output_file
+                if (cfg%census) then
+                    call report_census()
+                else
+                    write (output_unit, '(a,i0,a,i0,a,i0,a)') '  sweep points ', total, &
+                        ' on ', ranks, ' ranks (resumed from a checkpoint: ', resumed, ')'
+                end if
+            end if
+        end if
+        failed = merge(1, 0, allocated(err))
+        call MPI_Bcast(failed, 1, MPI_INTEGER, 0, MPI_COMM_WORLD)
+    end subroutine finish
+
+    !> Points or samples done / total, rate and time left (rank 0, stderr; at most once a
+    !> round).
+    subroutine report_progress()
         integer(int64) :: now
         real(wp) :: elapsed, rate
         integer :: done
@@ -445,12 +371,12 @@ contains
         if (quiet) return
         call system_clock(now)
         elapsed = real(now - clock_start, wp)/clock_rate
-        done = size(census%done) - left
+        done = total - left
         rate = (done - resumed)/max(elapsed, 1.0e-9_wp)
-        write (error_unit, '(a,i0,a,i0,a,es9.2,a,f9.1,a)') 'impactchain-mpi: sample ', done, &
-            ' / ', size(census%done), ', ', rate, ' samples/s, ', left/max(rate, 1.0e-9_wp), &
+        write (error_unit, '(a,i0,a,i0,a,es9.2,a,f9.1,a)') 'impactchain-mpi: '//unit//' ', &
+            done, ' / ', total, ', ', rate, ' '//unit//'s/s, ', left/max(rate, 1.0e-9_wp), &
             ' s left'
-    end subroutine report_census_progress
+    end subroutine report_progress
 
     ! ---- shared ----------------------------------------------------------------------------
 

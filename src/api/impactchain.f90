@@ -33,7 +33,7 @@ module impactchain
     use chain_branch_file, only: run_continuation, continuation_to_file
     use chain_sim, only: simulate_to_file, start_chain, initial_state, restart_chain, &
                          chain_on_section
-    use chain_sweep, only: run_sweep, sweep_summary_t
+    use chain_sweep_run, only: run_sweep, sweep_summary_t
     use chain_attractor, only: attractor_t, kind_names
     use chain_census, only: census_result_t
     use chain_census_file, only: census_to_file

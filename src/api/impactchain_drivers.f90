@@ -9,12 +9,15 @@ module impactchain_drivers
     use chain_branch_file, only: continuation_guess, continuation_table_t, continuation_table, &
                                  finite_or_inf
     use chain_sweep, only: plan_sweep, sweep_plan_t, sweep_result_t, sweep_result_init, &
-                           run_sweep_branches, write_sweep_file, save_checkpoint, &
-                           load_checkpoint, checkpoint_path, &
-                           branch_record_sizes, pack_branch, unpack_branch, check_sweep
-    use chain_census, only: census_result_init, run_census_samples, classify_census, &
-                            save_census_checkpoint, load_census_checkpoint, census_starts, &
-                            sample_record_sizes, pack_sample, unpack_sample
+                           write_sweep_file, check_sweep
+    use chain_sweep_run, only: run_sweep_branches
+    use chain_sweep_checkpoint, only: save_checkpoint, load_checkpoint, branch_record_sizes, &
+                                      pack_branch, unpack_branch
+    use chain_checkpoint, only: checkpoint_path
+    use chain_census, only: census_result_init, run_census_samples, census_starts
+    use chain_census_classify, only: classify_census
+    use chain_census_checkpoint, only: save_census_checkpoint, load_census_checkpoint, &
+                                       sample_record_sizes, pack_sample, unpack_sample
     use chain_census_file, only: write_census_file
     use chain_files, only: remove_file
     use chain_monitor, only: checkpoint_every

@@ -14,34 +14,27 @@
 !> sample order, so the census is the same bit for bit at any thread count. Until every
 !> sample is done the finished ones live in the checkpoint `file.h5.ckpt` (every few seconds
 !> and when stopped), from which the same input resumes.
+!>
+!> This module makes a census's starts and runs its samples; chain_census_classify tells them
+!> apart, chain_census_checkpoint keeps them on disk, chain_census_file writes the file.
 module chain_census
-    use, intrinsic :: ieee_arithmetic, only: ieee_is_finite, ieee_value, ieee_positive_inf
     use chain_kinds, only: wp, i8
     use chain_error, only: error_t, set_error, fmt_real, fmt_int
-    use chain_engine, only: chain_t, chain_init, chain_positions, chain_velocities, chain_period
+    use chain_engine, only: chain_t, chain_init, chain_positions, chain_velocities
     use chain_state, only: chain_state_t, moving_state
     use chain_config, only: config_t, validate_config, plane_coordinate
-    use chain_model, only: model_t, bond_gaps
+    use chain_model, only: bond_gaps
     use chain_record, only: memory_sink_t, record_result_t, record_cycles
-    use chain_section, only: chain_at_section, advance_to_point
-    use chain_event_log, only: event_log_t, event_log_init
     use chain_sim, only: uniform, initial_state
     use chain_sweep, only: sweep_plan_t, plan_sweep, sweep_point_config
-    use chain_attractor, only: attractor_t, kind_periodic, orbit_period, sample_kind, &
-                               site_fractions, mirror_symmetric, match_attractor
-    use chain_files, only: rename_file, close_checked
-    use chain_monitor, only: monitor_t, stage_samples, saving_monitor_t
+    use chain_attractor, only: attractor_t
+    use chain_monitor, only: monitor_t, stage_samples
+    use chain_task_farm, only: task_runner_t, task_output_t, run_tasks
     implicit none
     private
     public :: census_result_t, census_result_init, census_points, census_point_config
-    public :: sample_seed, sample_start, run_sample, run_census_samples, classify_census
+    public :: sample_seed, sample_start, run_sample, run_census_samples
     public :: census_starts, plane_starts, plane_value
-    public :: sample_record_sizes, pack_sample, unpack_sample, ensemble_statistics
-    public :: orbit_states, save_census_checkpoint, load_census_checkpoint
-    public :: census_checkpoint_monitor_t
-
-    !> The checkpoint's first bytes; the number changes with its layout.
-    character(len=8), parameter :: checkpoint_magic = 'ICCENSU3'
 
     !> Everything a census finds: per sample (filled in parallel), then the classification.
     !> Arrays are in Fortran order; h5py shows the point first.
@@ -72,16 +65,24 @@ module chain_census
         real(wp), allocatable :: attractor_exponents(:, :), attractor_spread(:, :)
     end type census_result_t
 
-    !> The census's monitor: the caller's, and a checkpoint every few seconds. It is told
-    !> inside run_task's critical section, with `res` consistent. A checkpoint that cannot be
-    !> written stops the census with that error (`err`).
-    type, extends(saving_monitor_t) :: census_checkpoint_monitor_t
+    !> A census as the task farm runs it: task t is one sample (task_sample).
+    type, extends(task_runner_t) :: census_runner_t
         type(config_t) :: cfg
         type(census_result_t), pointer :: res => null()
-        character(len=:), allocatable :: path          !! of the checkpoint
     contains
-        procedure :: save => save_census_progress
-    end type census_checkpoint_monitor_t
+        procedure :: units => one_sample
+        procedure :: done => sample_done
+        procedure :: run_unit => run_task_sample
+        procedure :: store => store_sample
+        procedure :: progress => samples_done
+    end type census_runner_t
+
+    !> One sample's results (run_sample's).
+    type, extends(task_output_t) :: sample_output_t
+        integer, allocatable :: periods(:)
+        integer(i8), allocatable :: sites(:)
+        real(wp), allocatable :: exponents(:), stderr(:), x(:), v(:)
+    end type sample_output_t
 
 contains
 
@@ -326,143 +327,108 @@ contains
         v = chain_velocities(chain)
     end subroutine run_sample
 
-    !> Run every sample not yet done (all points) with OpenMP threads into `res`; the first
-    !> error met, if any, is returned after all threads stop. `monitor` is told every finished
-    !> sample and may ask to stop (samples running in other threads finish first). `mine`
-    !> (points x samples, task order: sample s of point p is task s + samples (p - 1)) runs
-    !> only the tasks it marks (the share of one MPI rank); all when absent.
+    !> Run every sample not yet done (all points) with OpenMP threads into `res` (the tasks
+    !> of chain_task_farm, one sample each); the first error by task order, if any, is
+    !> returned after all threads stop. `monitor` is told every finished sample and may ask
+    !> to stop (samples running in other threads finish first). `mine` (points x samples, task
+    !> order: sample s of point p is task s + samples (p - 1)) runs only the tasks it marks
+    !> (the share of one MPI rank); all when absent.
     subroutine run_census_samples(cfg, res, err, monitor, mine)
         type(config_t), intent(in) :: cfg
-        type(census_result_t), intent(inout) :: res
+        type(census_result_t), intent(inout), target :: res
         type(error_t), allocatable, intent(out) :: err
         class(monitor_t), intent(inout), optional :: monitor
         logical, intent(in), optional :: mine(:)
-        type(error_t), allocatable :: task_err
-        character(len=:), allocatable :: first_message
-        logical :: stop_now
-        integer :: t
+        type(census_runner_t) :: runner
 
-        stop_now = .false.
-        !$omp parallel do schedule(dynamic) private(task_err) shared(stop_now, res)
-        do t = 1, res%n_points*res%n_samples
-            if (present(mine)) then
-                if (.not. mine(t)) cycle
-            end if
-            call run_task(cfg, t, res, stop_now, task_err, monitor)
-            if (allocated(task_err)) then
-                !$omp critical (census_results)
-                if (.not. allocated(first_message)) first_message = task_err%message
-                !$omp atomic write
-                stop_now = .true.
-                !$omp end critical (census_results)
-            end if
-        end do
-        !$omp end parallel do
-        if (allocated(first_message)) call set_error(err, first_message)
+        runner%stage = stage_samples
+        runner%cfg = cfg
+        runner%res => res
+        call run_tasks(runner, res%n_points*res%n_samples, err, mine, monitor)
     end subroutine run_census_samples
 
-    !> Task t: sample modulo(t - 1, samples) + 1 of point (t - 1) / samples + 1.
-    subroutine run_task(cfg, t, res, stop_now, err, monitor)
-        type(config_t), intent(in) :: cfg
+    !> Task t is sample modulo(t - 1, samples) + 1 of point (t - 1) / samples + 1.
+    pure subroutine task_sample(res, t, s, p)
+        type(census_result_t), intent(in) :: res
         integer, intent(in) :: t
-        type(census_result_t), intent(inout) :: res
-        logical, intent(inout) :: stop_now
-        type(error_t), allocatable, intent(out) :: err
-        class(monitor_t), intent(inout), optional :: monitor
-        type(config_t) :: point
-        integer :: s, p, n
-        integer :: periods(cfg%model%n)
-        integer(i8) :: sites(cfg%model%n + 1)
-        real(wp) :: exponents(res%n_exponents), stderr(res%n_exponents)
-        real(wp) :: x(cfg%model%n), v(cfg%model%n)
-        real(wp), allocatable :: x0(:), v0(:)
-        logical :: stopping, done
+        integer, intent(out) :: s, p
 
-        n = cfg%model%n
         s = modulo(t - 1, res%n_samples) + 1
         p = (t - 1)/res%n_samples + 1
-        !$omp critical (census_results)
-        done = res%done(s, p)
-        x0 = res%x0(:, s, p)
-        v0 = res%v0(:, s, p)
-        !$omp end critical (census_results)
-        !$omp atomic read
-        stopping = stop_now
-        if (done .or. stopping) return
-        call census_point_config(cfg, p, point, err)
+    end subroutine task_sample
+
+    integer function one_sample(runner, t)
+        class(census_runner_t), intent(in) :: runner
+        integer, intent(in) :: t
+
+        one_sample = 1
+    end function one_sample
+
+    logical function sample_done(runner, t, u)
+        class(census_runner_t), intent(in) :: runner
+        integer, intent(in) :: t, u
+        integer :: s, p
+
+        call task_sample(runner%res, t, s, p)
+        sample_done = runner%res%done(s, p)
+    end function sample_done
+
+    !> The sample of task t from its start.
+    subroutine run_task_sample(runner, t, u, output, err)
+        class(census_runner_t), intent(in) :: runner
+        integer, intent(in) :: t, u
+        class(task_output_t), allocatable, intent(out) :: output
+        type(error_t), allocatable, intent(out) :: err
+        type(config_t) :: point
+        type(sample_output_t), allocatable :: got
+        integer :: s, p, n, k
+
+        call task_sample(runner%res, t, s, p)
+        call census_point_config(runner%cfg, p, point, err)
         if (allocated(err)) return
-        call run_sample(point, x0, v0, periods, sites, exponents, stderr, x, v, err)
+        n = runner%cfg%model%n
+        k = runner%res%n_exponents
+        allocate (got)
+        allocate (got%periods(n), got%sites(n + 1), got%exponents(k), got%stderr(k))
+        allocate (got%x(n), got%v(n))
+        call run_sample(point, runner%res%x0(:, s, p), runner%res%v0(:, s, p), got%periods, &
+                        got%sites, got%exponents, got%stderr, got%x, got%v, err)
         if (allocated(err)) then
-            err%message = "&census: sample "//fmt_int(s)//point_text(cfg, res, p)//": "// &
-                          err%message
+            err%message = "&census: sample "//fmt_int(s)//point_text(runner%cfg, runner%res, p)// &
+                          ": "//err%message
             return
         end if
-        !$omp critical (census_results)
-        res%periods(:, s, p) = periods
-        res%sites(:, s, p) = sites
-        res%exponents(:, s, p) = exponents
-        res%exponents_stderr(:, s, p) = stderr
-        res%x(:, s, p) = x
-        res%v(:, s, p) = v
-        res%done(s, p) = .true.
-        if (present(monitor)) then
-            if (.not. monitor%keep_going(stage_samples, int(count(res%done), i8), &
-                                         int(size(res%done), i8))) then
-                !$omp atomic write
-                stop_now = .true.
-            end if
-        end if
-        !$omp end critical (census_results)
-    end subroutine run_task
+        call move_alloc(got, output)
+    end subroutine run_task_sample
 
-    !> One sample's record as pack_sample lays it out: nr reals and ni 64-bit integers for a
-    !> chain of n oscillators and k exponents per sample.
-    pure subroutine sample_record_sizes(n, k, nr, ni)
-        integer, intent(in) :: n, k
-        integer, intent(out) :: nr, ni
+    subroutine store_sample(runner, t, u, output)
+        class(census_runner_t), intent(inout) :: runner
+        integer, intent(in) :: t, u
+        class(task_output_t), intent(in) :: output
+        integer :: s, p
 
-        nr = 2*n + 2*k       ! x(n), v(n), exponents(k), their stderrs(k)
-        ni = 2 + 2*n         ! done, periods(n), sites(n+1)
-    end subroutine sample_record_sizes
+        call task_sample(runner%res, t, s, p)
+        select type (output)
+        type is (sample_output_t)
+            associate (res => runner%res)
+                res%periods(:, s, p) = output%periods
+                res%sites(:, s, p) = output%sites
+                res%exponents(:, s, p) = output%exponents
+                res%exponents_stderr(:, s, p) = output%stderr
+                res%x(:, s, p) = output%x
+                res%v(:, s, p) = output%v
+                res%done(s, p) = .true.
+            end associate
+        end select
+    end subroutine store_sample
 
-    !> Sample s of point p's results as plain numbers (sent between MPI ranks): values as they
-    !> are, so unpack_sample restores them bit for bit.
-    pure subroutine pack_sample(res, s, p, reals, ints)
-        type(census_result_t), intent(in) :: res
-        integer, intent(in) :: s, p
-        real(wp), intent(out) :: reals(:)
-        integer(i8), intent(out) :: ints(:)
-        integer :: n, k
+    subroutine samples_done(runner, done, total)
+        class(census_runner_t), intent(in) :: runner
+        integer(i8), intent(out) :: done, total
 
-        n = size(res%x, 1)
-        k = res%n_exponents
-        reals(1:n) = res%x(:, s, p)
-        reals(1 + n:2*n) = res%v(:, s, p)
-        reals(1 + 2*n:2*n + k) = res%exponents(:, s, p)
-        reals(1 + 2*n + k:2*n + 2*k) = res%exponents_stderr(:, s, p)
-        ints(1) = merge(1_i8, 0_i8, res%done(s, p))
-        ints(2:1 + n) = int(res%periods(:, s, p), i8)
-        ints(2 + n:2 + 2*n) = res%sites(:, s, p)
-    end subroutine pack_sample
-
-    !> The inverse of pack_sample: sample s of point p takes the record's results.
-    pure subroutine unpack_sample(reals, ints, s, p, res)
-        real(wp), intent(in) :: reals(:)
-        integer(i8), intent(in) :: ints(:)
-        integer, intent(in) :: s, p
-        type(census_result_t), intent(inout) :: res
-        integer :: n, k
-
-        n = size(res%x, 1)
-        k = res%n_exponents
-        res%x(:, s, p) = reals(1:n)
-        res%v(:, s, p) = reals(1 + n:2*n)
-        res%exponents(:, s, p) = reals(1 + 2*n:2*n + k)
-        res%exponents_stderr(:, s, p) = reals(1 + 2*n + k:2*n + 2*k)
-        res%done(s, p) = ints(1) == 1
-        res%periods(:, s, p) = int(ints(2:1 + n))
-        res%sites(:, s, p) = ints(2 + n:2 + 2*n)
-    end subroutine unpack_sample
+        done = count(runner%res%done)
+        total = size(runner%res%done)
+    end subroutine samples_done
 
     !> " at point p (parameter = value)" for a sweep, else nothing.
     function point_text(cfg, res, p) result(text)
@@ -475,309 +441,5 @@ contains
         if (cfg%sweep) text = " at point "//fmt_int(p)//" ("//cfg%sweep_parameter//" = "// &
                               fmt_real(res%values(p))//")"
     end function point_text
-
-    !> Classify every sample (all done), point by point in sample order, by the rules of
-    !> chain_attractor; then the fractions. A periodic attractor's states over one period, and
-    !> half a drive period after each, come from its representative's last record
-    !> (orbit_states). Attractors at different points are distinct.
-    subroutine classify_census(cfg, res, err)
-        type(config_t), intent(in) :: cfg
-        type(census_result_t), intent(inout) :: res
-        type(error_t), allocatable, intent(out) :: err
-        type(config_t) :: point
-        type(attractor_t), allocatable :: grown(:)
-        real(wp), allocatable :: sites(:)
-        integer :: s, p, a, period, kind, id
-        logical :: mirror, mirrored
-
-        res%n_attractors = 0
-        if (allocated(res%attractors)) deallocate (res%attractors)
-        allocate (res%attractors(8))
-        do p = 1, res%n_points
-            call census_point_config(cfg, p, point, err)
-            if (allocated(err)) return
-            mirror = cfg%census_mirror == 'merge' .and. mirror_symmetric(point%model%spacing)
-            do s = 1, res%n_samples
-                period = orbit_period(res%periods(:, s, p), point%record%max_period)
-                kind = sample_kind(period, res%exponents(1, s, p), &
-                                   res%exponents_stderr(1, s, p))
-                sites = site_fractions(res%sites(:, s, p))
-                call match_attractor(res%attractors(:res%n_attractors), p, kind, &
-                                     res%periods(:, s, p), res%x(:, s, p), res%v(:, s, p), &
-                                     sites, cfg%census_tolerance, mirror, id, mirrored)
-                if (id == 0) then
-                    if (res%n_attractors == size(res%attractors)) then
-                        allocate (grown(2*size(res%attractors)))
-                        grown(:res%n_attractors) = res%attractors
-                        call move_alloc(grown, res%attractors)
-                    end if
-                    id = res%n_attractors + 1
-                    call new_attractor(point, res, s, p, kind, period, sites, &
-                                       res%attractors(id), err)
-                    if (allocated(err)) return
-                    res%n_attractors = id
-                end if
-                res%attractor(s, p) = id
-                res%mirrored(s, p) = mirrored
-            end do
-        end do
-        res%attractors = res%attractors(:res%n_attractors)
-        deallocate (res%fraction, res%fraction_stderr)
-        allocate (res%fraction(res%n_attractors, res%n_points))
-        allocate (res%fraction_stderr(res%n_attractors, res%n_points))
-        do p = 1, res%n_points
-            do a = 1, res%n_attractors
-                res%fraction(a, p) = real(count(res%attractor(:, p) == a), wp)/res%n_samples
-            end do
-        end do
-        res%fraction_stderr = sqrt(res%fraction*(1 - res%fraction)/res%n_samples)
-        call attractor_ensembles(res)
-    end subroutine classify_census
-
-    !> Each attractor's samples (at its point, in sample order) as an ensemble of spectra: the
-    !> mean of their exponents and the spread between them (ensemble_statistics).
-    subroutine attractor_ensembles(res)
-        type(census_result_t), intent(inout) :: res
-        integer, allocatable :: sizes(:), first(:), filled(:), members(:)
-        integer :: s, p, a, na
-
-        na = res%n_attractors
-        if (allocated(res%attractor_exponents)) deallocate (res%attractor_exponents)
-        if (allocated(res%attractor_spread)) deallocate (res%attractor_spread)
-        allocate (res%attractor_exponents(res%n_exponents, na))
-        allocate (res%attractor_spread(res%n_exponents, na))
-        ! the members of each attractor, one after the other (a counting sort of the samples)
-        allocate (sizes(na), first(na), filled(na), members(res%n_samples*res%n_points))
-        sizes = 0
-        do p = 1, res%n_points
-            do s = 1, res%n_samples
-                sizes(res%attractor(s, p)) = sizes(res%attractor(s, p)) + 1
-            end do
-        end do
-        if (na > 0) first(1) = 1
-        do a = 2, na
-            first(a) = first(a - 1) + sizes(a - 1)
-        end do
-        filled = 0
-        do p = 1, res%n_points
-            do s = 1, res%n_samples
-                a = res%attractor(s, p)
-                members(first(a) + filled(a)) = s
-                filled(a) = filled(a) + 1
-            end do
-        end do
-        do a = 1, na
-            associate (mine => members(first(a):first(a) + sizes(a) - 1))
-                call ensemble_statistics(res%exponents(:, mine, res%attractors(a)%point), &
-                                         res%attractor_exponents(:, a), &
-                                         res%attractor_spread(:, a))
-            end associate
-        end do
-    end subroutine attractor_ensembles
-
-    !> The mean over m members of k exponents each (values(k, m); the members in the order
-    !> given; zeros without members) and the spread between them, the sample standard deviation
-    !> sqrt(sum (x - mean)**2 / (m - 1)), 0 for one member. An exponent of -infinity in a
-    !> member (a direction removed by a rest on a wall, or K = 0) makes that mean -infinity, and
-    !> its spread 0 when every member's is -infinity, +infinity when some are finite.
-    pure subroutine ensemble_statistics(values, mean, spread)
-        real(wp), intent(in) :: values(:, :)
-        real(wp), intent(out) :: mean(:), spread(:)
-        integer :: j, m
-
-        m = size(values, 2)
-        mean = 0
-        spread = 0
-        if (m == 0) return
-        do j = 1, size(values, 1)
-            mean(j) = sum(values(j, :))/m
-            if (m == 1) then
-                spread(j) = 0
-            else if (all(ieee_is_finite(values(j, :)))) then
-                spread(j) = sqrt(sum((values(j, :) - mean(j))**2)/(m - 1))
-            else if (all(values(j, :) == values(j, 1))) then
-                spread(j) = 0
-            else
-                spread(j) = ieee_value(1.0_wp, ieee_positive_inf)
-            end if
-        end do
-    end subroutine ensemble_statistics
-
-    !> The attractor that sample s of point p founds, with it as the representative. When its
-    !> state cannot be run again as a fresh chain (chain_at_section refuses it), the orbit is
-    !> its own state alone: copies at another cycle offset, and mirror images, then found
-    !> attractors of their own.
-    subroutine new_attractor(point, res, s, p, kind, period, sites, attractor, err)
-        type(config_t), intent(in) :: point
-        type(census_result_t), intent(in) :: res
-        integer, intent(in) :: s, p, kind, period
-        real(wp), intent(in) :: sites(:)
-        type(attractor_t), intent(out) :: attractor
-        type(error_t), allocatable, intent(out) :: err
-
-        attractor%point = p
-        attractor%first_sample = s
-        attractor%kind = kind
-        attractor%period = period
-        attractor%periods = res%periods(:, s, p)
-        attractor%lambda1 = res%exponents(1, s, p)
-        attractor%stderr1 = res%exponents_stderr(1, s, p)
-        attractor%x = res%x(:, s, p)
-        attractor%v = res%v(:, s, p)
-        attractor%sites = sites
-        if (kind /= kind_periodic) return
-        call orbit_states(point%model, point%record%phase, attractor%x, attractor%v, period, &
-                          attractor%orbit_x, attractor%orbit_v, attractor%half_x, &
-                          attractor%half_v, err)
-        if (.not. allocated(err)) return
-        deallocate (err)
-        attractor%orbit_x = reshape(attractor%x, [size(attractor%x), 1])
-        attractor%orbit_v = reshape(attractor%v, [size(attractor%v), 1])
-        allocate (attractor%half_x(size(attractor%x), 0), attractor%half_v(size(attractor%x), 0))
-    end subroutine new_attractor
-
-    !> The states of a period-p orbit through (x, v) on the section (drive phase `phase`):
-    !> orbit(:, k+1) k drive cycles later (k = 0..p-1; orbit(:, 1) is (x, v) itself), and
-    !> half(:, k+1) half a drive period after each. They are run from (x, v) as a fresh chain
-    !> on the section (chain_at_section: every oscillator moving, every bond searched).
-    subroutine orbit_states(model, phase, x, v, p, orbit_x, orbit_v, half_x, half_v, err)
-        type(model_t), intent(in) :: model
-        real(wp), intent(in) :: phase, x(:), v(:)
-        integer, intent(in) :: p
-        real(wp), allocatable, intent(out) :: orbit_x(:, :), orbit_v(:, :)
-        real(wp), allocatable, intent(out) :: half_x(:, :), half_v(:, :)
-        type(error_t), allocatable, intent(out) :: err
-        type(chain_t) :: chain
-        type(event_log_t) :: log
-        real(wp) :: s0, s_half, period
-        integer(i8) :: cycle_half
-        integer :: k
-
-        allocate (orbit_x(size(x), p), orbit_v(size(x), p), half_x(size(x), p))
-        allocate (half_v(size(x), p))
-        orbit_x(:, 1) = x
-        orbit_v(:, 1) = v
-        call event_log_init(log, .false., 0)
-        call chain_at_section(model, phase, x, v, chain, err)
-        if (allocated(err)) return
-        period = chain_period(chain)
-        s0 = phase/model%omega
-        do k = 0, p - 1
-            cycle_half = k
-            s_half = s0 + period/2
-            if (s_half >= period) then
-                cycle_half = k + 1
-                s_half = s_half - period
-            end if
-            call advance_to_point(chain, cycle_half, s_half, log, err)
-            if (allocated(err)) return
-            half_x(:, k + 1) = chain_positions(chain)
-            half_v(:, k + 1) = chain_velocities(chain)
-            if (k == p - 1) exit
-            call advance_to_point(chain, int(k + 1, i8), s0, log, err)
-            if (allocated(err)) return
-            orbit_x(:, k + 2) = chain_positions(chain)
-            orbit_v(:, k + 2) = chain_velocities(chain)
-        end do
-    end subroutine orbit_states
-
-    ! ---- checkpoints ---------------------------------------------------------------------
-
-    !> The finished samples, written atomically (tmp + rename): a header naming the input and
-    !> the census's sizes, then the per-sample arrays whole (values as they are, so bit for
-    !> bit). A failed write is an error and leaves the previous checkpoint as it was.
-    subroutine save_census_checkpoint(path, cfg, res, err)
-        character(len=*), intent(in) :: path
-        type(config_t), intent(in) :: cfg
-        type(census_result_t), intent(in) :: res
-        type(error_t), allocatable, intent(out) :: err
-        character(len=256) :: msg
-        integer :: u, ios
-        integer(i8) :: written
-
-        msg = ''
-        open (newunit=u, file=path//'.tmp', access='stream', form='unformatted', &
-              status='replace', action='write', iostat=ios, iomsg=msg)
-        if (ios /= 0) then
-            call set_error(err, "&census: cannot write the checkpoint '"//path//".tmp' ("// &
-                           trim(msg)//")")
-            return
-        end if
-        write (u, iostat=ios, iomsg=msg) checkpoint_magic, len(cfg%input_text), &
-            cfg%input_text, res%n_points, res%n_samples, cfg%model%n, res%n_exponents
-        if (ios == 0) write (u, iostat=ios, iomsg=msg) merge(1, 0, res%done), res%periods, &
-            res%sites, res%x0, res%v0, res%x, res%v, &
-            res%exponents, res%exponents_stderr
-        written = 0
-        if (ios == 0) inquire (unit=u, pos=written, iostat=ios, iomsg=msg)
-        call close_checked(u, path//'.tmp', written - 1, ios, msg)
-        if (ios /= 0) then
-            call set_error(err, "&census: cannot write the checkpoint '"//path//".tmp' ("// &
-                           trim(msg)//")")
-            return
-        end if
-        call rename_file(path//'.tmp', path, err)
-    end subroutine save_census_checkpoint
-
-    !> Resume from a checkpoint of the same input, if there is one (`res` from
-    !> census_result_init).
-    subroutine load_census_checkpoint(path, cfg, res, err)
-        character(len=*), intent(in) :: path
-        type(config_t), intent(in) :: cfg
-        type(census_result_t), intent(inout) :: res
-        type(error_t), allocatable, intent(out) :: err
-        character(len=8) :: magic
-        character(len=:), allocatable :: text
-        integer :: u, ios, length, n_points, n_samples, n, k
-        integer, allocatable :: done(:, :)
-        logical :: exists, ours
-        type(census_result_t) :: got
-
-        inquire (file=path, exist=exists)
-        if (.not. exists) return
-        open (newunit=u, file=path, access='stream', form='unformatted', status='old', &
-              action='read', iostat=ios)
-        if (ios /= 0) return
-        ours = .false.
-        read (u, iostat=ios) magic, length
-        if (ios == 0 .and. magic == checkpoint_magic .and. length == len(cfg%input_text)) then
-            allocate (character(len=length) :: text)
-            read (u, iostat=ios) text, n_points, n_samples, n, k
-            ours = ios == 0 .and. text == cfg%input_text .and. n_points == res%n_points .and. &
-                   n_samples == res%n_samples .and. n == cfg%model%n .and. k == res%n_exponents
-        end if
-        if (.not. ours) then
-            close (u)
-            call set_error(err, "&census: '"//path//"' is a checkpoint of another input "// &
-                           "(or of another version); remove it to start afresh")
-            return
-        end if
-        got = res
-        allocate (done(n_samples, n_points))
-        read (u, iostat=ios) done, got%periods, got%sites, got%x0, &
-            got%v0, got%x, got%v, got%exponents, got%exponents_stderr
-        close (u)
-        if (ios /= 0) then
-            call set_error(err, "&census: the checkpoint '"//path//"' is damaged; remove it "// &
-                           "to start afresh")
-            return
-        end if
-        got%done = done == 1
-        call move_alloc(got%done, res%done)
-        call move_alloc(got%periods, res%periods)
-        call move_alloc(got%sites, res%sites)
-        call move_alloc(got%x0, res%x0)
-        call move_alloc(got%v0, res%v0)
-        call move_alloc(got%x, res%x)
-        call move_alloc(got%v, res%v)
-        call move_alloc(got%exponents, res%exponents)
-        call move_alloc(got%exponents_stderr, res%exponents_stderr)
-    end subroutine load_census_checkpoint
-
-    subroutine save_census_progress(monitor)
-        class(census_checkpoint_monitor_t), intent(inout) :: monitor
-
-        call save_census_checkpoint(monitor%path, monitor%cfg, monitor%res, monitor%err)
-    end subroutine save_census_progress
 
 end module chain_census

@@ -7,11 +7,13 @@ module chain_census_file
     use chain_config, only: config_t
     use chain_model, only: parameter_units
     use chain_sim, only: write_run_header
-    use chain_sweep, only: checkpoint_path, validate_sweep_points, plan_sweep
+    use chain_sweep, only: validate_sweep_points, plan_sweep
     use chain_files, only: remove_file
-    use chain_census, only: census_result_t, census_starts, run_census_samples, &
-                            classify_census, save_census_checkpoint, load_census_checkpoint, &
-                            census_checkpoint_monitor_t, census_points
+    use chain_checkpoint, only: checkpoint_path
+    use chain_census, only: census_result_t, census_starts, run_census_samples, census_points
+    use chain_census_classify, only: classify_census
+    use chain_census_checkpoint, only: save_census_checkpoint, load_census_checkpoint, &
+                                       census_checkpoint_monitor_t
     use chain_attractor, only: kind_names, classification_rule, site_distance_limit, &
                                chaos_sigmas
     use chain_output, only: output_t, output_begin, output_group, output_end, output_abort, &
