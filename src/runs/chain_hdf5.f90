@@ -107,7 +107,7 @@ module chain_hdf5
         module procedure read_attr_string, read_attr_int8, read_attr_real
     end interface h5_read_attr
 
-    !> A new dataset holding `values` (a scalar: a dataset without axes), with its `units`.
+    !> A new dataset holding `values` (a scalar: a dataset without axes).
     interface h5_write
         module procedure write_real_0d, write_real_1d, write_real_2d, write_real_3d, &
             write_real_4d, write_int_0d, write_int_1d, write_int_2d, write_int_3d, &
@@ -693,10 +693,10 @@ contains
     end subroutine types_of
 
     !> A dataset of extents `dims` (none: a scalar) and element type `kind`, written whole
-    !> from `buf`, with its `units`.
-    subroutine write_dataset(file, name, kind, dims, buf, units, err)
+    !> from `buf`.
+    subroutine write_dataset(file, name, kind, dims, buf, err)
         type(h5_file_t), intent(in) :: file
-        character(len=*), intent(in) :: name, units
+        character(len=*), intent(in) :: name
         integer, intent(in) :: kind
         integer(hsize_t), intent(in) :: dims(:)
         type(c_ptr), intent(in) :: buf
@@ -730,14 +730,13 @@ contains
         end if
         call h5sclose_f(space, e)
         call check(e, 'h5sclose_f', '/'//name, file%path, err)
-        call write_attr_string(file, name, 'units', units, err)
     end subroutine write_dataset
 
     !> A 1-D dataset of variable-length UTF-8 strings (netCDF-4's NC_STRING), `values` with
-    !> their trailing blanks removed, with its `units`.
-    subroutine h5_write_strings(file, name, values, units, err)
+    !> their trailing blanks removed.
+    subroutine h5_write_strings(file, name, values, err)
         type(h5_file_t), intent(in) :: file
-        character(len=*), intent(in) :: name, values(:), units
+        character(len=*), intent(in) :: name, values(:)
         type(error_t), allocatable, intent(inout) :: err
         type :: text_t
             character(kind=c_char), allocatable :: chars(:)
@@ -780,127 +779,126 @@ contains
         end if
         call h5tclose_f(string_type, e)
         call check(e, 'h5tclose_f', '/'//name, file%path, err)
-        call write_attr_string(file, name, 'units', units, err)
     end subroutine h5_write_strings
 
-    subroutine write_real_0d(file, name, value, units, err)
+    subroutine write_real_0d(file, name, value, err)
         type(h5_file_t), intent(in) :: file
-        character(len=*), intent(in) :: name, units
+        character(len=*), intent(in) :: name
         real(wp), intent(in), target :: value
         type(error_t), allocatable, intent(inout) :: err
         integer(hsize_t) :: scalar(0)
 
-        call write_dataset(file, name, h5_real, scalar, c_loc(value), units, err)
+        call write_dataset(file, name, h5_real, scalar, c_loc(value), err)
     end subroutine write_real_0d
 
-    subroutine write_real_1d(file, name, values, units, err)
+    subroutine write_real_1d(file, name, values, err)
         type(h5_file_t), intent(in) :: file
-        character(len=*), intent(in) :: name, units
+        character(len=*), intent(in) :: name
         real(wp), intent(in), target, contiguous :: values(:)
         type(error_t), allocatable, intent(inout) :: err
 
-        call write_dataset(file, name, h5_real, shape(values, hsize_t), c_loc(values), units, err)
+        call write_dataset(file, name, h5_real, shape(values, hsize_t), c_loc(values), err)
     end subroutine write_real_1d
 
-    subroutine write_real_2d(file, name, values, units, err)
+    subroutine write_real_2d(file, name, values, err)
         type(h5_file_t), intent(in) :: file
-        character(len=*), intent(in) :: name, units
+        character(len=*), intent(in) :: name
         real(wp), intent(in), target, contiguous :: values(:, :)
         type(error_t), allocatable, intent(inout) :: err
 
-        call write_dataset(file, name, h5_real, shape(values, hsize_t), c_loc(values), units, err)
+        call write_dataset(file, name, h5_real, shape(values, hsize_t), c_loc(values), err)
     end subroutine write_real_2d
 
-    subroutine write_real_3d(file, name, values, units, err)
+    subroutine write_real_3d(file, name, values, err)
         type(h5_file_t), intent(in) :: file
-        character(len=*), intent(in) :: name, units
+        character(len=*), intent(in) :: name
         real(wp), intent(in), target, contiguous :: values(:, :, :)
         type(error_t), allocatable, intent(inout) :: err
 
-        call write_dataset(file, name, h5_real, shape(values, hsize_t), c_loc(values), units, err)
+        call write_dataset(file, name, h5_real, shape(values, hsize_t), c_loc(values), err)
     end subroutine write_real_3d
 
-    subroutine write_real_4d(file, name, values, units, err)
+    subroutine write_real_4d(file, name, values, err)
         type(h5_file_t), intent(in) :: file
-        character(len=*), intent(in) :: name, units
+        character(len=*), intent(in) :: name
         real(wp), intent(in), target, contiguous :: values(:, :, :, :)
         type(error_t), allocatable, intent(inout) :: err
 
-        call write_dataset(file, name, h5_real, shape(values, hsize_t), c_loc(values), units, err)
+        call write_dataset(file, name, h5_real, shape(values, hsize_t), c_loc(values), err)
     end subroutine write_real_4d
 
-    subroutine write_int_0d(file, name, value, units, err)
+    subroutine write_int_0d(file, name, value, err)
         type(h5_file_t), intent(in) :: file
-        character(len=*), intent(in) :: name, units
+        character(len=*), intent(in) :: name
         integer, intent(in), target :: value
         type(error_t), allocatable, intent(inout) :: err
         integer(hsize_t) :: scalar(0)
 
-        call write_dataset(file, name, h5_int, scalar, c_loc(value), units, err)
+        call write_dataset(file, name, h5_int, scalar, c_loc(value), err)
     end subroutine write_int_0d
 
-    subroutine write_int_1d(file, name, values, units, err)
+    subroutine write_int_1d(file, name, values, err)
         type(h5_file_t), intent(in) :: file
-        character(len=*), intent(in) :: name, units
+        character(len=*), intent(in) :: name
         integer, intent(in), target, contiguous :: values(:)
         type(error_t), allocatable, intent(inout) :: err
 
-        call write_dataset(file, name, h5_int, shape(values, hsize_t), c_loc(values), units, err)
+        call write_dataset(file, name, h5_int, shape(values, hsize_t), c_loc(values), err)
     end subroutine write_int_1d
 
-    subroutine write_int_2d(file, name, values, units, err)
+    subroutine write_int_2d(file, name, values, err)
         type(h5_file_t), intent(in) :: file
-        character(len=*), intent(in) :: name, units
+        character(len=*), intent(in) :: name
         integer, intent(in), target, contiguous :: values(:, :)
         type(error_t), allocatable, intent(inout) :: err
 
-        call write_dataset(file, name, h5_int, shape(values, hsize_t), c_loc(values), units, err)
+        call write_dataset(file, name, h5_int, shape(values, hsize_t), c_loc(values), err)
     end subroutine write_int_2d
 
-    subroutine write_int_3d(file, name, values, units, err)
+    subroutine write_int_3d(file, name, values, err)
         type(h5_file_t), intent(in) :: file
-        character(len=*), intent(in) :: name, units
+        character(len=*), intent(in) :: name
         integer, intent(in), target, contiguous :: values(:, :, :)
         type(error_t), allocatable, intent(inout) :: err
 
-        call write_dataset(file, name, h5_int, shape(values, hsize_t), c_loc(values), units, err)
+        call write_dataset(file, name, h5_int, shape(values, hsize_t), c_loc(values), err)
     end subroutine write_int_3d
 
-    subroutine write_int8_0d(file, name, value, units, err)
+    subroutine write_int8_0d(file, name, value, err)
         type(h5_file_t), intent(in) :: file
-        character(len=*), intent(in) :: name, units
+        character(len=*), intent(in) :: name
         integer(i8), intent(in), target :: value
         type(error_t), allocatable, intent(inout) :: err
         integer(hsize_t) :: scalar(0)
 
-        call write_dataset(file, name, h5_int8, scalar, c_loc(value), units, err)
+        call write_dataset(file, name, h5_int8, scalar, c_loc(value), err)
     end subroutine write_int8_0d
 
-    subroutine write_int8_1d(file, name, values, units, err)
+    subroutine write_int8_1d(file, name, values, err)
         type(h5_file_t), intent(in) :: file
-        character(len=*), intent(in) :: name, units
+        character(len=*), intent(in) :: name
         integer(i8), intent(in), target, contiguous :: values(:)
         type(error_t), allocatable, intent(inout) :: err
 
-        call write_dataset(file, name, h5_int8, shape(values, hsize_t), c_loc(values), units, err)
+        call write_dataset(file, name, h5_int8, shape(values, hsize_t), c_loc(values), err)
     end subroutine write_int8_1d
 
-    subroutine write_int8_2d(file, name, values, units, err)
+    subroutine write_int8_2d(file, name, values, err)
         type(h5_file_t), intent(in) :: file
-        character(len=*), intent(in) :: name, units
+        character(len=*), intent(in) :: name
         integer(i8), intent(in), target, contiguous :: values(:, :)
         type(error_t), allocatable, intent(inout) :: err
 
-        call write_dataset(file, name, h5_int8, shape(values, hsize_t), c_loc(values), units, err)
+        call write_dataset(file, name, h5_int8, shape(values, hsize_t), c_loc(values), err)
     end subroutine write_int8_2d
 
-    subroutine write_int8_3d(file, name, values, units, err)
+    subroutine write_int8_3d(file, name, values, err)
         type(h5_file_t), intent(in) :: file
-        character(len=*), intent(in) :: name, units
+        character(len=*), intent(in) :: name
         integer(i8), intent(in), target, contiguous :: values(:, :, :)
         type(error_t), allocatable, intent(inout) :: err
 
-        call write_dataset(file, name, h5_int8, shape(values, hsize_t), c_loc(values), units, err)
+        call write_dataset(file, name, h5_int8, shape(values, hsize_t), c_loc(values), err)
     end subroutine write_int8_3d
 
     !> Read dataset `name` whole into `buf` (element type `kind`), after checking that its
@@ -1147,10 +1145,10 @@ contains
     ! ---- chunked datasets and hyperslabs --------------------------------------------------
 
     !> A chunked dataset of extents `dims` and element type `kind` whose last axis can grow
-    !> (or shrink), with its `units`; a chunk holds whole columns, up to chunk_elements.
-    subroutine h5_create_growing(file, name, kind, dims, units, err)
+    !> (or shrink); a chunk holds whole columns, up to chunk_elements.
+    subroutine h5_create_growing(file, name, kind, dims, err)
         type(h5_file_t), intent(in) :: file
-        character(len=*), intent(in) :: name, units
+        character(len=*), intent(in) :: name
         integer, intent(in) :: kind
         integer(i8), intent(in) :: dims(:)
         type(error_t), allocatable, intent(inout) :: err
@@ -1165,25 +1163,25 @@ contains
         chunk(last) = max(1_hsize_t, min(extents(last), int(chunk_elements, hsize_t)/column))
         maxdims = extents
         maxdims(last) = H5S_UNLIMITED_F
-        call create_chunked(file, name, kind, extents, maxdims, chunk, units, err)
+        call create_chunked(file, name, kind, extents, maxdims, chunk, err)
     end subroutine h5_create_growing
 
     !> An empty 1-D dataset of element type `kind`, in chunks of `chunk` elements, that grows
-    !> as values are appended, with its `units`.
-    subroutine h5_create_appendable(file, name, kind, chunk, units, err)
+    !> as values are appended.
+    subroutine h5_create_appendable(file, name, kind, chunk, err)
         type(h5_file_t), intent(in) :: file
-        character(len=*), intent(in) :: name, units
+        character(len=*), intent(in) :: name
         integer, intent(in) :: kind
         integer(i8), intent(in) :: chunk
         type(error_t), allocatable, intent(inout) :: err
 
         call create_chunked(file, name, kind, [0_hsize_t], [H5S_UNLIMITED_F], &
-                            [int(chunk, hsize_t)], units, err)
+                            [int(chunk, hsize_t)], err)
     end subroutine h5_create_appendable
 
-    subroutine create_chunked(file, name, kind, dims, maxdims, chunk, units, err)
+    subroutine create_chunked(file, name, kind, dims, maxdims, chunk, err)
         type(h5_file_t), intent(in) :: file
-        character(len=*), intent(in) :: name, units
+        character(len=*), intent(in) :: name
         integer, intent(in) :: kind
         integer(hsize_t), intent(in) :: dims(:), maxdims(:), chunk(:)
         type(error_t), allocatable, intent(inout) :: err
@@ -1214,7 +1212,6 @@ contains
         end if
         call h5sclose_f(space, e)
         call check(e, 'h5sclose_f', '/'//name, file%path, err)
-        call write_attr_string(file, name, 'units', units, err)
     end subroutine create_chunked
 
     !> Change the extents of a chunked dataset.

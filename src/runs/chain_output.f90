@@ -1,5 +1,6 @@
-!> The layout of a run's output file (README.md "Output"): which groups, datasets and
-!> attributes a run writes, with their units, and reading back a final state (a start from a
+!> The layout of a run's output file (docs/output.md): which groups, datasets and attributes
+!> a run writes (their names, units and long names are the file schema's: chain_describe),
+!> and reading back a final state (a start from a
 !> file) or what a run stopped early keeps for its continuation. The HDF5 calls are
 !> chain_hdf5's; a sweep's /sweep group is chain_sweep's.
 !>
@@ -30,12 +31,13 @@ module chain_output
     use chain_model, only: model_t
     use chain_namelist, only: same_input
     use chain_state, only: chain_state_t
+    use chain_describe, only: describe, index_coordinate, bare_dimension, flags
     use chain_provenance, only: code_version, provenance_item_t, provenance
     use chain_hdf5, only: h5_file_t, h5_real, h5_int, h5_int8, h5_create_file, h5_open_file, &
                           h5_close_file, h5_is_hdf5_file, h5_create_group, h5_exists, &
                           h5_delete, h5_write_attr, h5_read_attr, h5_write, h5_read, &
                           h5_read_alloc, h5_extent, h5_create_growing, h5_create_appendable, &
-                          h5_set_extent, h5_write_slab, h5_read_slab, h5_create_dimension, &
+                          h5_set_extent, h5_write_slab, h5_read_slab, &
                           h5_set_scale, h5_dimensions, h5_detach_dimensions, h5_delete_attr
     implicit none
     private
@@ -48,7 +50,7 @@ module chain_output
     public :: resume_data_t, output_resume, read_resume, output_inspect, output_continue
     public :: output_checkpoint
     public :: file_absent, file_continuable, file_other_input, file_other
-    public :: output_describe, output_index, output_unset_param
+    public :: output_unset_param
 
     integer, parameter :: schema_version = 2
     !> The schema versions whose /final a run can start from (&initial kind = 'file').
@@ -253,17 +255,14 @@ contains
             call h5_write_attr(f, 'params', 'transient', transient, err)
             call h5_write_attr(f, 'params', 'cycles', cycles, err)
             call bond_coordinate(f, 'params', n, err)
-            call h5_write(f, 'params/spacing', spacing, '1', err)
-            call describe(f, 'params/spacing', 'spacing of the bond (the gap at rest)', &
-                          'length', 'bond', err)
+            call h5_write(f, 'params/spacing', spacing, err)
+            call describe(f, 'params/spacing', err)
             call h5_create_group(f, 'initial', err)
             call oscillator_coordinate(f, 'initial', n, err)
-            call h5_write(f, 'initial/x', x0, '1', err)
-            call describe(f, 'initial/x', 'displacement from equilibrium at t = 0', 'length', &
-                          'oscillator', err)
-            call h5_write(f, 'initial/v', v0, '1', err)
-            call describe(f, 'initial/v', 'velocity at t = 0', 'length/time', 'oscillator', &
-                          err)
+            call h5_write(f, 'initial/x', x0, err)
+            call describe(f, 'initial/x', err)
+            call h5_write(f, 'initial/v', v0, err)
+            call describe(f, 'initial/v', err)
         end associate
     end subroutine output_header
 
@@ -289,65 +288,6 @@ contains
         end associate
     end subroutine output_unset_param
 
-    !> Describe dataset `name` (for the sweep's writer: see describe).
-    subroutine output_describe(out, name, long_name, model_units, dims, err)
-        type(output_t), intent(inout) :: out
-        character(len=*), intent(in) :: name, long_name, model_units, dims
-        type(error_t), allocatable, intent(out) :: err
-
-        call describe(out%file, name, long_name, model_units, dims, err)
-    end subroutine output_describe
-
-    !> The coordinate variable `name` numbering its dimension first, first + 1, ... (for the
-    !> sweep's writer: `oscillator`, `exponent`).
-    subroutine output_index(out, name, first, count, long_name, err)
-        type(output_t), intent(inout) :: out
-        character(len=*), intent(in) :: name, long_name
-        integer, intent(in) :: first, count
-        type(error_t), allocatable, intent(out) :: err
-
-        call index_coordinate(out%file, name, first, count, long_name, err)
-    end subroutine output_index
-
-    ! ---- the description of a dataset ----------------------------------------------------
-
-    !> `long_name` of dataset `name`, its reduced unit (`model_units`, if any: its `units` are
-    !> then 1) and the dimensions of its axes (blank-separated, h5py's order; '' for a scalar
-    !> or a coordinate variable), which must exist in its group.
-    subroutine describe(f, name, long_name, model_units, dims, err)
-        type(h5_file_t), intent(in) :: f
-        character(len=*), intent(in) :: name, long_name, model_units, dims
-        type(error_t), allocatable, intent(inout) :: err
-
-        call h5_write_attr(f, name, 'long_name', long_name, err)
-        if (len(model_units) > 0) call h5_write_attr(f, name, 'model_units', model_units, err)
-        if (len_trim(dims) > 0) call h5_dimensions(f, name, dims, err)
-    end subroutine describe
-
-    !> Integer flags of dataset `name`: netCDF's flag_values and flag_meanings (words joined
-    !> by underscores, one per value).
-    subroutine flags(f, name, values, meanings, err)
-        type(h5_file_t), intent(in) :: f
-        character(len=*), intent(in) :: name, meanings
-        integer, intent(in), contiguous :: values(:)
-        type(error_t), allocatable, intent(inout) :: err
-
-        call h5_write_attr(f, name, 'flag_values', values, err)
-        call h5_write_attr(f, name, 'flag_meanings', meanings, err)
-    end subroutine flags
-
-    subroutine index_coordinate(f, name, first, count, long_name, err)
-        type(h5_file_t), intent(in) :: f
-        character(len=*), intent(in) :: name, long_name
-        integer, intent(in) :: first, count
-        type(error_t), allocatable, intent(inout) :: err
-        integer :: j
-
-        call h5_write(f, name, [(j, j=first, first + count - 1)], '1', err)
-        call h5_write_attr(f, name, 'long_name', long_name, err)
-        call h5_set_scale(f, name, err)
-    end subroutine index_coordinate
-
     !> `group/oscillator`: oscillators 1..n.
     subroutine oscillator_coordinate(f, group, n, err)
         type(h5_file_t), intent(in) :: f
@@ -355,7 +295,7 @@ contains
         integer, intent(in) :: n
         type(error_t), allocatable, intent(inout) :: err
 
-        call index_coordinate(f, group//'/oscillator', 1, n, 'oscillator index', err)
+        call index_coordinate(f, group//'/oscillator', 1, n, err)
     end subroutine oscillator_coordinate
 
     !> `group/bond`: bonds 0..n, bond k between oscillators k and k+1 (0 and n: the walls).
@@ -365,8 +305,7 @@ contains
         integer, intent(in) :: n
         type(error_t), allocatable, intent(inout) :: err
 
-        call index_coordinate(f, group//'/bond', 0, n + 1, 'bond index: bond k joins '// &
-                              'oscillators k and k+1 (0: the left wall, n: the right wall)', err)
+        call index_coordinate(f, group//'/bond', 0, n + 1, err)
     end subroutine bond_coordinate
 
     !> Create a group (once).
@@ -393,16 +332,13 @@ contains
             if (first == 1) then
                 call h5_create_group(f, 'strobe', err)
                 call oscillator_coordinate(f, 'strobe', out%n, err)
-                call h5_create_growing(f, 'strobe/cycle', h5_int8, dims(2:2), '1', err)
+                call h5_create_growing(f, 'strobe/cycle', h5_int8, dims(2:2), err)
                 call h5_set_scale(f, 'strobe/cycle', err)
-                call describe(f, 'strobe/cycle', 'drive cycle of the record (from the '// &
-                              'start, transient included)', 'drive cycles', '', err)
-                call h5_create_growing(f, 'strobe/x', h5_real, dims, '1', err)
-                call describe(f, 'strobe/x', 'displacement from equilibrium at the section', &
-                              'length', 'cycle oscillator', err)
-                call h5_create_growing(f, 'strobe/v', h5_real, dims, '1', err)
-                call describe(f, 'strobe/v', 'velocity at the section', 'length/time', &
-                              'cycle oscillator', err)
+                call describe(f, 'strobe/cycle', err)
+                call h5_create_growing(f, 'strobe/x', h5_real, dims, err)
+                call describe(f, 'strobe/x', err)
+                call h5_create_growing(f, 'strobe/v', h5_real, dims, err)
+                call describe(f, 'strobe/v', err)
             end if
             call h5_write_slab(f, 'strobe/x', offset, x, grow=.false., err=err)
             call h5_write_slab(f, 'strobe/v', offset, v, grow=.false., err=err)
@@ -421,17 +357,15 @@ contains
         associate (f => out%file)
             if (.not. out%events_created) then
                 call h5_create_group(f, 'events', err)
-                call h5_create_dimension(f, 'events/event', 0_i8, .true., err)
-                call h5_create_appendable(f, 'events/time', h5_real, event_chunk, '1', err)
-                call describe(f, 'events/time', 'time of the event from the start of the run', &
-                              'time', 'event', err)
-                call h5_create_appendable(f, 'events/site', h5_int, event_chunk, '1', err)
-                call describe(f, 'events/site', 'bond of the event: bond k joins oscillators '// &
-                              'k and k+1 (0: the left wall, n: the right wall)', '', 'event', err)
-                call h5_create_appendable(f, 'events/speed', h5_real, event_chunk, '1', err)
-                call describe(f, 'events/speed', 'approach speed', 'length/time', 'event', err)
-                call h5_create_appendable(f, 'events/kind', h5_int, event_chunk, '1', err)
-                call describe(f, 'events/kind', 'kind of event', '', 'event', err)
+                call bare_dimension(f, 'events/event', 0_i8, .true., err)
+                call h5_create_appendable(f, 'events/time', h5_real, event_chunk, err)
+                call describe(f, 'events/time', err)
+                call h5_create_appendable(f, 'events/site', h5_int, event_chunk, err)
+                call describe(f, 'events/site', err)
+                call h5_create_appendable(f, 'events/speed', h5_real, event_chunk, err)
+                call describe(f, 'events/speed', err)
+                call h5_create_appendable(f, 'events/kind', h5_int, event_chunk, err)
+                call describe(f, 'events/kind', err)
                 call flags(f, 'events/kind', [0, 1, 2, 3], 'impact impact_starting_a_rest '// &
                            'release touch_without_impulse', err)
                 if (allocated(err)) return
@@ -461,31 +395,26 @@ contains
             call h5_create_group(f, 'final', err)
             call oscillator_coordinate(f, 'final', out%n, err)
             call bond_coordinate(f, 'final', out%n, err)
-            call h5_write(f, 'final/x', state%x, '1', err)
-            call describe(f, 'final/x', 'displacement from equilibrium at the end', 'length', &
-                          'oscillator', err)
-            call h5_write(f, 'final/v', state%v, '1', err)
-            call describe(f, 'final/v', 'velocity at the end', 'length/time', 'oscillator', err)
-            call h5_write(f, 'final/phase', state%time*omega, 'radian', err)
-            call describe(f, 'final/phase', 'drive phase at the end', '', '', err)
-            call h5_write(f, 'final/time_in_cycle', state%time, '1', err)
-            call describe(f, 'final/time_in_cycle', 'time since the start of the drive '// &
-                          'cycle at the end', 'time', '', err)
-            call h5_write(f, 'final/contact', state%contact, '1', err)
-            call describe(f, 'final/contact', 'resting contact of the oscillator with a wall', &
-                          '', 'oscillator', err)
+            call h5_write(f, 'final/x', state%x, err)
+            call describe(f, 'final/x', err)
+            call h5_write(f, 'final/v', state%v, err)
+            call describe(f, 'final/v', err)
+            call h5_write(f, 'final/phase', state%time*omega, err)
+            call describe(f, 'final/phase', err)
+            call h5_write(f, 'final/time_in_cycle', state%time, err)
+            call describe(f, 'final/time_in_cycle', err)
+            call h5_write(f, 'final/contact', state%contact, err)
+            call describe(f, 'final/contact', err)
             call flags(f, 'final/contact', [-1, 0, 1], 'resting_on_the_left_wall free '// &
                        'resting_on_the_right_wall', err)
-            call h5_write(f, 'final/event_time', state%event_time, '1', err)
-            call describe(f, 'final/event_time', 'time within the drive cycle of the '// &
-                          'next event scheduled at the bond', 'time', 'bond', err)
-            call h5_write(f, 'final/event_action', state%event_action, '1', err)
-            call describe(f, 'final/event_action', 'next event scheduled at the bond', '', &
-                          'bond', err)
+            call h5_write(f, 'final/event_time', state%event_time, err)
+            call describe(f, 'final/event_time', err)
+            call h5_write(f, 'final/event_action', state%event_action, err)
+            call describe(f, 'final/event_action', err)
             call flags(f, 'final/event_action', [0, 1, 2, 3], 'none impact release recheck', &
                        err)
-            call h5_write(f, 'final/cycle', state%cycle, '1', err)
-            call describe(f, 'final/cycle', 'drive cycle at the end', 'drive cycles', '', err)
+            call h5_write(f, 'final/cycle', state%cycle, err)
+            call describe(f, 'final/cycle', err)
         end associate
     end subroutine output_final
 
@@ -505,13 +434,11 @@ contains
             call h5_write_attr(f, 'stats', 'releases', releases, err)
             call h5_write_attr(f, 'stats', 'touches', touches, err)
             call bond_coordinate(f, 'stats', out%n, err)
-            call h5_write(f, 'stats/site_counts', site_counts, '1', err)
-            call describe(f, 'stats/site_counts', 'impacts at the bond in the recorded cycles', &
-                          'impacts', 'bond', err)
+            call h5_write(f, 'stats/site_counts', site_counts, err)
+            call describe(f, 'stats/site_counts', err)
             ! /params/cycles is the number planned; a run stopped early did fewer
-            call h5_write(f, 'stats/cycles_done', cycles_done, '1', err)
-            call describe(f, 'stats/cycles_done', 'strobe records done', 'drive cycles', '', &
-                          err)
+            call h5_write(f, 'stats/cycles_done', cycles_done, err)
+            call describe(f, 'stats/cycles_done', err)
         end associate
     end subroutine output_stats
 
@@ -520,9 +447,8 @@ contains
         integer, intent(in), contiguous :: period(:)
         type(error_t), allocatable, intent(out) :: err
 
-        call h5_write(out%file, 'strobe/period', period, '1', err)
-        call describe(out%file, 'strobe/period', "period of the oscillator's strobe record "// &
-                      "(0: none found, aperiodic)", 'drive cycles', 'oscillator', err)
+        call h5_write(out%file, 'strobe/period', period, err)
+        call describe(out%file, 'strobe/period', err)
     end subroutine output_periods
 
     !> /lyapunov; `running_bits(k, rows)` are the running estimates at drive cycles
@@ -539,29 +465,21 @@ contains
 
         associate (f => out%file)
             call h5_create_group(f, 'lyapunov', err)
-            call index_coordinate(f, 'lyapunov/exponent', 1, size(bits), 'exponent index '// &
-                                  '(descending order)', err)
-            call h5_create_dimension(f, 'lyapunov/qr_step', size(running_cycle, kind=i8), &
+            call index_coordinate(f, 'lyapunov/exponent', 1, size(bits), err)
+            call bare_dimension(f, 'lyapunov/qr_step', size(running_cycle, kind=i8), &
                                      .false., err)
-            call h5_write(f, 'lyapunov/exponents', bits, 'bit', err)
-            call describe(f, 'lyapunov/exponents', 'Lyapunov exponent', &
-                          'bits per drive cycle', 'exponent', err)
-            call h5_write(f, 'lyapunov/exponents_per_time', per_time, '1', err)
-            call describe(f, 'lyapunov/exponents_per_time', 'Lyapunov exponent', &
-                          'nats per unit time', 'exponent', err)
-            call h5_write(f, 'lyapunov/stderr', stderr_bits, 'bit', err)
-            call describe(f, 'lyapunov/stderr', 'standard error of the Lyapunov exponent '// &
-                          '(blocking, where it levels off with the block size)', &
-                          'bits per drive cycle', 'exponent', err)
-            call h5_write(f, 'lyapunov/stderr_block', stderr_cycles, '1', err)
-            call describe(f, 'lyapunov/stderr_block', 'drive cycles per block at which '// &
-                          'stderr was read', 'drive cycles', 'exponent', err)
-            call h5_write(f, 'lyapunov/running_cycle', running_cycle, '1', err)
-            call describe(f, 'lyapunov/running_cycle', 'drive cycle of the running estimate', &
-                          'drive cycles', 'qr_step', err)
-            call h5_write(f, 'lyapunov/running', running_bits, 'bit', err)
-            call describe(f, 'lyapunov/running', 'running estimate of the Lyapunov exponent '// &
-                          'after a QR step', 'bits per drive cycle', 'qr_step exponent', err)
+            call h5_write(f, 'lyapunov/exponents', bits, err)
+            call describe(f, 'lyapunov/exponents', err)
+            call h5_write(f, 'lyapunov/exponents_per_time', per_time, err)
+            call describe(f, 'lyapunov/exponents_per_time', err)
+            call h5_write(f, 'lyapunov/stderr', stderr_bits, err)
+            call describe(f, 'lyapunov/stderr', err)
+            call h5_write(f, 'lyapunov/stderr_block', stderr_cycles, err)
+            call describe(f, 'lyapunov/stderr_block', err)
+            call h5_write(f, 'lyapunov/running_cycle', running_cycle, err)
+            call describe(f, 'lyapunov/running_cycle', err)
+            call h5_write(f, 'lyapunov/running', running_bits, err)
+            call describe(f, 'lyapunov/running', err)
             call h5_write_attr(f, 'lyapunov/running', 'coordinates', 'running_cycle', err)
             call h5_write_attr(f, 'lyapunov', 'ky_dimension', ky, err)
             call h5_write_attr(f, 'lyapunov', 'positive_sum', positive_sum, err)
@@ -588,18 +506,12 @@ contains
             if (first == 1) then
                 call h5_create_group(f, 'finite_time', err)
                 call h5_write_attr(f, 'finite_time', 'window', window, err)
-                call h5_create_growing(f, 'finite_time/cycle', h5_int8, [n_windows], '1', err)
+                call h5_create_growing(f, 'finite_time/cycle', h5_int8, [n_windows], err)
                 call h5_set_scale(f, 'finite_time/cycle', err)
-                call describe(f, 'finite_time/cycle', 'drive cycle at the end of the window', &
-                              'drive cycles', '', err)
-                call index_coordinate(f, 'finite_time/exponent', 1, int(k), 'exponent index '// &
-                                      '(column of the tangent frame: the order of '// &
-                                      '/lyapunov/exponents unless two exponents cross)', err)
-                call h5_create_growing(f, 'finite_time/exponents', h5_real, [k, n_windows], &
-                                       '1', err)
-                call describe(f, 'finite_time/exponents', 'finite-time Lyapunov exponent '// &
-                              'over the window (growth of the frame column per cycle)', &
-                              'bits per drive cycle', 'cycle exponent', err)
+                call describe(f, 'finite_time/cycle', err)
+                call index_coordinate(f, 'finite_time/exponent', 1, int(k), err)
+                call h5_create_growing(f, 'finite_time/exponents', h5_real, [k, n_windows], err)
+                call describe(f, 'finite_time/exponents', err)
             end if
             call h5_write_slab(f, 'finite_time/exponents', [0_i8, first - 1], exponents, &
                                grow=.false., err=err)
@@ -641,30 +553,20 @@ contains
         associate (f => out%file)
             if (.not. out%clv_created) then
                 call h5_create_group(f, 'clv', err)
-                call h5_create_growing(f, 'clv/cycle', h5_int8, [total], '1', err)
+                call h5_create_growing(f, 'clv/cycle', h5_int8, [total], err)
                 call h5_set_scale(f, 'clv/cycle', err)
-                call describe(f, 'clv/cycle', 'drive cycle of the record (as /strobe/cycle)', &
-                              'drive cycles', '', err)
-                call index_coordinate(f, 'clv/vector', 1, int(k), 'covariant vector index '// &
-                                      '(the columns of the QR frame: descending exponents)', err)
+                call describe(f, 'clv/cycle', err)
+                call index_coordinate(f, 'clv/vector', 1, int(k), err)
                 call oscillator_coordinate(f, 'clv', out%n, err)
-                call h5_create_growing(f, 'clv/ipr', h5_real, [k, total], '1', err)
-                call describe(f, 'clv/ipr', 'inverse participation ratio of the vector''s '// &
-                              'per-oscillator weight (1/n: spread evenly, 1: one oscillator)', &
-                              '', 'cycle vector', err)
-                call h5_create_growing(f, 'clv/min_angle', h5_real, [total], 'radian', err)
-                call describe(f, 'clv/min_angle', 'smallest angle between the span of the '// &
-                              'unstable vectors and any other vector (NaN: no such pair)', '', &
-                              'cycle', err)
+                call h5_create_growing(f, 'clv/ipr', h5_real, [k, total], err)
+                call describe(f, 'clv/ipr', err)
+                call h5_create_growing(f, 'clv/min_angle', h5_real, [total], err)
+                call describe(f, 'clv/min_angle', err)
                 if (stored > 0) then
-                    call index_coordinate(f, 'clv/leading_vector', 1, int(stored), &
-                                          'index of the vectors whose site weights are '// &
-                                          'stored (the first clv_store)', err)
+                    call index_coordinate(f, 'clv/leading_vector', 1, int(stored), err)
                     call h5_create_growing(f, 'clv/site_weight', h5_real, &
-                                           [int(out%n, i8), stored, total], '1', err)
-                    call describe(f, 'clv/site_weight', 'weight of the oscillator in the '// &
-                                  'vector, x**2 + v**2 of its components (summing to 1)', '', &
-                                  'cycle leading_vector oscillator', err)
+                                           [int(out%n, i8), stored, total], err)
+                    call describe(f, 'clv/site_weight', err)
                 end if
                 if (allocated(err)) return
                 out%clv_created = .true.
@@ -692,27 +594,19 @@ contains
         type(error_t), allocatable, intent(out) :: err
 
         associate (f => out%file)
-            call h5_write(f, 'clv/exponents', exponents, 'bit', err)
-            call describe(f, 'clv/exponents', 'growth rate of the covariant vector', &
-                          'bits per drive cycle', 'vector', err)
-            call h5_write(f, 'clv/stderr', stderr, 'bit', err)
-            call describe(f, 'clv/stderr', 'standard error of the growth rate (blocking, '// &
-                          'where it levels off with the block size)', 'bits per drive cycle', &
-                          'vector', err)
-            call h5_write(f, 'clv/stderr_block', stderr_block, '1', err)
-            call describe(f, 'clv/stderr_block', 'records per block at which stderr was '// &
-                          'read off', 'drive cycles', 'vector', err)
+            call h5_write(f, 'clv/exponents', exponents, err)
+            call describe(f, 'clv/exponents', err)
+            call h5_write(f, 'clv/stderr', stderr, err)
+            call describe(f, 'clv/stderr', err)
+            call h5_write(f, 'clv/stderr_block', stderr_block, err)
+            call describe(f, 'clv/stderr_block', err)
             if (size(saved_cycle) > 0) then
-                call index_coordinate(f, 'clv/component', 1, size(vectors, 1), 'state '// &
-                                      'component: 2i - 1 is x(i), 2i is v(i)', err)
-                call h5_write(f, 'clv/saved_cycle', saved_cycle, '1', err)
+                call index_coordinate(f, 'clv/component', 1, size(vectors, 1), err)
+                call h5_write(f, 'clv/saved_cycle', saved_cycle, err)
                 call h5_set_scale(f, 'clv/saved_cycle', err)
-                call describe(f, 'clv/saved_cycle', 'drive cycle of the record whose '// &
-                              'vectors are stored', 'drive cycles', '', err)
-                call h5_write(f, 'clv/vectors', vectors, '1', err)
-                call describe(f, 'clv/vectors', 'covariant Lyapunov vector (unit length; '// &
-                              'components x(1), v(1), x(2), ...)', '', &
-                              'saved_cycle vector component', err)
+                call describe(f, 'clv/saved_cycle', err)
+                call h5_write(f, 'clv/vectors', vectors, err)
+                call describe(f, 'clv/vectors', err)
             end if
             call h5_write_attr(f, 'clv', 'clv_transient', transient, err)
             call h5_write_attr(f, 'clv', 'unstable', unstable, err)
@@ -729,22 +623,18 @@ contains
 
         associate (f => out%file)
             call h5_create_group(f, 'floquet', err)
-            call h5_create_dimension(f, 'floquet/row', size(jacobian, 1, kind=i8), .false., err)
-            call h5_create_dimension(f, 'floquet/column', size(jacobian, 2, kind=i8), .false., &
+            call bare_dimension(f, 'floquet/row', size(jacobian, 1, kind=i8), .false., err)
+            call bare_dimension(f, 'floquet/column', size(jacobian, 2, kind=i8), .false., &
                                      err)
-            call h5_create_dimension(f, 'floquet/multiplier', size(re, kind=i8), .false., err)
+            call bare_dimension(f, 'floquet/multiplier', size(re, kind=i8), .false., err)
             ! rows of the Jacobian are rows in h5py
             rows = transpose(jacobian)
-            call h5_write(f, 'floquet/jacobian', rows, '1', err)
-            call describe(f, 'floquet/jacobian', 'Jacobian of the Poincare map over the '// &
-                          'cycles; rows and columns ordered x(1), v(1), x(2), ...', '', &
-                          'row column', err)
-            call h5_write(f, 'floquet/multipliers_re', re, '1', err)
-            call describe(f, 'floquet/multipliers_re', 'real part of the Floquet multiplier', &
-                          '', 'multiplier', err)
-            call h5_write(f, 'floquet/multipliers_im', im, '1', err)
-            call describe(f, 'floquet/multipliers_im', 'imaginary part of the Floquet '// &
-                          'multiplier', '', 'multiplier', err)
+            call h5_write(f, 'floquet/jacobian', rows, err)
+            call describe(f, 'floquet/jacobian', err)
+            call h5_write(f, 'floquet/multipliers_re', re, err)
+            call describe(f, 'floquet/multipliers_re', err)
+            call h5_write(f, 'floquet/multipliers_im', im, err)
+            call describe(f, 'floquet/multipliers_im', err)
             call h5_write_attr(f, 'floquet', 'cycles', cycles, err)
         end associate
     end subroutine output_jacobian
@@ -811,48 +701,37 @@ contains
 
         associate (f => out%file)
             call h5_create_group(f, 'resume', err)
-            call h5_write(f, 'resume/start_cycle', state%start_cycle, '1', err)
-            call describe(f, 'resume/start_cycle', "drive cycle of the run's start", &
-                          'drive cycles', '', err)
-            call h5_write(f, 'resume/start_time_in_cycle', state%start_time, '1', err)
-            call describe(f, 'resume/start_time_in_cycle', "time within the drive cycle of "// &
-                          "the run's start", 'time', '', err)
-            call h5_write(f, 'resume/last_event', state%last_event, '1', err)
-            call describe(f, 'resume/last_event', 'time within the drive cycle of the last '// &
-                          'impact', 'time', '', err)
-            call h5_write(f, 'resume/same_instant', state%same_instant, '1', err)
-            call describe(f, 'resume/same_instant', 'impacts at the time of last_event', '', &
-                          '', err)
+            call h5_write(f, 'resume/start_cycle', state%start_cycle, err)
+            call describe(f, 'resume/start_cycle', err)
+            call h5_write(f, 'resume/start_time_in_cycle', state%start_time, err)
+            call describe(f, 'resume/start_time_in_cycle', err)
+            call h5_write(f, 'resume/last_event', state%last_event, err)
+            call describe(f, 'resume/last_event', err)
+            call h5_write(f, 'resume/same_instant', state%same_instant, err)
+            call describe(f, 'resume/same_instant', err)
             if (.not. state%has_tangent) return
-            call h5_create_dimension(f, 'resume/state', size(state%tangent%frame, 2, kind=i8), &
+            call bare_dimension(f, 'resume/state', size(state%tangent%frame, 2, kind=i8), &
                                      .false., err)
-            call h5_create_dimension(f, 'resume/vector', size(state%tangent%frame, 1, kind=i8), &
+            call bare_dimension(f, 'resume/vector', size(state%tangent%frame, 1, kind=i8), &
                                      .false., err)
-            call h5_create_dimension(f, 'resume/packed_int', size(data%lyapunov_int, kind=i8), &
+            call bare_dimension(f, 'resume/packed_int', size(data%lyapunov_int, kind=i8), &
                                      .false., err)
-            call h5_create_dimension(f, 'resume/packed_real', &
+            call bare_dimension(f, 'resume/packed_real', &
                                      size(data%lyapunov_real, kind=i8), .false., err)
-            call h5_write(f, 'resume/tangent', state%tangent%frame, '1', err)
-            call describe(f, 'resume/tangent', 'tangent vectors (times '// &
-                          '2**-tangent_scale_bits)', '', 'state vector', err)
-            call h5_write(f, 'resume/tangent_scale_bits', state%tangent%scale_bits, '1', err)
-            call describe(f, 'resume/tangent_scale_bits', 'binary scale of the tangent '// &
-                          'vectors', '', '', err)
-            call h5_write(f, 'resume/tangent_log', state%tangent%growth_log, '1', err)
-            call describe(f, 'resume/tangent_log', 'growth of the tangent vector kept by '// &
-                          'the engine', 'nats', 'vector', err)
-            call h5_write(f, 'resume/rank_losses', state%tangent%rank_losses, '1', err)
-            call describe(f, 'resume/rank_losses', 'singular tangent maps since the last '// &
-                          'QR step', '', '', err)
-            call h5_write(f, 'resume/jumps_volume', state%tangent%jumps_volume, '1', err)
-            call describe(f, 'resume/jumps_volume', 'ln |det| of the jumps since the last '// &
-                          'QR step', 'nats', '', err)
-            call h5_write(f, 'resume/lyapunov_int', data%lyapunov_int, '1', err)
-            call describe(f, 'resume/lyapunov_int', "the Lyapunov accumulator's integers "// &
-                          "(packed)", '', 'packed_int', err)
-            call h5_write(f, 'resume/lyapunov_real', data%lyapunov_real, '1', err)
-            call describe(f, 'resume/lyapunov_real', "the Lyapunov accumulator's reals "// &
-                          "(packed)", 'nats', 'packed_real', err)
+            call h5_write(f, 'resume/tangent', state%tangent%frame, err)
+            call describe(f, 'resume/tangent', err)
+            call h5_write(f, 'resume/tangent_scale_bits', state%tangent%scale_bits, err)
+            call describe(f, 'resume/tangent_scale_bits', err)
+            call h5_write(f, 'resume/tangent_log', state%tangent%growth_log, err)
+            call describe(f, 'resume/tangent_log', err)
+            call h5_write(f, 'resume/rank_losses', state%tangent%rank_losses, err)
+            call describe(f, 'resume/rank_losses', err)
+            call h5_write(f, 'resume/jumps_volume', state%tangent%jumps_volume, err)
+            call describe(f, 'resume/jumps_volume', err)
+            call h5_write(f, 'resume/lyapunov_int', data%lyapunov_int, err)
+            call describe(f, 'resume/lyapunov_int', err)
+            call h5_write(f, 'resume/lyapunov_real', data%lyapunov_real, err)
+            call describe(f, 'resume/lyapunov_real', err)
         end associate
     end subroutine output_resume
 
