@@ -14,8 +14,9 @@ Conventions, the same in every figure:
   one, and the unit in brackets, ``[1]`` for a dimensionless quantity. Units are the
   ``units`` attributes of the datasets shown (:data:`impactchain.io.FILE_UNITS` for a run made in
   memory); the model parameters, which the file stores without units, are in the model's
-  reduced units (docs/model.md section 1.5): ``A`` and the spacing ``a`` in [length], ``w``
-  in [1/time], ``b`` and ``K`` in [1].
+  reduced units as the file schema gives them (:func:`impactchain.schema.parameter_units`,
+  docs/model.md section 1.5): ``A`` and the spacing ``a`` in [length], ``w`` in [1/time],
+  ``b`` and ``K`` in [1].
 - Colour that encodes a number has a colour bar; colour that tells runs apart has a legend
   naming the parameter or the seed that differs (:func:`run_labels`), never a file name.
 - Panels that show the same quantity share their limits (y, or z in 3-D).
@@ -61,6 +62,7 @@ from matplotlib.ticker import MaxNLocator
 
 from impactchain import __version__
 from impactchain.analysis import panel_ranges, period_label
+from impactchain import schema
 from impactchain.io import (FILE_UNITS, SPECIAL_KINDS, Census, Clv, Continuation, FiniteTime,
                             Run, Strobe, Sweep, is_sweep_dataset, read_run, run_from_sweep)
 from impactchain.shockwave import Wave, build_shock_waves
@@ -139,12 +141,6 @@ _SYMBOLS = {
     "restitution": ("restitution", "K"),
     "spacing": ("spacing", "a"),
 }
-PARAMETER_UNITS = {"n": "1", "amplitude": "length", "omega": "1/time", "damping": "1",
-                   "restitution": "1", "spacing": "length", "phase": "rad"}
-"""Units of the model parameters (reduced units, docs/model.md section 1.5); the file
-stores them as attributes without units."""
-
-
 class FigureError(ValueError):
     """The data or the options cannot make the requested figure."""
 
@@ -352,7 +348,7 @@ def _label(name: str, unit: str, symbol: str = "") -> str:
 
 def _parameter_label(name: str) -> str:
     words, symbol = _SYMBOLS.get(name, (name, ""))
-    return _label(words, PARAMETER_UNITS.get(name, "1"), symbol)
+    return _label(words, schema.parameter_label_units(name), symbol)
 
 
 def _unit(run: Run, dataset: str) -> str:
