@@ -60,7 +60,7 @@ contains
             end if
             bar = index(word, '|')
             if (bar > 0) then
-                if (second(along)) then
+                if (take_second(along)) then
                     word = word(bar + 1:)
                 else
                     word = word(:bar - 1)
@@ -70,11 +70,11 @@ contains
             dims = dims//word
         end do
     contains
-        pure logical function second(along)
+        pure logical function take_second(along)
             integer, intent(in), optional :: along
-            second = .false.
-            if (present(along)) second = along == 2
-        end function second
+            take_second = .false.
+            if (present(along)) take_second = along == 2
+        end function take_second
     end function entry_dims
 
     !> A coordinate variable: a dataset whose one dimension is its own name.
