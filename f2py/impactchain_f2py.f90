@@ -553,17 +553,14 @@ end subroutine ic_provenance
 subroutine ic_output_schema(text_len, text)
     use, intrinsic :: iso_c_binding, only: c_int
     use impactchain_drivers, only: output_schema_json
+    use chain_bridge, only: put_text
     implicit none
     !f2py threadsafe
     integer(c_int), intent(out) :: text_len
     integer(c_int), intent(out) :: text(262144)
     character(len=:), allocatable :: json
-    integer :: i
 
     json = output_schema_json()
-    text = 0
     text_len = len(json)
-    do i = 1, min(len(json), size(text))
-        text(i) = iachar(json(i:i))
-    end do
+    call put_text(json, text)
 end subroutine ic_output_schema

@@ -130,16 +130,16 @@ contains
                  'period of the oscillator''s strobe record (0: none found, aperiodic)', &
                  'a finished run')
         call add(t, 'run', '/events/event', 'dimension', 'event', '', '', '', 'events recorded', &
-                 'events recorded')
+                 '&run record_events')
         call add(t, 'run', '/events/time', 'dataset', 'event', 'float64', '1', 'time', &
-                 'time of the event from the start of the run', 'events recorded')
+                 'time of the event from the start of the run', '&run record_events')
         call add(t, 'run', '/events/site', 'dataset', 'event', 'int32', '1', '', &
                  'bond of the event: bond k joins oscillators k and k+1 (0: the left wall, '// &
-                 'n: the right wall)', 'events recorded')
+                 'n: the right wall)', '&run record_events')
         call add(t, 'run', '/events/speed', 'dataset', 'event', 'float64', '1', 'length/time', &
-                 'approach speed', 'events recorded')
+                 'approach speed', '&run record_events')
         call add(t, 'run', '/events/kind', 'dataset', 'event', 'int32', '1', '', 'kind of event', &
-                 'events recorded')
+                 '&run record_events')
         call add(t, 'run', '/final/oscillator', 'dataset', 'oscillator', 'int32', '1', '', &
                  'oscillator index', 'always')
         call add(t, 'run', '/final/bond', 'dataset', 'bond', 'int32', '1', '', &
@@ -186,44 +186,44 @@ contains
         call add(t, 'run', '/stats/cycles_done', 'dataset', '', 'int64', '1', 'drive cycles', &
                  'strobe records done', 'always')
         call add(t, 'run', '/lyapunov/@ky_dimension', 'attribute', '', 'float64', '1', '', &
-                 'Kaplan-Yorke dimension', 'lyapunov enabled')
+                 'Kaplan-Yorke dimension', '&lyapunov enabled')
         call add(t, 'run', '/lyapunov/@positive_sum', 'attribute', '', 'float64', 'bit', &
                  'bits per drive cycle', 'sum of the positive Lyapunov exponents', &
-                 'lyapunov enabled')
+                 '&lyapunov enabled')
         call add(t, 'run', '/lyapunov/@collisions_per_cycle', 'attribute', '', 'float64', '1', &
                  'impacts per drive cycle', 'collisions per drive cycle (the c of the sum rule)', &
-                 'lyapunov enabled')
+                 '&lyapunov enabled')
         call add(t, 'run', '/lyapunov/exponent', 'dataset', 'exponent', 'int32', '1', '', &
-                 'exponent index (descending order)', 'lyapunov enabled')
+                 'exponent index (descending order)', '&lyapunov enabled')
         call add(t, 'run', '/lyapunov/qr_step', 'dimension', 'qr_step', '', '', '', &
-                 'QR steps of the running estimates', 'lyapunov enabled')
+                 'QR steps of the running estimates', '&lyapunov enabled')
         call add(t, 'run', '/lyapunov/exponents', 'dataset', 'exponent', 'float64', 'bit', &
-                 'bits per drive cycle', 'Lyapunov exponent', 'lyapunov enabled')
+                 'bits per drive cycle', 'Lyapunov exponent', '&lyapunov enabled')
         call add(t, 'run', '/lyapunov/exponents_per_time', 'dataset', 'exponent', 'float64', '1', &
-                 'nats per unit time', 'Lyapunov exponent', 'lyapunov enabled')
+                 'nats per unit time', 'Lyapunov exponent', '&lyapunov enabled')
         call add(t, 'run', '/lyapunov/stderr', 'dataset', 'exponent', 'float64', 'bit', &
                  'bits per drive cycle', &
                  'standard error of the Lyapunov exponent (blocking, where it levels off '// &
-                 'with the block size)', 'lyapunov enabled')
+                 'with the block size)', '&lyapunov enabled')
         call add(t, 'run', '/lyapunov/stderr_block', 'dataset', 'exponent', 'int64', '1', &
                  'drive cycles', 'drive cycles per block at which stderr was read', &
-                 'lyapunov enabled')
+                 '&lyapunov enabled')
         call add(t, 'run', '/lyapunov/running_cycle', 'dataset', 'qr_step', 'int64', '1', &
-                 'drive cycles', 'drive cycle of the running estimate', 'lyapunov enabled')
+                 'drive cycles', 'drive cycle of the running estimate', '&lyapunov enabled')
         call add(t, 'run', '/lyapunov/running', 'dataset', 'qr_step exponent', 'float64', 'bit', &
                  'bits per drive cycle', &
-                 'running estimate of the Lyapunov exponent after a QR step', 'lyapunov enabled')
+                 'running estimate of the Lyapunov exponent after a QR step', '&lyapunov enabled')
         call add(t, 'run', '/finite_time/@window', 'attribute', '', 'int32', '1', 'drive cycles', &
-                 'recorded cycles per window', 'lyapunov window > 0')
+                 'recorded cycles per window', '&lyapunov window > 0')
         call add(t, 'run', '/finite_time/cycle', 'dataset', 'cycle', 'int64', '1', &
-                 'drive cycles', 'drive cycle at the end of the window', 'lyapunov window > 0')
+                 'drive cycles', 'drive cycle at the end of the window', '&lyapunov window > 0')
         call add(t, 'run', '/finite_time/exponent', 'dataset', 'exponent', 'int32', '1', '', &
                  'exponent index (column of the tangent frame: the order of '// &
-                 '/lyapunov/exponents unless two exponents cross)', 'lyapunov window > 0')
+                 '/lyapunov/exponents unless two exponents cross)', '&lyapunov window > 0')
         call add(t, 'run', '/finite_time/exponents', 'dataset', 'cycle exponent', 'float64', '1', &
                  'bits per drive cycle', &
                  'finite-time Lyapunov exponent over the window (growth of the frame column '// &
-                 'per cycle)', 'lyapunov window > 0')
+                 'per cycle)', '&lyapunov window > 0')
     end subroutine entries_stats_lyapunov_finite_time
 
     !> /clv and /floquet, their attributes first.
@@ -231,64 +231,64 @@ contains
         type(output_entry_t), allocatable, intent(inout) :: t(:)
 
         call add(t, 'run', '/clv/@clv_transient', 'attribute', '', 'int32', '1', 'drive cycles', &
-                 'backward steps without vectors at the end', 'lyapunov covariant')
+                 'backward steps without vectors at the end', '&lyapunov covariant')
         call add(t, 'run', '/clv/@unstable', 'attribute', '', 'int32', '1', '', &
                  'vectors spanning the unstable subspace (positive exponents)', &
-                 'lyapunov covariant')
+                 '&lyapunov covariant')
         call add(t, 'run', '/clv/cycle', 'dataset', 'cycle', 'int64', '1', 'drive cycles', &
-                 'drive cycle of the record (as /strobe/cycle)', 'lyapunov covariant')
+                 'drive cycle of the record (as /strobe/cycle)', '&lyapunov covariant')
         call add(t, 'run', '/clv/vector', 'dataset', 'vector', 'int32', '1', '', &
                  'covariant vector index (the columns of the QR frame: descending exponents)', &
-                 'lyapunov covariant')
+                 '&lyapunov covariant')
         call add(t, 'run', '/clv/oscillator', 'dataset', 'oscillator', 'int32', '1', '', &
-                 'oscillator index', 'lyapunov covariant')
+                 'oscillator index', '&lyapunov covariant')
         call add(t, 'run', '/clv/ipr', 'dataset', 'cycle vector', 'float64', '1', '', &
                  'inverse participation ratio of the vector''s per-oscillator weight (1/n: '// &
-                 'spread evenly, 1: one oscillator)', 'lyapunov covariant')
+                 'spread evenly, 1: one oscillator)', '&lyapunov covariant')
         call add(t, 'run', '/clv/min_angle', 'dataset', 'cycle', 'float64', 'radian', '', &
                  'smallest angle between the span of the unstable vectors and any other '// &
-                 'vector (NaN: no such pair)', 'lyapunov covariant')
+                 'vector (NaN: no such pair)', '&lyapunov covariant')
         call add(t, 'run', '/clv/leading_vector', 'dataset', 'leading_vector', 'int32', '1', '', &
                  'index of the vectors whose site weights are stored (the first clv_store)', &
-                 'clv_store > 0')
+                 '&lyapunov clv_store > 0')
         call add(t, 'run', '/clv/site_weight', 'dataset', 'cycle leading_vector oscillator', &
                  'float64', '1', '', &
                  'weight of the oscillator in the vector, x**2 + v**2 of its components '// &
-                 '(summing to 1)', 'clv_store > 0')
+                 '(summing to 1)', '&lyapunov clv_store > 0')
         call add(t, 'run', '/clv/exponents', 'dataset', 'vector', 'float64', 'bit', &
                  'bits per drive cycle', 'growth rate of the covariant vector', &
-                 'lyapunov covariant')
+                 '&lyapunov covariant')
         call add(t, 'run', '/clv/stderr', 'dataset', 'vector', 'float64', 'bit', &
                  'bits per drive cycle', &
                  'standard error of the growth rate (blocking, where it levels off with the '// &
-                 'block size)', 'lyapunov covariant')
+                 'block size)', '&lyapunov covariant')
         call add(t, 'run', '/clv/stderr_block', 'dataset', 'vector', 'int64', '1', &
                  'drive cycles', 'records per block at which stderr was read off', &
-                 'lyapunov covariant')
+                 '&lyapunov covariant')
         call add(t, 'run', '/clv/component', 'dataset', 'component', 'int32', '1', '', &
-                 'state component: 2i - 1 is x(i), 2i is v(i)', 'clv_save > 0')
+                 'state component: 2i - 1 is x(i), 2i is v(i)', '&lyapunov clv_save > 0')
         call add(t, 'run', '/clv/saved_cycle', 'dataset', 'saved_cycle', 'int64', '1', &
                  'drive cycles', 'drive cycle of the record whose vectors are stored', &
-                 'clv_save > 0')
+                 '&lyapunov clv_save > 0')
         call add(t, 'run', '/clv/vectors', 'dataset', 'saved_cycle vector component', 'float64', &
                  '1', '', &
                  'covariant Lyapunov vector (unit length; components x(1), v(1), x(2), ...)', &
-                 'clv_save > 0')
+                 '&lyapunov clv_save > 0')
         call add(t, 'run', '/floquet/@cycles', 'attribute', '', 'int32', '1', 'drive cycles', &
-                 'drive cycles the Jacobian spans', 'floquet requested')
+                 'drive cycles the Jacobian spans', '&lyapunov jacobian')
         call add(t, 'run', '/floquet/row', 'dimension', 'row', '', '', '', &
-                 'rows of the Jacobian', 'floquet requested')
+                 'rows of the Jacobian', '&lyapunov jacobian')
         call add(t, 'run', '/floquet/column', 'dimension', 'column', '', '', '', &
-                 'columns of the Jacobian', 'floquet requested')
+                 'columns of the Jacobian', '&lyapunov jacobian')
         call add(t, 'run', '/floquet/multiplier', 'dimension', 'multiplier', '', '', '', &
-                 'Floquet multipliers', 'floquet requested')
+                 'Floquet multipliers', '&lyapunov jacobian')
         call add(t, 'run', '/floquet/jacobian', 'dataset', 'row column', 'float64', '1', '', &
                  'Jacobian of the Poincare map over the cycles; rows and columns ordered '// &
-                 'x(1), v(1), x(2), ...', 'floquet requested')
+                 'x(1), v(1), x(2), ...', '&lyapunov jacobian')
         call add(t, 'run', '/floquet/multipliers_re', 'dataset', 'multiplier', 'float64', '1', &
-                 '', 'real part of the Floquet multiplier', 'floquet requested')
+                 '', 'real part of the Floquet multiplier', '&lyapunov jacobian')
         call add(t, 'run', '/floquet/multipliers_im', 'dataset', 'multiplier', 'float64', '1', &
-                 '', 'imaginary part of the Floquet multiplier', 'floquet requested')
+                 '', 'imaginary part of the Floquet multiplier', '&lyapunov jacobian')
     end subroutine entries_clv_floquet
 
     !> /resume.
@@ -304,35 +304,35 @@ contains
         call add(t, 'run', '/resume/same_instant', 'dataset', '', 'int32', '1', '', &
                  'impacts at the time of last_event', 'a run stopped early')
         call add(t, 'run', '/resume/state', 'dimension', 'state', '', '', '', &
-                 'components of the state', 'a run stopped early, lyapunov enabled')
+                 'components of the state', 'a run stopped early, &lyapunov enabled')
         call add(t, 'run', '/resume/vector', 'dimension', 'vector', '', '', '', &
-                 'tangent vectors', 'a run stopped early, lyapunov enabled')
+                 'tangent vectors', 'a run stopped early, &lyapunov enabled')
         call add(t, 'run', '/resume/packed_int', 'dimension', 'packed_int', '', '', '', &
                  'the packed integers of the Lyapunov accumulator', &
-                 'a run stopped early, lyapunov enabled')
+                 'a run stopped early, &lyapunov enabled')
         call add(t, 'run', '/resume/packed_real', 'dimension', 'packed_real', '', '', '', &
                  'the packed reals of the Lyapunov accumulator', &
-                 'a run stopped early, lyapunov enabled')
+                 'a run stopped early, &lyapunov enabled')
         call add(t, 'run', '/resume/tangent', 'dataset', 'state vector', 'float64', '1', '', &
                  'tangent vectors (times 2**-tangent_scale_bits)', &
-                 'a run stopped early, lyapunov enabled')
+                 'a run stopped early, &lyapunov enabled')
         call add(t, 'run', '/resume/tangent_scale_bits', 'dataset', '', 'int32', '1', '', &
-                 'binary scale of the tangent vectors', 'a run stopped early, lyapunov enabled')
+                 'binary scale of the tangent vectors', 'a run stopped early, &lyapunov enabled')
         call add(t, 'run', '/resume/tangent_log', 'dataset', 'vector', 'float64', '1', 'nats', &
                  'growth of the tangent vector kept by the engine', &
-                 'a run stopped early, lyapunov enabled')
+                 'a run stopped early, &lyapunov enabled')
         call add(t, 'run', '/resume/rank_losses', 'dataset', '', 'int64', '1', '', &
                  'singular tangent maps since the last QR step', &
-                 'a run stopped early, lyapunov enabled')
+                 'a run stopped early, &lyapunov enabled')
         call add(t, 'run', '/resume/jumps_volume', 'dataset', '', 'float64', '1', 'nats', &
                  'ln |det| of the jumps since the last QR step', &
-                 'a run stopped early, lyapunov enabled')
+                 'a run stopped early, &lyapunov enabled')
         call add(t, 'run', '/resume/lyapunov_int', 'dataset', 'packed_int', 'int64', '1', '', &
                  'the Lyapunov accumulator''s integers (packed)', &
-                 'a run stopped early, lyapunov enabled')
+                 'a run stopped early, &lyapunov enabled')
         call add(t, 'run', '/resume/lyapunov_real', 'dataset', 'packed_real', 'float64', '1', &
                  'nats', 'the Lyapunov accumulator''s reals (packed)', &
-                 'a run stopped early, lyapunov enabled')
+                 'a run stopped early, &lyapunov enabled')
     end subroutine entries_resume
 
     !> /sweep attributes, /sweep.
@@ -366,18 +366,18 @@ contains
         call add(t, 'sweep', '/sweep/drive_period', 'dataset', 'point|point2', 'float64', '1', &
                  'time', 'drive period 2 pi / omega', 'an omega sweep')
         call add(t, 'sweep', '/sweep/exponent', 'dataset', 'exponent', 'int32', '1', '', &
-                 'exponent index (descending order)', 'lyapunov enabled')
+                 'exponent index (descending order)', '&lyapunov enabled')
         call add(t, 'sweep', '/sweep/exponents', 'dataset', 'point point2? exponent', 'float64', &
-                 'bit', 'bits per drive cycle', 'Lyapunov exponent', 'lyapunov enabled')
+                 'bit', 'bits per drive cycle', 'Lyapunov exponent', '&lyapunov enabled')
         call add(t, 'sweep', '/sweep/stderr', 'dataset', 'point point2? exponent', 'float64', &
                  'bit', 'bits per drive cycle', &
                  'standard error of the Lyapunov exponent (blocking, where it levels off '// &
-                 'with the block size)', 'lyapunov enabled')
+                 'with the block size)', '&lyapunov enabled')
         call add(t, 'sweep', '/sweep/stderr_block', 'dataset', 'point point2? exponent', 'int64', &
                  '1', 'drive cycles', 'drive cycles per block at which stderr was read', &
-                 'lyapunov enabled')
+                 '&lyapunov enabled')
         call add(t, 'sweep', '/sweep/ky_dimension', 'dataset', 'point point2?', 'float64', '1', &
-                 '', 'Kaplan-Yorke dimension', 'lyapunov enabled')
+                 '', 'Kaplan-Yorke dimension', '&lyapunov enabled')
     end subroutine entries_sweep
 
     !> /continuation attributes, /continuation.
@@ -477,11 +477,11 @@ contains
         call add(t, 'census', '/census/@rule', 'attribute', '', 'string', '', '', &
                  'the classification in words', 'always')
         call add(t, 'census', '/census/@plane', 'attribute', '', 'string', '', '', &
-                 'the two coordinates of the plane, blank-separated', 'a census over a plane')
+                 'the two coordinates of the plane, blank-separated', '&census plane')
         call add(t, 'census', '/census/@plane_range', 'attribute', '', 'float64', '1', '', &
-                 'lo1, hi1, lo2, hi2 of the plane', 'a census over a plane')
+                 'lo1, hi1, lo2, hi2 of the plane', '&census plane')
         call add(t, 'census', '/census/@plane_points', 'attribute', '', 'int32', '1', '', &
-                 'points per side of the plane', 'a census over a plane')
+                 'points per side of the plane', '&census plane')
     end subroutine entries_census_attributes
 
     !> /census.

@@ -1,16 +1,18 @@
 """Files of every kind against the file schema (`impactchain --schema`, the one table of
 src/runs/chain_file_table.f90): a run with every optional group, a 2-D sweep along omega, a
-continuation, and censuses at one point and over a sweep. The recipes' files are checked the
+continuation, censuses at one point and over a sweep, and a run stopped early (/resume). The recipes' files are checked the
 same way in test_recipes.py. See file_schema.py for what is compared.
 """
 from __future__ import annotations
 
 import copy
+import signal
 
+import h5py
 import pytest
 
 from file_schema import read_schema, schema_differences
-from simulator import impactchain_exe, run_namelist  # noqa: F401 (fixture)
+from simulator import impactchain_exe, run_namelist, start_until_progress  # noqa: F401
 
 CASES = {
     "run": """&chain n = 4, amplitude = 4.15, omega = 1.5, restitution = 0.85 /
@@ -48,6 +50,13 @@ CASES = {
 }
 
 
+STOPPED = """&chain n = 4, amplitude = 4.15, omega = 1.5 /
+&run transient = 0, cycles = 5000000, record_events = .false. /
+&lyapunov enabled = .true. /
+&output file = 'out.h5' /
+"""
+
+
 @pytest.fixture(scope="module")
 def schema(impactchain_exe):
     return read_schema(impactchain_exe)
@@ -60,22 +69,29 @@ def files(impactchain_exe, tmp_path_factory):
         workdir = tmp_path_factory.mktemp(name)
         run_namelist(impactchain_exe, text, workdir)
         written[name] = workdir / "out.h5"
+    workdir = tmp_path_factory.mktemp("stopped")
+    (workdir / "in.nml").write_text(STOPPED)
+    proc, _ = start_until_progress(impactchain_exe, ["in.nml"], workdir)
+    proc.send_signal(signal.SIGINT)
+    proc.communicate(timeout=120)
+    written["stopped"] = workdir / "out.h5"
     return written
 
 
-@pytest.mark.parametrize("case", sorted(CASES))
+@pytest.mark.parametrize("case", sorted(CASES) + ["stopped"])
 def test_every_kind_of_file_is_the_tables(schema, files, case):
     assert schema_differences(files[case], schema) == []
 
 
 def test_every_optional_group_was_written(files):
     """The run of CASES holds what the table lists beyond `always` (so it is compared)."""
-    import h5py
     with h5py.File(files["run"]) as f:
         assert {"events", "lyapunov", "finite_time", "clv", "floquet"} <= set(f)
         assert {"site_weight", "vectors"} <= set(f["clv"])
     with h5py.File(files["sweep_2d"]) as f:
         assert {"point2", "drive_period", "exponents"} <= set(f["sweep"])
+    with h5py.File(files["stopped"]) as f:
+        assert f.attrs["complete"] == 0 and {"tangent", "lyapunov_int"} <= set(f["resume"])
 
 
 @pytest.mark.parametrize("change", ["units", "long_name", "dims", "dtype", "missing",
@@ -107,7 +123,6 @@ def test_an_entry_always_written_is_required(schema, files):
 def test_the_damping_unit_has_one_answer(schema, files):
     """b is a damping ratio (docs/model.md 1.1, 1.5): a pure number in /params and on a
     sweep's axis alike."""
-    import h5py
     damping = next(e for e in schema if e["path"] == "/params/@damping")
     assert damping["model_units"] is None and damping["units"] == "1"
     with h5py.File(files["sweep_2d"]) as f:
