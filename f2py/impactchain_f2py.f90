@@ -1,6 +1,6 @@
 !> The thin layer wrapped by f2py into `impactchain._kernels` (SHTOOLS' PythonWrapper
 !> pattern): plain external subroutines with explicit-shape c_double / c_int / c_int64_t
-!> arrays. Only these six routines cross into Python; `impactchain.api`
+!> arrays. Only these seven routines cross into Python; `impactchain.api`
 !> (python/impactchain/api.py) is the interface people use.
 !>
 !> Each routine builds the `config_t` a namelist with the same values would give, checks
@@ -546,3 +546,21 @@ subroutine ic_provenance(text_len, text)
         text(i) = iachar(lines(i:i))
     end do
 end subroutine ic_provenance
+
+!> The file schema (chain_file_schema: every dataset and attribute of the four kinds of file)
+!> as the JSON array of `impactchain --schema`'s "outputs", byte values in text(1:text_len);
+!> text_len > size(text) says the buffer was too small (nothing is cut silently).
+subroutine ic_output_schema(text_len, text)
+    use, intrinsic :: iso_c_binding, only: c_int
+    use impactchain_drivers, only: output_schema_json
+    use chain_bridge, only: put_text
+    implicit none
+    !f2py threadsafe
+    integer(c_int), intent(out) :: text_len
+    integer(c_int), intent(out) :: text(262144)
+    character(len=:), allocatable :: json
+
+    json = output_schema_json()
+    text_len = len(json)
+    call put_text(json, text)
+end subroutine ic_output_schema

@@ -44,7 +44,8 @@ program impactchain_mpi
                                    checkpoint_every, branch_record_sizes, pack_branch, &
                                    unpack_branch, output_t, output_begin, output_end, &
                                    output_abort, catch_interrupts, interrupted, cli_t, &
-                                   parse_command_line, cli_run, cli_help, cli_version, cli_usage
+                                   parse_command_line, cli_run, cli_help, cli_version, cli_usage, &
+                                   cli_schema, schema_json
     implicit none
     type(config_t) :: cfg
     type(sweep_plan_t) :: plan
@@ -95,8 +96,9 @@ contains
 
         cli = parse_command_line()
         select case (cli%action)
-        case (cli_help, cli_version)
+        case (cli_help, cli_version, cli_schema)
             if (rank == 0 .and. cli%action == cli_help) write (output_unit, '(a)') usage
+            if (rank == 0 .and. cli%action == cli_schema) write (output_unit, '(a)') schema_json()
             if (rank == 0 .and. cli%action == cli_version) &
                 write (output_unit, '(a)', advance='no') 'impactchain-mpi '//code_version// &
                                                           new_line('a')//provenance_text()

@@ -4,7 +4,8 @@ Modules: :mod:`impactchain.api` (the Fortran kernels on numpy arrays, through th
 extension ``impactchain._kernels``), :mod:`impactchain.io` (reading the files),
 :mod:`impactchain.results` (what a run holds: the dataclasses :mod:`impactchain.io` returns),
 :mod:`impactchain.inmemory` (the same dataclasses from :mod:`impactchain.api` results),
-:mod:`impactchain.namelist` (namelist text, read and written), :mod:`impactchain.shockwave`
+:mod:`impactchain.namelist` (namelist text, read and written), :mod:`impactchain.schema`
+(every dataset and attribute of the files, from the Fortran table), :mod:`impactchain.shockwave`
 (shock-wave construction), :mod:`impactchain.analysis` (period labels, panels),
 :mod:`impactchain.figures` (figure functions returning ``matplotlib.figure.Figure``, a module
 per topic), :mod:`impactchain.testing` (the invariants the test suites assert) and
@@ -14,7 +15,7 @@ per topic), :mod:`impactchain.testing` (the invariants the test suites assert) a
 __version__ = "0.1.0"
 
 _SUBMODULES = ("analysis", "api", "cli", "figures", "inmemory", "io", "namelist", "results",
-               "shockwave", "testing")
+               "schema", "shockwave", "testing")
 
 
 def __getattr__(name: str) -> object:

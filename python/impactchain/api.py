@@ -70,6 +70,8 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from impactchain import schema
+
 try:
     from impactchain import _kernels
 except ImportError as _exc:  # not built yet: say how to build it when a function is called
@@ -119,10 +121,6 @@ _POLL_SECONDS = 0.05  # how often the calling thread looks at a running kernel
 _STAGES = {1: ("transient", "cycle"), 2: ("records", "cycle"), 3: ("sweep", "point")}
 #: The same for a continuation, whose unit of progress is an orbit found on a branch
 _CONTINUATION_STAGES = {**_STAGES, 3: ("orbits", "orbit")}
-#: Reduced units of the parameters a sweep or a continuation varies, as the files give them
-#: (chain_model's parameter_units; None: dimensionless, no model_units attribute)
-_PARAMETER_UNITS = {"amplitude": "length", "omega": "1/time", "damping": "1/time",
-                    "restitution": None, "spacing": "length"}
 _MAX_N = 10_000_000  # chain_config's max_n: n is refused beyond it before any allocation
 _INT32 = (-(2**31), 2**31 - 1)
 _INT64 = (-(2**63), 2**63 - 1)
@@ -704,7 +702,6 @@ def _sweep_dataset(xr: Any, out: dict[str, Any], cfg: dict[str, Any], args: dict
     parameter = _text(args["parameter"])
     parameter2 = _text(args["parameter2"])
     two_d = len(parameter2) > 0
-    points = ("point", "point2") if two_d else ("point",)
 
     def grid(a: Any) -> NDArray[Any]:
         """(..., n1 n2) in Fortran order -> (n1, [n2,] ...), the file's layout."""
@@ -712,54 +709,35 @@ def _sweep_dataset(xr: Any, out: dict[str, Any], cfg: dict[str, Any], args: dict
         a = np.swapaxes(a.reshape((n2, n1) + a.shape[1:]), 0, 1)  # [i, j, ...]
         return np.ascontiguousarray(a if two_d else a[:, 0])
 
-    def described(dims: tuple[str, ...], values: Any, long_name: str, units: str = "1",
-                  model_units: str | None = None) -> tuple[Any, ...]:
-        attrs = {"long_name": long_name, "units": units}
-        if model_units is not None:
-            attrs["model_units"] = model_units
-        return (dims, values, attrs)
+    axes = 2 if two_d else 1
+
+    def described(name: str, values: Any, parameter: str | None = None,
+                  along: int = 1) -> tuple[Any, ...]:
+        return schema.variable(f"/sweep/{name}", values, parameter, axes, along)
 
     values = np.asarray(out["values"])
     coords = {
-        "point": described(("point",), values[0, :n1].copy(),
-                           f"{parameter} (the swept parameter) at the point",
-                           model_units=_PARAMETER_UNITS[parameter]),
-        "oscillator": described(("oscillator",), np.arange(1, cfg["n"] + 1, dtype=np.int32),
-                                "oscillator index"),
+        "point": described("point", values[0, :n1].copy(), parameter),
+        "oscillator": described("oscillator", np.arange(1, cfg["n"] + 1, dtype=np.int32)),
     }
     if two_d:
-        coords["point2"] = described(("point2",), values[1, ::n1].copy(),
-                                     f"{parameter2} (the swept parameter) at the point",
-                                     model_units=_PARAMETER_UNITS[parameter2])
+        coords["point2"] = described("point2", values[1, ::n1].copy(), parameter2)
     data = {
-        "x": described(points + ("record", "oscillator"),
-                       grid(np.asarray(out["x"]).transpose(1, 0, 2)),
-                       "displacement from equilibrium at the section, the records of the point",
-                       model_units="length"),
-        "collisions_per_cycle": described(points, grid(out["collisions"]),
-                                          "collisions per drive cycle",
-                                          model_units="impacts per drive cycle"),
-        "period": described(points + ("oscillator",), grid(out["period"]),
-                            "period of the oscillator's strobe record (0: none found, "
-                            "aperiodic)", model_units="drive cycles"),
+        "x": described("x", grid(np.asarray(out["x"]).transpose(1, 0, 2))),
+        "collisions_per_cycle": described("collisions_per_cycle", grid(out["collisions"])),
+        "period": described("period", grid(out["period"])),
     }
     if k > 0:
-        coords["exponent"] = described(("exponent",), np.arange(1, k + 1, dtype=np.int32),
-                                       "exponent index (descending order)")
-        data["exponents"] = described(points + ("exponent",), grid(out["exponents"]),
-                                      "Lyapunov exponent", "bit", "bits per drive cycle")
-        data["stderr"] = described(points + ("exponent",), grid(out["stderr_bits"]),
-                                   "standard error of the Lyapunov exponent (blocking, where "
-                                   "it levels off with the block size)", "bit",
-                                   "bits per drive cycle")
-        data["stderr_block"] = described(points + ("exponent",), grid(out["stderr_cycles"]),
-                                         "drive cycles per block at which stderr was read",
-                                         model_units="drive cycles")
-        data["ky_dimension"] = described(points, grid(out["ky"]), "Kaplan-Yorke dimension")
+        coords["exponent"] = described("exponent", np.arange(1, k + 1, dtype=np.int32))
+        data["exponents"] = described("exponents", grid(out["exponents"]))
+        data["stderr"] = described("stderr", grid(out["stderr_bits"]))
+        data["stderr_block"] = described("stderr_block", grid(out["stderr_cycles"]))
+        data["ky_dimension"] = described("ky_dimension", grid(out["ky"]))
     if "omega" in (parameter, parameter2):
-        axis = "point" if parameter == "omega" else "point2"
-        data["drive_period"] = described((axis,), 2 * np.pi / coords[axis][1],
-                                         "drive period 2 pi / omega", model_units="time")
+        along = 1 if parameter == "omega" else 2
+        axis = ("point", "point2")[along - 1]
+        data["drive_period"] = described("drive_period", 2 * np.pi / coords[axis][1],
+                                         along=along)
     attrs: dict[str, Any] = dict(parameter=parameter, parameter2=parameter2,
                                  mode=_text(args["mode"]))
     attrs.update({key: cfg[key] for key in ("n", "amplitude", "omega", "damping",
@@ -989,68 +967,46 @@ def _first_room(args: dict[str, Any]) -> dict[str, int]:
 def _continuation_dataset(xr: Any, out: dict[str, Any], cfg: dict[str, Any],
                           args: dict[str, Any]) -> Any:
     """ic_continuation's arrays (Fortran order) as the file's /continuation group: the same
-    dimensions, coordinates, variables, their attributes (chain_branch_file's describe_all)
+    dimensions, coordinates, variables, their attributes (the file schema's)
     and the group's attributes."""
     parameter = _text(args["parameter"])
-    unit = _PARAMETER_UNITS[parameter]
     points = out["values"].size
     n = cfg["n"]
 
-    def described(dims: tuple[str, ...], values: Any, long_name: str,
-                  model_units: str | None = None) -> tuple[Any, ...]:
-        attrs = {"long_name": long_name, "units": "1"}
-        if model_units is not None:
-            attrs["model_units"] = model_units
-        return (dims, np.ascontiguousarray(values), attrs)
+    def described(name: str, values: Any) -> tuple[Any, ...]:
+        return schema.variable(f"/continuation/{name}", np.ascontiguousarray(values),
+                               parameter)
 
-    def index(name: str, first: int, count: int, long_name: str) -> tuple[Any, ...]:
-        return described((name,), np.arange(first, first + count, dtype=np.int32), long_name)
+    def index(name: str, first: int, count: int) -> tuple[Any, ...]:
+        return described(name, np.arange(first, first + count, dtype=np.int32))
 
     kinds = [bytes(np.asarray(k).astype(np.uint8)).split(b"\0")[0].decode()
              for k in np.asarray(out["special_kind"]).T]
     coords = {
-        "point": index("point", 0, points, "point index (in the order found, branch after "
-                                           "branch)"),
-        "oscillator": index("oscillator", 1, n, "oscillator index"),
-        "multiplier": index("multiplier", 1, 2 * n, "multiplier index"),
-        "iterate": index("iterate", 1, out["strobe_x"].shape[1],
-                         "section crossing of the period"),
-        "special": index("special", 0, len(kinds), "special point index"),
+        "point": index("point", 0, points),
+        "oscillator": index("oscillator", 1, n),
+        "multiplier": index("multiplier", 1, 2 * n),
+        "iterate": index("iterate", 1, out["strobe_x"].shape[1]),
+        "special": index("special", 0, len(kinds)),
     }
-    p, po, pm = ("point",), ("point", "oscillator"), ("point", "multiplier")
     data = {
-        "values": described(p, out["values"], f"{parameter} (the continued parameter) at the "
-                            "point", unit),
-        "x": described(po, out["x"].T, "displacement from equilibrium on the section, the "
-                       "orbit's state", "length"),
-        "v": described(po, out["v"].T, "velocity on the section, the orbit's state",
-                       "length/time"),
-        "strobe_x": described(("point", "iterate", "oscillator"),
-                              out["strobe_x"].transpose(2, 1, 0), "displacement at the "
-                              "section crossings of one period (NaN beyond the period)",
-                              "length"),
-        "period": described(p, out["periods"], "period of the orbit", "drive cycles"),
-        "branch": described(p, out["branch"], "branch index (0: the first; 1, 2, ...: "
-                            "branches switched to at period doublings)"),
-        "multipliers_re": described(pm, out["mult_re"].T, "Floquet multiplier, real part"),
-        "multipliers_im": described(pm, out["mult_im"].T,
-                                    "Floquet multiplier, imaginary part"),
-        "stable": described(p, out["stable"], "stability (1: every multiplier inside the "
-                            "unit circle)"),
-        "min_gap": described(p, out["min_gap"], "smallest gap at a local minimum over one "
-                             "period, other than a bond's own impacts (inf: none)", "length"),
-        "min_impact_speed": described(p, out["min_impact_speed"], "smallest impact speed "
-                                      "over one period (inf: no impacts)", "length/time"),
-        "impacts_per_period": described(p, out["impacts"], "impacts over one period"),
-        "residual": described(p, out["residual"],
-                              "Newton's last residual |P(z) - z| / (1 + |z|)"),
-        "iterations": described(p, out["iterations"], "Newton iterations of the point"),
-        "special_index": described(("special",), out["special_index"],
-                                   "the point (0-based index) of the special point"),
-        "special_kind": described(("special",), np.array(kinds, dtype=str),
-                                  "fold, period-doubling, neimark-sacker or grazing"),
-        "special_value": described(("special",), out["special_value"],
-                                   f"{parameter} at the special point", unit),
+        "values": described("values", out["values"]),
+        "x": described("x", out["x"].T),
+        "v": described("v", out["v"].T),
+        "strobe_x": described("strobe_x", out["strobe_x"].transpose(2, 1, 0)),
+        "period": described("period", out["periods"]),
+        "branch": described("branch", out["branch"]),
+        "multipliers_re": described("multipliers_re", out["mult_re"].T),
+        "multipliers_im": described("multipliers_im", out["mult_im"].T),
+        "stable": described("stable", out["stable"]),
+        "min_gap": described("min_gap", out["min_gap"]),
+        "min_impact_speed": described("min_impact_speed", out["min_impact_speed"]),
+        "impacts_per_period": described("impacts_per_period", out["impacts"]),
+        "residual": described("residual", out["residual"]),
+        "iterations": described("iterations", out["iterations"]),
+        "special_index": described("special_index", out["special_index"]),
+        "special_kind": described("special_kind", np.array(kinds, dtype=str)),
+        "special_value": described("special_value", out["special_value"]),
     }
     spacing = np.asarray(cfg["spacing"])
     start = float(spacing[0]) if parameter == "spacing" else cfg[parameter]

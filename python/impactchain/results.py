@@ -7,9 +7,8 @@ from __future__ import annotations
 
 import math
 import os
-from collections.abc import Iterable, Mapping
+from collections.abc import Iterable, Iterator, Mapping
 from dataclasses import dataclass, field
-from types import MappingProxyType
 
 import numpy as np
 
@@ -36,60 +35,31 @@ TOUCH = 3
 """``/events/kind``: a contact closing slower than its gap can resolve: no impulse (not a
 collision)."""
 
-FILE_UNITS: Mapping[str, str] = MappingProxyType({
-    "params/spacing": "length",
-    "initial/x": "length",
-    "initial/v": "length/time",
-    "strobe/x": "length",
-    "strobe/v": "length/time",
-    "strobe/cycle": "drive cycles",
-    "strobe/period": "drive cycles (0 = aperiodic)",
-    "events/time": "time",
-    "events/speed": "length/time",
-    "final/x": "length",
-    "final/v": "length/time",
-    "lyapunov/exponents": "bits per drive cycle",
-    "lyapunov/stderr": "bits per drive cycle",
-    "lyapunov/stderr_block": "drive cycles",
-    "lyapunov/running": "bits per drive cycle",
-    "sweep/x": "length",
-    "sweep/exponents": "bits per drive cycle",
-    "sweep/stderr": "bits per drive cycle",
-    "sweep/ky_dimension": "1",
-    "continuation/x": "length",
-    "continuation/v": "length/time",
-    "continuation/strobe_x": "length",
-    "continuation/period": "drive cycles",
-    "continuation/min_gap": "length",
-    "continuation/min_impact_speed": "length/time",
-    "continuation/impacts_per_period": "impacts per period",
-    "census/x0": "length",
-    "census/v0": "length/time",
-    "census/lambda1": "bits per drive cycle",
-    "census/attractor_period": "drive cycles",
-    "census/attractor_lambda1": "bits per drive cycle",
-    "census/attractor_lambda1_stderr": "bits per drive cycle",
-    "census/attractor_x": "length",
-    "census/attractor_v": "length/time",
-    "census/sample_exponents": "bits per drive cycle",
-    "census/sample_exponents_stderr": "bits per drive cycle",
-    "census/attractor_exponents": "bits per drive cycle",
-    "census/attractor_exponents_spread": "bits per drive cycle",
-    "clv/cycle": "drive cycles",
-    "clv/exponents": "bits per drive cycle",
-    "clv/stderr": "bits per drive cycle",
-    "clv/stderr_block": "drive cycles",
-    "clv/ipr": "1",
-    "clv/site_weight": "1",
-    "clv/min_angle": "radian",
-    "clv/vectors": "1",
-    "finite_time/cycle": "drive cycles",
-    "finite_time/exponents": "bits per drive cycle",
-})
-"""The unit of each dataset in the model's reduced units (docs/model.md section 1.5): a
-version-2 file's ``model_units`` attribute (its ``units`` are UDUNITS', ``1`` for these),
-a version-1 file's ``units``; the units of a run made in memory
-(:func:`impactchain.inmemory.run_from_api`) and the defaults of the figures' axis labels."""
+class _FileUnits(Mapping[str, str]):
+    """The unit of each dataset in the model's reduced units (docs/model.md section 1.5): a
+    version-2 file's ``model_units`` attribute, else its ``units`` (UDUNITS'); the units of a
+    run made in memory (:func:`impactchain.inmemory.run_from_api`) and the defaults of the
+    figures' axis labels. Read from the file schema (:mod:`impactchain.schema`) when first
+    asked."""
+
+    def _units(self) -> dict[str, str]:
+        from impactchain import schema
+
+        return schema.dataset_units()
+
+    def __getitem__(self, key: str) -> str:
+        return self._units()[key]
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(self._units())
+
+    def __len__(self) -> int:
+        return len(self._units())
+
+
+FILE_UNITS: Mapping[str, str] = _FileUnits()
+"""The unit of each dataset (``group/name``), as the file schema gives it (see
+:class:`_FileUnits`)."""
 
 
 SPECIAL_KINDS = ("fold", "period-doubling", "neimark-sacker", "grazing")

@@ -23,7 +23,8 @@ module impactchain_drivers
     use chain_monitor, only: checkpoint_every
     use chain_output, only: output_t, output_begin, output_end, output_abort
     use chain_cli, only: cli_t, parse_command_line, cli_run, cli_help, cli_version, cli_usage, &
-                         exit_now, seconds_from_environment
+                         cli_schema, schema_json, exit_now, seconds_from_environment
+    use chain_file_schema, only: output_schema_json
     use chain_interrupt, only: catch_interrupts, interrupted
     use chain_progress, only: progress_t, progress_start, progress_update, progress_within, &
                               stderr_is_terminal, progress_quiet_start
@@ -39,6 +40,7 @@ module impactchain_drivers
     public :: write_census_file, census_starts, sample_record_sizes, pack_sample
     public :: unpack_sample, output_t, output_begin, output_end, output_abort, cli_t
     public :: parse_command_line, cli_run, cli_help, cli_version, cli_usage, exit_now
+    public :: cli_schema, schema_json, output_schema_json
     public :: seconds_from_environment, catch_interrupts, interrupted, progress_t
     public :: progress_start, progress_update, progress_within, stderr_is_terminal
     public :: progress_quiet_start

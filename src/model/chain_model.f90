@@ -9,7 +9,6 @@ module chain_model
     private
     public :: model_t, model_walls, bond_gaps
     public :: model_parameters, is_model_parameter, model_parameter, set_model_parameter
-    public :: parameter_units
 
     !> The parameters a sweep or a branch of orbits can vary ('spacing': every bond's rest
     !> gap at once).
@@ -106,20 +105,5 @@ contains
             model%spacing = value
         end select
     end subroutine set_model_parameter
-
-    !> The reduced unit of a parameter, as the output files name it ('' for a pure number).
-    pure function parameter_units(name) result(unit)
-        character(len=*), intent(in) :: name
-        character(len=:), allocatable :: unit
-
-        select case (name)
-        case ('amplitude', 'spacing')
-            unit = 'length'
-        case ('omega', 'damping')
-            unit = '1/time'
-        case default
-            unit = ''
-        end select
-    end function parameter_units
 
 end module chain_model

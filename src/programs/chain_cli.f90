@@ -1,8 +1,9 @@
 !> The command line both programs share:
 !>   [--quiet] [--set group.key=value]... [-o file.h5] [--overwrite] [--check] input.nml
-!> plus `--help` and `--version`. `--set` (repeatable), `-o` and `--overwrite` become
-!> overrides of the input's text (chain_namelist), applied in the order given; `--check`
-!> validates the input and prints it resolved, running nothing. Returns what was asked for;
+!> plus `--help`, `--version` and `--schema` (the input and output tables as JSON). `--set`
+!> (repeatable), `-o` and `--overwrite` become overrides of the input's text (chain_namelist),
+!> applied in the order given; `--check` validates the input and prints it resolved, running
+!> nothing. Returns what was asked for;
 !> the programs print and exit (library code never stops; `exit_now` is the programs' way
 !> out after an error). Infrastructure, no model section.
 module chain_cli
@@ -12,16 +13,18 @@ module chain_cli
                                              ieee_get_halting_mode, ieee_set_halting_mode, &
                                              ieee_set_flag
     use chain_kinds, only: wp
+    use chain_file_schema, only: output_schema_json
     implicit none
     private
     public :: cli_t, parse_command_line, parse_arguments, exit_now, seconds_from_environment
-    public :: cli_run, cli_help, cli_version, cli_usage, cli_error
+    public :: cli_run, cli_help, cli_version, cli_usage, cli_error, cli_schema, schema_json
 
     integer, parameter :: cli_run = 0     !! run the input file
     integer, parameter :: cli_help = 1    !! print the usage and exit 0
     integer, parameter :: cli_version = 2 !! print the version and exit 0
     integer, parameter :: cli_usage = 3   !! no input given: print the usage, exit 2
     integer, parameter :: cli_error = 4   !! print `message` and exit 1
+    integer, parameter :: cli_schema = 5  !! print schema_json() and exit 0
     integer, parameter :: max_override = 4096 !! longest `--set` value
 
     type :: cli_t
@@ -35,6 +38,15 @@ module chain_cli
     end type cli_t
 
 contains
+
+    !> What `--schema` prints: the schema version, the input table and the output table
+    !> (chain_file_schema), one JSON object.
+    function schema_json() result(json)
+        character(len=:), allocatable :: json
+
+        json = '{"schema_version": 1,'//new_line('a')//'"inputs": [],'//new_line('a')// &
+               '"outputs": '//output_schema_json()//'}'
+    end function schema_json
 
     !> For the programs only: flush what was written and end the process with `code` at once,
     !> without the exit handlers. After a failed write (a full disk) HDF5's own handler,
@@ -123,6 +135,9 @@ contains
                 return
             case ('--version')
                 cli%action = cli_version
+                return
+            case ('--schema')
+                cli%action = cli_schema
                 return
             case ('--check')
                 cli%check = .true.

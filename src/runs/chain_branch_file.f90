@@ -4,7 +4,7 @@
 module chain_branch_file
     use chain_kinds, only: wp, i8
     use chain_error, only: error_t
-    use chain_model, only: model_parameter, parameter_units
+    use chain_model, only: model_parameter
     use chain_engine, only: chain_t, chain_positions, chain_velocities
     use chain_event_log, only: event_log_t, event_log_init
     use chain_section, only: section_target, advance_to_point, advance_cycles
@@ -12,8 +12,9 @@ module chain_branch_file
     use chain_sim, only: start_chain, write_run_header
     use chain_branch, only: branch_options_t, branches_t, follow_branches, special_kinds
     use chain_output, only: output_t, output_begin, output_group, output_end, output_abort, &
-                            output_describe, output_index, output_unset_param
+                            output_unset_param
     use chain_hdf5, only: h5_write, h5_write_attr, h5_write_strings
+    use chain_describe, only: describe_group, index_coordinate
     use chain_monitor, only: monitor_t
     use, intrinsic :: ieee_arithmetic, only: ieee_value, ieee_quiet_nan, ieee_positive_inf
     implicit none
@@ -197,86 +198,33 @@ contains
             call h5_write_attr(f, 'continuation', 'step', cfg%cont_step, err)
             call h5_write_attr(f, 'continuation', 'end_reason', res%end_reason, err)
             if (allocated(err)) return
-            call output_index(out, 'continuation/point', 0, np, 'point index (in the '// &
-                              'order found, branch after branch)', err)
-            if (.not. allocated(err)) call output_index(out, 'continuation/oscillator', 1, n, &
-                                                        'oscillator index', err)
-            if (.not. allocated(err)) call output_index(out, 'continuation/multiplier', 1, &
-                                                        2*n, 'multiplier index', err)
-            if (.not. allocated(err)) call output_index(out, 'continuation/iterate', 1, &
-                                                        t%longest, 'section crossing of '// &
-                                                        'the period', err)
-            if (.not. allocated(err)) call output_index(out, 'continuation/special', 0, ns, &
-                                                        'special point index', err)
+            call index_coordinate(f, 'continuation/point', 0, np, err)
+            call index_coordinate(f, 'continuation/oscillator', 1, n, err)
+            call index_coordinate(f, 'continuation/multiplier', 1, 2*n, err)
+            call index_coordinate(f, 'continuation/iterate', 1, t%longest, err)
+            call index_coordinate(f, 'continuation/special', 0, ns, err)
             if (allocated(err)) return
-            call h5_write(f, 'continuation/values', t%values, '1', err)
-            call h5_write(f, 'continuation/x', t%x, '1', err)
-            call h5_write(f, 'continuation/v', t%v, '1', err)
-            call h5_write(f, 'continuation/strobe_x', t%strobe_x, '1', err)
-            call h5_write(f, 'continuation/period', t%period, '1', err)
-            call h5_write(f, 'continuation/branch', t%branch, '1', err)
-            call h5_write(f, 'continuation/multipliers_re', t%multipliers_re, '1', err)
-            call h5_write(f, 'continuation/multipliers_im', t%multipliers_im, '1', err)
-            call h5_write(f, 'continuation/stable', t%stable, '1', err)
-            call h5_write(f, 'continuation/min_gap', t%min_gap, '1', err)
-            call h5_write(f, 'continuation/min_impact_speed', t%min_impact_speed, '1', err)
-            call h5_write(f, 'continuation/impacts_per_period', t%impacts, '1', err)
-            call h5_write(f, 'continuation/residual', t%residual, '1', err)
-            call h5_write(f, 'continuation/iterations', t%iterations, '1', err)
-            call h5_write(f, 'continuation/special_index', t%special_index, '1', err)
-            call h5_write_strings(f, 'continuation/special_kind', t%special_kind, '1', err)
-            call h5_write(f, 'continuation/special_value', t%special_value, '1', err)
+            call h5_write(f, 'continuation/values', t%values, err)
+            call h5_write(f, 'continuation/x', t%x, err)
+            call h5_write(f, 'continuation/v', t%v, err)
+            call h5_write(f, 'continuation/strobe_x', t%strobe_x, err)
+            call h5_write(f, 'continuation/period', t%period, err)
+            call h5_write(f, 'continuation/branch', t%branch, err)
+            call h5_write(f, 'continuation/multipliers_re', t%multipliers_re, err)
+            call h5_write(f, 'continuation/multipliers_im', t%multipliers_im, err)
+            call h5_write(f, 'continuation/stable', t%stable, err)
+            call h5_write(f, 'continuation/min_gap', t%min_gap, err)
+            call h5_write(f, 'continuation/min_impact_speed', t%min_impact_speed, err)
+            call h5_write(f, 'continuation/impacts_per_period', t%impacts, err)
+            call h5_write(f, 'continuation/residual', t%residual, err)
+            call h5_write(f, 'continuation/iterations', t%iterations, err)
+            call h5_write(f, 'continuation/special_index', t%special_index, err)
+            call h5_write_strings(f, 'continuation/special_kind', t%special_kind, err)
+            call h5_write(f, 'continuation/special_value', t%special_value, err)
         end associate
         if (allocated(err)) return
-        call describe_all(out, cfg%cont_parameter, err)
+        call describe_group(out%file, 'continuation', err, parameter=cfg%cont_parameter)
     end subroutine write_continuation
-
-    !> The long names, units and dimensions of /continuation's datasets.
-    subroutine describe_all(out, parameter, err)
-        type(output_t), intent(inout) :: out
-        character(len=*), intent(in) :: parameter
-        type(error_t), allocatable, intent(inout) :: err
-        character(len=:), allocatable :: unit
-
-        unit = parameter_units(parameter)
-        call describe('values', parameter//' (the continued parameter) at the point', unit, &
-                      'point')
-        call describe('x', "displacement from equilibrium on the section, the orbit's "// &
-                      "state", 'length', 'point oscillator')
-        call describe('v', "velocity on the section, the orbit's state", 'length/time', &
-                      'point oscillator')
-        call describe('strobe_x', 'displacement at the section crossings of one period '// &
-                      '(NaN beyond the period)', 'length', 'point iterate oscillator')
-        call describe('period', 'period of the orbit', 'drive cycles', 'point')
-        call describe('branch', 'branch index (0: the first; 1, 2, ...: branches switched '// &
-                      'to at period doublings)', '', 'point')
-        call describe('multipliers_re', 'Floquet multiplier, real part', '', &
-                      'point multiplier')
-        call describe('multipliers_im', 'Floquet multiplier, imaginary part', '', &
-                      'point multiplier')
-        call describe('stable', 'stability (1: every multiplier inside the unit circle)', '', &
-                      'point')
-        call describe('min_gap', 'smallest gap at a local minimum over one period, other '// &
-                      "than a bond's own impacts (inf: none)", 'length', 'point')
-        call describe('min_impact_speed', 'smallest impact speed over one period (inf: no '// &
-                      'impacts)', 'length/time', 'point')
-        call describe('impacts_per_period', 'impacts over one period', '', 'point')
-        call describe('residual', "Newton's last residual |P(z) - z| / (1 + |z|)", '', &
-                      'point')
-        call describe('iterations', 'Newton iterations of the point', '', 'point')
-        call describe('special_index', 'the point (0-based index) of the special point', '', &
-                      'special')
-        call describe('special_kind', 'fold, period-doubling, neimark-sacker or grazing', &
-                      '', 'special')
-        call describe('special_value', parameter//' at the special point', unit, 'special')
-    contains
-        subroutine describe(name, long_name, model_units, dims)
-            character(len=*), intent(in) :: name, long_name, model_units, dims
-
-            if (.not. allocated(err)) call output_describe(out, 'continuation/'//name, &
-                                                           long_name, model_units, dims, err)
-        end subroutine describe
-    end subroutine describe_all
 
     !> `value`, or +inf where it stands for none (huge): the file's grazing monitors.
     pure real(wp) function finite_or_inf(value)

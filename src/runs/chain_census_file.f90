@@ -5,7 +5,6 @@ module chain_census_file
     use chain_kinds, only: wp
     use chain_error, only: error_t, set_error, fmt_real
     use chain_config, only: config_t
-    use chain_model, only: parameter_units
     use chain_sim, only: write_run_header
     use chain_sweep, only: validate_sweep_points, plan_sweep
     use chain_files, only: remove_file
@@ -17,8 +16,9 @@ module chain_census_file
     use chain_attractor, only: kind_names, classification_rule, site_distance_limit, &
                                chaos_sigmas
     use chain_output, only: output_t, output_begin, output_group, output_end, output_abort, &
-                            output_describe, output_index, output_unset_param
+                            output_unset_param
     use chain_hdf5, only: h5_write, h5_write_attr, h5_write_strings, h5_set_scale
+    use chain_describe, only: describe, describe_group, index_coordinate
     use chain_monitor, only: monitor_t
     implicit none
     private
@@ -143,32 +143,29 @@ contains
         call census_axes(out, cfg, res, err)
         if (allocated(err)) return
         associate (f => out%file, ts => res%attractors(:na))
-            call h5_write(f, 'census/x0', res%x0, '1', err)
-            call h5_write(f, 'census/v0', res%v0, '1', err)
-            call h5_write(f, 'census/sample_attractor', res%attractor - 1, '1', err)
-            call h5_write(f, 'census/mirrored', merge(1, 0, res%mirrored), '1', err)
+            call h5_write(f, 'census/x0', res%x0, err)
+            call h5_write(f, 'census/v0', res%v0, err)
+            call h5_write(f, 'census/sample_attractor', res%attractor - 1, err)
+            call h5_write(f, 'census/mirrored', merge(1, 0, res%mirrored), err)
             ! (the first of each sample's exponents, a contiguous copy)
-            call h5_write(f, 'census/lambda1', res%exponents(1, :, :) + 0.0_wp, 'bit', err)
-            call h5_write(f, 'census/attractor_period', periods, '1', err)
-            call h5_write(f, 'census/attractor_lambda1', [(ts(a)%lambda1, a=1, na)], 'bit', err)
-            call h5_write(f, 'census/attractor_lambda1_stderr', [(ts(a)%stderr1, a=1, na)], &
-                          'bit', err)
-            call h5_write(f, 'census/attractor_x', ax, '1', err)
-            call h5_write(f, 'census/attractor_v', av, '1', err)
-            call h5_write(f, 'census/attractor_point', [(ts(a)%point - 1, a=1, na)], '1', err)
-            call h5_write(f, 'census/attractor_sample', [(ts(a)%first_sample, a=1, na)], &
-                          '1', err)
-            call h5_write_strings(f, 'census/attractor_kind', kinds, '1', err)
-            call h5_write(f, 'census/attractor_sites', sites, '1', err)
-            call h5_write(f, 'census/fraction', res%fraction, '1', err)
-            call h5_write(f, 'census/fraction_stderr', res%fraction_stderr, '1', err)
-            call h5_write(f, 'census/sample_exponents', res%exponents, 'bit', err)
-            call h5_write(f, 'census/sample_exponents_stderr', res%exponents_stderr, 'bit', err)
-            call h5_write(f, 'census/attractor_exponents', res%attractor_exponents, 'bit', err)
-            call h5_write(f, 'census/attractor_exponents_spread', res%attractor_spread, 'bit', &
-                          err)
+            call h5_write(f, 'census/lambda1', res%exponents(1, :, :) + 0.0_wp, err)
+            call h5_write(f, 'census/attractor_period', periods, err)
+            call h5_write(f, 'census/attractor_lambda1', [(ts(a)%lambda1, a=1, na)], err)
+            call h5_write(f, 'census/attractor_lambda1_stderr', [(ts(a)%stderr1, a=1, na)], err)
+            call h5_write(f, 'census/attractor_x', ax, err)
+            call h5_write(f, 'census/attractor_v', av, err)
+            call h5_write(f, 'census/attractor_point', [(ts(a)%point - 1, a=1, na)], err)
+            call h5_write(f, 'census/attractor_sample', [(ts(a)%first_sample, a=1, na)], err)
+            call h5_write_strings(f, 'census/attractor_kind', kinds, err)
+            call h5_write(f, 'census/attractor_sites', sites, err)
+            call h5_write(f, 'census/fraction', res%fraction, err)
+            call h5_write(f, 'census/fraction_stderr', res%fraction_stderr, err)
+            call h5_write(f, 'census/sample_exponents', res%exponents, err)
+            call h5_write(f, 'census/sample_exponents_stderr', res%exponents_stderr, err)
+            call h5_write(f, 'census/attractor_exponents', res%attractor_exponents, err)
+            call h5_write(f, 'census/attractor_exponents_spread', res%attractor_spread, err)
         end associate
-        if (.not. allocated(err)) call describe_all(out, err)
+        call describe_group(out%file, 'census', err)
     end subroutine write_census_file
 
     !> /census attributes: the &census keys, the swept parameter ('' at one point) and the
@@ -212,89 +209,21 @@ contains
         type(error_t), allocatable, intent(inout) :: err
 
         if (allocated(err)) return
-        if (cfg%sweep) then
-            call h5_write(out%file, 'census/point', res%values, '1', err)
-            call h5_set_scale(out%file, 'census/point', err)
-            if (.not. allocated(err)) call output_describe(out, 'census/point', &
-                cfg%sweep_parameter//' (the swept parameter) at the point', &
-                parameter_units(cfg%sweep_parameter), '', err)
-        else
-            call output_index(out, 'census/point', 0, 1, 'point index (a census at one '// &
-                              'parameter point)', err)
-        end if
-        if (.not. allocated(err)) call output_index(out, 'census/sample', 1, res%n_samples, &
-            'sample index (the stream of its random start)', err)
-        if (.not. allocated(err)) call output_index(out, 'census/oscillator', 1, &
-                                                    cfg%model%n, 'oscillator index', err)
-        if (.not. allocated(err)) call output_index(out, 'census/attractor', 0, &
-                                                    res%n_attractors, 'attractor id', err)
-        if (.not. allocated(err)) call output_index(out, 'census/bond', 0, cfg%model%n + 1, &
-            'bond index: bond k joins oscillators k and k+1 (0: the left wall, n: the '// &
-            'right wall)', err)
-        if (.not. allocated(err)) call output_index(out, 'census/exponent', 1, &
-                                                    res%n_exponents, 'exponent index '// &
-                                                    '(descending order)', err)
+        associate (f => out%file)
+            if (cfg%sweep) then
+                call h5_write(f, 'census/point', res%values, err)
+                call h5_set_scale(f, 'census/point', err)
+                call describe(f, 'census/point', err, parameter=cfg%sweep_parameter, &
+                              when='a census over a sweep')
+            else
+                call index_coordinate(f, 'census/point', 0, 1, err, when='a census at one point')
+            end if
+            call index_coordinate(f, 'census/sample', 1, res%n_samples, err)
+            call index_coordinate(f, 'census/oscillator', 1, cfg%model%n, err)
+            call index_coordinate(f, 'census/attractor', 0, res%n_attractors, err)
+            call index_coordinate(f, 'census/bond', 0, cfg%model%n + 1, err)
+            call index_coordinate(f, 'census/exponent', 1, res%n_exponents, err)
+        end associate
     end subroutine census_axes
-
-    !> The long names, units and dimensions of /census's datasets.
-    subroutine describe_all(out, err)
-        type(output_t), intent(inout) :: out
-        type(error_t), allocatable, intent(inout) :: err
-
-        call describe('x0', "displacement at t = 0, the sample's start", 'length', &
-                      'point sample oscillator')
-        call describe('v0', "velocity at t = 0, the sample's start", 'length/time', &
-                      'point sample oscillator')
-        call describe('sample_attractor', 'the attractor the sample reached (its id)', '', &
-                      'point sample')
-        call describe('mirrored', "1: the sample reached the attractor's mirror image "// &
-                      "(mirror = 'merge'), 0: the attractor itself", '', 'point sample')
-        call describe('lambda1', "the sample's largest Lyapunov exponent over its records", &
-                      'bits per drive cycle', 'point sample')
-        call describe('attractor_period', "period of each oscillator's strobe record on "// &
-                      'the attractor (0: none found, aperiodic)', 'drive cycles', &
-                      'attractor oscillator')
-        call describe('attractor_lambda1', "largest Lyapunov exponent of the attractor's "// &
-                      'representative (its first sample)', 'bits per drive cycle', 'attractor')
-        call describe('attractor_lambda1_stderr', 'standard error of attractor_lambda1 '// &
-                      '(block averages)', 'bits per drive cycle', 'attractor')
-        call describe('attractor_x', "displacement of the representative at its last "// &
-                      "record, on the section: a state the attractor's runs can start from", &
-                      'length', 'attractor oscillator')
-        call describe('attractor_v', 'velocity of the representative at its last record', &
-                      'length/time', 'attractor oscillator')
-        call describe('attractor_point', 'the point (0-based index) where the attractor '// &
-                      'was found', '', 'attractor')
-        call describe('attractor_sample', 'its representative: the first sample (1-based) '// &
-                      'that reached it', '', 'attractor')
-        call describe('attractor_kind', 'periodic, chaotic or aperiodic-nonchaotic', '', &
-                      'attractor')
-        call describe('attractor_sites', "fraction of the representative's impacts on "// &
-                      'each bond over its records', '', 'attractor bond')
-        call describe('fraction', "fraction of the point's samples that reached the "// &
-                      'attractor (its basin fraction)', '', 'point attractor')
-        call describe('fraction_stderr', 'binomial standard error of fraction, '// &
-                      'sqrt(f (1 - f) / samples)', '', 'point attractor')
-        call describe('sample_exponents', "the sample's leading Lyapunov exponents over its "// &
-                      'records (&census exponents; the first is lambda1)', &
-                      'bits per drive cycle', 'point sample exponent')
-        call describe('sample_exponents_stderr', 'standard error of sample_exponents '// &
-                      "(block averages along the sample's own run)", 'bits per drive cycle', &
-                      'point sample exponent')
-        call describe('attractor_exponents', "mean of sample_exponents over the attractor's "// &
-                      'samples (mirror images included)', 'bits per drive cycle', &
-                      'attractor exponent')
-        call describe('attractor_exponents_spread', 'standard deviation of '// &
-                      "sample_exponents between the attractor's samples (n - 1 in the "// &
-                      'denominator; 0 for one sample): the spread between trajectories', &
-                      'bits per drive cycle', 'attractor exponent')
-    contains
-        subroutine describe(name, long_name, model_units, dims)
-            character(len=*), intent(in) :: name, long_name, model_units, dims
-
-            if (.not. allocated(err)) call output_describe(out, 'census/'//name, long_name, &
-                                                           model_units, dims, err)
-        end subroutine describe
-    end subroutine describe_all
 
 end module chain_census_file

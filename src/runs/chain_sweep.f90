@@ -26,13 +26,13 @@
 module chain_sweep
     use chain_kinds, only: wp, i8, two_pi
     use chain_error, only: error_t, set_error, fmt_real, fmt_int
-    use chain_model, only: set_model_parameter, parameter_units
+    use chain_model, only: set_model_parameter
     use chain_config, only: config_t, validate_config, lyapunov_vectors, check_size, &
                             sweep_axis_points
     use chain_sim, only: write_run_header
-    use chain_output, only: output_t, output_group, output_describe, output_index, &
-                            output_unset_param
-    use chain_hdf5, only: h5_write, h5_write_attr, h5_set_scale, h5_create_dimension
+    use chain_output, only: output_t, output_group, output_unset_param
+    use chain_hdf5, only: h5_write, h5_write_attr, h5_set_scale
+    use chain_describe, only: describe, index_coordinate, bare_dimension
     implicit none
     private
     public :: sweep_plan_t, sweep_result_t, plan_sweep, sweep_point_config
@@ -251,7 +251,6 @@ contains
         type(sweep_plan_t), intent(in) :: plan
         type(sweep_result_t), intent(in) :: res
         type(error_t), allocatable, intent(out) :: err
-        character(len=:), allocatable :: points
         integer :: n1
 
         call write_run_header(out, cfg, err)
@@ -267,32 +266,28 @@ contains
             call h5_write_attr(f, 'sweep', 'parameter2', cfg%sweep_parameter2, err)
             call h5_write_attr(f, 'sweep', 'mode', cfg%sweep_mode, err)
             call sweep_axis(out, 'sweep/point', cfg%sweep_parameter, res%values(1, :n1), err)
-            points = 'point'
             if (plan%n_axes == 2) then
                 call sweep_axis(out, 'sweep/point2', cfg%sweep_parameter2, &
                                 res%values(2, ::n1), err)
-                points = 'point point2'
             end if
             if (allocated(err)) return
-            call h5_create_dimension(f, 'sweep/record', int(cfg%record%cycles, i8), .false., err)
-            if (.not. allocated(err)) call output_index(out, 'sweep/oscillator', 1, &
-                                                        cfg%model%n, 'oscillator index', err)
+            call bare_dimension(f, 'sweep/record', int(cfg%record%cycles, i8), .false., err)
+            call index_coordinate(f, 'sweep/oscillator', 1, cfg%model%n, err)
         end associate
-        if (.not. allocated(err)) call write_sweep_records(out, cfg, plan, res, points, err)
+        if (.not. allocated(err)) call write_sweep_records(out, cfg, plan, res, err)
         if (.not. allocated(err)) call write_drive_periods(out, cfg, plan, res, err)
         if (plan%k > 0 .and. .not. allocated(err)) &
-            call write_sweep_exponents(out, plan, res, points, err)
+            call write_sweep_exponents(out, plan, res, err)
     end subroutine write_sweep_file
 
     !> /sweep/x, collisions_per_cycle and period. A 2-D sweep's points (index i along
     !> parameter, j along parameter2) are stored in order p = i + (j - 1) n1; in the file their
     !> axes are (point, point2).
-    subroutine write_sweep_records(out, cfg, plan, res, points, err)
+    subroutine write_sweep_records(out, cfg, plan, res, err)
         type(output_t), intent(inout) :: out
         type(config_t), intent(in) :: cfg
         type(sweep_plan_t), intent(in) :: plan
         type(sweep_result_t), intent(in) :: res
-        character(len=*), intent(in) :: points
         type(error_t), allocatable, intent(inout) :: err
         integer :: n, c, n1, n2
 
@@ -302,78 +297,59 @@ contains
         n2 = plan%n_axis2
         associate (f => out%file)
             if (plan%n_axes == 1) then
-                call h5_write(f, 'sweep/x', res%x, '1', err)
-                call h5_write(f, 'sweep/collisions_per_cycle', res%collisions, '1', err)
-                call h5_write(f, 'sweep/period', res%period, '1', err)
+                call h5_write(f, 'sweep/x', res%x, err)
+                call h5_write(f, 'sweep/collisions_per_cycle', res%collisions, err)
+                call h5_write(f, 'sweep/period', res%period, err)
             else
-                call h5_write(f, 'sweep/x', reshape(res%x, [n, c, n2, n1], order=[1, 2, 4, 3]), &
-                              '1', err)
+                call h5_write(f, 'sweep/x', reshape(res%x, [n, c, n2, n1], order=[1, 2, 4, 3]), err)
                 call h5_write(f, 'sweep/collisions_per_cycle', &
-                              reshape(res%collisions, [n2, n1], order=[2, 1]), '1', err)
+                              reshape(res%collisions, [n2, n1], order=[2, 1]), err)
                 call h5_write(f, 'sweep/period', reshape(res%period, [n, n2, n1], &
-                                                         order=[1, 3, 2]), '1', err)
+                                                         order=[1, 3, 2]), err)
             end if
         end associate
         if (allocated(err)) return
-        call output_describe(out, 'sweep/x', 'displacement from equilibrium at the '// &
-                             'section, the records of the point', 'length', &
-                             points//' record oscillator', err)
-        if (.not. allocated(err)) &
-            call output_describe(out, 'sweep/collisions_per_cycle', 'collisions per '// &
-                                 'drive cycle', 'impacts per drive cycle', points, err)
-        if (.not. allocated(err)) &
-            call output_describe(out, 'sweep/period', "period of the oscillator's "// &
-                                 "strobe record (0: none found, aperiodic)", &
-                                 'drive cycles', points//' oscillator', err)
+        call describe(out%file, 'sweep/x', err, axes=plan%n_axes)
+        call describe(out%file, 'sweep/collisions_per_cycle', err, axes=plan%n_axes)
+        call describe(out%file, 'sweep/period', err, axes=plan%n_axes)
     end subroutine write_sweep_records
 
     !> /sweep/exponents, stderr, stderr_block and ky_dimension, in the layout of
     !> write_sweep_records.
-    subroutine write_sweep_exponents(out, plan, res, points, err)
+    subroutine write_sweep_exponents(out, plan, res, err)
         type(output_t), intent(inout) :: out
         type(sweep_plan_t), intent(in) :: plan
         type(sweep_result_t), intent(in) :: res
-        character(len=*), intent(in) :: points
         type(error_t), allocatable, intent(inout) :: err
         integer :: n1, n2
 
         n1 = plan%n_axis1
         n2 = plan%n_axis2
-        call output_index(out, 'sweep/exponent', 1, plan%k, 'exponent index '// &
-                          '(descending order)', err)
+        call index_coordinate(out%file, 'sweep/exponent', 1, plan%k, err)
         if (allocated(err)) return
         associate (f => out%file)
             if (plan%n_axes == 1) then
-                call h5_write(f, 'sweep/exponents', res%exponents, 'bit', err)
-                call h5_write(f, 'sweep/stderr', res%stderr, 'bit', err)
-                call h5_write(f, 'sweep/stderr_block', res%stderr_block, '1', err)
-                call h5_write(f, 'sweep/ky_dimension', res%ky, '1', err)
+                call h5_write(f, 'sweep/exponents', res%exponents, err)
+                call h5_write(f, 'sweep/stderr', res%stderr, err)
+                call h5_write(f, 'sweep/stderr_block', res%stderr_block, err)
+                call h5_write(f, 'sweep/ky_dimension', res%ky, err)
             else
                 call h5_write(f, 'sweep/exponents', reshape(res%exponents, [plan%k, n2, n1], &
-                                                            order=[1, 3, 2]), 'bit', err)
+                                                            order=[1, 3, 2]), err)
                 call h5_write(f, 'sweep/stderr', reshape(res%stderr, [plan%k, n2, n1], &
-                                                         order=[1, 3, 2]), 'bit', err)
+                                                         order=[1, 3, 2]), err)
                 call h5_write(f, 'sweep/stderr_block', reshape(res%stderr_block, &
                                                                [plan%k, n2, n1], &
-                                                               order=[1, 3, 2]), '1', err)
+                                                               order=[1, 3, 2]), err)
                 call h5_write(f, 'sweep/ky_dimension', reshape(res%ky, [n2, n1], &
-                                                               order=[2, 1]), '1', err)
+                                                               order=[2, 1]), err)
             end if
         end associate
         if (allocated(err)) return
-        call output_describe(out, 'sweep/exponents', 'Lyapunov exponent', &
-                             'bits per drive cycle', points//' exponent', err)
-        if (.not. allocated(err)) &
-            call output_describe(out, 'sweep/stderr', 'standard error of the Lyapunov '// &
-                                 'exponent (blocking, where it levels off with the block '// &
-                                 'size)', 'bits per drive cycle', points//' exponent', err)
-        if (.not. allocated(err)) &
-            call output_describe(out, 'sweep/stderr_block', 'drive cycles per block at '// &
-                                 'which stderr was read', 'drive cycles', &
-                                 points//' exponent', err)
-        if (.not. allocated(err)) &
-            call output_describe(out, 'sweep/ky_dimension', 'Kaplan-Yorke dimension', &
-                                 '', points, err)
+        call describe(out%file, 'sweep/exponents', err, axes=plan%n_axes)
+        call describe(out%file, 'sweep/stderr', err, axes=plan%n_axes)
+        call describe(out%file, 'sweep/stderr_block', err, axes=plan%n_axes)
+        call describe(out%file, 'sweep/ky_dimension', err, axes=plan%n_axes)
     end subroutine write_sweep_exponents
 
     !> /sweep/drive_period along the omega axis of an omega sweep (2 pi / w, as
@@ -388,13 +364,11 @@ contains
 
         n1 = plan%n_axis1
         if (cfg%sweep_parameter == 'omega') then
-            call h5_write(out%file, 'sweep/drive_period', two_pi/res%values(1, :n1), '1', err)
-            if (.not. allocated(err)) call output_describe(out, 'sweep/drive_period', &
-                'drive period 2 pi / omega', 'time', 'point', err)
+            call h5_write(out%file, 'sweep/drive_period', two_pi/res%values(1, :n1), err)
+            call describe(out%file, 'sweep/drive_period', err, along=1)
         else if (plan%n_axes == 2 .and. cfg%sweep_parameter2 == 'omega') then
-            call h5_write(out%file, 'sweep/drive_period', two_pi/res%values(2, ::n1), '1', err)
-            if (.not. allocated(err)) call output_describe(out, 'sweep/drive_period', &
-                'drive period 2 pi / omega', 'time', 'point2', err)
+            call h5_write(out%file, 'sweep/drive_period', two_pi/res%values(2, ::n1), err)
+            call describe(out%file, 'sweep/drive_period', err, along=2)
         end if
     end subroutine write_drive_periods
 
@@ -404,16 +378,13 @@ contains
         character(len=*), intent(in) :: name, parameter
         real(wp), intent(in) :: values(:)
         type(error_t), allocatable, intent(inout) :: err
-        character(len=:), allocatable :: unit
         real(wp), allocatable :: coordinates(:) ! (values may be strided: a contiguous copy)
 
         if (allocated(err)) return
-        unit = parameter_units(parameter)
         coordinates = values
-        call h5_write(out%file, name, coordinates, '1', err)
+        call h5_write(out%file, name, coordinates, err)
         call h5_set_scale(out%file, name, err)
-        if (.not. allocated(err)) call output_describe(out, name, parameter//' (the swept '// &
-                                                       'parameter) at the point', unit, '', err)
+        call describe(out%file, name, err, parameter=parameter)
     end subroutine sweep_axis
 
 end module chain_sweep

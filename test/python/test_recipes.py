@@ -25,6 +25,7 @@ from pathlib import Path
 
 import pytest
 
+from file_schema import read_schema, schema_differences
 from simulator import ROOT, impactchain_exe  # noqa: F401 (fixture)
 
 SCRIPT = ROOT / "test" / "recipes" / "recipe_reference.py"
@@ -53,6 +54,17 @@ def machine_runs(impactchain_exe, tmp_path_factory) -> Path:
 
 def test_every_recipe_within_tolerance_on_this_machines_kernels(machine_runs):
     assert (machine_runs / "fig13.h5").exists()
+
+
+def test_every_recipe_file_is_the_file_schemas(machine_runs, impactchain_exe):
+    """Every dataset and attribute of every recipe's file is in the file schema (dims, dtype,
+    units, model_units, long_name as the table has them), and each holds what the table
+    says a file of its kind always holds (file_schema.py)."""
+    schema = read_schema(impactchain_exe)
+    files = sorted(machine_runs.glob("*.h5"))
+    assert len(files) == len(list((ROOT / "namelists").glob("*.nml")))
+    problems = {f.name: schema_differences(f, schema) for f in files}
+    assert {name: found for name, found in problems.items() if found} == {}
 
 
 def test_every_recipe_within_tolerance_on_a_second_kernel(impactchain_exe, tmp_path):

@@ -43,8 +43,8 @@ draw and how a figure is saved, ``_data`` what they take. Every public name is r
 # every public name of the topic modules, reachable as impactchain.figures.NAME
 from impactchain.figures._canvas import ProvenanceFigure, metadata, save
 from impactchain.figures._data import RunLike, SupportsRun, as_run, run_labels
-from impactchain.figures._style import (BAND_ALPHA, LEFT_COLOUR, OVERLAY_COLOURS, PARAMETER_UNITS,
-                                        RIGHT_COLOUR, TIME_LABEL_UNIT, WALL_STYLE, FigureError)
+from impactchain.figures._style import (BAND_ALPHA, LEFT_COLOUR, OVERLAY_COLOURS, RIGHT_COLOUR,
+                                        TIME_LABEL_UNIT, WALL_STYLE, FigureError)
 from impactchain.figures.census import (ATTRACTOR_COLOURS, MIRROR_BLEND, SAMPLE_ALPHA,
                                         basin_fractions, basin_plane, ensemble_spectra)
 from impactchain.figures.clv import (CLV_CMAP, IMPACT_COLOUR, NEAR_TANGENCY, clv_angles, clv_ipr,

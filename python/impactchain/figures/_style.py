@@ -13,6 +13,7 @@ from matplotlib import colormaps
 from matplotlib.axes import Axes
 from matplotlib.colors import BoundaryNorm, ListedColormap
 
+from impactchain import schema
 from impactchain.results import FILE_UNITS, Run
 
 
@@ -32,12 +33,6 @@ _SYMBOLS = {
     "restitution": ("restitution", "K"),
     "spacing": ("spacing", "a"),
 }
-PARAMETER_UNITS = {"n": "1", "amplitude": "length", "omega": "1/time", "damping": "1",
-                   "restitution": "1", "spacing": "length", "phase": "rad"}
-"""Units of the model parameters (reduced units, docs/model.md section 1.5); the file
-stores them as attributes without units."""
-
-
 class FigureError(ValueError):
     """The data or the options cannot make the requested figure."""
 
@@ -50,7 +45,7 @@ def _label(name: str, unit: str, symbol: str = "") -> str:
 
 def _parameter_label(name: str) -> str:
     words, symbol = _SYMBOLS.get(name, (name, ""))
-    return _label(words, PARAMETER_UNITS.get(name, "1"), symbol)
+    return _label(words, schema.parameter_label_units(name), symbol)
 
 
 def _unit(run: Run, dataset: str) -> str:

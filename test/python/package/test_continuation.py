@@ -26,7 +26,7 @@ from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 
 from conftest import write_run
-from impactchain import figures
+from impactchain import figures, schema
 from impactchain.cli import main
 from impactchain.io import (SPECIAL_KINDS, Continuation, SchemaError, read_continuation,
                             read_run)
@@ -106,57 +106,43 @@ def write_continuation(
         strobe_x = strobe_positions(values, period, n)
         x = strobe_x[:, 0, :] if strobe_x.shape[1] else np.zeros((points, n))
         re, im = multipliers(stable, n)
-        for name, count, first, long_name in (
-                ("point", points, 0, "point index"),
-                ("oscillator", n, 1, "oscillator index"),
-                ("multiplier", 2 * n, 1, "Floquet multiplier index"),
-                ("iterate", strobe_x.shape[1], 1, "section crossing within the period"),
-                ("special", len(special), 0, "special point index")):
+        for name, count, first in (("point", points, 0), ("oscillator", n, 1),
+                                   ("multiplier", 2 * n, 1),
+                                   ("iterate", strobe_x.shape[1], 1),
+                                   ("special", len(special), 0)):
             g[name] = np.arange(first, first + count, dtype=np.int32)
-            g[name].attrs.update(long_name=long_name, units="1")
+            g[name].attrs.update(schema.attributes(schema.output(f"/continuation/{name}")))
             g[name].make_scale(name)
         kinds = [kind for _, kind in special]
         kind_data = (np.array([k.encode().ljust(16) for k in kinds], dtype="S16")
                      if fixed_strings else np.array(kinds, dtype=h5py.string_dtype()))
-        datasets: dict[str, tuple[Any, str, str, str]] = {
-            "values": (np.asarray(values, dtype=float), "point",
-                       f"{parameter} (the continued parameter) at the point", "length"),
-            "x": (x, "point oscillator",
-                  "displacement from equilibrium on the section", "length"),
-            "v": (-0.5 * x, "point oscillator", "velocity on the section",
-                  "length/time"),
-            "strobe_x": (strobe_x, "point iterate oscillator",
-                         "displacement at the section crossings of the period", "length"),
-            "period": (np.asarray(period, dtype=np.int32), "point",
-                       "period of the orbit", "drive cycles"),
-            "branch": (np.asarray(branch, dtype=np.int32), "point", "branch index", ""),
-            "multipliers_re": (re, "point multiplier", "Floquet multiplier, real part", ""),
-            "multipliers_im": (im, "point multiplier", "Floquet multiplier, imaginary part",
-                               ""),
-            "stable": (np.asarray(stable, dtype=np.int8), "point", "stable orbit", ""),
-            "min_gap": (np.where(np.arange(points) == 11, 0.0,
-                                 np.linspace(0.5, 0.1, points)), "point",
-                        "smallest gap at a local minimum", "length"),
-            "min_impact_speed": (np.full(points, math.inf), "point", "smallest impact speed",
-                                 "length/time"),
-            "impacts_per_period": (np.zeros(points, dtype=np.int32), "point",
-                                   "impacts per period", "impacts per period"),
-            "residual": (np.full(points, 1e-13), "point", "Newton's last residual", ""),
-            "iterations": (np.full(points, 3, dtype=np.int32), "point", "Newton steps", ""),
-            "special_index": (np.array([i for i, _ in special], dtype=np.int32), "special",
-                              "index of the special point among the points", ""),
-            "special_kind": (kind_data, "special", "kind of the special point", ""),
-            "special_value": (np.array([values[i] for i, _ in special], dtype=float),
-                              "special", f"{parameter} at the special point", "length"),
+        # the description of each dataset is the file schema's (impactchain.schema)
+        datasets: dict[str, Any] = {
+            "values": np.asarray(values, dtype=float),
+            "x": x,
+            "v": -0.5 * x,
+            "strobe_x": strobe_x,
+            "period": np.asarray(period, dtype=np.int32),
+            "branch": np.asarray(branch, dtype=np.int32),
+            "multipliers_re": re,
+            "multipliers_im": im,
+            "stable": np.asarray(stable, dtype=np.int8),
+            "min_gap": np.where(np.arange(points) == 11, 0.0, np.linspace(0.5, 0.1, points)),
+            "min_impact_speed": np.full(points, math.inf),
+            "impacts_per_period": np.zeros(points, dtype=np.int32),
+            "residual": np.full(points, 1e-13),
+            "iterations": np.full(points, 3, dtype=np.int32),
+            "special_index": np.array([i for i, _ in special], dtype=np.int32),
+            "special_kind": kind_data,
+            "special_value": np.array([values[i] for i, _ in special], dtype=float),
         }
-        for name, (data, dims, long_name, model_units) in datasets.items():
+        for name, data in datasets.items():
             if name in leave_out:
                 continue
+            entry = schema.output(f"/continuation/{name}")
             g[name] = data
-            g[name].attrs.update(long_name=long_name, units="1")
-            if model_units:
-                g[name].attrs["model_units"] = model_units
-            for axis, dim in enumerate(dims.split()):
+            g[name].attrs.update(schema.attributes(entry, parameter))
+            for axis, dim in enumerate(schema.dims(entry)):
                 g[name].dims[axis].attach_scale(g[dim])
     return path
 
