@@ -15,6 +15,7 @@ program main
                            census_result_t, census_to_file, kind_names, wp
     use impactchain_drivers, only: checkpoint_path, catch_interrupts, cli_t, parse_command_line, &
                                    cli_run, cli_help, cli_version, cli_usage, exit_now, &
+                                   cli_schema, input_schema_json, &
                                    seconds_from_environment, checkpoint_every
     use stderr_monitor, only: stderr_monitor_t, close_progress, progress_after_from_environment
     implicit none
@@ -38,6 +39,11 @@ program main
         ! the version, then where this executable runs: compiler, BLAS and its kernels, CPU
         write (output_unit, '(a)') 'impactchain '//code_version
         write (output_unit, '(a)', advance='no') provenance_text()
+        stop
+    case (cli_schema)
+        ! the tables of inputs and outputs, for tools and the docs ("outputs": the file schema)
+        write (output_unit, '(a)') '{"schema_version": 1,'//new_line('a')//'"inputs": '// &
+            input_schema_json()//','//new_line('a')//'"outputs": []}'
         stop
     case (cli_usage)
         call usage(error_unit)
@@ -113,6 +119,7 @@ contains
             '                         IMPACTCHAIN_PROGRESS_AFTER=seconds changes the 2 s)', &
             '  -h, --help             this text', &
             '  --version              the code version', &
+            '  --schema               every input key (and output dataset) as JSON', &
             '', &
             'A run is saved as it goes: every 10 s (IMPACTCHAIN_CHECKPOINT_SECONDS=seconds', &
             'changes that) its file holds the records so far, marked complete = 0; after', &

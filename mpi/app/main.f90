@@ -40,7 +40,8 @@ program impactchain_mpi
                                    checkpoint_every, branch_record_sizes, pack_branch, &
                                    unpack_branch, output_t, output_begin, output_end, &
                                    output_abort, catch_interrupts, interrupted, cli_t, &
-                                   parse_command_line, cli_run, cli_help, cli_version, cli_usage
+                                   parse_command_line, cli_run, cli_help, cli_version, cli_usage, &
+                                   cli_schema
     implicit none
     type(config_t) :: cfg
     type(sweep_plan_t) :: plan
@@ -105,6 +106,9 @@ contains
             stop
         case (cli_usage)
             call stop_all(usage, usage_error)
+        case (cli_schema)
+            call stop_all("--schema: the schema is the same for both programs; run "// &
+                          "impactchain --schema", usage_error)
         case (cli_run)
         case default
             call stop_all(cli%message, usage_error)

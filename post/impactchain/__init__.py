@@ -2,7 +2,8 @@
 
 Modules: :mod:`impactchain.api` (the Fortran kernels on numpy arrays, through the compiled
 extension ``impactchain._kernels``), :mod:`impactchain.io` (the file layout),
-:mod:`impactchain.shockwave` (shock-wave construction), :mod:`impactchain.analysis` (period
+:mod:`impactchain.shockwave` (shock-wave construction), :mod:`impactchain.schema` (the input keys, their defaults and ranges),
+:mod:`impactchain.analysis` (period
 labels, panels), :mod:`impactchain.figures` (figure functions returning
 ``matplotlib.figure.Figure``), :mod:`impactchain.testing` (the invariants the test suites
 assert) and :mod:`impactchain.cli` (``python -m impactchain``).
@@ -10,7 +11,7 @@ assert) and :mod:`impactchain.cli` (``python -m impactchain``).
 
 __version__ = "0.1.0"
 
-_SUBMODULES = ("analysis", "api", "cli", "figures", "io", "shockwave", "testing")
+_SUBMODULES = ("analysis", "api", "cli", "figures", "io", "schema", "shockwave", "testing")
 
 
 def __getattr__(name: str) -> object:

@@ -70,6 +70,8 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from impactchain.schema import SCHEMA_DEFAULT, with_schema_defaults
+
 try:
     from impactchain import _kernels
 except ImportError as _exc:  # not built yet: say how to build it when a function is called
@@ -324,23 +326,24 @@ class PeriodicOrbit:
 # ---------------------------------------------------------------------------- functions
 
 
+@with_schema_defaults
 def simulate(
     n: int,
     amplitude: float,
     omega: float,
-    damping: float = 0.05,
-    restitution: float = 0.7,
-    spacing: float | ArrayLike = 1.0,
-    boundary: str = "fixed",
+    damping: float = SCHEMA_DEFAULT,
+    restitution: float = SCHEMA_DEFAULT,
+    spacing: float | ArrayLike = SCHEMA_DEFAULT,
+    boundary: str = SCHEMA_DEFAULT,
     x0: ArrayLike | None = None,
     v0: ArrayLike | None = None,
-    transient: int = 0,
+    transient: int = SCHEMA_DEFAULT,
     cycles: int = 100,
-    events: bool = True,
+    events: bool = SCHEMA_DEFAULT,
     *,
-    phase: float = 0.0,
-    stick_speed: float = 1.0e-9,
-    max_size_mb: float = 4096.0,
+    phase: float = SCHEMA_DEFAULT,
+    stick_speed: float = SCHEMA_DEFAULT,
+    max_size_mb: float = SCHEMA_DEFAULT,
     progress: bool = False,
 ) -> Simulation:
     """Run the chain: ``transient`` unrecorded drive cycles, then ``cycles`` recorded ones.
@@ -398,25 +401,26 @@ def simulate(
     )
 
 
+@with_schema_defaults
 def lyapunov(
     n: int,
     amplitude: float,
     omega: float,
-    damping: float = 0.05,
-    restitution: float = 0.7,
-    spacing: float | ArrayLike = 1.0,
-    boundary: str = "fixed",
+    damping: float = SCHEMA_DEFAULT,
+    restitution: float = SCHEMA_DEFAULT,
+    spacing: float | ArrayLike = SCHEMA_DEFAULT,
+    boundary: str = SCHEMA_DEFAULT,
     x0: ArrayLike | None = None,
     v0: ArrayLike | None = None,
-    transient: int = 0,
+    transient: int = SCHEMA_DEFAULT,
     cycles: int = 100,
-    vectors: int = 0,
+    vectors: int = SCHEMA_DEFAULT,
     *,
-    qr_every: int = 0,
-    window: int = 0,
-    phase: float = 0.0,
-    stick_speed: float = 1.0e-9,
-    max_size_mb: float = 4096.0,
+    qr_every: int = SCHEMA_DEFAULT,
+    window: int = SCHEMA_DEFAULT,
+    phase: float = SCHEMA_DEFAULT,
+    stick_speed: float = SCHEMA_DEFAULT,
+    max_size_mb: float = SCHEMA_DEFAULT,
     progress: bool = False,
 ) -> Lyapunov:
     """Lyapunov spectrum averaged over ``cycles`` drive cycles after ``transient``.
@@ -464,23 +468,24 @@ def lyapunov(
     )
 
 
+@with_schema_defaults(period=("lyapunov", "jacobian_cycles"))
 def floquet(
     n: int,
     amplitude: float,
     omega: float,
-    damping: float = 0.05,
-    restitution: float = 0.7,
-    spacing: float | ArrayLike = 1.0,
-    boundary: str = "fixed",
+    damping: float = SCHEMA_DEFAULT,
+    restitution: float = SCHEMA_DEFAULT,
+    spacing: float | ArrayLike = SCHEMA_DEFAULT,
+    boundary: str = SCHEMA_DEFAULT,
     x0: ArrayLike | None = None,
     v0: ArrayLike | None = None,
-    transient: int = 0,
+    transient: int = SCHEMA_DEFAULT,
     cycles: int = 1,
-    period: int = 1,
+    period: int = SCHEMA_DEFAULT,
     *,
-    phase: float = 0.0,
-    stick_speed: float = 1.0e-9,
-    max_size_mb: float = 4096.0,
+    phase: float = SCHEMA_DEFAULT,
+    stick_speed: float = SCHEMA_DEFAULT,
+    max_size_mb: float = SCHEMA_DEFAULT,
     progress: bool = False,
 ) -> Floquet:
     """Floquet multipliers: eigenvalues of the ``period``-cycle Poincare-map Jacobian at
@@ -506,20 +511,21 @@ def floquet(
     )
 
 
+@with_schema_defaults(cycles=("lyapunov", "jacobian_cycles"))
 def poincare_jacobian(
     x: ArrayLike,
     v: ArrayLike,
     amplitude: float,
     omega: float,
-    damping: float = 0.05,
-    restitution: float = 0.7,
-    spacing: float | ArrayLike = 1.0,
-    boundary: str = "fixed",
-    cycles: int = 1,
+    damping: float = SCHEMA_DEFAULT,
+    restitution: float = SCHEMA_DEFAULT,
+    spacing: float | ArrayLike = SCHEMA_DEFAULT,
+    boundary: str = SCHEMA_DEFAULT,
+    cycles: int = SCHEMA_DEFAULT,
     *,
-    phase: float = 0.0,
-    stick_speed: float = 1.0e-9,
-    max_size_mb: float = 4096.0,
+    phase: float = SCHEMA_DEFAULT,
+    stick_speed: float = SCHEMA_DEFAULT,
+    max_size_mb: float = SCHEMA_DEFAULT,
 ) -> NDArray[np.float64]:
     """Jacobian of the ``cycles``-cycle Poincare map at the state (x, v) on the section.
 
@@ -558,12 +564,13 @@ def poincare_jacobian(
     return _frozen(jac)
 
 
+@with_schema_defaults
 def random_start(
     n: int,
-    seed: int = 1,
-    x_amp: float = 0.0,
-    v_amp: float = 0.0,
-    spacing: float | ArrayLike = 1.0,
+    seed: int = SCHEMA_DEFAULT,
+    x_amp: float = SCHEMA_DEFAULT,
+    v_amp: float = SCHEMA_DEFAULT,
+    spacing: float | ArrayLike = SCHEMA_DEFAULT,
 ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """The CLI's seeded random start (``&initial kind='random'``): x_i uniform in
     [-x_amp, x_amp), v_i in [-v_amp, v_amp), from the same portable generator, so that
@@ -592,34 +599,35 @@ def random_start(
     return _frozen(x), _frozen(v)
 
 
+@with_schema_defaults
 def sweep(
     n: int,
     amplitude: float,
     omega: float,
-    damping: float = 0.05,
-    restitution: float = 0.7,
-    spacing: float | ArrayLike = 1.0,
-    boundary: str = "fixed",
+    damping: float = SCHEMA_DEFAULT,
+    restitution: float = SCHEMA_DEFAULT,
+    spacing: float | ArrayLike = SCHEMA_DEFAULT,
+    boundary: str = SCHEMA_DEFAULT,
     x0: ArrayLike | None = None,
     v0: ArrayLike | None = None,
-    transient: int = 0,
+    transient: int = SCHEMA_DEFAULT,
     cycles: int = 100,
     *,
     parameter: str,
     start: float,
     stop: float,
     step: float,
-    mode: str = "continuation",
+    mode: str = SCHEMA_DEFAULT,
     parameter2: str | None = None,
     start2: float | None = None,
     stop2: float | None = None,
     step2: float | None = None,
     lyapunov: bool = False,
-    vectors: int = 0,
-    qr_every: int = 0,
-    phase: float = 0.0,
-    stick_speed: float = 1.0e-9,
-    max_size_mb: float = 4096.0,
+    vectors: int = SCHEMA_DEFAULT,
+    qr_every: int = SCHEMA_DEFAULT,
+    phase: float = SCHEMA_DEFAULT,
+    stick_speed: float = SCHEMA_DEFAULT,
+    max_size_mb: float = SCHEMA_DEFAULT,
     threads: int = 0,
     progress: bool = False,
 ) -> Any:
@@ -793,26 +801,27 @@ def _text(name: NDArray[np.int32]) -> str:
     return bytes(np.asarray(name).astype(np.uint8)).decode()
 
 
+@with_schema_defaults
 def continuation(
     n: int,
     amplitude: float,
     omega: float,
-    damping: float = 0.05,
-    restitution: float = 0.7,
-    spacing: float | ArrayLike = 1.0,
-    boundary: str = "fixed",
+    damping: float = SCHEMA_DEFAULT,
+    restitution: float = SCHEMA_DEFAULT,
+    spacing: float | ArrayLike = SCHEMA_DEFAULT,
+    boundary: str = SCHEMA_DEFAULT,
     x0: ArrayLike | None = None,
     v0: ArrayLike | None = None,
-    transient: int = 0,
+    transient: int = SCHEMA_DEFAULT,
     *,
     parameter: str,
     stop: float,
     step: float,
-    period: int = 1,
-    max_points: int = 200,
-    doublings: int = 0,
-    phase: float = 0.0,
-    stick_speed: float = 1.0e-9,
+    period: int = SCHEMA_DEFAULT,
+    max_points: int = SCHEMA_DEFAULT,
+    doublings: int = SCHEMA_DEFAULT,
+    phase: float = SCHEMA_DEFAULT,
+    stick_speed: float = SCHEMA_DEFAULT,
     progress: bool = False,
 ) -> Any:
     """Branches of periodic orbits followed in one parameter: the CLI's ``&continuation``.
@@ -859,21 +868,22 @@ def continuation(
     return _continuation_dataset(xr, out, cfg, args)
 
 
+@with_schema_defaults
 def periodic_orbit(
     n: int,
     amplitude: float,
     omega: float,
-    damping: float = 0.05,
-    restitution: float = 0.7,
-    spacing: float | ArrayLike = 1.0,
-    boundary: str = "fixed",
+    damping: float = SCHEMA_DEFAULT,
+    restitution: float = SCHEMA_DEFAULT,
+    spacing: float | ArrayLike = SCHEMA_DEFAULT,
+    boundary: str = SCHEMA_DEFAULT,
     x0: ArrayLike | None = None,
     v0: ArrayLike | None = None,
-    transient: int = 0,
-    period: int = 1,
+    transient: int = SCHEMA_DEFAULT,
+    period: int = SCHEMA_DEFAULT,
     *,
-    phase: float = 0.0,
-    stick_speed: float = 1.0e-9,
+    phase: float = SCHEMA_DEFAULT,
+    stick_speed: float = SCHEMA_DEFAULT,
     progress: bool = False,
 ) -> PeriodicOrbit:
     """The period-``period`` orbit (p in 1..10000 drive cycles) that Newton shooting finds

@@ -1,11 +1,14 @@
 !> What the programs of this project need beyond the public API (`impactchain`): the shared
 !> command line and exit, the interrupt flag and progress lines (app/), the MPI driver's
 !> sweep and census rounds, checkpoints, packing and file writing (mpi/), the Python layer's
-!> continuation tables and argument checks (f2py/). Not an API for other projects: these
+!> continuation tables and argument checks, its configurations as namelist text (f2py/), and
+!> the input schema (`--schema`). Not an API for other projects: these
 !> names follow the drivers. It implements nothing itself.
 module impactchain_drivers
-    use chain_error, only: set_error
-    use chain_config, only: fmt_real, fmt_int, check_size, set_boundary
+    use chain_error, only: set_error, fmt_int8
+    use chain_config, only: fmt_real, fmt_int, check_size, set_boundary, read_config_text
+    use chain_inputs, only: input_schema_json
+    use chain_exact, only: exact, exact_list, fmt_logical
     use chain_branch_file, only: continuation_guess, continuation_table_t, continuation_table, &
                                  finite_or_inf
     use chain_sweep, only: plan_sweep, sweep_plan_t, sweep_result_t, sweep_result_init, &
@@ -20,13 +23,15 @@ module impactchain_drivers
     use chain_monitor, only: checkpoint_every
     use chain_output, only: output_t, output_begin, output_end, output_abort
     use chain_cli, only: cli_t, parse_command_line, cli_run, cli_help, cli_version, cli_usage, &
-                         exit_now, seconds_from_environment
+                         cli_schema, exit_now, seconds_from_environment
     use chain_interrupt, only: catch_interrupts, interrupted
     use chain_progress, only: progress_t, progress_start, progress_update, progress_within, &
                               stderr_is_terminal, progress_quiet_start
     implicit none
     private
     public :: set_error, fmt_real, fmt_int, check_size, set_boundary, continuation_guess
+    public :: read_config_text, input_schema_json, exact, exact_list, fmt_logical, fmt_int8
+    public :: cli_schema
     public :: continuation_table_t, continuation_table, finite_or_inf, plan_sweep
     public :: sweep_plan_t, sweep_result_t, sweep_result_init, run_sweep_branches
     public :: write_sweep_file, save_checkpoint, load_checkpoint, remove_file

@@ -1,6 +1,6 @@
 !> The command line both programs share:
 !>   [--quiet] [--set group.key=value]... [-o file.h5] [--overwrite] [--check] input.nml
-!> plus `--help` and `--version`. `--set` (repeatable), `-o` and `--overwrite` become
+!> plus `--help`, `--version` and `--schema` (the input schema as JSON). `--set` (repeatable), `-o` and `--overwrite` become
 !> overrides of the input's text (chain_namelist), applied in the order given; `--check`
 !> validates the input and prints it resolved, running nothing. Returns what was asked for;
 !> the programs print and exit (library code never stops; `exit_now` is the programs' way
@@ -15,13 +15,14 @@ module chain_cli
     implicit none
     private
     public :: cli_t, parse_command_line, parse_arguments, exit_now, seconds_from_environment
-    public :: cli_run, cli_help, cli_version, cli_usage, cli_error
+    public :: cli_run, cli_help, cli_version, cli_usage, cli_error, cli_schema
 
     integer, parameter :: cli_run = 0     !! run the input file
     integer, parameter :: cli_help = 1    !! print the usage and exit 0
     integer, parameter :: cli_version = 2 !! print the version and exit 0
     integer, parameter :: cli_usage = 3   !! no input given: print the usage, exit 2
     integer, parameter :: cli_error = 4   !! print `message` and exit 1
+    integer, parameter :: cli_schema = 5  !! print the schema of inputs and outputs, exit 0
     integer, parameter :: max_override = 4096 !! longest `--set` value
 
     type :: cli_t
@@ -123,6 +124,9 @@ contains
                 return
             case ('--version')
                 cli%action = cli_version
+                return
+            case ('--schema')
+                cli%action = cli_schema
                 return
             case ('--check')
                 cli%check = .true.
