@@ -12,7 +12,7 @@ module chain_bridge
                            record_sink_t, record_result_t, chain_copy_state, monitor_t, &
                            stage_events
     use impactchain_drivers, only: set_error, fmt_real, fmt_int, fmt_int8, read_config_text, &
-                                   exact, exact_list, fmt_logical
+                                   exact, exact_list, fmt_logical, namelist_string
     !$ use omp_lib, only: omp_set_num_threads
     implicit none
     private
@@ -115,11 +115,11 @@ contains
         character(len=:), allocatable :: text
 
         !$omp critical (chain_bridge_config_text)
-        text = "&sweep parameter = "//quoted(text_of(parameter))//", start = "//exact(start)// &
-               ", stop = "//exact(stop)//", step = "//exact(step)//", mode = "// &
-               quoted(text_of(mode))
+        text = "&sweep parameter = "//namelist_string(text_of(parameter))//", start = "// &
+               exact(start)//", stop = "//exact(stop)//", step = "//exact(step)//", mode = "// &
+               namelist_string(text_of(mode))
         if (len_trim(text_of(parameter2)) > 0) text = text//", parameter2 = "// &
-            quoted(text_of(parameter2))//", start2 = "//exact(start2)//", stop2 = "// &
+            namelist_string(text_of(parameter2))//", start2 = "//exact(start2)//", stop2 = "// &
             exact(stop2)//", step2 = "//exact(step2)
         text = text//" /"//new_line('a')
         !$omp end critical (chain_bridge_config_text)
@@ -132,14 +132,13 @@ contains
         integer(c_int), intent(in) :: parameter(:)
         real(wp), intent(in) :: stop, step
         integer, intent(in) :: period, max_points, doublings
-
         character(len=:), allocatable :: text
 
         !$omp critical (chain_bridge_config_text)
-        text = "&continuation parameter = "//quoted(text_of(parameter))//", stop = "// &
-               exact(stop)//", step = "//exact(step)//", period = "//fmt_int(period)// &
-               ", max_points = "//fmt_int(max_points)//", doublings = "//fmt_int(doublings)// &
-               " /"//new_line('a')
+        text = "&continuation parameter = "//namelist_string(text_of(parameter))// &
+               ", stop = "//exact(stop)//", step = "//exact(step)//", period = "// &
+               fmt_int(period)//", max_points = "//fmt_int(max_points)//", doublings = "// &
+               fmt_int(doublings)//" /"//new_line('a')
         !$omp end critical (chain_bridge_config_text)
     end function continuation_group
 
@@ -153,20 +152,6 @@ contains
             text(j:j) = achar(iand(int(bytes(j)), 255))
         end do
     end function text_of
-
-    !> A namelist string: 'it''s'.
-    pure function quoted(raw) result(text)
-        character(len=*), intent(in) :: raw
-        character(len=:), allocatable :: text
-        integer :: j
-
-        text = "'"
-        do j = 1, len(raw)
-            text = text//raw(j:j)
-            if (raw(j:j) == "'") text = text//"'"
-        end do
-        text = text//"'"
-    end function quoted
 
     !> The configuration of the namelist with these values, read by the CLI's reader (so its
     !> checks and messages are the CLI's, and its values the same bits: reals are written to
@@ -199,12 +184,13 @@ contains
         text = "&chain n = "//fmt_int(n)//", spacing = "//exact_list(spacing)//", damping = "// &
                exact(damping)//", restitution = "//exact(restitution)//", amplitude = "// &
                exact(amplitude)//", omega = "//exact(omega)//", boundary = "// &
-               quoted(text_of(boundary))//" /"//nl
+               namelist_string(text_of(boundary))//" /"//nl
         if (present(seed)) then
             text = text//"&initial kind = 'random', seed = "//fmt_int(seed)//", x_amp = "// &
                    exact(x_amp)//", v_amp = "//exact(v_amp)//" /"//nl
         else if (explicit) then
-            text = text//"&initial kind = 'explicit', x0 = "//exact_list(x0)
+            text = text//"&initial kind = 'explicit'"
+            if (size(x0) > 0) text = text//", x0 = "//exact_list(x0)
             if (size(v0) > 0) text = text//", v0 = "//exact_list(v0)
             text = text//" /"//nl
         end if

@@ -71,6 +71,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from impactchain.schema import SCHEMA_DEFAULT, with_schema_defaults
+from impactchain.schema import key as schema_key
 
 try:
     from impactchain import _kernels
@@ -125,7 +126,6 @@ _CONTINUATION_STAGES = {**_STAGES, 3: ("orbits", "orbit")}
 #: (chain_model's parameter_units; None: dimensionless, no model_units attribute)
 _PARAMETER_UNITS = {"amplitude": "length", "omega": "1/time", "damping": "1/time",
                     "restitution": None, "spacing": "length"}
-_MAX_N = 10_000_000  # chain_config's max_n: n is refused beyond it before any allocation
 _INT32 = (-(2**31), 2**31 - 1)
 _INT64 = (-(2**63), 2**63 - 1)
 _FIRST_EVENT_CAPACITY = (1024, 1 << 20)  # bounds of the first guess of the event count
@@ -1375,8 +1375,10 @@ def _n(value: Any) -> int:
     """n, refused outside the CLI's range before anything of size n is made (the kernels
     check it too, but only after their arguments, sized by n, exist)."""
     n = _integer(value, "n")
-    if not 1 <= n <= _MAX_N:
-        raise ValueError(f"&chain: n = {n} is outside [1, {_MAX_N}]")
+    # (refused here, before any allocation, as the reader would: the table's range)
+    most = int(schema_key("chain", "n")["max"])
+    if not 1 <= n <= most:
+        raise ValueError(f"&chain: n = {n} is outside [1, {most}]")
     return n
 
 

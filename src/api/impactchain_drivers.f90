@@ -8,7 +8,7 @@ module impactchain_drivers
     use chain_error, only: set_error, fmt_int8
     use chain_config, only: fmt_real, fmt_int, check_size, set_boundary, read_config_text
     use chain_inputs, only: input_schema_json
-    use chain_exact, only: exact, exact_list, fmt_logical
+    use chain_exact, only: exact, exact_list, fmt_logical, namelist_string
     use chain_branch_file, only: continuation_guess, continuation_table_t, continuation_table, &
                                  finite_or_inf
     use chain_sweep, only: plan_sweep, sweep_plan_t, sweep_result_t, sweep_result_init, &
@@ -31,6 +31,7 @@ module impactchain_drivers
     private
     public :: set_error, fmt_real, fmt_int, check_size, set_boundary, continuation_guess
     public :: read_config_text, input_schema_json, exact, exact_list, fmt_logical, fmt_int8
+    public :: namelist_string
     public :: cli_schema
     public :: continuation_table_t, continuation_table, finite_or_inf, plan_sweep
     public :: sweep_plan_t, sweep_result_t, sweep_result_init, run_sweep_branches

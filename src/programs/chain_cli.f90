@@ -1,7 +1,8 @@
 !> The command line both programs share:
 !>   [--quiet] [--set group.key=value]... [-o file.h5] [--overwrite] [--check] input.nml
-!> plus `--help`, `--version` and `--schema` (the input schema as JSON). `--set` (repeatable), `-o` and `--overwrite` become
-!> overrides of the input's text (chain_namelist), applied in the order given; `--check`
+!> plus `--help`, `--version` and `--schema` (the input schema as JSON). `--set` (repeatable),
+!> `-o` and `--overwrite` become overrides of the input's text (chain_namelist), applied in the
+!> order given; `--check`
 !> validates the input and prints it resolved, running nothing. Returns what was asked for;
 !> the programs print and exit (library code never stops; `exit_now` is the programs' way
 !> out after an error). Infrastructure, no model section.

@@ -1,5 +1,5 @@
 !> Values as namelist text that reads back to the same value: reals in the fewest significant
-!> digits that do (2.2, 0.05, 1e-09), lists of them, logicals. Used by the echo of the
+!> digits that do (2.2, 0.05, 1e-09), lists of them, logicals, strings. Used by the echo of the
 !> configuration and by the input schema's JSON. Infrastructure, no model section.
 module chain_exact
     use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
@@ -7,7 +7,7 @@ module chain_exact
     use chain_error, only: fmt_int
     implicit none
     private
-    public :: exact, exact_list, fmt_logical
+    public :: exact, exact_list, fmt_logical, namelist_string
 
     !> es30.(d - 1)e4 for d significant digits (at least 2 written).
     character(len=*), parameter :: digit_formats(17) = [character(len=11) :: &
@@ -113,5 +113,19 @@ contains
         text = merge('.true. ', '.false.', flag)
         text = trim(text)
     end function fmt_logical
+
+    !> A namelist string: it's -> 'it''s'.
+    pure function namelist_string(raw) result(text)
+        character(len=*), intent(in) :: raw
+        character(len=:), allocatable :: text
+        integer :: j
+
+        text = "'"
+        do j = 1, len(raw)
+            text = text//raw(j:j)
+            if (raw(j:j) == "'") text = text//"'"
+        end do
+        text = text//"'"
+    end function namelist_string
 
 end module chain_exact

@@ -6,10 +6,10 @@
 module chain_input_values
     use chain_kinds, only: wp, i8
     use chain_error, only: error_t, set_error, fmt_int, fmt_int8
-    use chain_exact, only: exact, fmt_logical
+    use chain_exact, only: exact, fmt_logical, namelist_string
     use chain_namelist, only: token_t, given_t, given_items, lower
-    use chain_inputs, only: input_key_t, input_keys, find_input, check_input, choices_listed, key_integer, key_real, &
-                            key_logical, key_string
+    use chain_inputs, only: input_key_t, input_keys, find_input, check_input, choices_listed, &
+                            key_integer, key_real, key_logical, key_string
     implicit none
     private
     public :: input_values_t, read_inputs, check_inputs, echo_inputs, set_input
@@ -191,7 +191,7 @@ contains
         case default
             text = unquoted(token)
             if (len_trim(input_keys(k)%choices) > 0) text = lower(trim(adjustl(text)))
-            text = "'"//doubled_quotes(text)//"'"
+            text = namelist_string(text)
         end select
     end function echo_value
 
@@ -375,17 +375,5 @@ contains
             j = j + 1
         end do
     end function unquoted
-
-    pure function doubled_quotes(raw) result(text)
-        character(len=*), intent(in) :: raw
-        character(len=:), allocatable :: text
-        integer :: j
-
-        text = ''
-        do j = 1, len(raw)
-            text = text//raw(j:j)
-            if (raw(j:j) == "'") text = text//"'"
-        end do
-    end function doubled_quotes
 
 end module chain_input_values

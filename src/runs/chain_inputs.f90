@@ -158,12 +158,12 @@ module chain_inputs
                     'max_points = 1', help='the value the branch runs towards'), &
         input_key_t('continuation', 'step', key_real, default_text='required unless '// &
                     'max_points = 1', help='first step of the parameter'), &
-        input_key_t('continuation', 'period', key_integer, default='1', range='[1, 10000]', &
+        input_key_t('continuation', 'period', key_integer, default='1', range='1..10000', &
                     low=1, high=1.0e4_wp, units='cycles', help='period of the orbit'), &
         input_key_t('continuation', 'max_points', key_integer, default='200', &
                     range='>= 1', low=1, units='1', &
                     help='most orbits along the branch (1: Newton only)'), &
-        input_key_t('continuation', 'doublings', key_integer, default='0', range='[0, 8]', &
+        input_key_t('continuation', 'doublings', key_integer, default='0', range='0..8', &
                     low=0, high=8, units='1', help='period doublings followed'), &
         input_key_t('census', 'samples', key_integer, default='100', &
                     default_text='100 (plane_points**2 with a plane)', &
@@ -182,7 +182,8 @@ module chain_inputs
         input_key_t('census', 'mirror', key_string, default="'merge'", &
                     choices='merge separate', help='mirror images: one attractor or two'), &
         input_key_t('census', 'plane', key_string, list=.true., most=2, &
-                    default_text='none', help="a plane of two start coordinates, 'x<i>' or 'v<i>'"), &
+                    default_text='none', &
+                    help="a plane of two start coordinates, 'x<i>' or 'v<i>'"), &
         input_key_t('census', 'plane_range', key_real, list=.true., most=4, &
                     default_text='none', units='', &
                     help='min, max of the first coordinate, then of the second'), &
@@ -222,10 +223,13 @@ contains
     pure function outside_message(spec, value_text) result(text)
         type(input_key_t), intent(in) :: spec
         character(len=*), intent(in) :: value_text
-        character(len=:), allocatable :: text
+        character(len=:), allocatable :: text, verb
 
-        text = "&"//trim(spec%group)//": "//trim(spec%name)//" = "//value_text// &
-               " is outside "//trim(spec%range)
+        ! ("n = 0 is outside [1, 10000000]", "max_points = 0 must be >= 1")
+        verb = " is outside "
+        if (scan(spec%range(1:1), '<>') > 0) verb = " must be "
+        text = "&"//trim(spec%group)//": "//trim(spec%name)//" = "//value_text//verb// &
+               trim(spec%range)
     end function outside_message
 
     !> A number of key k against the table's static range (a NaN is outside every range).

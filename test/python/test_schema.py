@@ -193,3 +193,31 @@ def test_defaults_are_what_a_run_without_the_key_uses_bit_for_bit(schema, impact
         assert contents(given) == reference, key
         compared += 1
     assert compared >= 15
+
+
+def test_python_reads_the_same_table_and_takes_its_defaults(schema):
+    """impactchain.schema.inputs() is --schema's "inputs" (read from the extension, never
+    re-typed), and the API's keyword defaults are the table's (help() shows them)."""
+    import inspect
+
+    from impactchain import api
+    from impactchain import schema as py_schema
+
+    assert py_schema.inputs() == schema["inputs"]
+    table = {(k["group"], k["name"]): k["default"] for k in schema["inputs"]}
+    signature = inspect.signature(api.simulate)
+    for name, group in [("damping", "chain"), ("restitution", "chain"), ("spacing", "chain"),
+                        ("boundary", "chain"), ("transient", "run"), ("phase", "run"),
+                        ("stick_speed", "run"), ("max_size_mb", "output")]:
+        assert signature.parameters[name].default == table[(group, name)], name
+    assert signature.parameters["events"].default == table[("run", "record_events")]
+    assert inspect.signature(api.floquet).parameters["period"].default == \
+        table[("lyapunov", "jacobian_cycles")]
+    continuation = inspect.signature(api.continuation).parameters
+    for name in ("period", "max_points", "doublings"):
+        assert continuation[name].default == table[("continuation", name)], name
+    assert inspect.signature(api.sweep).parameters["mode"].default == table[("sweep", "mode")]
+    random = inspect.signature(api.random_start).parameters
+    for name in ("seed", "x_amp", "v_amp"):
+        assert random[name].default == table[("initial", name)], name
+    assert "damping: 'float' = 0.05" in str(signature)
