@@ -323,6 +323,11 @@ contains
         character(len=*), intent(in) :: group, key
         character(len=:), allocatable :: text
 
+        ! (a configuration not read from text, made in code: the table's defaults)
+        if (.not. allocated(store%keys)) then
+            text = trim(input_keys(slot_of(group, key))%default)
+            return
+        end if
         text = ''
         associate (slot => store%keys(slot_of(group, key)))
             if (.not. allocated(slot%values)) return
