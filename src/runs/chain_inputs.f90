@@ -68,6 +68,10 @@ module chain_inputs
                     high=1.0e6_wp, units='length/time', help='a random start: largest |v|'), &
         input_key_t('initial', 'file', key_string, default="''", units='', &
                     help="a file start: an earlier run's file, its final state"), &
+        input_key_t('initial', 'kick', key_real, default='0.0', range='[-1e6, 1e6]', &
+                    low=-1.0e6_wp, high=1.0e6_wp, units='length/time', &
+                    help='velocity added to oscillator 1 at t = 0 (an impulse at the left '// &
+                    "end); not to a file's start"), &
         input_key_t('initial', 'x0', key_real, list=.true., most=max_list, &
                     default_text='none', units='length', &
                     help='an explicit start: n displacements'), &
