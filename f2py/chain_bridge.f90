@@ -49,6 +49,7 @@ module chain_bridge
         procedure :: put_strobe => array_put_strobe
         procedure :: put_events => array_put_events
         procedure :: put_windows => array_put_windows
+        procedure :: attach => array_attach
     end type array_sink_t
 
     !> A control array shared with the caller while a call runs (the Python layer polls it from
@@ -295,6 +296,33 @@ contains
             bytes(j) = iachar(text(j:j))
         end do
     end subroutine put_text
+
+    !> Point the sink at the caller's arrays: strobe records when `strobe`, events when
+    !> `events`, finite-time exponents when `windows_kept`.
+    subroutine array_attach(sink, strobe, events, windows_kept, x, v, cycle, time, speed, site, &
+                            kind, windows, window_cycle)
+        class(array_sink_t), intent(inout) :: sink
+        logical, intent(in) :: strobe, events, windows_kept
+        real(wp), intent(inout), target :: x(:, :), v(:, :), time(:), speed(:), windows(:, :)
+        integer(i8), intent(inout), target :: cycle(:), window_cycle(:)
+        integer, intent(inout), target :: site(:), kind(:)
+
+        if (strobe) then
+            sink%x => x
+            sink%v => v
+            sink%cycle => cycle
+        end if
+        if (events) then
+            sink%time => time
+            sink%speed => speed
+            sink%site => site
+            sink%kind => kind
+        end if
+        if (windows_kept) then
+            sink%windows => windows
+            sink%window_cycle => window_cycle
+        end if
+    end subroutine array_attach
 
     subroutine array_put_strobe(sink, n_records, first, x, v, cycle, err)
         class(array_sink_t), intent(inout) :: sink

@@ -120,21 +120,8 @@ subroutine ic_run(n, nsp, spacing, damping, restitution, amplitude, omega, nb, b
                          status_internal, status, msg_len, message)
         return
     end if
-    if (keep_strobe /= 0) then
-        sink%x => x
-        sink%v => v
-        sink%cycle => cycle
-    end if
-    if (cfg%record%record_events) then
-        sink%time => ev_time
-        sink%speed => ev_speed
-        sink%site => ev_site
-        sink%kind => ev_kind
-    end if
-    if (window > 0) then
-        sink%windows => windows
-        sink%window_cycle => window_cycle
-    end if
+    call sink%attach(keep_strobe /= 0, cfg%record%record_events, window > 0, x, v, cycle, &
+                     ev_time, ev_speed, ev_site, ev_kind, windows, window_cycle)
     monitor%control => control
     call record_cycles(cfg%record, chain, sink, res, err, monitor)
     if (call_ended(control, err, status, msg_len, message)) return
