@@ -1,7 +1,7 @@
 !> Support for the f2py layer (`impactchain_f2py.f90`); f2py never sees this module.
 !>
-!> It turns plain arguments into the same `config_t` the namelist reader builds, so that
-!> `validate_config` and `check_size` give the CLI's own messages; it provides a record sink
+!> It turns plain arguments into namelist text read by the CLI's own reader, so that the
+!> configuration, its checks and their messages are the CLI's; it provides a record sink
 !> that writes strobe records and events straight into arrays owned by the caller (numpy); and
 !> it copies error messages into a buffer of byte values; it shares a small control array with
 !> the Python caller during a call (stop requests, progress). There is no physics here: every
@@ -11,11 +11,12 @@ module chain_bridge
     use impactchain, only: wp, i8, error_t, config_t, lyapunov_vectors, event_log_t, chain_t, &
                            record_sink_t, record_result_t, chain_copy_state, monitor_t, &
                            stage_events
-    use impactchain_drivers, only: set_error, fmt_real, fmt_int, set_boundary
+    use impactchain_drivers, only: set_error, fmt_real, fmt_int, fmt_int8, read_config_text, &
+                                   exact, exact_list, fmt_logical, namelist_string
     !$ use omp_lib, only: omp_set_num_threads
     implicit none
     private
-    public :: array_sink_t, shared_monitor_t, make_config, set_sweep, set_continuation
+    public :: array_sink_t, shared_monitor_t, make_config, sweep_group, continuation_group
     public :: put_message, put_text
     public :: run_sizes_ok, put_run_results, use_threads, call_ended
     public :: status_ok, status_invalid, status_failed, status_capacity, status_internal
@@ -48,6 +49,7 @@ module chain_bridge
         procedure :: put_strobe => array_put_strobe
         procedure :: put_events => array_put_events
         procedure :: put_windows => array_put_windows
+        procedure :: attach => array_attach
     end type array_sink_t
 
     !> A control array shared with the caller while a call runs (the Python layer polls it from
@@ -105,44 +107,41 @@ contains
         !$ if (threads > 0) call omp_set_num_threads(threads)
     end subroutine use_threads
 
-    !> Add the &sweep group with these values (names as byte values, lower case; parameter2
-    !> empty for a 1-D sweep) to a configuration made by make_config.
-    subroutine set_sweep(cfg, parameter, start, stop, step, mode, parameter2, start2, stop2, &
-                         step2)
-        type(config_t), intent(inout) :: cfg
+    !> The &sweep group with these values (names as byte values, lower case; parameter2
+    !> empty for a 1-D sweep), for make_config's `groups`.
+    function sweep_group(parameter, start, stop, step, mode, parameter2, start2, stop2, &
+                         step2) result(text)
         integer(c_int), intent(in) :: parameter(:), mode(:), parameter2(:)
         real(wp), intent(in) :: start, stop, step, start2, stop2, step2
+        character(len=:), allocatable :: text
 
-        cfg%sweep = .true.
-        cfg%sweep_parameter = text_of(parameter)
-        cfg%sweep_mode = text_of(mode)
-        cfg%sweep_parameter2 = text_of(parameter2)
-        cfg%sweep_start = start
-        cfg%sweep_stop = stop
-        cfg%sweep_step = step
-        if (len(cfg%sweep_parameter2) > 0) then
-            cfg%sweep_start2 = start2
-            cfg%sweep_stop2 = stop2
-            cfg%sweep_step2 = step2
-        end if
-    end subroutine set_sweep
+        !$omp critical (chain_bridge_config_text)
+        text = "&sweep parameter = "//namelist_string(text_of(parameter))//", start = "// &
+               exact(start)//", stop = "//exact(stop)//", step = "//exact(step)//", mode = "// &
+               namelist_string(text_of(mode))
+        if (len_trim(text_of(parameter2)) > 0) text = text//", parameter2 = "// &
+            namelist_string(text_of(parameter2))//", start2 = "//exact(start2)//", stop2 = "// &
+            exact(stop2)//", step2 = "//exact(step2)
+        text = text//" /"//new_line('a')
+        !$omp end critical (chain_bridge_config_text)
+    end function sweep_group
 
-    !> Add the &continuation group with these values (the parameter's name as byte values,
-    !> lower case) to a configuration made by make_config.
-    subroutine set_continuation(cfg, parameter, stop, step, period, max_points, doublings)
-        type(config_t), intent(inout) :: cfg
+    !> The &continuation group with these values (the parameter's name as byte values, lower
+    !> case), for make_config's `groups`.
+    function continuation_group(parameter, stop, step, period, max_points, doublings) &
+        result(text)
         integer(c_int), intent(in) :: parameter(:)
         real(wp), intent(in) :: stop, step
         integer, intent(in) :: period, max_points, doublings
+        character(len=:), allocatable :: text
 
-        cfg%continuation = .true.
-        cfg%cont_parameter = text_of(parameter)
-        cfg%cont_stop = stop
-        cfg%cont_step = step
-        cfg%cont_period = period
-        cfg%cont_max_points = max_points
-        cfg%cont_doublings = doublings
-    end subroutine set_continuation
+        !$omp critical (chain_bridge_config_text)
+        text = "&continuation parameter = "//namelist_string(text_of(parameter))// &
+               ", stop = "//exact(stop)//", step = "//exact(step)//", period = "// &
+               fmt_int(period)//", max_points = "//fmt_int(max_points)//", doublings = "// &
+               fmt_int(doublings)//" /"//new_line('a')
+        !$omp end critical (chain_bridge_config_text)
+    end function continuation_group
 
     !> Byte values 0..255 as text.
     pure function text_of(bytes) result(text)
@@ -155,13 +154,16 @@ contains
         end do
     end function text_of
 
-    !> The configuration a namelist with these values would give. `spacing` has one value
-    !> (uniform) or n+1 values, as in &chain; `boundary` is the lower-cased name as byte values;
-    !> `explicit` selects &initial kind = 'explicit' (x0, v0) rather than 'rest'.
+    !> The configuration of the namelist with these values, read by the CLI's reader (so its
+    !> checks and messages are the CLI's, and its values the same bits: reals are written to
+    !> full precision). `spacing` has one value (uniform) or n+1 values, as in &chain;
+    !> `boundary` is the lower-cased name as byte values; `explicit` selects &initial kind =
+    !> 'explicit' (x0, v0) rather than 'rest', and seed, x_amp, v_amp kind = 'random';
+    !> `window` is &lyapunov's; `groups`, more groups (sweep_group, continuation_group).
     subroutine make_config(cfg, n, spacing, damping, restitution, amplitude, omega, boundary, &
                            explicit, x0, v0, transient, cycles, phase, stick_speed, &
                            max_size_mb, record_events, lyapunov, vectors, qr_every, jacobian, &
-                           jacobian_cycles, err)
+                           jacobian_cycles, err, window, seed, x_amp, v_amp, groups)
         type(config_t), intent(out) :: cfg
         integer, intent(in) :: n, vectors, qr_every, jacobian_cycles
         real(wp), intent(in) :: spacing(:), damping, restitution, amplitude, omega
@@ -170,44 +172,41 @@ contains
         logical, intent(in) :: explicit, record_events, lyapunov, jacobian
         integer(i8), intent(in) :: transient, cycles
         type(error_t), allocatable, intent(out) :: err
+        integer, intent(in), optional :: window, seed
+        real(wp), intent(in), optional :: x_amp, v_amp
+        character(len=*), intent(in), optional :: groups
+        character(len=:), allocatable :: text
+        character(len=*), parameter :: nl = new_line('a')
 
-        cfg%model%n = n
-        if (size(spacing) == 1) then
-            allocate (cfg%model%spacing(max(n + 1, 1)))
-            cfg%model%spacing = spacing(1)
-        else
-            cfg%model%spacing = spacing
+        ! one thread at a time (here, in sweep_group and continuation_group): the Python
+        ! layer's threads writing and reading numbers as text at once garbled some (internal
+        ! I/O of gfortran 12 is not safe in threads); the kernels then run in parallel
+        !$omp critical (chain_bridge_config_text)
+        text = "&chain n = "//fmt_int(n)//", spacing = "//exact_list(spacing)//", damping = "// &
+               exact(damping)//", restitution = "//exact(restitution)//", amplitude = "// &
+               exact(amplitude)//", omega = "//exact(omega)//", boundary = "// &
+               namelist_string(text_of(boundary))//" /"//nl
+        if (present(seed)) then
+            text = text//"&initial kind = 'random', seed = "//fmt_int(seed)//", x_amp = "// &
+                   exact(x_amp)//", v_amp = "//exact(v_amp)//" /"//nl
+        else if (explicit) then
+            text = text//"&initial kind = 'explicit'"
+            if (size(x0) > 0) text = text//", x0 = "//exact_list(x0)
+            if (size(v0) > 0) text = text//", v0 = "//exact_list(v0)
+            text = text//" /"//nl
         end if
-        cfg%model%damping = damping
-        cfg%model%restitution = restitution
-        cfg%model%amplitude = amplitude
-        cfg%model%omega = omega
-        call set_boundary(cfg%model, text_of(boundary), err)
-        if (explicit) then
-            cfg%initial_kind = 'explicit'
-        else
-            cfg%initial_kind = 'rest'
-        end if
-        cfg%initial_file = ''
-        cfg%x0 = x0
-        cfg%v0 = v0
-        cfg%record%transient = transient
-        cfg%record%cycles = cycles
-        cfg%record%phase = phase
-        cfg%model%stick_speed = stick_speed
-        cfg%record%record_events = record_events
-        cfg%record%lyapunov = lyapunov
-        cfg%record%vectors = vectors
-        cfg%record%qr_every = qr_every
-        cfg%record%jacobian = jacobian
-        cfg%record%jacobian_cycles = jacobian_cycles
-        cfg%output_file = '(python)'
-        cfg%max_size_mb = max_size_mb
-        cfg%sweep = .false.
-        cfg%sweep_mode = 'continuation'
-        cfg%sweep_parameter = ''
-        cfg%sweep_parameter2 = ''
-        cfg%input_text = ''
+        text = text//"&run transient = "//fmt_int8(transient)//", cycles = "// &
+               fmt_int8(cycles)//", phase = "//exact(phase)//", stick_speed = "// &
+               exact(stick_speed)//", record_events = "//fmt_logical(record_events)//" /"//nl// &
+               "&lyapunov enabled = "//fmt_logical(lyapunov)//", vectors = "// &
+               fmt_int(vectors)//", qr_every = "//fmt_int(qr_every)//", jacobian = "// &
+               fmt_logical(jacobian)//", jacobian_cycles = "//fmt_int(jacobian_cycles)
+        if (present(window)) text = text//", window = "//fmt_int(window)
+        text = text//" /"//nl//"&output file = '(python)', max_size_mb = "// &
+               exact(max_size_mb)//" /"//nl
+        if (present(groups)) text = text//groups
+        call read_config_text('python arguments', text, cfg, err)
+        !$omp end critical (chain_bridge_config_text)
     end subroutine make_config
 
     !> Do ic_run's caller-given sizes fit the (validated) configuration? nf = n always; the
@@ -297,6 +296,33 @@ contains
             bytes(j) = iachar(text(j:j))
         end do
     end subroutine put_text
+
+    !> Point the sink at the caller's arrays: strobe records when `strobe`, events when
+    !> `events`, finite-time exponents when `windows_kept`.
+    subroutine array_attach(sink, strobe, events, windows_kept, x, v, cycle, time, speed, site, &
+                            kind, windows, window_cycle)
+        class(array_sink_t), intent(inout) :: sink
+        logical, intent(in) :: strobe, events, windows_kept
+        real(wp), intent(inout), target :: x(:, :), v(:, :), time(:), speed(:), windows(:, :)
+        integer(i8), intent(inout), target :: cycle(:), window_cycle(:)
+        integer, intent(inout), target :: site(:), kind(:)
+
+        if (strobe) then
+            sink%x => x
+            sink%v => v
+            sink%cycle => cycle
+        end if
+        if (events) then
+            sink%time => time
+            sink%speed => speed
+            sink%site => site
+            sink%kind => kind
+        end if
+        if (windows_kept) then
+            sink%windows => windows
+            sink%window_cycle => window_cycle
+        end if
+    end subroutine array_attach
 
     subroutine array_put_strobe(sink, n_records, first, x, v, cycle, err)
         class(array_sink_t), intent(inout) :: sink

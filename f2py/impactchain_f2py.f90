@@ -1,10 +1,10 @@
 !> The thin layer wrapped by f2py into `impactchain._kernels` (SHTOOLS' PythonWrapper
 !> pattern): plain external subroutines with explicit-shape c_double / c_int / c_int64_t
-!> arrays. Only these seven routines cross into Python; `impactchain.api`
+!> arrays. Only these routines cross into Python; `impactchain.api`
 !> (python/impactchain/api.py) is the interface people use.
 !>
-!> Each routine builds the `config_t` a namelist with the same values would give, checks
-!> it with the library's `validate_config` (so errors carry the CLI's messages), and calls the
+!> Each routine writes the namelist of its arguments and reads it with the CLI's reader
+!> (chain_bridge's make_config: the same checks, messages and values as the CLI), and calls the
 !> same kernels as the CLI: `start_chain` and `record_cycles` (what `simulate_to_file` runs, with a
 !> sink writing into the caller's arrays instead of an HDF5 file), `poincare_jacobian`, the
 !> sweep's `run_sweep_branches` or the continuation's `run_continuation`.
@@ -53,7 +53,7 @@ subroutine ic_run(n, nsp, spacing, damping, restitution, amplitude, omega, nb, b
                   stderr_bits, stderr_cycles, per_time, ky, jac, mult_re, mult_im, windows, &
                   window_cycle, control, status, msg_len, message)
     use, intrinsic :: iso_c_binding, only: c_int, c_int64_t, c_double
-    use impactchain, only: i8, error_t, config_t, validate_config, chain_t, record_result_t, &
+    use impactchain, only: i8, error_t, config_t, chain_t, record_result_t, &
                            record_cycles, start_chain
     use impactchain_drivers, only: check_size
     use chain_bridge, only: array_sink_t, shared_monitor_t, make_config, put_message, &
@@ -103,9 +103,8 @@ subroutine ic_run(n, nsp, spacing, damping, restitution, amplitude, omega, nb, b
     call make_config(cfg, int(n), spacing, damping, restitution, amplitude, omega, boundary, &
                      explicit /= 0, x0, v0, int(transient, i8), int(cycles, i8), phase, &
                      stick_speed, max_size_mb, record_events /= 0, lyapunov /= 0, &
-                     int(vectors), int(qr_every), jacobian /= 0, int(jacobian_cycles), err)
-    cfg%record%window = int(window)
-    if (.not. allocated(err)) call validate_config(cfg, err)
+                     int(vectors), int(qr_every), jacobian /= 0, int(jacobian_cycles), err, &
+                     window=int(window))
     if (.not. allocated(err)) call check_size(cfg, err)
     if (.not. allocated(err)) call start_chain(cfg, chain, err)
     if (allocated(err)) then
@@ -121,21 +120,8 @@ subroutine ic_run(n, nsp, spacing, damping, restitution, amplitude, omega, nb, b
                          status_internal, status, msg_len, message)
         return
     end if
-    if (keep_strobe /= 0) then
-        sink%x => x
-        sink%v => v
-        sink%cycle => cycle
-    end if
-    if (cfg%record%record_events) then
-        sink%time => ev_time
-        sink%speed => ev_speed
-        sink%site => ev_site
-        sink%kind => ev_kind
-    end if
-    if (window > 0) then
-        sink%windows => windows
-        sink%window_cycle => window_cycle
-    end if
+    call sink%attach(keep_strobe /= 0, cfg%record%record_events, window > 0, x, v, cycle, &
+                     ev_time, ev_speed, ev_site, ev_kind, windows, window_cycle)
     monitor%control => control
     call record_cycles(cfg%record, chain, sink, res, err, monitor)
     if (call_ended(control, err, status, msg_len, message)) return
@@ -156,7 +142,7 @@ subroutine ic_jacobian(nsp, spacing, damping, restitution, amplitude, omega, nb,
                        nx0, x0, nv0, v0, phase, stick_speed, max_size_mb, jacobian_cycles, &
                        dry_run, mj, jac, status, msg_len, message)
     use, intrinsic :: iso_c_binding, only: c_int, c_double
-    use impactchain, only: wp, i8, error_t, config_t, validate_config, chain_t, &
+    use impactchain, only: wp, i8, error_t, config_t, chain_t, &
                            chain_on_section, poincare_jacobian
     use impactchain_drivers, only: check_size
     use chain_bridge, only: make_config, put_message, status_ok, &
@@ -179,7 +165,6 @@ subroutine ic_jacobian(nsp, spacing, damping, restitution, amplitude, omega, nb,
     call make_config(cfg, int(nx0), spacing, damping, restitution, amplitude, omega, boundary, &
                      .true., x0, v0, 0_i8, 1_i8, phase, stick_speed, max_size_mb, .false., &
                      .false., 0, 1, .true., int(jacobian_cycles), err)
-    if (.not. allocated(err)) call validate_config(cfg, err)
     if (.not. allocated(err)) call check_size(cfg, err)
     if (.not. allocated(err)) then
         allocate (v_start(cfg%model%n))
@@ -210,7 +195,7 @@ end subroutine ic_jacobian
 subroutine ic_random_start(n, nsp, spacing, seed, x_amp, v_amp, dry_run, nf, x, v, status, &
                            msg_len, message)
     use, intrinsic :: iso_c_binding, only: c_int, c_double
-    use impactchain, only: wp, i8, error_t, config_t, validate_config, initial_state, &
+    use impactchain, only: wp, i8, error_t, config_t, initial_state, &
                            chain_state_t
     use chain_bridge, only: make_config, put_message, status_ok, status_invalid, &
                             status_internal
@@ -234,12 +219,7 @@ subroutine ic_random_start(n, nsp, spacing, seed, x_amp, v_amp, dry_run, nf, x, 
                      [iachar('f'), iachar('i'), iachar('x'), iachar('e'), iachar('d')], &
                      .false., no_list, &
                      no_list, 0_i8, 1_i8, 0.0_wp, 1.0e-9_wp, 4096.0_wp, .false., .false., 0, &
-                     1, .false., 1, err)
-    cfg%initial_kind = 'random'
-    cfg%seed = seed
-    cfg%x_amp = x_amp
-    cfg%v_amp = v_amp
-    if (.not. allocated(err)) call validate_config(cfg, err)
+                     1, .false., 1, err, seed=int(seed), x_amp=x_amp, v_amp=v_amp)
     if (.not. allocated(err)) call initial_state(cfg, start, err)
     if (allocated(err)) then
         call put_message(err%message, status_invalid, status, msg_len, message)
@@ -272,10 +252,10 @@ subroutine ic_sweep(n, nsp, spacing, damping, restitution, amplitude, omega, nb,
                     exponents, stderr_bits, stderr_cycles, ky, control, status, msg_len, &
                     message)
     use, intrinsic :: iso_c_binding, only: c_int, c_int64_t, c_double
-    use impactchain, only: i8, error_t, config_t, validate_config, chain_state_t
+    use impactchain, only: i8, error_t, config_t, chain_state_t
     use impactchain_drivers, only: check_sweep, plan_sweep, sweep_plan_t, sweep_result_t, &
                                    sweep_result_init, run_sweep_branches
-    use chain_bridge, only: shared_monitor_t, make_config, set_sweep, put_message, use_threads, &
+    use chain_bridge, only: shared_monitor_t, make_config, sweep_group, put_message, use_threads, &
                             call_ended, status_ok, status_invalid, status_internal
     implicit none
     !f2py threadsafe
@@ -314,11 +294,8 @@ subroutine ic_sweep(n, nsp, spacing, damping, restitution, amplitude, omega, nb,
     call make_config(cfg, int(n), spacing, damping, restitution, amplitude, omega, boundary, &
                      explicit /= 0, x0, v0, int(transient, i8), int(cycles, i8), phase, &
                      stick_speed, max_size_mb, .false., lyapunov /= 0, int(vectors), &
-                     int(qr_every), .false., 1, err)
-    if (.not. allocated(err)) then
-        call set_sweep(cfg, parameter, start, stop, step, mode, parameter2, start2, stop2, step2)
-        call validate_config(cfg, err)
-    end if
+                     int(qr_every), .false., 1, err, groups=sweep_group(parameter, start, &
+                     stop, step, mode, parameter2, start2, stop2, step2))
     ! the CLI's checks (sizes against max_size_mb, every point), before the caller allocates x
     if (.not. allocated(err)) then
         plan = plan_sweep(cfg)
@@ -384,10 +361,10 @@ subroutine ic_continuation(n, nsp, spacing, damping, restitution, amplitude, ome
                            start_bonds, start_min_gap, start_min_impact_speed, start_reason, &
                            control, status, msg_len, message)
     use, intrinsic :: iso_c_binding, only: c_int, c_int64_t, c_double
-    use impactchain, only: i8, error_t, config_t, validate_config, branches_t, run_continuation, &
+    use impactchain, only: i8, error_t, config_t, branches_t, run_continuation, &
                            impact_bonds
     use impactchain_drivers, only: continuation_table_t, continuation_table, finite_or_inf
-    use chain_bridge, only: shared_monitor_t, make_config, set_continuation, put_message, &
+    use chain_bridge, only: shared_monitor_t, make_config, continuation_group, put_message, &
                             put_text, call_ended, status_ok, status_invalid, status_capacity, &
                             status_internal
     implicit none
@@ -456,12 +433,9 @@ subroutine ic_continuation(n, nsp, spacing, damping, restitution, amplitude, ome
     start_min_impact_speed = 0
     call make_config(cfg, int(n), spacing, damping, restitution, amplitude, omega, boundary, &
                      explicit /= 0, x0, v0, int(transient, i8), 1_i8, phase, stick_speed, &
-                     4096.0_c_double, .false., .false., 0, 1, .false., 1, err)
-    if (.not. allocated(err)) then
-        call set_continuation(cfg, parameter, stop, step, int(period), int(max_points), &
-                              int(doublings))
-        call validate_config(cfg, err)
-    end if
+                     4096.0_c_double, .false., .false., 0, 1, .false., 1, err, &
+                     groups=continuation_group(parameter, stop, step, int(period), &
+                                               int(max_points), int(doublings)))
     if (allocated(err)) then
         call put_message(err%message, status_invalid, status, msg_len, message)
         return
@@ -564,3 +538,27 @@ subroutine ic_output_schema(text_len, text)
     text_len = len(json)
     call put_text(json, text)
 end subroutine ic_output_schema
+
+!> The input schema as JSON (the "inputs" of `impactchain --schema`, chain_inputs), as byte
+!> values in text(1:text_len); text_len = -(the length needed) when the buffer is too small.
+subroutine ic_input_schema(text_len, text)
+    use, intrinsic :: iso_c_binding, only: c_int
+    use impactchain_drivers, only: input_schema_json
+    implicit none
+    !f2py threadsafe
+    integer(c_int), intent(out) :: text_len
+    integer(c_int), intent(out) :: text(65536)
+    character(len=:), allocatable :: json
+    integer :: i
+
+    json = input_schema_json()
+    text = 0
+    if (len(json) > size(text)) then
+        text_len = -len(json)
+        return
+    end if
+    text_len = len(json)
+    do i = 1, text_len
+        text(i) = iachar(json(i:i))
+    end do
+end subroutine ic_input_schema

@@ -5,8 +5,8 @@ extension ``impactchain._kernels``), :mod:`impactchain.io` (reading the files),
 :mod:`impactchain.results` (what a run holds: the dataclasses :mod:`impactchain.io` returns),
 :mod:`impactchain.inmemory` (the same dataclasses from :mod:`impactchain.api` results),
 :mod:`impactchain.namelist` (namelist text, read and written), :mod:`impactchain.schema`
-(every dataset and attribute of the files, from the Fortran table), :mod:`impactchain.shockwave`
-(shock-wave construction), :mod:`impactchain.analysis` (period labels, panels),
+(the input keys and every dataset of the files, from the Fortran tables),
+:mod:`impactchain.shockwave` (shock-wave construction), :mod:`impactchain.analysis` (period labels, panels),
 :mod:`impactchain.figures` (figure functions returning ``matplotlib.figure.Figure``, a module
 per topic), :mod:`impactchain.testing` (the invariants the test suites assert) and
 :mod:`impactchain.cli` (``python -m impactchain``).

@@ -71,6 +71,8 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from impactchain import schema
+from impactchain.schema import SCHEMA_DEFAULT, with_schema_defaults
+from impactchain.schema import key as schema_key
 
 try:
     from impactchain import _kernels
@@ -121,25 +123,24 @@ _POLL_SECONDS = 0.05  # how often the calling thread looks at a running kernel
 _STAGES = {1: ("transient", "cycle"), 2: ("records", "cycle"), 3: ("sweep", "point")}
 #: The same for a continuation, whose unit of progress is an orbit found on a branch
 _CONTINUATION_STAGES = {**_STAGES, 3: ("orbits", "orbit")}
-_MAX_N = 10_000_000  # chain_config's max_n: n is refused beyond it before any allocation
 _INT32 = (-(2**31), 2**31 - 1)
 _INT64 = (-(2**63), 2**63 - 1)
 _FIRST_EVENT_CAPACITY = (1024, 1 << 20)  # bounds of the first guess of the event count
 _BYTES_PER_EVENT = 24  # time, speed (float64), site, kind (int32)
 
-#: Outputs of ``_kernels.ic_run``, in f2py's order (checked by post/tests/test_api.py).
+#: Outputs of ``_kernels.ic_run``, in f2py's order (checked by test/python/package/test_api.py).
 RUN_OUTPUTS = (
     "final_x", "final_v", "periods", "site_counts", "counts", "collisions_per_cycle", "nev",
     "k", "exponents", "stderr_bits", "stderr_cycles", "per_time", "ky", "jac", "mult_re",
     "mult_im", "status", "msg_len", "message",
 )
-#: Outputs of ``_kernels.ic_sweep``, in f2py's order (checked by post/tests/test_api.py).
+#: Outputs of ``_kernels.ic_sweep``, in f2py's order (checked by test/python/package/test_api.py).
 SWEEP_OUTPUTS = (
     "sizes", "values", "collisions", "period", "exponents", "stderr_bits", "stderr_cycles",
     "ky", "status", "msg_len", "message",
 )
 #: Outputs of ``_kernels.ic_continuation``, in f2py's order (checked by
-#: post/tests/test_api.py).
+#: test/python/package/test_api.py).
 CONTINUATION_OUTPUTS = (
     "sizes", "values", "x", "v", "periods", "branch", "mult_re", "mult_im", "stable",
     "min_gap", "min_impact_speed", "impacts", "residual", "iterations", "special_index",
@@ -322,23 +323,24 @@ class PeriodicOrbit:
 # ---------------------------------------------------------------------------- functions
 
 
+@with_schema_defaults
 def simulate(
     n: int,
     amplitude: float,
     omega: float,
-    damping: float = 0.05,
-    restitution: float = 0.7,
-    spacing: float | ArrayLike = 1.0,
-    boundary: str = "fixed",
+    damping: float = SCHEMA_DEFAULT,
+    restitution: float = SCHEMA_DEFAULT,
+    spacing: float | ArrayLike = SCHEMA_DEFAULT,
+    boundary: str = SCHEMA_DEFAULT,
     x0: ArrayLike | None = None,
     v0: ArrayLike | None = None,
-    transient: int = 0,
+    transient: int = SCHEMA_DEFAULT,
     cycles: int = 100,
-    events: bool = True,
+    events: bool = SCHEMA_DEFAULT,
     *,
-    phase: float = 0.0,
-    stick_speed: float = 1.0e-9,
-    max_size_mb: float = 4096.0,
+    phase: float = SCHEMA_DEFAULT,
+    stick_speed: float = SCHEMA_DEFAULT,
+    max_size_mb: float = SCHEMA_DEFAULT,
     progress: bool = False,
 ) -> Simulation:
     """Run the chain: ``transient`` unrecorded drive cycles, then ``cycles`` recorded ones.
@@ -396,25 +398,26 @@ def simulate(
     )
 
 
+@with_schema_defaults
 def lyapunov(
     n: int,
     amplitude: float,
     omega: float,
-    damping: float = 0.05,
-    restitution: float = 0.7,
-    spacing: float | ArrayLike = 1.0,
-    boundary: str = "fixed",
+    damping: float = SCHEMA_DEFAULT,
+    restitution: float = SCHEMA_DEFAULT,
+    spacing: float | ArrayLike = SCHEMA_DEFAULT,
+    boundary: str = SCHEMA_DEFAULT,
     x0: ArrayLike | None = None,
     v0: ArrayLike | None = None,
-    transient: int = 0,
+    transient: int = SCHEMA_DEFAULT,
     cycles: int = 100,
-    vectors: int = 0,
+    vectors: int = SCHEMA_DEFAULT,
     *,
-    qr_every: int = 0,
-    window: int = 0,
-    phase: float = 0.0,
-    stick_speed: float = 1.0e-9,
-    max_size_mb: float = 4096.0,
+    qr_every: int = SCHEMA_DEFAULT,
+    window: int = SCHEMA_DEFAULT,
+    phase: float = SCHEMA_DEFAULT,
+    stick_speed: float = SCHEMA_DEFAULT,
+    max_size_mb: float = SCHEMA_DEFAULT,
     progress: bool = False,
 ) -> Lyapunov:
     """Lyapunov spectrum averaged over ``cycles`` drive cycles after ``transient``.
@@ -462,23 +465,24 @@ def lyapunov(
     )
 
 
+@with_schema_defaults(period=("lyapunov", "jacobian_cycles"))
 def floquet(
     n: int,
     amplitude: float,
     omega: float,
-    damping: float = 0.05,
-    restitution: float = 0.7,
-    spacing: float | ArrayLike = 1.0,
-    boundary: str = "fixed",
+    damping: float = SCHEMA_DEFAULT,
+    restitution: float = SCHEMA_DEFAULT,
+    spacing: float | ArrayLike = SCHEMA_DEFAULT,
+    boundary: str = SCHEMA_DEFAULT,
     x0: ArrayLike | None = None,
     v0: ArrayLike | None = None,
-    transient: int = 0,
+    transient: int = SCHEMA_DEFAULT,
     cycles: int = 1,
-    period: int = 1,
+    period: int = SCHEMA_DEFAULT,
     *,
-    phase: float = 0.0,
-    stick_speed: float = 1.0e-9,
-    max_size_mb: float = 4096.0,
+    phase: float = SCHEMA_DEFAULT,
+    stick_speed: float = SCHEMA_DEFAULT,
+    max_size_mb: float = SCHEMA_DEFAULT,
     progress: bool = False,
 ) -> Floquet:
     """Floquet multipliers: eigenvalues of the ``period``-cycle Poincare-map Jacobian at
@@ -504,20 +508,21 @@ def floquet(
     )
 
 
+@with_schema_defaults(cycles=("lyapunov", "jacobian_cycles"))
 def poincare_jacobian(
     x: ArrayLike,
     v: ArrayLike,
     amplitude: float,
     omega: float,
-    damping: float = 0.05,
-    restitution: float = 0.7,
-    spacing: float | ArrayLike = 1.0,
-    boundary: str = "fixed",
-    cycles: int = 1,
+    damping: float = SCHEMA_DEFAULT,
+    restitution: float = SCHEMA_DEFAULT,
+    spacing: float | ArrayLike = SCHEMA_DEFAULT,
+    boundary: str = SCHEMA_DEFAULT,
+    cycles: int = SCHEMA_DEFAULT,
     *,
-    phase: float = 0.0,
-    stick_speed: float = 1.0e-9,
-    max_size_mb: float = 4096.0,
+    phase: float = SCHEMA_DEFAULT,
+    stick_speed: float = SCHEMA_DEFAULT,
+    max_size_mb: float = SCHEMA_DEFAULT,
 ) -> NDArray[np.float64]:
     """Jacobian of the ``cycles``-cycle Poincare map at the state (x, v) on the section.
 
@@ -556,12 +561,13 @@ def poincare_jacobian(
     return _frozen(jac)
 
 
+@with_schema_defaults
 def random_start(
     n: int,
-    seed: int = 1,
-    x_amp: float = 0.0,
-    v_amp: float = 0.0,
-    spacing: float | ArrayLike = 1.0,
+    seed: int = SCHEMA_DEFAULT,
+    x_amp: float = SCHEMA_DEFAULT,
+    v_amp: float = SCHEMA_DEFAULT,
+    spacing: float | ArrayLike = SCHEMA_DEFAULT,
 ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """The CLI's seeded random start (``&initial kind='random'``): x_i uniform in
     [-x_amp, x_amp), v_i in [-v_amp, v_amp), from the same portable generator, so that
@@ -590,34 +596,35 @@ def random_start(
     return _frozen(x), _frozen(v)
 
 
+@with_schema_defaults
 def sweep(
     n: int,
     amplitude: float,
     omega: float,
-    damping: float = 0.05,
-    restitution: float = 0.7,
-    spacing: float | ArrayLike = 1.0,
-    boundary: str = "fixed",
+    damping: float = SCHEMA_DEFAULT,
+    restitution: float = SCHEMA_DEFAULT,
+    spacing: float | ArrayLike = SCHEMA_DEFAULT,
+    boundary: str = SCHEMA_DEFAULT,
     x0: ArrayLike | None = None,
     v0: ArrayLike | None = None,
-    transient: int = 0,
+    transient: int = SCHEMA_DEFAULT,
     cycles: int = 100,
     *,
     parameter: str,
     start: float,
     stop: float,
     step: float,
-    mode: str = "continuation",
+    mode: str = SCHEMA_DEFAULT,
     parameter2: str | None = None,
     start2: float | None = None,
     stop2: float | None = None,
     step2: float | None = None,
     lyapunov: bool = False,
-    vectors: int = 0,
-    qr_every: int = 0,
-    phase: float = 0.0,
-    stick_speed: float = 1.0e-9,
-    max_size_mb: float = 4096.0,
+    vectors: int = SCHEMA_DEFAULT,
+    qr_every: int = SCHEMA_DEFAULT,
+    phase: float = SCHEMA_DEFAULT,
+    stick_speed: float = SCHEMA_DEFAULT,
+    max_size_mb: float = SCHEMA_DEFAULT,
     threads: int = 0,
     progress: bool = False,
 ) -> Any:
@@ -771,26 +778,27 @@ def _text(name: NDArray[np.int32]) -> str:
     return bytes(np.asarray(name).astype(np.uint8)).decode()
 
 
+@with_schema_defaults
 def continuation(
     n: int,
     amplitude: float,
     omega: float,
-    damping: float = 0.05,
-    restitution: float = 0.7,
-    spacing: float | ArrayLike = 1.0,
-    boundary: str = "fixed",
+    damping: float = SCHEMA_DEFAULT,
+    restitution: float = SCHEMA_DEFAULT,
+    spacing: float | ArrayLike = SCHEMA_DEFAULT,
+    boundary: str = SCHEMA_DEFAULT,
     x0: ArrayLike | None = None,
     v0: ArrayLike | None = None,
-    transient: int = 0,
+    transient: int = SCHEMA_DEFAULT,
     *,
     parameter: str,
     stop: float,
     step: float,
-    period: int = 1,
-    max_points: int = 200,
-    doublings: int = 0,
-    phase: float = 0.0,
-    stick_speed: float = 1.0e-9,
+    period: int = SCHEMA_DEFAULT,
+    max_points: int = SCHEMA_DEFAULT,
+    doublings: int = SCHEMA_DEFAULT,
+    phase: float = SCHEMA_DEFAULT,
+    stick_speed: float = SCHEMA_DEFAULT,
     progress: bool = False,
 ) -> Any:
     """Branches of periodic orbits followed in one parameter: the CLI's ``&continuation``.
@@ -837,21 +845,22 @@ def continuation(
     return _continuation_dataset(xr, out, cfg, args)
 
 
+@with_schema_defaults
 def periodic_orbit(
     n: int,
     amplitude: float,
     omega: float,
-    damping: float = 0.05,
-    restitution: float = 0.7,
-    spacing: float | ArrayLike = 1.0,
-    boundary: str = "fixed",
+    damping: float = SCHEMA_DEFAULT,
+    restitution: float = SCHEMA_DEFAULT,
+    spacing: float | ArrayLike = SCHEMA_DEFAULT,
+    boundary: str = SCHEMA_DEFAULT,
     x0: ArrayLike | None = None,
     v0: ArrayLike | None = None,
-    transient: int = 0,
-    period: int = 1,
+    transient: int = SCHEMA_DEFAULT,
+    period: int = SCHEMA_DEFAULT,
     *,
-    phase: float = 0.0,
-    stick_speed: float = 1.0e-9,
+    phase: float = SCHEMA_DEFAULT,
+    stick_speed: float = SCHEMA_DEFAULT,
     progress: bool = False,
 ) -> PeriodicOrbit:
     """The period-``period`` orbit (p in 1..10000 drive cycles) that Newton shooting finds
@@ -1321,8 +1330,10 @@ def _n(value: Any) -> int:
     """n, refused outside the CLI's range before anything of size n is made (the kernels
     check it too, but only after their arguments, sized by n, exist)."""
     n = _integer(value, "n")
-    if not 1 <= n <= _MAX_N:
-        raise ValueError(f"&chain: n = {n} is outside [1, {_MAX_N}]")
+    # (refused here, before any allocation, as the reader would: the table's range)
+    most = int(schema_key("chain", "n")["max"])
+    if not 1 <= n <= most:
+        raise ValueError(f"&chain: n = {n} is outside [1, {most}]")
     return n
 
 

@@ -1,11 +1,14 @@
 !> What the programs of this project need beyond the public API (`impactchain`): the shared
 !> command line and exit, the interrupt flag and progress lines (app/), the MPI driver's
 !> sweep and census rounds, checkpoints, packing and file writing (mpi/), the Python layer's
-!> continuation tables and argument checks (f2py/). Not an API for other projects: these
+!> continuation tables and argument checks, its configurations as namelist text (f2py/), and
+!> the input schema (`--schema`). Not an API for other projects: these
 !> names follow the drivers. It implements nothing itself.
 module impactchain_drivers
-    use chain_error, only: set_error
-    use chain_config, only: fmt_real, fmt_int, check_size, set_boundary
+    use chain_error, only: set_error, fmt_int8
+    use chain_config, only: fmt_real, fmt_int, check_size, set_boundary, read_config_text
+    use chain_inputs, only: input_schema_json
+    use chain_exact, only: exact, exact_list, fmt_logical, namelist_string
     use chain_branch_file, only: continuation_guess, continuation_table_t, continuation_table, &
                                  finite_or_inf
     use chain_sweep, only: plan_sweep, sweep_plan_t, sweep_result_t, sweep_result_init, &
@@ -31,6 +34,9 @@ module impactchain_drivers
     implicit none
     private
     public :: set_error, fmt_real, fmt_int, check_size, set_boundary, continuation_guess
+    public :: read_config_text, input_schema_json, exact, exact_list, fmt_logical, fmt_int8
+    public :: namelist_string
+    public :: cli_schema
     public :: continuation_table_t, continuation_table, finite_or_inf, plan_sweep
     public :: sweep_plan_t, sweep_result_t, sweep_result_init, run_sweep_branches
     public :: write_sweep_file, save_checkpoint, load_checkpoint, remove_file

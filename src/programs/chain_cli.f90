@@ -14,6 +14,7 @@ module chain_cli
                                              ieee_set_flag
     use chain_kinds, only: wp
     use chain_file_schema, only: output_schema_json
+    use chain_inputs, only: input_schema_json
     implicit none
     private
     public :: cli_t, parse_command_line, parse_arguments, exit_now, seconds_from_environment
@@ -44,7 +45,8 @@ contains
     function schema_json() result(json)
         character(len=:), allocatable :: json
 
-        json = '{"schema_version": 1,'//new_line('a')//'"inputs": [],'//new_line('a')// &
+        json = '{"schema_version": 1,'//new_line('a')// &
+               '"inputs": '//input_schema_json()//','//new_line('a')// &
                '"outputs": '//output_schema_json()//'}'
     end function schema_json
 

@@ -19,6 +19,7 @@ module chain_sim
     use chain_state, only: chain_state_t, moving_state
     use chain_event_log, only: event_log_t
     use chain_config, only: config_t, config_summary, check_size
+    use chain_input_values, only: real_input
     use chain_model, only: model_t, model_walls
     use chain_lyapunov, only: lyapunov_pack, lyapunov_unpack
     use chain_record, only: record_sink_t, record_result_t, record_cycles, record_state_t, &
@@ -94,12 +95,14 @@ contains
         keep_going = .not. monitor%asked
     end function checkpoint_keep_going
 
-    !> The initial state of a configuration (rest, seeded random, explicit, or an earlier run).
+    !> The initial state of a configuration (rest, seeded random, explicit, or an earlier run),
+    !> with &initial kick added to oscillator 1's velocity (but to an earlier run's).
     subroutine initial_state(cfg, state, err)
         type(config_t), intent(in) :: cfg
         type(chain_state_t), intent(out) :: state
         type(error_t), allocatable, intent(out) :: err
         real(wp), allocatable :: x(:), v(:)
+        real(wp) :: kick
         integer(i8) :: seed
         integer :: i
 
@@ -120,6 +123,10 @@ contains
             call file_state(cfg, state, err)
             return
         end select
+        ! an impulse at the left end, the classic way to send a wave down the chain (none:
+        ! v untouched, even a -0.0 of a random start)
+        kick = real_input(cfg%inputs, 'initial', 'kick')
+        if (kick /= 0) v(1) = v(1) + kick
         state = moving_state(x, v, 0_i8, 0.0_wp)
     end subroutine initial_state
 

@@ -123,22 +123,6 @@ def test_mistake_is_reported_where_and_how(impactchain_exe, tmp_path, case):
     assert not list(tmp_path.glob("*.h5*"))
 
 
-def test_schema_lists_exactly_the_namelist_keys():
-    """chain_config's table of keys and types is the namelist statements' keys, group by
-    group (a key added in one place and not the other fails here)."""
-    source = (ROOT / "src" / "runs" / "chain_config.f90").read_text()
-    statements = {}
-    for match in re.finditer(r"namelist /(\w+)/((?:[^\n]*&\s*\n)*[^\n]*)", source):
-        names = re.sub(r"&\s*\n", " ", match.group(2)).replace(",", " ").split()
-        statements[match.group(1)] = names
-    schema = {}
-    for group, key in re.findall(r"key_spec_t\('(\w+)', '(\w+)'", source):
-        schema.setdefault(group, []).append(key)
-    assert set(statements) == {"chain", "initial", "run", "lyapunov", "output", "sweep",
-                               "continuation", "census"}
-    assert statements == schema
-
-
 def run(exe, args, cwd, check=True):
     result = subprocess.run([str(exe), "--quiet", *args], cwd=cwd, capture_output=True,
                             text=True, timeout=120)
