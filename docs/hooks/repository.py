@@ -1,0 +1,66 @@
+"""The files of the repository that the site shows but docs/ does not hold.
+
+The pages of docs/ link to the paper's figures as ``../figures/NAME.png`` and to the README as
+``../README.md`` (links that work where the repository itself is read); the site takes those
+figures, the gallery's own pages and the changelog from the repository, and points the
+README's links at the site's first page. MathJax is served from the site (no network).
+"""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+from typing import Any
+
+ROOT = Path(__file__).resolve().parents[2]
+# repository files put into the site at the same relative path
+SHOWN = ["figures/*.png", "gallery/*/README.md", "gallery/*/*.png"]
+MATHJAX_FILES = ["MathJax.js", "config/**/*", "extensions/**/*", "fonts/**/*", "jax/**/*",
+                 "localization/en/**/*"]
+OUT_OF_DOCS = re.compile(r"\]\(\.\./((?:figures|gallery)/[^)\s]+)\)")
+
+
+def _mathjax_root() -> Path:
+    import jupyter_server_mathjax
+    return Path(jupyter_server_mathjax.__file__).parent / "static"
+
+
+def on_files(files: Any, config: Any) -> Any:
+    """MkDocs hook: the figures, the gallery's pages, the changelog and MathJax."""
+    from mkdocs.structure.files import File
+
+    for pattern in SHOWN:
+        for path in sorted(ROOT.glob(pattern)):
+            files.append(File.generated(config, path.relative_to(ROOT).as_posix(),
+                                        abs_src_path=str(path)))
+    files.append(File.generated(config, "changelog.md",
+                                content=(ROOT / "CHANGELOG.md").read_text(encoding="utf-8")))
+    mathjax = _mathjax_root()
+    for pattern in MATHJAX_FILES:
+        for path in sorted(mathjax.glob(pattern)):
+            if path.is_file():
+                files.append(File.generated(
+                    config, "javascripts/mathjax/" + path.relative_to(mathjax).as_posix(),
+                    abs_src_path=str(path)))
+    return files
+
+
+def on_page_markdown(markdown: str, page: Any, config: Any, files: Any) -> str:
+    """Links out of docs/ into the same files inside the site."""
+    depth = page.file.src_uri.count("/")
+    up = "../" * depth
+    markdown = OUT_OF_DOCS.sub(lambda m: f"]({up}{m.group(1)})", markdown)
+    return markdown.replace("](../README.md)", f"]({up}index.md)")
+
+
+FORD_INTERFACE_LINK = re.compile(r'href="([^"]*)#moduleprocedure-')
+
+
+def on_post_build(config: Any) -> None:
+    """FORD (6.1) links the procedures of a generic interface as ``#moduleprocedure-NAME``
+    while their headings carry ``id="proc-NAME"``: the links are pointed at the headings."""
+    for page in (Path(config["site_dir"]) / "api" / "fortran" / "interface").glob("*.html"):
+        text = page.read_text(encoding="utf-8")
+        fixed = FORD_INTERFACE_LINK.sub(r'href="\1#proc-', text)
+        if fixed != text:
+            page.write_text(fixed, encoding="utf-8")
