@@ -15,14 +15,15 @@ from typing import Any
 ROOT = Path(__file__).resolve().parents[2]
 # repository files put into the site at the same relative path
 SHOWN = ["figures/*.png", "gallery/*/README.md", "gallery/*/*.png"]
-MATHJAX_FILES = ["MathJax.js", "config/**/*", "extensions/**/*", "fonts/**/*", "jax/**/*",
-                 "localization/en/**/*"]
+# MathJax 3's TeX-to-HTML component, its fonts and the TeX extensions it loads on demand
+MATHJAX_FILES = ["tex-mml-chtml.js", "output/chtml/fonts/woff-v2/*", "input/**/*", "ui/**/*",
+                 "a11y/**/*"]
 OUT_OF_DOCS = re.compile(r"\]\(\.\./((?:figures|gallery)/[^)\s]+)\)")
 
 
 def _mathjax_root() -> Path:
-    import jupyter_server_mathjax
-    return Path(jupyter_server_mathjax.__file__).parent / "static"
+    import mathjax  # the package django-static-mathjax
+    return Path(mathjax.__file__).parent / "static" / "mathjax" / "es5"
 
 
 def on_files(files: Any, config: Any) -> Any:
@@ -33,6 +34,10 @@ def on_files(files: Any, config: Any) -> Any:
         for path in sorted(ROOT.glob(pattern)):
             files.append(File.generated(config, path.relative_to(ROOT).as_posix(),
                                         abs_src_path=str(path)))
+    # pdoc's pages name no icon, so a browser asks for the site's /favicon.ico
+    import material
+    files.append(File.generated(config, "favicon.ico", abs_src_path=str(
+        Path(material.__file__).parent / "templates" / "assets" / "images" / "favicon.png")))
     files.append(File.generated(config, "changelog.md",
                                 content=(ROOT / "CHANGELOG.md").read_text(encoding="utf-8")))
     mathjax = _mathjax_root()
@@ -54,13 +59,21 @@ def on_page_markdown(markdown: str, page: Any, config: Any, files: Any) -> str:
 
 
 FORD_INTERFACE_LINK = re.compile(r'href="([^"]*)#moduleprocedure-')
+FORD_MATHJAX = re.compile(
+    r'<script src="https://cdnjs\.cloudflare\.com/ajax/libs/mathjax/[^"]*"></script>')
 
 
 def on_post_build(config: Any) -> None:
-    """FORD (6.1) links the procedures of a generic interface as ``#moduleprocedure-NAME``
-    while their headings carry ``id="proc-NAME"``: the links are pointed at the headings."""
-    for page in (Path(config["site_dir"]) / "api" / "fortran" / "interface").glob("*.html"):
+    """Two things in FORD's (6.1) pages: its MathJax comes from a CDN, replaced here by the
+    site's own copy with the site's configuration; and it links the procedures of a generic
+    interface as ``#moduleprocedure-NAME`` while their headings carry ``id="proc-NAME"``."""
+    site = Path(config["site_dir"])
+    for page in (site / "api" / "fortran").rglob("*.html"):
         text = page.read_text(encoding="utf-8")
-        fixed = FORD_INTERFACE_LINK.sub(r'href="\1#proc-', text)
+        up = "../" * (len(page.relative_to(site).parts) - 1)
+        fixed = FORD_MATHJAX.sub(
+            f'<script src="{up}javascripts/mathjax-config.js"></script>\n'
+            f'<script src="{up}javascripts/mathjax/tex-mml-chtml.js"></script>', text)
+        fixed = FORD_INTERFACE_LINK.sub(r'href="\1#proc-', fixed)
         if fixed != text:
             page.write_text(fixed, encoding="utf-8")

@@ -1,12 +1,11 @@
-// MathJax 2, served from the site itself (javascripts/mathjax/, copied by docs/hooks/repository.py):
+// MathJax 3, served from the site itself (javascripts/mathjax/, copied by docs/hooks/repository.py):
 // the formulas of the pages (\( \) and \[ \] from pymdownx.arithmatex) and of the notebooks ($ $).
 window.MathJax = {
-  tex2jax: {
+  tex: {
     inlineMath: [["\\(", "\\)"], ["$", "$"]],
     displayMath: [["\\[", "\\]"], ["$$", "$$"]],
     processEscapes: true,
     processEnvironments: true
   },
-  "HTML-CSS": { availableFonts: ["TeX"], preferredFont: "TeX", imageFont: null },
-  messageStyle: "none"
+  options: { enableMenu: false }
 };

@@ -47,7 +47,7 @@ IMAGES = """
 return Array.from(document.images).map(i => [i.currentSrc || i.src, i.complete, i.naturalWidth]);
 """
 MATH_DONE = """
-return !window.MathJax || !MathJax.Hub || MathJax.Hub.queue.pending === 0;
+return !window.MathJax || !MathJax.startup || !MathJax.startup.promise || (MathJax.startup.promise.then(() => { window.__typeset = true; }), window.__typeset === true);
 """
 
 
