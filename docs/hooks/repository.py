@@ -64,10 +64,14 @@ FORD_MATHJAX = re.compile(
 
 
 def on_post_build(config: Any) -> None:
-    """Two things in FORD's (6.1) pages: its MathJax comes from a CDN, replaced here by the
+    """FORD's (6.1) pages: its MathJax comes from a CDN, replaced here by the
     site's own copy with the site's configuration; and it links the procedures of a generic
-    interface as ``#moduleprocedure-NAME`` while their headings carry ``id="proc-NAME"``."""
+    interface as ``#moduleprocedure-NAME`` while their headings carry ``id="proc-NAME"``; and
+    its search page."""
     site = Path(config["site_dir"])
+    # written even with `search: false` (docs/ford.md), without the script it calls: no page
+    # links to it
+    (site / "api" / "fortran" / "search.html").unlink(missing_ok=True)
     for page in (site / "api" / "fortran").rglob("*.html"):
         text = page.read_text(encoding="utf-8")
         up = "../" * (len(page.relative_to(site).parts) - 1)

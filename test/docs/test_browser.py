@@ -1,6 +1,7 @@
-"""Every page of the built site as a reader sees it, in Debian's headless Chromium: no error
-on the console, every image loaded, and a screenshot that is not blank. The screenshots are
-kept in build/docs-screenshots/ to be looked at."""
+"""The pages of the built site as a reader sees them, in Debian's headless Chromium (every
+page but most of FORD's: builtsite.pages_to_open): no error on the console, every image
+loaded, and a screenshot that is not blank. The screenshots are kept in
+build/docs-screenshots/ to be looked at."""
 
 from __future__ import annotations
 
@@ -10,7 +11,7 @@ from pathlib import Path
 
 import pytest
 
-from builtsite import ROOT, pages, served
+from builtsite import ROOT, pages_to_open, served
 
 SHOTS = ROOT / "build" / "docs-screenshots"
 # the number of colours below which a screenshot counts as blank
@@ -62,7 +63,7 @@ def _colours(png: bytes) -> int:
         return len(image.convert("RGB").getcolors(maxcolors=1 << 24) or [])
 
 
-@pytest.mark.parametrize("page", pages(), ids=str)
+@pytest.mark.parametrize("page", pages_to_open(), ids=str)
 def test_page(browser, base_url: str, page: Path) -> None:
     browser.get_log("browser")                     # what earlier pages left
     browser.get(base_url + page.as_posix())
