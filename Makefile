@@ -64,7 +64,7 @@ DEFAULT_RUN := runs/default.h5
 FPM_LOG := 2>&1 | sed -u -E '/^\[ *[0-9]+%\] +[^ ]+( +done\.)?$$/d'
 
 .PHONY: all setup system-deps python-deps blas-check blas-env build run test fortran-test \
-        python-test mpi figures bench recipe-reference api-docs clean help
+        python-test mpi figures bench recipe-reference api-docs docs docs-deps docs-test clean help
 
 all: build
 
@@ -76,6 +76,7 @@ help:
 	@echo "make bench    build with the release profile and run the benchmark table"
 	@echo "make recipe-reference  rewrite test/recipes/reference.json (results meant to change)"
 	@echo "make api-docs the API reference (Fortran and Python) into docs/api/"
+	@echo "make docs     the documentation site into site/ (tutorials executed, references generated)"
 
 setup: system-deps python-deps
 
@@ -149,7 +150,7 @@ python-test: build
 	IMPACTCHAIN_FPM_FLAGS='$(CHECKED_FLAGS)' \
 	    $(PY) -m pytest -q test/python --ignore=test/python/package
 
-test: fortran-test python-test
+test: fortran-test python-test docs-test
 
 bench: build
 	$(PY) bench/run_bench.py --fpm $(FPM)
@@ -160,16 +161,41 @@ bench: build
 recipe-reference: build
 	$(PY) test/recipes/recipe_reference.py compute --jobs $$(nproc)
 
+# The documentation site (docs/README.md): MkDocs with the Material theme into site/, from the
+# pages of docs/, the tutorial notebooks of docs/tutorials/ (executed as the site is built:
+# a failing cell fails the build), the input and output references generated from
+# `impactchain --schema`, and the API references of `make api-docs`. Its Python packages come
+# from requirements-docs.txt; its tests open every page in Debian's headless Chromium.
+DOCS_STAMP := $(VENV)/.docs-requirements-installed
+DOCS_APT_PACKAGES := chromium chromium-driver
+VENV_PATH := PATH="$(abspath $(VENV))/bin:$$PATH"
+
+docs-deps: $(DOCS_STAMP)
+	@$(MAKE) --no-print-directory system-deps APT_PACKAGES="$(DOCS_APT_PACKAGES)"
+
+$(DOCS_STAMP): requirements-docs.txt $(PY_STAMP)
+	$(PY) -m pip install --quiet -r requirements-docs.txt
+	touch $@
+
 # The API reference, generated from the documentation comments: FORD for the Fortran
 # library (docs/ford.md), pdoc for the Python package; into docs/api/ (not kept in git).
-api-docs: build
-	$(PY) -m pip install --quiet ford pdoc
+api-docs: build docs-deps
+	rm -rf docs/api
 	$(VENV)/bin/ford --quiet docs/ford.md
 	PDOC_ALLOW_EXEC=1 $(VENV)/bin/pdoc impactchain -o docs/api/python
 	@echo "impactchain: API reference in docs/api/fortran/index.html and docs/api/python/index.html"
 
+docs: api-docs
+	@start=$$(date +%s)
+	$(VENV_PATH) NO_MKDOCS_2_WARNING=1 $(VENV)/bin/mkdocs build --quiet --clean
+	echo "impactchain: the site is in site/index.html ($$(( $$(date +%s) - start )) s)"
+
+# the site as a reader sees it: every page in headless Chromium, every link, every command
+docs-test: docs
+	$(VENV_PATH) $(PY) -m pytest -q test/docs
+
 clean:
-	rm -rf build runs/*.h5 runs/*.png
+	rm -rf build runs/*.h5 runs/*.png site
 
 # ---- every figure of the paper: `make figures` (runs in parallel on the machine's cores) ----
 RUNS := figures/runs

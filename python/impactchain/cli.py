@@ -6,7 +6,7 @@ file carries the code version, the input namelists and the source file names in 
 metadata (:func:`impactchain.figures.metadata`).
 
 ``python -m impactchain examples DIR`` copies the recipes of the paper's figures
-(``namelists/``) and the example scripts into DIR.
+(``namelists/``), the example scripts and the tutorial notebooks (``tutorials/``) into DIR.
 
 Errors in the input (missing file, wrong schema, data the figure needs but the run did
 not record) and bad options print one line ``impactchain: error: ...`` on stderr and exit
@@ -365,11 +365,12 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("files", nargs=1, metavar="FILE.h5")
     _output_options(p, "output prefix, e.g. figs/run (figs/run.pdf: PDF files)")
     _all_options(p)
-    p = sub.add_parser("examples", help="copy the recipes of the paper's figures and the "
-                                        "example scripts into DIR",
-                       description="Copy the recipes of the paper's figures (namelists/) "
-                                   "and the example scripts into DIR; an existing file is "
-                                   "never replaced without --overwrite.")
+    p = sub.add_parser("examples", help="copy the recipes of the paper's figures, the "
+                                        "example scripts and the tutorials into DIR",
+                       description="Copy the recipes of the paper's figures (namelists/), "
+                                   "the example scripts and the tutorial notebooks "
+                                   "(tutorials/) into DIR; an existing file is never "
+                                   "replaced without --overwrite.")
     p.add_argument("directory", metavar="DIR")
     p.add_argument("--overwrite", action="store_true", help="replace files that exist")
     return parser
@@ -398,7 +399,7 @@ EXAMPLES = Path(__file__).resolve().parent / "examples"
 
 
 def _copy_examples(target: Path, overwrite: bool) -> None:
-    """The installed examples (recipes in namelists/, scripts) into ``target``: all or
+    """The installed examples (recipes in namelists/, scripts, tutorials/) into ``target``: all or
     nothing, and nothing the user has replaced without ``overwrite``."""
     if not EXAMPLES.is_dir():
         raise CliError("this installation has no examples (the package was built without "
@@ -415,8 +416,8 @@ def _copy_examples(target: Path, overwrite: bool) -> None:
         (target / f).parent.mkdir(parents=True, exist_ok=True)
         shutil.copyfile(EXAMPLES / f, target / f)
     print(f"impactchain: copied {len(files)} files into {target} (the recipes in "
-          f"{target / 'namelists'}; run one with: impactchain {target / 'namelists'}"
-          "/default.nml)")
+          f"{target / 'namelists'}, run one with: impactchain {target / 'namelists'}"
+          f"/default.nml; the tutorial notebooks in {target / 'tutorials'})")
 
 
 def _make_one(command: Command, args: argparse.Namespace) -> None:

@@ -354,10 +354,9 @@ def test_clv_errors(make_run: MakeRun, run_file: Path, tmp_path: Path,
 
 
 def test_examples_are_copied_out_and_never_over_a_users_file(tmp_path: Path) -> None:
-    """Issue 32, 6 (the recipes and scripts; the tutorials are to come): `python -m
-    impactchain examples DIR` copies the installed recipes of the paper's figures and the
-    example scripts; a second time it refuses, naming a file that exists and copying
-    nothing, unless --overwrite."""
+    """Issue 32, 6: `python -m impactchain examples DIR` copies the installed recipes of the
+    paper's figures, the example scripts and the tutorial notebooks; a second time it
+    refuses, naming a file that exists and copying nothing, unless --overwrite."""
     root = Path(__file__).resolve().parents[3]
     target = tmp_path / "mine"
     done = subprocess.run([sys.executable, "-m", "impactchain", "examples", str(target)],
@@ -368,6 +367,11 @@ def test_examples_are_copied_out_and_never_over_a_users_file(tmp_path: Path) -> 
     assert ((target / "namelists" / "default.nml").read_text()
             == (root / "namelists" / "default.nml").read_text())
     assert (target / "fig1c_space_amplitude.py").exists()
+    tutorials = sorted(p.name for p in (root / "docs" / "tutorials").glob("*.ipynb"))
+    assert len(tutorials) >= 4
+    assert sorted(p.name for p in (target / "tutorials").glob("*.ipynb")) == tutorials
+    assert ((target / "tutorials" / tutorials[0]).read_bytes()
+            == (root / "docs" / "tutorials" / tutorials[0]).read_bytes())
     (target / "namelists" / "default.nml").write_text("! my own\n")
     again = subprocess.run([sys.executable, "-m", "impactchain", "examples", str(target)],
                            capture_output=True, text=True, timeout=120)
