@@ -106,9 +106,6 @@ contains
             stop
         case (cli_usage)
             call stop_all(usage, usage_error)
-        case (cli_schema)
-            call stop_all("--schema: the schema is the same for both programs; run "// &
-                          "impactchain --schema", usage_error)
         case (cli_run)
         case default
             call stop_all(cli%message, usage_error)
