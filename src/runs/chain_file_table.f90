@@ -20,6 +20,7 @@
 !> - `when`: 'always', 'header', or in words the input that makes a file hold it.
 !> Infrastructure, no model section.
 module chain_file_table
+    use chain_inputs, only: input_keys, find_input
     implicit none
     private
     public :: output_entry_t, output_table
@@ -56,6 +57,16 @@ contains
                                when)]
     end subroutine add
 
+    !> The reduced unit of an input key as a file states it (model_units): the input table's,
+    !> its one home; none for a pure number.
+    pure function key_units(group, name) result(units)
+        character(len=*), intent(in) :: group, name
+        character(len=:), allocatable :: units
+
+        units = trim(input_keys(find_input(group, name))%units)
+        if (units == '1') units = ''
+    end function key_units
+
     !> /, /params attributes, /params.
     subroutine entries_root_params(t)
         type(output_entry_t), allocatable, intent(inout) :: t(:)
@@ -82,13 +93,17 @@ contains
                  '1: the run finished, 0: it stopped early', 'header')
         call add(t, 'run', '/params/@n', 'attribute', '', 'int32', '1', '', &
                  'number of oscillators', 'header')
-        call add(t, 'run', '/params/@damping', 'attribute', '', 'float64', '1', '', &
+        call add(t, 'run', '/params/@damping', 'attribute', '', 'float64', '1', &
+                 key_units('chain', 'damping'), &
                  'damping ratio b', 'header')
-        call add(t, 'run', '/params/@restitution', 'attribute', '', 'float64', '1', '', &
+        call add(t, 'run', '/params/@restitution', 'attribute', '', 'float64', '1', &
+                 key_units('chain', 'restitution'), &
                  'coefficient of restitution', 'header')
-        call add(t, 'run', '/params/@amplitude', 'attribute', '', 'float64', '1', 'length', &
+        call add(t, 'run', '/params/@amplitude', 'attribute', '', 'float64', '1', &
+                 key_units('chain', 'amplitude'), &
                  'drive amplitude A', 'header')
-        call add(t, 'run', '/params/@omega', 'attribute', '', 'float64', '1', '1/time', &
+        call add(t, 'run', '/params/@omega', 'attribute', '', 'float64', '1', &
+                 key_units('chain', 'omega'), &
                  'drive frequency w', 'header')
         call add(t, 'run', '/params/@boundary', 'attribute', '', 'string', '', '', &
                  '''fixed'' (walls at both ends) or ''free''', 'header')
@@ -96,14 +111,17 @@ contains
                  'drive period 2 pi / omega', 'header')
         call add(t, 'run', '/params/@phase', 'attribute', '', 'float64', 'radian', '', &
                  'phase of the Poincare section, w t mod 2 pi', 'header')
-        call add(t, 'run', '/params/@transient', 'attribute', '', 'int64', '1', 'drive cycles', &
+        call add(t, 'run', '/params/@transient', 'attribute', '', 'int64', '1', &
+                 key_units('run', 'transient'), &
                  'drive cycles before the records', 'header')
-        call add(t, 'run', '/params/@cycles', 'attribute', '', 'int64', '1', 'drive cycles', &
+        call add(t, 'run', '/params/@cycles', 'attribute', '', 'int64', '1', &
+                 key_units('run', 'cycles'), &
                  'drive cycles recorded (planned)', 'header')
         call add(t, 'run', '/params/bond', 'dataset', 'bond', 'int32', '1', '', &
                  'bond index: bond k joins oscillators k and k+1 (0: the left wall, n: the '// &
                  'right wall)', 'header')
-        call add(t, 'run', '/params/spacing', 'dataset', 'bond', 'float64', '1', 'length', &
+        call add(t, 'run', '/params/spacing', 'dataset', 'bond', 'float64', '1', &
+                 key_units('chain', 'spacing'), &
                  'spacing of the bond (the gap at rest)', 'header')
     end subroutine entries_root_params
 

@@ -48,11 +48,11 @@ module chain_inputs
                     dynamic=.true., units='length', help='equilibrium spacing a: one value, '// &
                     'or n + 1 values, one per bond from the left wall'), &
         input_key_t('chain', 'damping', key_real, default='0.05', range='[0, 1)', low=0, &
-                    high=1, high_open=.true., units='1/time', help='damping coefficient b'), &
+                    high=1, high_open=.true., units='1', help='damping ratio b'), &
         input_key_t('chain', 'restitution', key_real, default='0.7', range='[0, 1]', low=0, &
                     high=1, units='1', help='coefficient of restitution K'), &
         input_key_t('chain', 'amplitude', key_real, required=.true., range='[0, 1e6]', low=0, &
-                    high=1.0e6_wp, units='length/time2', help='drive amplitude A'), &
+                    high=1.0e6_wp, units='length', help='drive amplitude A'), &
         input_key_t('chain', 'omega', key_real, required=.true., range='[1e-3, 1e3]', &
                     low=1.0e-3_wp, high=1.0e3_wp, units='1/time', help='drive frequency w'), &
         input_key_t('chain', 'boundary', key_string, default="'fixed'", choices='fixed free', &
@@ -79,13 +79,13 @@ module chain_inputs
                     default_text='0 for every oscillator', units='length/time', &
                     help='an explicit start: n velocities'), &
         input_key_t('run', 'transient', key_integer, wide=.true., default='0', &
-                    range='[0, 1e12]', low=0, high=1.0e12_wp, units='cycles', &
+                    range='[0, 1e12]', low=0, high=1.0e12_wp, units='drive cycles', &
                     help='drive cycles run before the first record'), &
         input_key_t('run', 'cycles', key_integer, wide=.true., default='200', &
-                    range='[1, 1e12]', low=1, high=1.0e12_wp, units='cycles', &
+                    range='[1, 1e12]', low=1, high=1.0e12_wp, units='drive cycles', &
                     help='drive cycles recorded, one strobe record each'), &
         input_key_t('run', 'phase', key_real, default='0.0', range='[0, 2 pi)', low=0, &
-                    high=two_pi, high_open=.true., units='rad', &
+                    high=two_pi, high_open=.true., units='radian', &
                     help='drive phase of the Poincare section'), &
         input_key_t('run', 'record_events', key_logical, default='.true.', &
                     help='keep every collision'), &
@@ -93,7 +93,7 @@ module chain_inputs
                     low_open=.true., high=1, units='length/time', &
                     help='rebound speed below which chatter ends in rest'), &
         input_key_t('run', 'max_period', key_integer, default='16', range='[1, 10000]', &
-                    low=1, high=1.0e4_wp, units='cycles', help='longest period looked for'), &
+                    low=1, high=1.0e4_wp, units='drive cycles', help='longest period looked for'), &
         input_key_t('run', 'period_tol', key_real, default='1e-6', range='(0, 1)', low=0, &
                     low_open=.true., high=1, high_open=.true., units='1', &
                     help='relative tolerance of the period rule'), &
@@ -103,31 +103,31 @@ module chain_inputs
         input_key_t('lyapunov', 'vectors', key_integer, default='0', range='[0, 2n]', low=0, &
                     dynamic=.true., units='1', help='exponents computed (0: all 2n)'), &
         input_key_t('lyapunov', 'qr_every', key_integer, default='0', range='[0, cycles]', &
-                    low=0, dynamic=.true., units='cycles', &
+                    low=0, dynamic=.true., units='drive cycles', &
                     help='cycles per QR step (0: adaptive)'), &
         input_key_t('lyapunov', 'align', key_integer, default='100', range='[0, 100000]', &
-                    low=0, high=1.0e5_wp, units='cycles', &
+                    low=0, high=1.0e5_wp, units='drive cycles', &
                     help='transient cycles that turn the frame before averaging'), &
         input_key_t('lyapunov', 'jacobian', key_logical, default='.false.', &
                     help='the Poincare-map Jacobian at the final state'), &
         input_key_t('lyapunov', 'jacobian_cycles', key_integer, default='1', &
-                    range='[1, 1000]', low=1, high=1.0e3_wp, units='cycles', &
+                    range='[1, 1000]', low=1, high=1.0e3_wp, units='drive cycles', &
                     help='drive cycles of that map'), &
         input_key_t('lyapunov', 'covariant', key_logical, default='.false.', &
                     echo_default=.false., help='covariant Lyapunov vectors'), &
         input_key_t('lyapunov', 'clv_transient', key_integer, &
                     default_text='cycles/2, in [1, 200]', range='[1, cycles - 1]', low=1, &
-                    dynamic=.true., units='cycles', echo_default=.false., &
+                    dynamic=.true., units='drive cycles', echo_default=.false., &
                     help='last records, without vectors, over which the backward pass converges'), &
         input_key_t('lyapunov', 'clv_store', key_integer, default_text='min(4, vectors)', &
                     range='[0, vectors]', low=0, dynamic=.true., units='1', &
                     echo_default=.false., help='vectors whose per-oscillator weights are kept'), &
         input_key_t('lyapunov', 'clv_save', key_integer, default='1', &
                     range='[0, cycles - clv_transient]', low=0, dynamic=.true., &
-                    units='cycles', echo_default=.false., &
+                    units='drive cycles', echo_default=.false., &
                     help='last records with vectors whose vectors are kept'), &
         input_key_t('lyapunov', 'window', key_integer, default='0', range='[0, cycles]', &
-                    low=0, dynamic=.true., units='cycles', echo_default=.false., &
+                    low=0, dynamic=.true., units='drive cycles', echo_default=.false., &
                     help='recorded cycles per finite-time exponent (0: none)'), &
         input_key_t('output', 'file', key_string, default_text="the input's name, .h5", &
                     help='the output file'), &
@@ -163,7 +163,7 @@ module chain_inputs
         input_key_t('continuation', 'step', key_real, default_text='required unless '// &
                     'max_points = 1', help='first step of the parameter'), &
         input_key_t('continuation', 'period', key_integer, default='1', range='1..10000', &
-                    low=1, high=1.0e4_wp, units='cycles', help='period of the orbit'), &
+                    low=1, high=1.0e4_wp, units='drive cycles', help='period of the orbit'), &
         input_key_t('continuation', 'max_points', key_integer, default='200', &
                     range='>= 1', low=1, units='1', &
                     help='most orbits along the branch (1: Newton only)'), &

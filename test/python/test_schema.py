@@ -221,3 +221,19 @@ def test_python_reads_the_same_table_and_takes_its_defaults(schema):
     for name in ("seed", "x_amp", "v_amp"):
         assert random[name].default == table[("initial", name)], name
     assert "damping: 'float' = 0.05" in str(signature)
+
+
+def test_a_parameter_has_one_unit_in_the_input_and_the_files(schema):
+    """The unit of a key (input reference) is the unit its /params entry states in every
+    file (model_units; none for a pure number): the damping ratio b a pure number, A a
+    length, w a frequency."""
+    inputs = {(k["group"], k["name"]): k["units"] for k in schema["inputs"]}
+    params = {e["path"].split("/")[-1].lstrip("@"): e for e in schema["outputs"]
+              if e["path"].startswith("/params/") and e["file"] == "run"}
+    shared = [(g, n) for (g, n) in inputs if n in params and g in ("chain", "run")]
+    assert {n for _, n in shared} >= {"damping", "restitution", "amplitude", "omega",
+                                      "spacing", "transient", "cycles"}
+    for group, name in shared:
+        stated = params[name]["model_units"] or params[name]["units"]
+        assert stated == inputs[group, name], (group, name, stated, inputs[group, name])
+    assert inputs["chain", "damping"] == "1" and inputs["chain", "amplitude"] == "length"
