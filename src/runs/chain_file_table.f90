@@ -362,7 +362,8 @@ contains
         call add(t, 'sweep', '/sweep/@parameter2', 'attribute', '', 'string', '', '', &
                  'the second swept parameter ('''' in a 1-D sweep)', 'always')
         call add(t, 'sweep', '/sweep/@mode', 'attribute', '', 'string', '', '', &
-                 '''fixed'' (every point from the initial state) or ''follow''', 'always')
+                 '''continuation'' (each point starts from the last state of the one '// &
+                 'before) or ''independent'' (every point from the initial state)', 'always')
         call add(t, 'sweep', '/sweep/point', 'dataset', 'point', 'float64', '1', '{parameter}', &
                  '{parameter} (the swept parameter) at the point', 'always')
         call add(t, 'sweep', '/sweep/point2', 'dataset', 'point2', 'float64', '1', '{parameter}', &

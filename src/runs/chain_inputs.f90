@@ -91,7 +91,7 @@ module chain_inputs
                     help='keep every collision'), &
         input_key_t('run', 'stick_speed', key_real, default='1e-9', range='(0, 1]', low=0, &
                     low_open=.true., high=1, units='length/time', &
-                    help='rebound speed below which chatter ends in rest'), &
+                    help='approach speed below which chatter ends in rest'), &
         input_key_t('run', 'max_period', key_integer, default='16', range='[1, 10000]', &
                     low=1, high=1.0e4_wp, units='drive cycles', help='longest period looked for'), &
         input_key_t('run', 'period_tol', key_real, default='1e-6', range='(0, 1)', low=0, &
