@@ -10,15 +10,17 @@ module chain_bridge
     use, intrinsic :: iso_c_binding, only: c_int, c_int64_t, c_double
     use impactchain, only: wp, i8, error_t, config_t, lyapunov_vectors, event_log_t, chain_t, &
                            record_sink_t, record_result_t, chain_copy_state, monitor_t, &
-                           stage_events
+                           stage_events, branches_t
     use impactchain_drivers, only: set_error, fmt_real, fmt_int, fmt_int8, read_config_text, &
-                                   exact, exact_list, fmt_logical, namelist_string
+                                   exact, exact_list, fmt_logical, namelist_string, &
+                                   continuation_table_t, finite_or_inf
     !$ use omp_lib, only: omp_set_num_threads
     implicit none
     private
     public :: array_sink_t, shared_monitor_t, make_config, sweep_group, continuation_group
     public :: put_message, put_text
-    public :: run_sizes_ok, put_run_results, use_threads, call_ended
+    public :: run_sizes_ok, put_run_results, put_continuation_results, use_threads
+    public :: call_ended
     public :: status_ok, status_invalid, status_failed, status_capacity, status_internal
     public :: status_stopped, message_capacity
 
@@ -271,6 +273,99 @@ contains
             mult_im = res%multipliers_im
         end if
     end subroutine put_run_results
+
+    !> ic_continuation's outputs: the points and special points of the branches (`res`, its
+    !> `table`) and Newton's start with the bonds of its impacts (`bonds`), or all zero without
+    !> them; the caller checked the capacities. `strobe_x` is the caller's array: written,
+    !> never zeroed.
+    subroutine put_continuation_results(values, x, v, strobe_x, periods, branch, mult_re, &
+                                        mult_im, stable, min_gap, min_impact_speed, impacts, &
+                                        residual, iterations, special_index, special_kind, &
+                                        special_value, end_reason, start_x, start_v, start_jac, &
+                                        start_mult_re, start_mult_im, start_residuals, &
+                                        start_bonds, start_min_gap, start_min_impact_speed, &
+                                        start_reason, res, table, bonds)
+        real(c_double), intent(out) :: values(:), x(:, :), v(:, :)
+        real(c_double), intent(inout) :: strobe_x(:, :, :)
+        integer(c_int), intent(out) :: periods(:), branch(:), stable(:), impacts(:)
+        integer(c_int), intent(out) :: iterations(:), special_index(:), special_kind(:, :)
+        real(c_double), intent(out) :: mult_re(:, :), mult_im(:, :), min_gap(:)
+        real(c_double), intent(out) :: min_impact_speed(:), residual(:), special_value(:)
+        integer(c_int), intent(out) :: end_reason(:), start_reason(:), start_bonds(:)
+        real(c_double), intent(out) :: start_x(:), start_v(:), start_jac(:, :)
+        real(c_double), intent(out) :: start_mult_re(:), start_mult_im(:), start_residuals(:)
+        real(c_double), intent(out) :: start_min_gap, start_min_impact_speed
+        type(branches_t), intent(in), optional :: res
+        type(continuation_table_t), intent(in), optional :: table
+        integer, intent(in), optional :: bonds(:)
+        integer :: np, ns, j
+
+        values = 0
+        x = 0
+        v = 0
+        periods = 0
+        branch = 0
+        mult_re = 0
+        mult_im = 0
+        stable = 0
+        min_gap = 0
+        min_impact_speed = 0
+        impacts = 0
+        residual = 0
+        iterations = 0
+        special_index = 0
+        special_kind = 0
+        special_value = 0
+        end_reason = 0
+        start_reason = 0
+        start_x = 0
+        start_v = 0
+        start_jac = 0
+        start_mult_re = 0
+        start_mult_im = 0
+        start_residuals = 0
+        start_bonds = 0
+        start_min_gap = 0
+        start_min_impact_speed = 0
+        if (.not. (present(res) .and. present(table) .and. present(bonds))) return
+        np = res%n_points
+        ns = res%n_specials
+        values(:np) = table%values
+        x(:, :np) = table%x
+        v(:, :np) = table%v
+        strobe_x(:, :table%longest, :np) = table%strobe_x
+        periods(:np) = table%period
+        branch(:np) = table%branch
+        mult_re(:, :np) = table%multipliers_re
+        mult_im(:, :np) = table%multipliers_im
+        stable(:np) = table%stable
+        min_gap(:np) = table%min_gap
+        min_impact_speed(:np) = table%min_impact_speed
+        impacts(:np) = table%impacts
+        residual(:np) = table%residual
+        iterations(:np) = table%iterations
+        special_index(:ns) = table%special_index
+        do j = 1, ns
+            call put_text(trim(table%special_kind(j)), special_kind(:, j))
+        end do
+        special_value(:ns) = table%special_value
+        call put_text(res%end_reason, end_reason)
+
+        associate (o => res%start)
+            start_x = o%x
+            start_v = o%v
+            start_jac = o%jacobian
+            if (o%converged) then
+                start_mult_re = o%multipliers_re
+                start_mult_im = o%multipliers_im
+            end if
+            start_residuals(:size(o%residuals)) = o%residuals
+            start_bonds(:size(bonds)) = bonds
+            start_min_gap = finite_or_inf(o%min_gap)
+            start_min_impact_speed = finite_or_inf(o%min_impact_speed)
+            call put_text(o%reason, start_reason)
+        end associate
+    end subroutine put_continuation_results
 
     !> Copy `text` into the message buffer (truncated to its size) and set the status.
     subroutine put_message(text, code, status, msg_len, message)

@@ -363,10 +363,10 @@ subroutine ic_continuation(n, nsp, spacing, damping, restitution, amplitude, ome
     use, intrinsic :: iso_c_binding, only: c_int, c_int64_t, c_double
     use impactchain, only: i8, error_t, config_t, branches_t, run_continuation, &
                            impact_bonds
-    use impactchain_drivers, only: continuation_table_t, continuation_table, finite_or_inf
+    use impactchain_drivers, only: continuation_table_t, continuation_table
     use chain_bridge, only: shared_monitor_t, make_config, continuation_group, put_message, &
-                            put_text, call_ended, status_ok, status_invalid, status_capacity, &
-                            status_internal
+                            put_continuation_results, call_ended, status_ok, status_invalid, &
+                            status_capacity, status_internal
     implicit none
     !f2py threadsafe
     integer(c_int), intent(in) :: n, nsp, nb, nx0, nv0, explicit, npar, period, max_points
@@ -400,37 +400,16 @@ subroutine ic_continuation(n, nsp, spacing, damping, restitution, amplitude, ome
     type(shared_monitor_t) :: monitor
     type(error_t), allocatable :: err
     integer, allocatable :: bonds(:)
-    integer :: np, ns, j
+    integer :: np, ns
 
     call put_message('', status_ok, status, msg_len, message)
     sizes = 0
-    values = 0
-    x = 0
-    v = 0
-    periods = 0
-    branch = 0
-    mult_re = 0
-    mult_im = 0
-    stable = 0
-    min_gap = 0
-    min_impact_speed = 0
-    impacts = 0
-    residual = 0
-    iterations = 0
-    special_index = 0
-    special_kind = 0
-    special_value = 0
-    end_reason = 0
-    start_reason = 0
-    start_x = 0
-    start_v = 0
-    start_jac = 0
-    start_mult_re = 0
-    start_mult_im = 0
-    start_residuals = 0
-    start_bonds = 0
-    start_min_gap = 0
-    start_min_impact_speed = 0
+    call put_continuation_results(values, x, v, strobe_x, periods, branch, mult_re, &
+                                  mult_im, stable, min_gap, min_impact_speed, impacts, residual, &
+                                  iterations, special_index, special_kind, special_value, &
+                                  end_reason, start_x, start_v, start_jac, start_mult_re, &
+                                  start_mult_im, start_residuals, start_bonds, start_min_gap, &
+                                  start_min_impact_speed, start_reason)
     call make_config(cfg, int(n), spacing, damping, restitution, amplitude, omega, boundary, &
                      explicit /= 0, x0, v0, int(transient, i8), 1_i8, phase, stick_speed, &
                      4096.0_c_double, .false., .false., 0, 1, .false., 1, err, &
@@ -463,41 +442,13 @@ subroutine ic_continuation(n, nsp, spacing, damping, restitution, amplitude, ome
         return
     end if
 
-    values(:np) = table%values
-    x(:, :np) = table%x
-    v(:, :np) = table%v
-    strobe_x(:, :table%longest, :np) = table%strobe_x
-    periods(:np) = table%period
-    branch(:np) = table%branch
-    mult_re(:, :np) = table%multipliers_re
-    mult_im(:, :np) = table%multipliers_im
-    stable(:np) = table%stable
-    min_gap(:np) = table%min_gap
-    min_impact_speed(:np) = table%min_impact_speed
-    impacts(:np) = table%impacts
-    residual(:np) = table%residual
-    iterations(:np) = table%iterations
-    special_index(:ns) = table%special_index
-    do j = 1, ns
-        call put_text(trim(table%special_kind(j)), special_kind(:, j))
-    end do
-    special_value(:ns) = table%special_value
-    call put_text(res%end_reason, end_reason)
-
-    associate (o => res%start)
-        start_x = o%x
-        start_v = o%v
-        start_jac = o%jacobian
-        if (o%converged) then
-            start_mult_re = o%multipliers_re
-            start_mult_im = o%multipliers_im
-        end if
-        start_residuals(:sizes(6)) = o%residuals
-        start_bonds(:sizes(7)) = bonds
-        start_min_gap = finite_or_inf(o%min_gap)
-        start_min_impact_speed = finite_or_inf(o%min_impact_speed)
-        call put_text(o%reason, start_reason)
-    end associate
+    call put_continuation_results(values, x, v, strobe_x, periods, branch, mult_re, &
+                                  mult_im, stable, min_gap, min_impact_speed, impacts, residual, &
+                                  iterations, special_index, special_kind, special_value, &
+                                  end_reason, start_x, start_v, start_jac, start_mult_re, &
+                                  start_mult_im, start_residuals, start_bonds, start_min_gap, &
+                                  start_min_impact_speed, start_reason, &
+                                  res, table, bonds)
 end subroutine ic_continuation
 
 !> Where the extension runs (chain_provenance: code version, compiler and flags, BLAS and the

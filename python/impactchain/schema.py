@@ -126,7 +126,7 @@ PARAMETER = "{parameter}"
 
 @functools.cache
 def _outputs() -> tuple[dict[str, Any], ...]:
-    from impactchain.api import _extension
+    from impactchain._calls import _extension
 
     text_len, text = _extension().ic_output_schema()
     if text_len > len(text):

@@ -40,7 +40,7 @@ import h5py
 import numpy as np
 import pytest
 
-from impactchain import api
+from impactchain import _calls, _continuations, _runs, api
 from impactchain.testing import assert_sum_rule
 
 ROOT = Path(__file__).resolve().parents[3]
@@ -248,7 +248,7 @@ def test_bit_identical_to_cli(name: str, cli: Path, tmp_path: Path) -> None:
     assert sim.x.shape == sim.v.shape == (case["cycles"], case["n"])
     if name == "sticking":  # the case is what it claims to be
         assert sim.sticks > 0 and sim.releases > 0
-        assert sim.event_time.size > api._FIRST_EVENT_CAPACITY[0]
+        assert sim.event_time.size > _runs._FIRST_EVENT_CAPACITY[0]
 
 
 def test_shapes_units_and_readonly() -> None:
@@ -271,9 +271,9 @@ def test_shapes_units_and_readonly() -> None:
 def test_event_buffer_retry_is_invisible(monkeypatch: pytest.MonkeyPatch) -> None:
     """A first guess of 1 event (retry) and of a million (no retry) give the same run."""
     args = dict(n=4, amplitude=1.7, omega=1.5, transient=5, cycles=30)
-    monkeypatch.setattr(api, "_FIRST_EVENT_CAPACITY", (1, 1))
+    monkeypatch.setattr(_runs, "_FIRST_EVENT_CAPACITY", (1, 1))
     small = api.simulate(**args)
-    monkeypatch.setattr(api, "_FIRST_EVENT_CAPACITY", (10**6, 10**6))
+    monkeypatch.setattr(_runs, "_FIRST_EVENT_CAPACITY", (10**6, 10**6))
     large = api.simulate(**args)
     assert small.event_time.size > 1
     for field in ("x", "v", "event_time", "event_site", "event_speed", "event_kind"):
@@ -345,7 +345,7 @@ def test_threads_give_the_same_results() -> None:
 def test_extension_outputs_in_documented_order(kernel: str, names: str) -> None:
     """api.RUN_OUTPUTS / SWEEP_OUTPUTS / CONTINUATION_OUTPUTS name the tuples f2py returns; a
     reordered layer must fail here."""
-    first_line = getattr(api._extension(), kernel).__doc__.splitlines()[0]
+    first_line = getattr(_calls._extension(), kernel).__doc__.splitlines()[0]
     returned = first_line.split(" = ")[0].split(",")
     assert tuple(returned) == getattr(api, names)
 
@@ -494,9 +494,9 @@ def test_engine_failure_is_a_runtime_error(monkeypatch: pytest.MonkeyPatch) -> N
     """Status 2 (the run failed) and unknown statuses raise RuntimeError, never pass."""
     message = np.frombuffer(b"engine: stuck", dtype=np.uint8).astype(np.int32)
     with pytest.raises(RuntimeError, match="^engine: stuck$"):
-        api._raise_for(2, message.size, message)
+        _calls._raise_for(2, message.size, message)
     with pytest.raises(RuntimeError, match=r"status 4"):
-        api._raise_for(4, message.size, message)
+        _calls._raise_for(4, message.size, message)
 
 
 # -------------------------------------------------------------------------- 3. no leaks
@@ -783,7 +783,7 @@ def test_extension_needs_no_executable_stack() -> None:
     loads where executable stacks are refused."""
     import struct
 
-    path = Path(api._extension().__file__)
+    path = Path(_calls._extension().__file__)
     data = path.read_bytes()
     assert data[:4] == b"\x7fELF" and data[4] == 2, "a 64-bit ELF"  # ELFCLASS64
     phoff, = struct.unpack_from("<Q", data, 0x20)
@@ -857,7 +857,7 @@ def test_continuation_capacity_retry_is_invisible(monkeypatch: pytest.MonkeyPatc
     xr = pytest.importorskip("xarray")
     amplitude, group, _, _ = CONTINUATIONS["fold"]
     ample = api.continuation(**FIG10, amplitude=amplitude, **group)
-    monkeypatch.setattr(api, "_first_room", lambda args: dict(
+    monkeypatch.setattr(_continuations, "_first_room", lambda args: dict(
         npcap=1, nlong=1, nscap=1, ntext=1, nrcap=1, nbcap=1))
     xr.testing.assert_identical(api.continuation(**FIG10, amplitude=amplitude, **group), ample)
 
@@ -1004,12 +1004,12 @@ def test_complex_x0_is_refused() -> None:
 _POOL_CHILD = """
 import sys, time
 from concurrent.futures import ThreadPoolExecutor
-from impactchain import api
+from impactchain import _calls, api
 calls = [lambda: api.simulate(16, 1.7, 1.5, transient=10**10, cycles=2)] * 3
 try:
     with ThreadPoolExecutor(2) as pool:
         futures = [pool.submit(call) for call in calls]
-        while len(api._RUNNING) < 2:  # both workers' kernels have started
+        while len(_calls._RUNNING) < 2:  # both workers' kernels have started
             time.sleep(0.01)
         print("running", flush=True)
         for future in futures:

@@ -27,7 +27,7 @@ import numpy as np
 import pytest
 
 import impactchain
-from impactchain import api
+from impactchain import _calls, api
 
 ROOT = Path(__file__).resolve().parents[3]
 SOURCE = ROOT / "python" / "impactchain"
@@ -52,7 +52,7 @@ def test_imports_the_installed_package() -> None:
                        "differ from python/impactchain/; run `make build` (or `pip install .`)")
     if api.extension_available() or "IMPACTCHAIN_REQUIRE_EXTENSION" in os.environ:
         assert api.extension_available()
-        assert Path(api._kernels.__file__).resolve().parent == installed
+        assert Path(_calls._kernels.__file__).resolve().parent == installed
 
 
 def test_bare_import_reaches_every_module() -> None:
