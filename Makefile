@@ -141,14 +141,20 @@ fortran-test: build mpi
 	@echo "impactchain: the same tests with runtime checks"
 	$(FPM) test $(CHECKED) $(FPM_LOG)
 
+# pytest-xdist spreads the tests over the machine's cores, a test file per worker at a time
+# (so that a file's shared fixtures run once); PYTEST_JOBS=0 runs them in this process
+PYTEST_JOBS ?= auto
+PYTEST_PARALLEL := -n $(PYTEST_JOBS) --dist loadscope
+
 python-test: build
 	@echo "impactchain: the Python tests (package and simulator, release build)"
-	IMPACTCHAIN_REQUIRE_EXTENSION=1 $(PY) -m pytest
+	IMPACTCHAIN_REQUIRE_EXTENSION=1 $(PY) -m pytest $(PYTEST_PARALLEL)
 	@echo "impactchain: pip install of the repository into a fresh venv (a full build)"
 	$(PY) -m pytest -m install -q -rA test/python/package/test_install.py
 	@echo "impactchain: the simulator tests again against the runtime-checked build"
+	$(FPM) build $(CHECKED) $(FPM_LOG)
 	IMPACTCHAIN_FPM_FLAGS='$(CHECKED_FLAGS)' \
-	    $(PY) -m pytest -q test/python --ignore=test/python/package
+	    $(PY) -m pytest -q $(PYTEST_PARALLEL) test/python --ignore=test/python/package
 
 test: fortran-test python-test docs-test
 
@@ -192,7 +198,7 @@ docs: api-docs
 
 # the site as a reader sees it: every page in headless Chromium, every link, every command
 docs-test: docs
-	$(VENV_PATH) $(PY) -m pytest -q test/docs
+	$(VENV_PATH) $(PY) -m pytest -q $(PYTEST_PARALLEL) test/docs
 
 clean:
 	rm -rf build runs/*.h5 runs/*.png site
