@@ -4,9 +4,13 @@ Each folder of src/ is a layer; its README.md names on its `Uses:` line the laye
 modules may use besides their own (src/README.md). The programs outside src/ use the
 library through its facades (src/api/); the benchmark also times base's kernels itself.
 
-    python test/check_layers.py [ROOT]     # exit 0, or 1 with one line per back-edge
+    python test/check_layers.py [ROOT]     # exit 0, or 1 with one line per problem
 
-`make test` runs it (test/python/test_layers.py), on this tree and on a tree made to fail.
+The tests mirror the layers (test/README.md): a folder of test/ holding test sources (Fortran
+sources, or Python's test_*.py) is a test area named like the folder of src/ it tests, or one
+of the test trees of TEST_ROOTS; any other is a problem too.
+
+`make test` runs it (test/python/test_layers.py), on this tree and on trees made to fail.
 """
 
 from __future__ import annotations
@@ -17,6 +21,13 @@ from pathlib import Path
 
 #: folders outside src/ and the layers of src/ they may use
 OUTSIDE = {"app": ["api"], "mpi/app": ["api"], "f2py": ["api"], "bench": ["api", "base"]}
+
+#: folders of test/ that hold tests of no one layer, and what they test
+TEST_ROOTS = {"test": "the Fortran suites and their two programs (fpm 0.12 compiles no test "
+                      "module in a subfolder that uses test/'s own modules)",
+              "test/python": "the simulator's tests, through its command line",
+              "test/python/package": "the Python package impactchain (python/impactchain)",
+              "test/docs": "the documentation site"}
 
 _USE = re.compile(r"^\s*use\s*(?:,\s*(?:non_)?intrinsic\s*::\s*|::\s*)?(\w+)", re.I | re.M)
 _MODULE = re.compile(r"^\s*(?:module\s+(?!procedure\b|function\b|subroutine\b)(\w+)"
@@ -69,9 +80,22 @@ def check(root: Path) -> list[str]:
     return problems
 
 
+def test_areas(root: Path) -> list[str]:
+    """Every folder of test/ holding test sources that is neither a test root nor named
+    like a folder of src/, one line each (empty: none)."""
+    layers = {readme.parent.name for readme in (root / "src").glob("*/README.md")}
+    folders = {path.parent for pattern in ("*.[fF]90", "test_*.py")
+               for path in (root / "test").rglob(pattern)}
+    return [f"{folder.relative_to(root)}: a test area with no folder src/{folder.name} (an "
+            f"area is named like the layer it tests: {', '.join(sorted(layers))})"
+            for folder in sorted(folders)
+            if folder.relative_to(root).as_posix() not in TEST_ROOTS
+            and folder.name not in layers]
+
+
 def main(argv: list[str]) -> int:
     root = Path(argv[1]) if len(argv) > 1 else Path(__file__).resolve().parents[1]
-    problems = check(root)
+    problems = check(root) + test_areas(root)
     for line in problems:
         print("check_layers: " + line, file=sys.stderr)
     return 1 if problems else 0

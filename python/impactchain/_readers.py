@@ -1,6 +1,8 @@
 """One reader per optional HDF5 group of a run file (``/initial`` ... ``/finite_time``), each
 checking the shapes and values it reads and returning the group's dataclass of
-:mod:`impactchain.results`; :func:`impactchain.io.read_run` calls them.
+:mod:`impactchain.results`; :func:`impactchain.io.read_run` calls them. Every name they read
+or test for goes through the file schema (:mod:`impactchain._hdf5`), so one the table lacks
+fails at once.
 """
 
 from __future__ import annotations
@@ -10,8 +12,8 @@ import re
 import h5py
 import numpy as np
 
-from impactchain._hdf5 import (SchemaError, _attr, _dataset, _flat_points, _float, _frozen, _int,
-                               _point_values, _str, _strings)
+from impactchain._hdf5 import (SchemaError, _attr, _dataset, _flat_points, _float, _frozen, _has,
+                               _has_attr, _int, _point_values, _str, _strings)
 from impactchain.results import (ATTRACTOR_KINDS, IMPACT, RELEASE, SPECIAL_KINDS, STICK, TOUCH,
                                  Census, Clv, Continuation, Events, FinalState, FiniteTime,
                                  Lyapunov, State, Stats, Strobe, Sweep)
@@ -36,7 +38,7 @@ def _read_final(g: h5py.Group, path: str, n: int) -> FinalState:
 def _read_strobe(g: h5py.Group, path: str, n: int) -> Strobe:
     x = _dataset(g, path, "x", (None, n), float)
     m = x.shape[0]
-    period = _dataset(g, path, "period", (n,), int) if "period" in g else None
+    period = _dataset(g, path, "period", (n,), int) if _has(g, "period") else None
     return Strobe(
         x=x,
         v=_dataset(g, path, "v", (m, n), float),
@@ -69,9 +71,9 @@ def _read_stats(g: h5py.Group, path: str, n: int) -> Stats:
         releases=_int(_attr(g, path, "releases"), path, "stats/releases"),
         site_counts=_dataset(g, path, "site_counts", (n + 1,), int),
         cycles_done=_int(_dataset(g, path, "cycles_done", None, int), path,
-                         "stats/cycles_done") if "cycles_done" in g else None,
+                         "stats/cycles_done") if _has(g, "cycles_done") else None,
         touches=_int(_attr(g, path, "touches"), path, "stats/touches")
-        if "touches" in g.attrs else None,
+        if _has_attr(g, "touches") else None,
     )
 
 
@@ -89,19 +91,19 @@ def _read_lyapunov(g: h5py.Group, path: str) -> Lyapunov:
         collisions_per_cycle=_float(_attr(g, path, "collisions_per_cycle"), path,
                                     "lyapunov/collisions_per_cycle"),
         running_cycle=_dataset(g, path, "running_cycle", (running.shape[0],), int)
-        if "running_cycle" in g else None,
+        if _has(g, "running_cycle") else None,
         stderr_block=_dataset(g, path, "stderr_block", (k,), int)
-        if "stderr_block" in g else None,
+        if _has(g, "stderr_block") else None,
     )
 
 
 def _read_sweep(g: h5py.Group, path: str, n: int) -> Sweep:
-    if "point" in g:
+    if _has(g, "point"):
         return _read_sweep_v2(g, path, n)
     parameter2 = _str(_attr(g, path, "parameter2"))
     values = _dataset(g, path, "values", (None, 2) if parameter2 else (None,), float)
     p = values.shape[0]
-    exponents = _dataset(g, path, "exponents", (p, None), float) if "exponents" in g else None
+    exponents = _dataset(g, path, "exponents", (p, None), float) if _has(g, "exponents") else None
     k = None if exponents is None else exponents.shape[1]
     return Sweep(
         parameter=_str(_attr(g, path, "parameter")),
@@ -112,15 +114,15 @@ def _read_sweep(g: h5py.Group, path: str, n: int) -> Sweep:
         collisions_per_cycle=_dataset(g, path, "collisions_per_cycle", (p,), float),
         period=_dataset(g, path, "period", (p, n), int),
         exponents=exponents,
-        stderr=_dataset(g, path, "stderr", (p, k), float) if "stderr" in g else None,
+        stderr=_dataset(g, path, "stderr", (p, k), float) if _has(g, "stderr") else None,
         ky_dimension=_dataset(g, path, "ky_dimension", (p,), float)
-        if "ky_dimension" in g else None,
+        if _has(g, "ky_dimension") else None,
     )
 
 
 def _read_sweep_v2(g: h5py.Group, path: str, n: int) -> Sweep:
     """Version 2: the point axes (point, point2) first; returned flattened as version 1."""
-    parameter2 = _str(g.attrs.get("parameter2", ""))
+    parameter2 = _str(_attr(g, path, "parameter2", ""))
     point = _dataset(g, path, "point", (None,), float)
     n1 = point.shape[0]
     if parameter2:
@@ -135,10 +137,10 @@ def _read_sweep_v2(g: h5py.Group, path: str, n: int) -> Sweep:
     def per_point(name: str, tail: tuple[int | None, ...], dtype: type) -> np.ndarray:
         return _frozen(_flat_points(_dataset(g, path, name, axes + tail, dtype), bool(parameter2)))
 
-    exponents = per_point("exponents", (None,), float) if "exponents" in g else None
+    exponents = per_point("exponents", (None,), float) if _has(g, "exponents") else None
     k = None if exponents is None else exponents.shape[1]
     drive_period = None
-    if "drive_period" in g:
+    if _has(g, "drive_period"):
         along = "point" if _str(_attr(g, path, "parameter")) == "omega" else "point2"
         period = _dataset(g, path, "drive_period", (n1 if along == "point" else n2,), float)
         if parameter2:
@@ -153,8 +155,8 @@ def _read_sweep_v2(g: h5py.Group, path: str, n: int) -> Sweep:
         collisions_per_cycle=per_point("collisions_per_cycle", (), float),
         period=per_point("period", (n,), int),
         exponents=exponents,
-        stderr=per_point("stderr", (k,), float) if "stderr" in g else None,
-        ky_dimension=per_point("ky_dimension", (), float) if "ky_dimension" in g else None,
+        stderr=per_point("stderr", (k,), float) if _has(g, "stderr") else None,
+        ky_dimension=per_point("ky_dimension", (), float) if _has(g, "ky_dimension") else None,
         drive_period=drive_period,
     )
 
@@ -234,13 +236,13 @@ def _read_census(g: h5py.Group, path: str, n: int) -> Census:
     plane = None
     plane_range = None
     plane_points = 0
-    if "plane" in g.attrs:
-        names = tuple(_str(g.attrs["plane"]).split())
+    if _has_attr(g, "plane"):
+        names = tuple(_str(_attr(g, path, "plane")).split())
         bad = [name for name in names if not re.fullmatch(r"[xv][0-9]+", name)
                or not 1 <= int(name[1:]) <= n]
         if len(names) != 2 or bad:
             raise SchemaError(f"{path}: {g.name} attribute 'plane' = "
-                              f"{_str(g.attrs['plane'])!r} is not two coordinates x<i> or "
+                              f"{_str(_attr(g, path, 'plane'))!r} is not two coordinates x<i> or "
                               f"v<i>, i in 1..{n}")
         plane = (names[0], names[1])
         plane_range = _frozen(np.asarray(_attr(g, path, "plane_range"), dtype=float))
@@ -252,7 +254,7 @@ def _read_census(g: h5py.Group, path: str, n: int) -> Census:
             raise SchemaError(f"{path}: {g.name}: plane_points = {plane_points} does not "
                               f"square to the {s} samples")
     lambda1 = _dataset(g, path, "lambda1", (p, s), float)
-    stored = "sample_exponents" in g
+    stored = _has(g, "sample_exponents")
     if stored:
         exponents = _dataset(g, path, "sample_exponents", (p, s, None), float)
         k = exponents.shape[2]
@@ -271,7 +273,7 @@ def _read_census(g: h5py.Group, path: str, n: int) -> Census:
         v_amp=_float(_attr(g, path, "v_amp"), path, f"{g.name}/v_amp"),
         tolerance=_float(_attr(g, path, "tolerance"), path, f"{g.name}/tolerance"),
         mirror=_str(_attr(g, path, "mirror")),
-        rule=_str(g.attrs.get("rule", "")),
+        rule=_str(_attr(g, path, "rule", "")),
         values=values,
         x0=x0,
         v0=_dataset(g, path, "v0", (p, s, n), float),
@@ -334,13 +336,13 @@ def _read_clv(g: h5py.Group, path: str, n: int) -> Clv:
     if not 0 <= unstable <= k:
         raise SchemaError(f"{path}: {g.name}@unstable = {unstable} is outside 0..{k}")
     site_weight = None
-    if "site_weight" in g:
+    if _has(g, "site_weight"):
         site_weight = _dataset(g, path, "site_weight", (r, None, n), float)
         if site_weight.shape[1] > k:
             raise SchemaError(f"{path}: {g.name}/site_weight holds {site_weight.shape[1]} "
                               f"vectors, more than the {k} of {g.name}/exponents")
     vectors = saved_cycle = None
-    if "vectors" in g or "saved_cycle" in g:
+    if _has(g, "vectors") or _has(g, "saved_cycle"):
         saved_cycle = _dataset(g, path, "saved_cycle", (None,), int)
         vectors = _dataset(g, path, "vectors", (saved_cycle.shape[0], k, 2 * n), float)
     return Clv(

@@ -57,6 +57,13 @@ so that they appear here as ``(n_record, n)``; a file with the other order is re
 rather than silently transposed. Periods, exponents and Kaplan-Yorke dimensions are the
 simulator's, as stored; nothing in ``impactchain`` computes them again.
 
+Every path this module and ``_readers`` read or test for is an entry of the file schema
+(:mod:`impactchain.schema`, the table the simulator writes by), resolved before the file is
+looked at: a name the table lacks is a :class:`~impactchain._hdf5.ReaderPathError` at once, and
+so is a rank other than its dims'; the types of ``/params`` are the table's dtypes. Only
+``/sweep/values`` of version 1 is not in the table. ``Run.units`` keeps what the file itself
+says (a version-1 file's own units).
+
 The dataclasses live in :mod:`impactchain.results`, one reader per group in ``_readers``, the
 namelist text in :mod:`impactchain.namelist` and runs made in memory in
 :mod:`impactchain.inmemory`; this module reads files and names all of them, as before.
@@ -64,6 +71,7 @@ namelist text in :mod:`impactchain.namelist` and runs made in memory in
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import os
 from collections.abc import Iterable
@@ -73,8 +81,8 @@ from typing import Any
 import h5py
 import numpy as np
 
-from impactchain._hdf5 import (SchemaError, _attr, _collect_units, _dataset, _float, _frozen, _int,
-                               _str)
+from impactchain._hdf5 import (SchemaError, _attr, _collect_units, _dataset, _entry, _float,
+                               _frozen, _group, _has, _has_attr, _int, _str, _version)
 from impactchain._readers import (_read_census, _read_clv, _read_continuation, _read_events,
                                   _read_final, _read_finite_time, _read_lyapunov, _read_state,
                                   _read_stats, _read_strobe, _read_sweep)
@@ -201,17 +209,17 @@ def _check_file(path: str) -> None:
 
 
 def _check_schema(f: h5py.File, path: str) -> None:
-    if "schema_version" not in f.attrs:
+    if not _has_attr(f, "schema_version"):
         raise SchemaError(
             f"{path}: no 'schema_version' attribute; not an impactchain output file"
         )
-    version = _int(f.attrs["schema_version"], path, "schema_version")
+    version = _version(f, path)
     if version not in READABLE_VERSIONS:
         raise SchemaError(
             f"{path}: schema_version {version} is not supported (this impactchain package "
             f"reads schema_version {' and '.join(map(str, READABLE_VERSIONS))})"
         )
-    if "params" not in f:
+    if not _group(f, "params"):
         raise SchemaError(f"{path}: no /params group")
 
 
@@ -220,13 +228,25 @@ def _check_required(
 ) -> None:
     for entry in require:
         options = [item.strip("/") for item in entry.split("|")]
-        if any(option in f for option in options):
+        if any(_present(f, option) for option in options):
             continue
         names = " or ".join(f"/{option}" for option in options)
         need = f", needed by {purpose}" if purpose else ""
         hint = _HINTS.get(options[0])
         reason = f" ({hint})" if hint else ""
         raise SchemaError(f"{path}: no {names}{need}{reason}")
+
+
+def _present(f: h5py.File, option: str) -> bool:
+    """Whether the file has ``option``, a group (``events``) or dataset (``sweep/exponents``)
+    of the file schema."""
+    group, _, name = option.partition("/")
+    if not name:
+        return _group(f, group)
+    if not _group(f, group):
+        _has(f, option)  # the path must be the table's even where the group is absent
+        return False
+    return _has(f[group], name)
 
 
 def _wanted_groups(require: Iterable[str], groups: Iterable[str] | None) -> set[str]:
@@ -256,17 +276,17 @@ def _read(f: h5py.File, path: str, wanted: set[str]) -> Run:
     }
     parts: dict[str, Any] = {}
     for name, reader in readers.items():
-        if name in wanted and name in f:
+        if name in wanted and _group(f, name):
             parts[name] = reader(f[name])
     return Run(
         path=path,
-        schema_version=_int(f.attrs["schema_version"], path, "schema_version"),
-        code_version=_str(f.attrs.get("code_version", "")),
-        input_namelist=_str(f.attrs.get("input_namelist", "")),
-        complete=bool(_int(f.attrs.get("complete", 1), path, "complete")),
+        schema_version=_version(f, path),
+        code_version=_str(_attr(f, path, "code_version", "")),
+        input_namelist=_str(_attr(f, path, "input_namelist", "")),
+        complete=bool(_int(_attr(f, path, "complete", 1), path, "complete")),
         params=params,
         units=MappingProxyType(_collect_units(f)),
-        resolved_namelist=_str(f.attrs.get("resolved_namelist", "")),
+        resolved_namelist=_str(_attr(f, path, "resolved_namelist", "")),
         **parts,
     )
 
@@ -275,24 +295,25 @@ def _read_params(f: h5py.File, path: str) -> Params:
     g = f["params"]
     # a version-2 sweep leaves out what differs from point to point, a continuation its
     # parameter
-    swept = set(_swept(f, path)) if "sweep" in f and _version(f, path) >= 2 else set()
-    if "continuation" in f:
+    swept = set(_swept(f, path)) if _group(f, "sweep") and _version(f, path) >= 2 else set()
+    if _group(f, "continuation"):
         swept.add(_str(_attr(f["continuation"], path, "parameter")))
-    if "census" in f and _str(f["census"].attrs.get("parameter", "")):
-        swept.add(_str(f["census"].attrs["parameter"]))
+    if _group(f, "census") and _str(_attr(f["census"], path, "parameter", "")):
+        swept.add(_str(_attr(f["census"], path, "parameter")))
     if "omega" in swept:
         swept.add("drive_period")
-    attrs = {name: math.nan if name in swept and name not in g.attrs else _attr(g, path, name)
-             for name in _PARAM_TYPES}
+    types = _param_types(g)
+    attrs = {name: math.nan if name in swept and not _has_attr(g, name)
+             else _attr(g, path, name) for name in types}
     n = _int(attrs["n"], path, "params/n")
     if n < 1:
         raise SchemaError(f"{path}: /params n = {n} must be >= 1")
-    if "spacing" in swept and "spacing" not in g:
+    if "spacing" in swept and not _has(g, "spacing"):
         spacing = _frozen(np.full(n + 1, math.nan))
     else:
         spacing = _dataset(g, path, "spacing", (n + 1,), float)
     values: dict[str, Any] = {}
-    for name, kind in _PARAM_TYPES.items():
+    for name, kind in types.items():
         where = f"params/{name}"
         if kind is int:
             values[name] = _int(attrs[name], path, where)
@@ -304,28 +325,21 @@ def _read_params(f: h5py.File, path: str) -> Params:
     return Params(**values)
 
 
-_PARAM_TYPES: dict[str, type] = {
-    "n": int,
-    "damping": float,
-    "restitution": float,
-    "amplitude": float,
-    "omega": float,
-    "boundary": str,
-    "drive_period": float,
-    "phase": float,
-    "transient": int,
-    "cycles": int,
-}
+#: The Python type of each of the file schema's dtypes
+_TYPES: dict[str, type] = {"int32": int, "int64": int, "float64": float, "string": str}
 
 
-def _version(f: h5py.File, path: str) -> int:
-    return _int(f.attrs["schema_version"], path, "schema_version")
+def _param_types(g: h5py.Group) -> dict[str, type]:
+    """The attributes of /params that :class:`Params` holds, each with the type its dtype
+    in the file schema reads as (``spacing``, a dataset, apart)."""
+    return {field.name: _TYPES[_entry(g, field.name, attribute=True)["dtype"]]
+            for field in dataclasses.fields(Params) if field.name != "spacing"}
 
 
 def _swept(f: h5py.File, path: str) -> list[str]:
     """The swept parameters of a sweep's file."""
     g = f["sweep"]
     names = [_str(_attr(g, path, "parameter"))]
-    if "parameter2" in g.attrs and _str(g.attrs["parameter2"]):
-        names.append(_str(g.attrs["parameter2"]))
+    if _str(_attr(g, path, "parameter2", "")):
+        names.append(_str(_attr(g, path, "parameter2")))
     return names

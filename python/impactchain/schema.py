@@ -28,7 +28,7 @@ from typing import Any
 import numpy as np
 
 __all__ = ["inputs", "default", "key", "with_schema_defaults", "SCHEMA_DEFAULT",
-           "outputs", "output", "parameter_units", "label_units", "dims", "attributes",
+           "outputs", "output", "groups", "parameter_units", "label_units", "dims", "attributes",
            "variable", "parameter_label_units", "dataset_units"]
 
 
@@ -148,6 +148,14 @@ def output(path: str, when: str | None = None) -> dict[str, Any]:
         if entry["path"] == key and (when is None or entry["when"] == when):
             return copy.deepcopy(entry)
     raise KeyError(f"the file schema has no entry {key!r}")
+
+
+@functools.cache
+def groups() -> tuple[str, ...]:
+    """The groups of the file schema (``params``, ``strobe`` ...), in the order of
+    :func:`outputs`."""
+    names = (entry["path"].split("/")[1] for entry in _outputs())
+    return tuple(dict.fromkeys(name for name in names if not name.startswith("@")))
 
 
 def parameter_units(name: str) -> str | None:

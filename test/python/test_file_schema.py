@@ -1,7 +1,8 @@
 """Files of every kind against the file schema (`impactchain --schema`, the one table of
 src/runs/chain_file_table.f90): a run with every optional group, a 2-D sweep along omega, a
 continuation, censuses at one point and over a sweep, and a run stopped early (/resume). The recipes' files are checked the
-same way in test_recipes.py. See file_schema.py for what is compared.
+same way in test_recipes.py. See file_schema.py for what is compared. The Python reader
+names only the table's paths (impactchain._hdf5).
 """
 from __future__ import annotations
 
@@ -12,6 +13,9 @@ import h5py
 import pytest
 
 from file_schema import read_schema, schema_differences
+from impactchain import schema as impactchain_schema
+from impactchain._hdf5 import ReaderPathError
+from impactchain.io import read_run
 from simulator import impactchain_exe, run_namelist, start_until_progress  # noqa: F401
 
 CASES = {
@@ -128,3 +132,45 @@ def test_the_damping_unit_has_one_answer(schema, files):
     with h5py.File(files["sweep_2d"]) as f:
         assert "model_units" not in f["sweep/point"].attrs
         assert f["sweep/point2"].attrs["model_units"] == "1/time"
+
+
+@pytest.mark.parametrize("case", sorted(CASES) + ["stopped"])
+def test_the_reader_names_only_the_tables_paths(files, case):
+    """Every name impactchain.io and its readers read or test for is resolved in the table
+    first (impactchain._hdf5._entry), so reading every kind of file, every optional group
+    present, fails on a name the table lacks."""
+    run = read_run(files[case])
+    assert run.params.n >= 1
+
+
+@pytest.mark.parametrize("path", ["/strobe/x", "/stats/@touches", "/params/@phase",
+                                  "/census/sample_exponents", "/sweep/point2", "/@complete"])
+def test_a_path_missing_from_the_table_fails_the_reader(files, monkeypatch, path):
+    """The table without one entry: the reader stops at that name, whether the file holds
+    it or not, with an error that is not the file's (no SchemaError)."""
+    table = tuple(e for e in impactchain_schema._outputs() if e["path"] != path)
+    monkeypatch.setattr(impactchain_schema, "_outputs", lambda: table)
+    case = {"/census/sample_exponents": "census", "/sweep/point2": "sweep_2d"}.get(path, "run")
+    with pytest.raises(ReaderPathError, match=f"the reader names {path}, which the file "
+                                              "schema lacks"):
+        read_run(files[case])
+
+
+def test_a_group_missing_from_the_table_fails_the_reader(files, monkeypatch):
+    table = tuple(e for e in impactchain_schema._outputs() if not e["path"].startswith("/clv/"))
+    monkeypatch.setattr(impactchain_schema, "_outputs", lambda: table)
+    impactchain_schema.groups.cache_clear()
+    try:
+        with pytest.raises(ReaderPathError, match="the reader names the group /clv, which"):
+            read_run(files["run"])
+    finally:
+        impactchain_schema.groups.cache_clear()
+
+
+def test_a_required_path_missing_from_the_table_fails(files):
+    """A figure's `require` names paths of the table too: a misspelt one is no missing
+    group of the file."""
+    with pytest.raises(ReaderPathError, match="/strobe/xs, which the file schema lacks"):
+        read_run(files["run"], require=("strobe/xs",))
+    with pytest.raises(ReaderPathError, match="the group /strobes, which"):
+        read_run(files["run"], require=("strobes",))

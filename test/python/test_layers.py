@@ -1,6 +1,6 @@
 """Issue 31, 1: the folders of src/ are layers whose `use`s point one way
 (test/check_layers.py); a back-edge fails the check, naming the file, the module and both
-layers."""
+layers, and so does a folder of tests named like no layer."""
 from __future__ import annotations
 
 import shutil
@@ -50,3 +50,19 @@ def test_a_source_outside_the_layers_fails(tmp_path):
     assert result.returncode == 1
     assert [line.split(":")[1].strip() for line in result.stderr.splitlines()] == [
         "src/chain_loose.f90", "src/extra/chain_extra.c"], result.stderr
+
+
+def test_a_test_area_named_like_no_layer_fails(tmp_path):
+    """test/ mirrors src/ (test/README.md): a folder of tests is named like the layer it
+    tests; the Fortran area test/model passes, test/physics and test/python/output do not."""
+    shutil.copytree(ROOT / "src", tmp_path / "src")
+    for source in ("test/testing.f90", "test/model/test_gaps.f90", "test/physics/test_flow.f90",
+                   "test/python/test_cli.py", "test/python/output/test_file.py",
+                   "test/python/package/test_io.py"):
+        (tmp_path / source).parent.mkdir(parents=True, exist_ok=True)
+        (tmp_path / source).write_text("\n")
+    result = _check(tmp_path)
+    assert result.returncode == 1
+    assert [line.split(":")[1].strip() for line in result.stderr.splitlines()] == [
+        "test/physics", "test/python/output"], result.stderr
+    assert "a test area with no folder src/physics" in result.stderr
