@@ -59,8 +59,8 @@ def continuation(
     doublings (docs/model.md section 12). Folds, period doublings, Neimark-Sacker points and
     grazings are located; a branch ends at a grazing, at a bound of the parameter, after
     ``max_points`` or when Newton fails, and says why (``end_reason``). ``**keys`` (any key
-    of the input table) as :func:`simulate`'s. Ctrl-C stops the work at its next transient cycle or orbit
-    (:class:`KeyboardInterrupt`); ``progress=True`` shows a tqdm bar of them.
+    of the input table) as :func:`simulate`'s. Ctrl-C stops the work at its next transient
+    cycle or orbit (:class:`KeyboardInterrupt`); ``progress=True`` shows a tqdm bar of them.
 
     Returns:
         An :class:`xarray.Dataset`, identical to the CLI file's ``/continuation`` group

@@ -128,6 +128,7 @@ class Simulation:
                   "/strobe/oscillator": _osc(n), "/strobe/cycle": self.cycle,
                   "/strobe/x": self.x, "/strobe/v": self.v, "/strobe/period": self.periods,
                   "/stats/bond": _bonds(n), "/stats/site_counts": self.site_counts,
+                  "/stats/cycles_done": np.int64(self.x.shape[0]),
                   "/stats/@impacts": self.impacts, "/stats/@sticks": self.sticks,
                   "/stats/@releases": self.releases, "/stats/@touches": self.touches,
                   "/stats/@collisions_per_cycle": self.collisions_per_cycle}
@@ -272,20 +273,28 @@ def _params_values(params: Mapping[str, Any]) -> dict[str, Any]:
 
 
 def _final_values(result: Any, n: int) -> dict[str, Any]:
-    """The file's ``/final`` state (x, v) of a result."""
+    """The file's ``/final`` state of a result: x, v and, when the run's arguments are
+    known, the cycle and section phase it ends at."""
     x = getattr(result, "final_x", None)
     v = getattr(result, "final_v", None)
     if x is None:
         x, v = result.x, result.v
-    return {"/final/oscillator": _osc(n), "/final/x": x, "/final/v": v}
+    values = {"/final/oscillator": _osc(n), "/final/x": x, "/final/v": v}
+    params = getattr(result, "params", None)
+    if params:
+        values.update({"/final/cycle": np.int64(params["transient"] + params["cycles"]),
+                       "/final/phase": np.float64(params["phase"])})
+    return values
 
 
 def _root(params: Mapping[str, Any]) -> dict[str, Any]:
-    """The root attributes of a run's tree: its code version and equivalent input."""
+    """The root attributes of a run's tree: the file layout's version, its code version and
+    equivalent input, complete (so that :func:`impactchain.io.read_run` reads it as a file)."""
     from impactchain.namelist import equivalent_namelist
+    from impactchain.results import SCHEMA_VERSION
 
-    return {"code_version": params["code_version"],
-            "input_namelist": equivalent_namelist(params, "vectors" in params)}
+    return {"schema_version": SCHEMA_VERSION, "code_version": params["code_version"],
+            "input_namelist": equivalent_namelist(params, "vectors" in params), "complete": 1}
 
 
 # ---------------------------------------------------------------------------- functions

@@ -212,8 +212,11 @@ def is_tree(data: Any) -> bool:
 def run_from_tree(tree: Any, require: Any = (), purpose: str | None = None) -> Run:
     """The :class:`Run` of an xarray tree of an impactchain file: xarray writes it as the
     netCDF-4 file it mirrors, which :func:`impactchain.io.read_run` reads (with ``require``
-    and ``purpose``); ``Run.path`` is the tree's source file, if it was read from one."""
+    and ``purpose``); ``Run.path`` is the tree's source file, if it was read from one. A group
+    of a tree (``tree["sweep"]``) stands for its whole tree."""
     from impactchain.io import read_run
+
+    tree = tree.root
 
     with tempfile.TemporaryDirectory() as folder:
         path = os.path.join(folder, "tree.h5")

@@ -1210,7 +1210,9 @@ def test_figures_take_files_trees_and_results_alike(cli: Path, tmp_path: Path) -
             for a, b in zip(drawn, lines[0]):
                 np.testing.assert_array_equal(a, b)
     run_tree = xr.open_datatree(files["run"], engine="h5netcdf")
-    for data in (files["run"], run_tree, api.simulate(**KICKED)):
+    simulation = api.simulate(**KICKED)
+    for data in (files["run"], run_tree, run_tree["strobe"], simulation,
+                 simulation.to_xarray()):
         plt.close(figures.space_time_amplitude(data))
     tree.close()
     run_tree.close()
