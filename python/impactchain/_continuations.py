@@ -115,9 +115,17 @@ def periodic_orbit(
         ValueError: a bad argument, with the CLI's message. TypeError: an argument of the
         wrong type. RuntimeError: the engine failed. KeyboardInterrupt: Ctrl-C.
     """
-    _, args = _continuation_args(n, amplitude, omega, keys, "amplitude", 0.0, 0.0, period, 1,
-                                 0)
+    cfg, args = _continuation_args(n, amplitude, omega, keys, "amplitude", 0.0, 0.0, period,
+                                   1, 0)
     out = _continue(args, progress)
+
+    def file_group() -> Any:
+        try:
+            import xarray as xr
+        except ImportError:
+            raise ImportError("to_xarray() needs xarray: pip install xarray") from None
+        return _continuation_dataset(xr, out, cfg, args)
+
     converged = bool(out["sizes"][4])
     multipliers = out["start_mult_re"] + 1j * out["start_mult_im"]
     return PeriodicOrbit(
@@ -133,6 +141,7 @@ def periodic_orbit(
         min_gap=float(out["start_min_gap"]),
         stable=bool(out["stable"][0]) if out["values"].size else False,
         jacobian=_frozen(out["start_jac"]),
+        file_group=file_group,
     )
 
 

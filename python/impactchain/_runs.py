@@ -4,7 +4,7 @@ through :mod:`impactchain.api`)."""
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
@@ -250,6 +250,17 @@ class PeriodicOrbit:
     jacobian: NDArray[np.float64]
     """(2n, 2n) Jacobian of P^p at ``x``, ``v``, the state interleaved as (x_1, v_1, ...,
     x_n, v_n) (as :attr:`Floquet.jacobian`)."""
+    file_group: Callable[[], Any] | None = field(default=None, repr=False)
+    """Makes the ``/continuation`` group of the CLI's file of this run (``to_xarray``)."""
+
+    def to_xarray(self) -> Any:
+        """This orbit as the :class:`xarray.Dataset` of the CLI's file of the same input
+        (``&continuation max_points = 1``): its ``/continuation`` group, one point (none when
+        Newton did not converge, ``end_reason`` then says why), with the file's names,
+        dimensions and units, as :func:`continuation` returns it."""
+        if self.file_group is None:
+            raise ValueError("this PeriodicOrbit was not made by impactchain.api.periodic_orbit")
+        return self.file_group()
 
 
 def _osc(count: int) -> NDArray[np.int32]:

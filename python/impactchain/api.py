@@ -35,7 +35,7 @@ keyword, by its name or, where several groups have it, as ``group.key`` (``**{'i
 keys are all named at once with the reader's "did you mean". Results are xarray objects or
 convert with one call: ``simulate``, ``lyapunov`` and ``floquet`` results' ``to_xarray()``
 gives the :class:`xarray.DataTree` of the CLI's file (``xarray.open_datatree(path)``), with
-the file's names, dimensions and units.
+the file's names, dimensions and units; a ``periodic_orbit``'s, its file's ``/continuation``.
 
 Long calls (:func:`simulate`, :func:`lyapunov`, :func:`floquet`, :func:`sweep`,
 :func:`continuation`, :func:`periodic_orbit`) run the Fortran in a worker thread with the GIL

@@ -53,6 +53,8 @@ def as_run(data: RunLike, require: Iterable[str] = (), purpose: str | None = Non
             raise TypeError(f"{type(data).__name__}.to_run() returned "
                             f"{type(run).__name__}, not an impactchain.io.Run")
         return run
+    if callable(getattr(data, "to_xarray", None)) and not hasattr(data, "data_vars"):
+        return as_run(data.to_xarray(), require, purpose)  # (api.PeriodicOrbit)
     raise TypeError(f"cannot draw a {type(data).__name__}: give an impactchain.io.Run, a path "
                     "to an impactchain file, an xarray tree of one or an impactchain.api "
                     "result")
@@ -61,7 +63,8 @@ def as_run(data: RunLike, require: Iterable[str] = (), purpose: str | None = Non
 def _as_runs(data: RunLike | Sequence[RunLike], require: Iterable[str] = (),
              purpose: str | None = None) -> list[Run]:
     single = (isinstance(data, (Run, str, os.PathLike)) or isinstance(data, SupportsRun)
-              or is_tree(data) or hasattr(data, "data_vars"))  # (a Dataset is one result)
+              or is_tree(data) or hasattr(data, "data_vars")  # (a Dataset is one result)
+              or hasattr(data, "to_xarray"))
     items = [data] if single else list(data)  # type: ignore[arg-type]
     return [as_run(item, require, purpose) for item in items]
 

@@ -1216,3 +1216,19 @@ def test_figures_take_files_trees_and_results_alike(cli: Path, tmp_path: Path) -
         plt.close(figures.space_time_amplitude(data))
     tree.close()
     run_tree.close()
+
+
+def test_periodic_orbit_converts_to_the_files_group(cli: Path, tmp_path: Path) -> None:
+    """PeriodicOrbit.to_xarray() is the CLI file's /continuation group of the same input
+    (&continuation max_points = 1), bit for bit, and the figures draw the orbit as that."""
+    xr = pytest.importorskip("xarray")
+    import matplotlib.pyplot as plt
+
+    from impactchain import figures
+
+    text = _continuation_namelist(3.0, dict(parameter="amplitude", max_points=1))
+    assert run_cli(cli, text, tmp_path).returncode == 0
+    orbit = api.periodic_orbit(**FIG10, amplitude=3.0)
+    assert_same_bits(orbit.to_xarray(), _file_group(xr, tmp_path / "run.h5"))
+    for draw in (figures.multipliers, figures.branches):
+        plt.close(draw(orbit))
