@@ -156,16 +156,36 @@ contains
         end do
     end function text_of
 
+    !> The lines of `text` (none for empty text), as a list of equal length.
+    pure function lines_of(text) result(lines)
+        character(len=*), intent(in) :: text
+        character(len=:), allocatable :: lines(:)
+        integer :: n, j, first, last
+
+        n = count([(text(j:j) == new_line('a'), j=1, len(text))])
+        if (len(text) > 0 .and. text(len(text):) /= new_line('a')) n = n + 1
+        allocate (character(len=max(len(text), 1)) :: lines(n))
+        first = 1
+        do j = 1, n
+            last = index(text(first:), new_line('a')) + first - 2
+            if (last < first - 1) last = len(text)
+            lines(j) = text(first:last)
+            first = last + 2
+        end do
+    end function lines_of
+
     !> The configuration of the namelist with these values, read by the CLI's reader (so its
     !> checks and messages are the CLI's, and its values the same bits: reals are written to
     !> full precision). `spacing` has one value (uniform) or n+1 values, as in &chain;
     !> `boundary` is the lower-cased name as byte values; `explicit` selects &initial kind =
     !> 'explicit' (x0, v0) rather than 'rest', and seed, x_amp, v_amp kind = 'random';
-    !> `window` is &lyapunov's; `groups`, more groups (sweep_group, continuation_group).
+    !> `window` is &lyapunov's; `groups`, more groups (sweep_group, continuation_group);
+    !> `overrides`, byte values of `group.key=value` lines applied to the text as the CLI's
+    !> `--set` (any key of the input table).
     subroutine make_config(cfg, n, spacing, damping, restitution, amplitude, omega, boundary, &
                            explicit, x0, v0, transient, cycles, phase, stick_speed, &
                            max_size_mb, record_events, lyapunov, vectors, qr_every, jacobian, &
-                           jacobian_cycles, err, window, seed, x_amp, v_amp, groups)
+                           jacobian_cycles, err, window, seed, x_amp, v_amp, groups, overrides)
         type(config_t), intent(out) :: cfg
         integer, intent(in) :: n, vectors, qr_every, jacobian_cycles
         real(wp), intent(in) :: spacing(:), damping, restitution, amplitude, omega
@@ -177,6 +197,7 @@ contains
         integer, intent(in), optional :: window, seed
         real(wp), intent(in), optional :: x_amp, v_amp
         character(len=*), intent(in), optional :: groups
+        integer(c_int), intent(in), optional :: overrides(:)
         character(len=:), allocatable :: text
         character(len=*), parameter :: nl = new_line('a')
 
@@ -207,7 +228,12 @@ contains
         text = text//" /"//nl//"&output file = '(python)', max_size_mb = "// &
                exact(max_size_mb)//" /"//nl
         if (present(groups)) text = text//groups
-        call read_config_text('python arguments', text, cfg, err)
+        if (present(overrides)) then
+            call read_config_text('python arguments', text, cfg, err, &
+                                  lines_of(text_of(overrides)))
+        else
+            call read_config_text('python arguments', text, cfg, err)
+        end if
         !$omp end critical (chain_bridge_config_text)
     end subroutine make_config
 

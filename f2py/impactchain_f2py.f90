@@ -21,6 +21,8 @@
 !>   /= 0 to ask for a stop (seen at the next transient cycle, record, sweep point or orbit);
 !>   the routine keeps control(2:4) = stage (1 transient, 2 records, 3 sweep points or orbits
 !>   of a branch), units done, their total.
+!> - `overrides`: `group.key=value` lines (byte values) applied after the arguments, as the
+!>   CLI's `--set`: any key of the input table, checked and refused with the CLI's messages.
 !> - Booleans are c_int 0 / 1. No strings cross: `boundary` (the lower-cased name) and
 !>   `message` are c_int arrays of byte values 0..255 (f2py 2.x cannot declare c_int8_t).
 !> - Sizes of outputs are caller-given. With `dry_run = 1` a routine only validates (`ic_run`
@@ -47,11 +49,11 @@
 subroutine ic_run(n, nsp, spacing, damping, restitution, amplitude, omega, nb, boundary, &
                   explicit, nx0, x0, nv0, v0, transient, cycles, phase, stick_speed, &
                   max_size_mb, record_events, lyapunov, vectors, qr_every, jacobian, &
-                  jacobian_cycles, window, dry_run, keep_strobe, nr, nc, nf, ncap, kcap, mj, &
-                  kw, nw, x, v, cycle, final_x, final_v, periods, site_counts, counts, &
-                  collisions_per_cycle, nev, ev_time, ev_site, ev_speed, ev_kind, k, exponents, &
-                  stderr_bits, stderr_cycles, per_time, ky, jac, mult_re, mult_im, windows, &
-                  window_cycle, control, status, msg_len, message)
+                  jacobian_cycles, window, nov, overrides, dry_run, keep_strobe, nr, nc, nf, &
+                  ncap, kcap, mj, kw, nw, x, v, cycle, final_x, final_v, periods, site_counts, &
+                  counts, collisions_per_cycle, nev, ev_time, ev_site, ev_speed, ev_kind, k, &
+                  exponents, stderr_bits, stderr_cycles, per_time, ky, jac, mult_re, mult_im, &
+                  windows, window_cycle, control, status, msg_len, message)
     use, intrinsic :: iso_c_binding, only: c_int, c_int64_t, c_double
     use impactchain, only: i8, error_t, config_t, chain_t, record_result_t, &
                            record_cycles, start_chain
@@ -61,6 +63,8 @@ subroutine ic_run(n, nsp, spacing, damping, restitution, amplitude, omega, nb, b
                             status_invalid, status_capacity, status_internal
     implicit none
     !f2py threadsafe
+    integer(c_int), intent(in) :: nov
+    integer(c_int), intent(in) :: overrides(nov) !! `group.key=value` lines, byte values
     integer(c_int), intent(in) :: n, nsp, nb, nx0, nv0, explicit, record_events, lyapunov
     integer(c_int), intent(in) :: vectors, qr_every, jacobian, jacobian_cycles, dry_run
     integer(c_int), intent(in) :: keep_strobe, nr, nf, kcap, mj, window, kw
@@ -104,7 +108,8 @@ subroutine ic_run(n, nsp, spacing, damping, restitution, amplitude, omega, nb, b
                      explicit /= 0, x0, v0, int(transient, i8), int(cycles, i8), phase, &
                      stick_speed, max_size_mb, record_events /= 0, lyapunov /= 0, &
                      int(vectors), int(qr_every), jacobian /= 0, int(jacobian_cycles), err, &
-                     window=int(window))
+                     window=int(window), &
+                     overrides=overrides)
     if (.not. allocated(err)) call check_size(cfg, err)
     if (.not. allocated(err)) call start_chain(cfg, chain, err)
     if (allocated(err)) then
@@ -140,7 +145,7 @@ end subroutine ic_run
 !> taken as a fresh start (no sticking contacts, bonds scheduled from scratch).
 subroutine ic_jacobian(nsp, spacing, damping, restitution, amplitude, omega, nb, boundary, &
                        nx0, x0, nv0, v0, phase, stick_speed, max_size_mb, jacobian_cycles, &
-                       dry_run, mj, jac, status, msg_len, message)
+                       nov, overrides, dry_run, mj, jac, status, msg_len, message)
     use, intrinsic :: iso_c_binding, only: c_int, c_double
     use impactchain, only: wp, i8, error_t, config_t, chain_t, &
                            chain_on_section, poincare_jacobian
@@ -149,6 +154,8 @@ subroutine ic_jacobian(nsp, spacing, damping, restitution, amplitude, omega, nb,
                             status_invalid, status_failed, status_internal
     implicit none
     !f2py threadsafe
+    integer(c_int), intent(in) :: nov
+    integer(c_int), intent(in) :: overrides(nov) !! `group.key=value` lines, byte values
     integer(c_int), intent(in) :: nsp, nb, nx0, nv0, jacobian_cycles, dry_run, mj
     real(c_double), intent(in) :: spacing(nsp), damping, restitution, amplitude, omega
     real(c_double), intent(in) :: x0(nx0), v0(nv0), phase, stick_speed, max_size_mb
@@ -164,7 +171,8 @@ subroutine ic_jacobian(nsp, spacing, damping, restitution, amplitude, omega, nb,
     call put_message('', status_ok, status, msg_len, message)
     call make_config(cfg, int(nx0), spacing, damping, restitution, amplitude, omega, boundary, &
                      .true., x0, v0, 0_i8, 1_i8, phase, stick_speed, max_size_mb, .false., &
-                     .false., 0, 1, .true., int(jacobian_cycles), err)
+                     .false., 0, 1, .true., int(jacobian_cycles), err, &
+                     overrides=overrides)
     if (.not. allocated(err)) call check_size(cfg, err)
     if (.not. allocated(err)) then
         allocate (v_start(cfg%model%n))
@@ -192,8 +200,8 @@ end subroutine ic_jacobian
 
 !> The seeded random start of &initial kind = 'random' (the CLI's generator): x(i) uniform in
 !> [-x_amp, x_amp), v(i) in [-v_amp, v_amp). nf = n when the arguments are valid.
-subroutine ic_random_start(n, nsp, spacing, seed, x_amp, v_amp, dry_run, nf, x, v, status, &
-                           msg_len, message)
+subroutine ic_random_start(n, nsp, spacing, seed, x_amp, v_amp, nov, overrides, dry_run, nf, &
+                           x, v, status, msg_len, message)
     use, intrinsic :: iso_c_binding, only: c_int, c_double
     use impactchain, only: wp, i8, error_t, config_t, initial_state, &
                            chain_state_t
@@ -201,6 +209,8 @@ subroutine ic_random_start(n, nsp, spacing, seed, x_amp, v_amp, dry_run, nf, x, 
                             status_internal
     implicit none
     !f2py threadsafe
+    integer(c_int), intent(in) :: nov
+    integer(c_int), intent(in) :: overrides(nov) !! `group.key=value` lines, byte values
     integer(c_int), intent(in) :: n, nsp, seed, dry_run, nf
     real(c_double), intent(in) :: spacing(nsp), x_amp, v_amp
     real(c_double), intent(out) :: x(nf), v(nf)
@@ -219,7 +229,8 @@ subroutine ic_random_start(n, nsp, spacing, seed, x_amp, v_amp, dry_run, nf, x, 
                      [iachar('f'), iachar('i'), iachar('x'), iachar('e'), iachar('d')], &
                      .false., no_list, &
                      no_list, 0_i8, 1_i8, 0.0_wp, 1.0e-9_wp, 4096.0_wp, .false., .false., 0, &
-                     1, .false., 1, err, seed=int(seed), x_amp=x_amp, v_amp=v_amp)
+                     1, .false., 1, err, seed=int(seed), x_amp=x_amp, v_amp=v_amp, &
+                     overrides=overrides)
     if (.not. allocated(err)) call initial_state(cfg, start, err)
     if (allocated(err)) then
         call put_message(err%message, status_invalid, status, msg_len, message)
@@ -248,9 +259,9 @@ subroutine ic_sweep(n, nsp, spacing, damping, restitution, amplitude, omega, nb,
                     explicit, nx0, x0, nv0, v0, transient, cycles, phase, stick_speed, &
                     max_size_mb, lyapunov, vectors, qr_every, npar, parameter, start, stop, &
                     step, nmode, mode, npar2, parameter2, start2, stop2, step2, threads, &
-                    dry_run, nf, nc, npts, kcap, sizes, values, x, collisions, period, &
-                    exponents, stderr_bits, stderr_cycles, ky, control, status, msg_len, &
-                    message)
+                    nov, overrides, dry_run, nf, nc, npts, kcap, sizes, values, x, collisions, &
+                    period, exponents, stderr_bits, stderr_cycles, ky, control, status, &
+                    msg_len, message)
     use, intrinsic :: iso_c_binding, only: c_int, c_int64_t, c_double
     use impactchain, only: i8, error_t, config_t, chain_state_t
     use impactchain_drivers, only: check_sweep, plan_sweep, sweep_plan_t, sweep_result_t, &
@@ -259,6 +270,8 @@ subroutine ic_sweep(n, nsp, spacing, damping, restitution, amplitude, omega, nb,
                             call_ended, status_ok, status_invalid, status_internal
     implicit none
     !f2py threadsafe
+    integer(c_int), intent(in) :: nov
+    integer(c_int), intent(in) :: overrides(nov) !! `group.key=value` lines, byte values
     integer(c_int), intent(in) :: n, nsp, nb, nx0, nv0, explicit, lyapunov, vectors, qr_every
     integer(c_int), intent(in) :: npar, nmode, npar2, threads, dry_run, nf, npts, kcap
     integer(c_int64_t), intent(in) :: transient, cycles, nc
@@ -295,7 +308,8 @@ subroutine ic_sweep(n, nsp, spacing, damping, restitution, amplitude, omega, nb,
                      explicit /= 0, x0, v0, int(transient, i8), int(cycles, i8), phase, &
                      stick_speed, max_size_mb, .false., lyapunov /= 0, int(vectors), &
                      int(qr_every), .false., 1, err, groups=sweep_group(parameter, start, &
-                     stop, step, mode, parameter2, start2, stop2, step2))
+                     stop, step, mode, parameter2, start2, stop2, step2), &
+                     overrides=overrides)
     ! the CLI's checks (sizes against max_size_mb, every point), before the caller allocates x
     if (.not. allocated(err)) then
         plan = plan_sweep(cfg)
@@ -352,8 +366,9 @@ end subroutine ic_sweep
 !> failed ('' when converged).
 subroutine ic_continuation(n, nsp, spacing, damping, restitution, amplitude, omega, nb, &
                            boundary, explicit, nx0, x0, nv0, v0, transient, phase, stick_speed, &
-                           npar, parameter, stop, step, period, max_points, doublings, dry_run, &
-                           nf, npcap, nlong, nscap, ntext, nrcap, nbcap, sizes, values, x, v, &
+                           npar, parameter, stop, step, period, max_points, doublings, nov, &
+                           overrides, dry_run, nf, npcap, nlong, nscap, ntext, nrcap, nbcap, &
+                           sizes, values, x, v, &
                            strobe_x, periods, branch, mult_re, mult_im, stable, min_gap, &
                            min_impact_speed, impacts, residual, iterations, special_index, &
                            special_kind, special_value, end_reason, start_x, start_v, &
@@ -369,6 +384,8 @@ subroutine ic_continuation(n, nsp, spacing, damping, restitution, amplitude, ome
                             status_capacity, status_internal
     implicit none
     !f2py threadsafe
+    integer(c_int), intent(in) :: nov
+    integer(c_int), intent(in) :: overrides(nov) !! `group.key=value` lines, byte values
     integer(c_int), intent(in) :: n, nsp, nb, nx0, nv0, explicit, npar, period, max_points
     integer(c_int), intent(in) :: doublings, dry_run, nf, npcap, nlong, nscap, ntext, nrcap
     integer(c_int), intent(in) :: nbcap
@@ -414,7 +431,8 @@ subroutine ic_continuation(n, nsp, spacing, damping, restitution, amplitude, ome
                      explicit /= 0, x0, v0, int(transient, i8), 1_i8, phase, stick_speed, &
                      4096.0_c_double, .false., .false., 0, 1, .false., 1, err, &
                      groups=continuation_group(parameter, stop, step, int(period), &
-                                               int(max_points), int(doublings)))
+                                               int(max_points), int(doublings)), &
+                     overrides=overrides)
     if (allocated(err)) then
         call put_message(err%message, status_invalid, status, msg_len, message)
         return

@@ -4,17 +4,20 @@ they report (the plumbing of :mod:`impactchain.api`)."""
 
 from __future__ import annotations
 
+import difflib
 import operator
 import signal
 import threading
 import time
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from types import MappingProxyType
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
+from impactchain.schema import default as schema_default
+from impactchain.schema import inputs as schema_inputs
 from impactchain.schema import key as schema_key
 
 
@@ -72,40 +75,126 @@ def _extension() -> Any:
     return _kernels
 
 
-def _config(n: Any, amplitude: Any, omega: Any, damping: Any, restitution: Any,
-            spacing: Any, boundary: Any, x0: Any, v0: Any, transient: Any, cycles: Any,
-            phase: Any, stick_speed: Any, max_size_mb: Any) -> dict[str, Any]:
-    """The arguments of ``ic_run`` describing one run (Python types converted only)."""
+#: The keys of the input table that the run functions hand the bridge as arguments of its
+#: own, by name and group; every other key goes as an override (``group.key=value``)
+_ARGUMENT_KEYS = {"damping": "chain", "restitution": "chain", "spacing": "chain",
+                  "boundary": "chain", "x0": "initial", "v0": "initial", "transient": "run",
+                  "phase": "run", "stick_speed": "run", "max_size_mb": "output"}
+#: Keys a function sets from its own parameters or its kind of run, never from ``**keys``
+_FUNCTION_KEYS = {("chain", "n"), ("chain", "amplitude"), ("chain", "omega"),
+                  ("run", "cycles"), ("run", "record_events"), ("lyapunov", "enabled"),
+                  ("lyapunov", "vectors"), ("lyapunov", "qr_every"), ("lyapunov", "window"),
+                  ("lyapunov", "jacobian"), ("lyapunov", "jacobian_cycles"),
+                  ("output", "file")}
+#: Groups of a kind of run whose keys are the parameters of its own function
+_RUN_KINDS = ("sweep", "continuation", "census")
+
+
+def _keys(keys: Mapping[str, Any], home: Sequence[str] = ()) -> dict[tuple[str, str], Any]:
+    """Each keyword of ``**keys`` as ``(group, key)`` of the input table: ``group.key`` as
+    written, a bare name in the one group that has it (in the first of ``home`` when several
+    do; the groups of sweeps, continuations and censuses only when in ``home``). A name of no
+    group is kept as written under the group of the nearest key (else &chain, the model's,
+    where the paper's symbols live), so that the reader's "did you mean" names it, with
+    every other unknown key at once."""
+    groups: dict[str, list[str]] = {}
+    for entry in schema_inputs():  # (a kind of run's keys are its function's arguments)
+        if entry["group"] not in _RUN_KINDS or entry["group"] in home:
+            groups.setdefault(entry["name"], []).append(entry["group"])
+    resolved: dict[tuple[str, str], Any] = {}
+    for written, value in keys.items():
+        group, dot, name = written.rpartition(".")
+        if dot:
+            group = group.lower()
+        elif name.lower() in groups:
+            found = groups[name.lower()]
+            group = next((g for g in home if g in found), found[0])
+            if len(found) > 1 and group not in home:
+                raise TypeError(f"{name} is a key of " + " and ".join(f"&{g}" for g in found)
+                                + f": name one, e.g. **{{'{found[0]}.{name}': ...}}")
+        else:
+            near = difflib.get_close_matches(name.lower(), list(groups), n=1)
+            group = groups[near[0]][0] if near else "chain"
+        if name.lower() in groups and group in groups[name.lower()]:
+            name = name.lower()
+        if (group, name) in _FUNCTION_KEYS or (group in _RUN_KINDS and group not in home):
+            raise TypeError(f"&{group} {name} is not set through **keys here: it is an "
+                            "argument of this function, or of the function of its kind of run")
+        resolved[(group, name)] = value
+    return resolved
+
+
+def _namelist_value(value: Any) -> str:
+    """A Python value as namelist text (reals to every bit: repr round-trips a double)."""
+    if isinstance(value, (bool, np.bool_)):
+        return ".true." if value else ".false."
+    if isinstance(value, str):
+        return "'" + value.replace("'", "''") + "'"
+    if isinstance(value, (int, np.integer)):
+        return str(int(value))
+    if isinstance(value, (float, np.floating)):
+        return repr(float(value))
+    if np.ndim(value) == 1:
+        return ", ".join(_namelist_value(v) for v in np.asarray(value).tolist())
+    raise TypeError(f"{value!r}: a key's value is a number, a string, a bool or a list")
+
+
+def _overrides(given: Mapping[tuple[str, str], Any]) -> NDArray[np.int32]:
+    """The bridge's ``overrides``: a ``group.key=value`` line per key, as byte values."""
+    lines = "".join(f"{group}.{key}={_namelist_value(value)}\n"
+                    for (group, key), value in given.items())
+    return np.frombuffer(lines.encode(), dtype=np.uint8).astype(np.int32)
+
+
+def _argument(given: dict[tuple[str, str], Any], name: str) -> Any:
+    """A key the bridge takes as an argument: given (and taken out of ``given``), else the
+    table's default (x0, v0: None, a start at rest)."""
+    key = (_ARGUMENT_KEYS[name], name)
+    if key in given:
+        return given.pop(key)
+    return None if name in ("x0", "v0") else schema_default(*key)
+
+
+def _config(n: Any, amplitude: Any, omega: Any, cycles: Any, keys: Mapping[str, Any],
+            home: Sequence[str] = ()) -> dict[str, Any]:
+    """The arguments of ``ic_run`` describing one run (Python types converted only): those
+    the bridge takes, from ``keys`` or the table's defaults, and every other key of ``keys``
+    as ``overrides``."""
+    given = _keys(keys, home)
+    arg = {name: _argument(given, name) for name in _ARGUMENT_KEYS}
     nn = _n(n)
+    x0, v0 = arg["x0"], arg["v0"]
     explicit = x0 is not None or v0 is not None
     xs = np.zeros(max(nn, 0)) if x0 is None and explicit else _vector(x0, "&initial: x0")
     return dict(
         n=nn,
-        spacing=_spacing(spacing),
-        damping=_float(damping, "damping"),
-        restitution=_float(restitution, "restitution"),
+        spacing=_spacing(arg["spacing"]),
+        damping=_float(arg["damping"], "damping"),
+        restitution=_float(arg["restitution"], "restitution"),
         amplitude=_float(amplitude, "amplitude"),
         omega=_float(omega, "omega"),
-        boundary=_name(boundary, "boundary"),
+        boundary=_name(arg["boundary"], "boundary"),
         explicit=int(explicit),
         x0=xs,
         v0=_vector(v0, "&initial: v0"),
-        transient=_int64(transient, "&run: transient", "[0, 1e12]"),
+        transient=_int64(arg["transient"], "&run: transient", "[0, 1e12]"),
         cycles=_int64(cycles, "&run: cycles", "[1, 1e12]"),
-        phase=_float(phase, "phase"),
-        stick_speed=_float(stick_speed, "stick_speed"),
-        max_size_mb=_float(max_size_mb, "max_size_mb"),
+        phase=_float(arg["phase"], "phase"),
+        stick_speed=_float(arg["stick_speed"], "stick_speed"),
+        max_size_mb=_float(arg["max_size_mb"], "max_size_mb"),
         record_events=0,
         lyapunov=0,
         vectors=0,
         qr_every=1,
         jacobian=0,
         jacobian_cycles=1,
+        overrides=_overrides(given),
     )
 
 
-def _used(cfg: dict[str, Any], boundary: str, **extra: Any) -> Mapping[str, Any]:
-    """The arguments of a run as used, read-only (``Simulation.params``)."""
+def _used(cfg: dict[str, Any], **extra: Any) -> Mapping[str, Any]:
+    """The arguments of a run as used, read-only (``Simulation.params``); ``overrides``:
+    the other keys given, as ``group.key=value`` lines."""
     n = cfg["n"]
     start = bool(cfg["explicit"])
     x0 = cfg["x0"] if start else None
@@ -114,10 +203,11 @@ def _used(cfg: dict[str, Any], boundary: str, **extra: Any) -> Mapping[str, Any]
         n=n, amplitude=cfg["amplitude"], omega=cfg["omega"], damping=cfg["damping"],
         restitution=cfg["restitution"],
         spacing=_frozen(np.broadcast_to(cfg["spacing"], (n + 1,)).copy()),
-        boundary=boundary.strip().lower(), x0=None if x0 is None else _frozen(x0.copy()),
+        boundary=_text(cfg["boundary"]), x0=None if x0 is None else _frozen(x0.copy()),
         v0=None if v0 is None else _frozen(np.array(v0, dtype=np.float64)),
         transient=cfg["transient"], cycles=cfg["cycles"], phase=cfg["phase"],
-        stick_speed=cfg["stick_speed"], code_version=_code_version(), **extra)
+        stick_speed=cfg["stick_speed"], overrides=tuple(_text(cfg["overrides"]).splitlines()),
+        code_version=_code_version(), **extra)
     return MappingProxyType(used)
 
 

@@ -4,10 +4,10 @@ through :mod:`impactchain.api`)."""
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from typing import Any
 
 import numpy as np
-from numpy.typing import ArrayLike
 
 from impactchain import schema
 from impactchain._calls import (
@@ -38,13 +38,6 @@ def continuation(
     n: int,
     amplitude: float,
     omega: float,
-    damping: float = SCHEMA_DEFAULT,
-    restitution: float = SCHEMA_DEFAULT,
-    spacing: float | ArrayLike = SCHEMA_DEFAULT,
-    boundary: str = SCHEMA_DEFAULT,
-    x0: ArrayLike | None = None,
-    v0: ArrayLike | None = None,
-    transient: int = SCHEMA_DEFAULT,
     *,
     parameter: str,
     stop: float,
@@ -52,9 +45,8 @@ def continuation(
     period: int = SCHEMA_DEFAULT,
     max_points: int = SCHEMA_DEFAULT,
     doublings: int = SCHEMA_DEFAULT,
-    phase: float = SCHEMA_DEFAULT,
-    stick_speed: float = SCHEMA_DEFAULT,
     progress: bool = False,
+    **keys: Any,
 ) -> Any:
     """Branches of periodic orbits followed in one parameter: the CLI's ``&continuation``.
 
@@ -66,9 +58,9 @@ def continuation(
     branch, and ``doublings`` levels of the period-doubled branches born at its period
     doublings (docs/model.md section 12). Folds, period doublings, Neimark-Sacker points and
     grazings are located; a branch ends at a grazing, at a bound of the parameter, after
-    ``max_points`` or when Newton fails, and says why (``end_reason``). Other arguments as
-    :func:`simulate`. Ctrl-C stops the work at its next transient cycle or orbit
-    (:class:`KeyboardInterrupt`); ``progress=True`` shows a tqdm bar of them.
+    ``max_points`` or when Newton fails, and says why (``end_reason``). ``**keys`` (any key
+    of the input table) as :func:`simulate`'s. Ctrl-C stops the work at its next transient
+    cycle or orbit (:class:`KeyboardInterrupt`); ``progress=True`` shows a tqdm bar of them.
 
     Returns:
         An :class:`xarray.Dataset`, identical to the CLI file's ``/continuation`` group
@@ -93,35 +85,26 @@ def continuation(
     except ImportError:
         raise ImportError("api.continuation returns an xarray.Dataset: pip install xarray"
                           ) from None
-    cfg, args = _continuation_args(n, amplitude, omega, damping, restitution, spacing,
-                                   boundary, x0, v0, transient, phase, stick_speed, parameter,
-                                   stop, step, period, max_points, doublings)
+    cfg, args = _continuation_args(n, amplitude, omega, keys, parameter, stop, step, period,
+                                   max_points, doublings)
     out = _continue(args, progress)
     return _continuation_dataset(xr, out, cfg, args)
 
 
-@with_schema_defaults
+@with_schema_defaults(period=("continuation", "period"))
 def periodic_orbit(
     n: int,
     amplitude: float,
     omega: float,
-    damping: float = SCHEMA_DEFAULT,
-    restitution: float = SCHEMA_DEFAULT,
-    spacing: float | ArrayLike = SCHEMA_DEFAULT,
-    boundary: str = SCHEMA_DEFAULT,
-    x0: ArrayLike | None = None,
-    v0: ArrayLike | None = None,
-    transient: int = SCHEMA_DEFAULT,
-    period: int = SCHEMA_DEFAULT,
     *,
-    phase: float = SCHEMA_DEFAULT,
-    stick_speed: float = SCHEMA_DEFAULT,
+    period: int = SCHEMA_DEFAULT,
     progress: bool = False,
+    **keys: Any,
 ) -> PeriodicOrbit:
     """The period-``period`` orbit (p in 1..10000 drive cycles) that Newton shooting finds
     from the state on the section (drive phase ``phase``) after ``transient`` cycles from
     ``x0``, ``v0``: the CLI's ``&continuation max_points = 1`` run (the same Fortran call;
-    the orbit is that file's one point). Other arguments as :func:`simulate`.
+    the orbit is that file's one point). ``**keys`` as :func:`simulate`'s.
 
     Returns:
         A :class:`PeriodicOrbit`. Newton's failure is a result, not an exception:
@@ -132,10 +115,17 @@ def periodic_orbit(
         ValueError: a bad argument, with the CLI's message. TypeError: an argument of the
         wrong type. RuntimeError: the engine failed. KeyboardInterrupt: Ctrl-C.
     """
-    _, args = _continuation_args(n, amplitude, omega, damping, restitution, spacing,
-                                 boundary, x0, v0, transient, phase, stick_speed,
-                                 "amplitude", 0.0, 0.0, period, 1, 0)
+    cfg, args = _continuation_args(n, amplitude, omega, keys, "amplitude", 0.0, 0.0, period,
+                                   1, 0)
     out = _continue(args, progress)
+
+    def file_group() -> Any:
+        try:
+            import xarray as xr
+        except ImportError:
+            raise ImportError("to_xarray() needs xarray: pip install xarray") from None
+        return _continuation_dataset(xr, out, cfg, args)
+
     converged = bool(out["sizes"][4])
     multipliers = out["start_mult_re"] + 1j * out["start_mult_im"]
     return PeriodicOrbit(
@@ -151,20 +141,18 @@ def periodic_orbit(
         min_gap=float(out["start_min_gap"]),
         stable=bool(out["stable"][0]) if out["values"].size else False,
         jacobian=_frozen(out["start_jac"]),
+        file_group=file_group,
     )
 
 
-def _continuation_args(n: Any, amplitude: Any, omega: Any, damping: Any, restitution: Any,
-                       spacing: Any, boundary: Any, x0: Any, v0: Any, transient: Any,
-                       phase: Any, stick_speed: Any, parameter: Any, stop: Any, step: Any,
-                       period: Any, max_points: Any, doublings: Any
-                       ) -> tuple[dict[str, Any], dict[str, Any]]:
+def _continuation_args(n: Any, amplitude: Any, omega: Any, keys: Mapping[str, Any],
+                       parameter: Any, stop: Any, step: Any, period: Any, max_points: Any,
+                       doublings: Any) -> tuple[dict[str, Any], dict[str, Any]]:
     """The run's arguments (as :func:`_config`) and those of ``ic_continuation``."""
-    cfg = _config(n, amplitude, omega, damping, restitution, spacing, boundary, x0, v0,
-                  transient, 1, phase, stick_speed, 4096.0)
+    cfg = _config(n, amplitude, omega, 1, keys)
     args = {key: cfg[key] for key in ("n", "spacing", "damping", "restitution", "amplitude",
                                       "omega", "boundary", "explicit", "x0", "v0",
-                                      "transient", "phase", "stick_speed")}
+                                      "transient", "phase", "stick_speed", "overrides")}
     args.update(
         parameter=_name(parameter, "parameter"),
         stop=_float(stop, "stop"),

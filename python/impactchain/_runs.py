@@ -4,7 +4,7 @@ through :mod:`impactchain.api`)."""
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
@@ -20,14 +20,16 @@ from impactchain._calls import (
     _float,
     _frozen,
     _int32,
+    _keys,
     _n,
-    _name,
+    _overrides,
     _raise_for,
     _spacing,
     _used,
     _vector,
     _watched,
 )
+from impactchain._xarray import tree
 from impactchain.schema import SCHEMA_DEFAULT, with_schema_defaults
 
 if TYPE_CHECKING:
@@ -116,6 +118,25 @@ class Simulation:
 
         return run_from_api(self, lyapunov)
 
+    def to_xarray(self) -> Any:
+        """This run as the :class:`xarray.DataTree` of the CLI's file
+        (``xarray.open_datatree(path)``): groups ``/params``, ``/strobe``, ``/final``,
+        ``/stats`` and, with events, ``/events``, with the file's names, dimensions and
+        units (the file schema's)."""
+        n = int(self.params["n"])
+        values = {**_params_values(self.params), **_final_values(self, n),
+                  "/strobe/oscillator": _osc(n), "/strobe/cycle": self.cycle,
+                  "/strobe/x": self.x, "/strobe/v": self.v, "/strobe/period": self.periods,
+                  "/stats/bond": _bonds(n), "/stats/site_counts": self.site_counts,
+                  "/stats/cycles_done": np.int64(self.x.shape[0]),
+                  "/stats/@impacts": self.impacts, "/stats/@sticks": self.sticks,
+                  "/stats/@releases": self.releases, "/stats/@touches": self.touches,
+                  "/stats/@collisions_per_cycle": self.collisions_per_cycle}
+        if self.params.get("events"):
+            values.update({"/events/time": self.event_time, "/events/site": self.event_site,
+                           "/events/speed": self.event_speed, "/events/kind": self.event_kind})
+        return tree(values, _root(self.params))
+
 
 @dataclass(frozen=True, eq=False)
 class Lyapunov:
@@ -153,6 +174,21 @@ class Lyapunov:
 
         return run_from_api(None, self)
 
+    def to_xarray(self) -> Any:
+        """This spectrum as the :class:`xarray.DataTree` of the CLI's file: ``/params``,
+        ``/lyapunov`` and ``/final``, with the file's names, dimensions and units."""
+        n = int(self.params["n"])
+        values = {**_params_values(self.params), **_final_values(self, n),
+                  "/lyapunov/exponent": _osc(self.exponents.size),
+                  "/lyapunov/exponents": self.exponents,
+                  "/lyapunov/exponents_per_time": self.exponents_per_time,
+                  "/lyapunov/stderr": self.stderr,
+                  "/lyapunov/@ky_dimension": self.ky_dimension,
+                  "/lyapunov/@collisions_per_cycle": self.collisions_per_cycle}
+        if self.stderr_block is not None:
+            values["/lyapunov/stderr_block"] = self.stderr_block
+        return tree(values, _root(self.params))
+
 
 @dataclass(frozen=True, eq=False)
 class Floquet:
@@ -168,6 +204,15 @@ class Floquet:
     """(n,) displacement where the Jacobian was evaluated (the end of the run) [length]."""
     v: NDArray[np.float64]
     """(n,) velocity there [length/time]."""
+
+    def to_xarray(self) -> Any:
+        """The Jacobian and multipliers as the :class:`xarray.DataTree` of the CLI's file:
+        ``/floquet`` (``jacobian``, ``multipliers_re``, ``multipliers_im``) and ``/final``
+        (the state), with the file's names, dimensions and units."""
+        return tree({"/floquet/jacobian": self.jacobian,
+                     "/floquet/multipliers_re": self.multipliers.real,
+                     "/floquet/multipliers_im": self.multipliers.imag,
+                     **_final_values(self, self.x.size)}, {})
 
 
 @dataclass(frozen=True, eq=False)
@@ -205,48 +250,96 @@ class PeriodicOrbit:
     jacobian: NDArray[np.float64]
     """(2n, 2n) Jacobian of P^p at ``x``, ``v``, the state interleaved as (x_1, v_1, ...,
     x_n, v_n) (as :attr:`Floquet.jacobian`)."""
+    file_group: Callable[[], Any] | None = field(default=None, repr=False)
+    """Makes the ``/continuation`` group of the CLI's file of this run (``to_xarray``)."""
+
+    def to_xarray(self) -> Any:
+        """This orbit as the :class:`xarray.Dataset` of the CLI's file of the same input
+        (``&continuation max_points = 1``): its ``/continuation`` group, one point (none when
+        Newton did not converge, ``end_reason`` then says why), with the file's names,
+        dimensions and units, as :func:`continuation` returns it."""
+        if self.file_group is None:
+            raise ValueError("this PeriodicOrbit was not made by impactchain.api.periodic_orbit")
+        return self.file_group()
+
+
+def _osc(count: int) -> NDArray[np.int32]:
+    """A 1-based index coordinate (oscillator, exponent, row, ...), as the files store it."""
+    return np.arange(1, count + 1, dtype=np.int32)
+
+
+def _bonds(n: int) -> NDArray[np.int32]:
+    return np.arange(n + 1, dtype=np.int32)
+
+
+def _params_values(params: Mapping[str, Any]) -> dict[str, Any]:
+    """The file's ``/params`` of a run's arguments as used."""
+    n = int(params["n"])
+    values: dict[str, Any] = {f"/params/@{key}": params[key] for key in (
+        "n", "amplitude", "omega", "damping", "restitution", "boundary", "phase", "transient",
+        "cycles")}
+    values["/params/@drive_period"] = 2 * np.pi / params["omega"]
+    values.update({"/params/bond": _bonds(n), "/params/spacing": np.asarray(params["spacing"])})
+    return values
+
+
+def _final_values(result: Any, n: int) -> dict[str, Any]:
+    """The file's ``/final`` state of a result: x, v and, when the run's arguments are
+    known, the cycle and section phase it ends at."""
+    x = getattr(result, "final_x", None)
+    v = getattr(result, "final_v", None)
+    if x is None:
+        x, v = result.x, result.v
+    values = {"/final/oscillator": _osc(n), "/final/x": x, "/final/v": v}
+    params = getattr(result, "params", None)
+    if params:
+        values.update({"/final/cycle": np.int64(params["transient"] + params["cycles"]),
+                       "/final/phase": np.float64(params["phase"])})
+    return values
+
+
+def _root(params: Mapping[str, Any]) -> dict[str, Any]:
+    """The root attributes of a run's tree: the file layout's version, its code version and
+    equivalent input, complete (so that :func:`impactchain.io.read_run` reads it as a file)."""
+    from impactchain.namelist import equivalent_namelist
+    from impactchain.results import SCHEMA_VERSION
+
+    return {"schema_version": SCHEMA_VERSION, "code_version": params["code_version"],
+            "input_namelist": equivalent_namelist(params, "vectors" in params), "complete": 1}
 
 
 # ---------------------------------------------------------------------------- functions
 
 
-@with_schema_defaults
+@with_schema_defaults(events=("run", "record_events"))
 def simulate(
     n: int,
     amplitude: float,
     omega: float,
-    damping: float = SCHEMA_DEFAULT,
-    restitution: float = SCHEMA_DEFAULT,
-    spacing: float | ArrayLike = SCHEMA_DEFAULT,
-    boundary: str = SCHEMA_DEFAULT,
-    x0: ArrayLike | None = None,
-    v0: ArrayLike | None = None,
-    transient: int = SCHEMA_DEFAULT,
+    *,
     cycles: int = 100,
     events: bool = SCHEMA_DEFAULT,
-    *,
-    phase: float = SCHEMA_DEFAULT,
-    stick_speed: float = SCHEMA_DEFAULT,
-    max_size_mb: float = SCHEMA_DEFAULT,
     progress: bool = False,
+    **keys: Any,
 ) -> Simulation:
     """Run the chain: ``transient`` unrecorded drive cycles, then ``cycles`` recorded ones.
 
     Parameters (namelist keys; ranges are checked by the library):
         n: number of oscillators, 1..1e7.
         amplitude: drive amplitude A >= 0. omega: drive angular frequency, 1e-3..1e3.
-        damping: b in [0, 1). restitution: K in [0, 1].
-        spacing: one value (uniform) or the n+1 bond spacings, bond 0 first; > 0 [length].
-        boundary: ``'fixed'`` (walls at both ends) or ``'free'`` (no walls).
-        x0, v0: initial displacements / velocities, arrays of n values [length,
-            length/time]; both None: at rest; v0 None with x0 given: v = 0.
-        transient: cycles run before recording, 0..1e12. cycles: records, 1..1e12.
+        cycles: records, 1..1e12.
         events: keep the event stream (time, site, speed, kind of every event).
-        phase: drive phase of the section in [0, 2 pi). stick_speed: the rebound speed
-            below which chatter on a wall ends in sticking, (0, 1].
-        max_size_mb: refuse runs whose records need more memory (the CLI's
-            ``&output max_size_mb``, also applied to the event stream here).
         progress: show a tqdm progress bar (transient cycles, then records).
+        **keys: any other key of the input table (``impactchain --schema``), by its name
+            (``damping=0.1``, ``kick=0.5``, ``x0=[...]``) or as ``group.key`` when several
+            groups have it (``**{'initial.seed': 3}``), as the CLI's ``--set group.key=value``;
+            unknown keys are all named at once, with the reader's "did you mean".
+            The common ones: damping b in [0, 1); restitution K in [0, 1]; spacing, one
+            value or the n+1 bond spacings, bond 0 first [length]; boundary ``'fixed'`` or
+            ``'free'``; x0, v0, arrays of n values [length, length/time] (both absent: at
+            rest; v0 absent with x0 given: v = 0); transient, cycles run before recording;
+            phase, the drive phase of the section; stick_speed; max_size_mb (also applied
+            to the event stream here).
 
     Returns:
         A :class:`Simulation`; ``x``, ``v`` have shape (cycles, n).
@@ -256,8 +349,7 @@ def simulate(
         wrong type. RuntimeError: the run itself failed (the engine's message).
         KeyboardInterrupt: Ctrl-C; the run stops at its next cycle or record.
     """
-    cfg = _config(n, amplitude, omega, damping, restitution, spacing, boundary, x0, v0,
-                  transient, cycles, phase, stick_speed, max_size_mb)
+    cfg = _config(n, amplitude, omega, cycles, keys)
     keep_events = bool(events)
     out = _run(cfg, strobe=True, events=keep_events, progress=progress)
     nev = int(out["nev"])
@@ -281,7 +373,7 @@ def simulate(
         collisions_per_cycle=float(out["collisions_per_cycle"]),
         drive_period=2 * np.pi / cfg["omega"],
         phase=cfg["phase"],
-        params=_used(cfg, boundary, events=keep_events),
+        params=_used(cfg, events=keep_events),
     )
 
 
@@ -290,22 +382,13 @@ def lyapunov(
     n: int,
     amplitude: float,
     omega: float,
-    damping: float = SCHEMA_DEFAULT,
-    restitution: float = SCHEMA_DEFAULT,
-    spacing: float | ArrayLike = SCHEMA_DEFAULT,
-    boundary: str = SCHEMA_DEFAULT,
-    x0: ArrayLike | None = None,
-    v0: ArrayLike | None = None,
-    transient: int = SCHEMA_DEFAULT,
+    *,
     cycles: int = 100,
     vectors: int = SCHEMA_DEFAULT,
-    *,
     qr_every: int = SCHEMA_DEFAULT,
     window: int = SCHEMA_DEFAULT,
-    phase: float = SCHEMA_DEFAULT,
-    stick_speed: float = SCHEMA_DEFAULT,
-    max_size_mb: float = SCHEMA_DEFAULT,
     progress: bool = False,
+    **keys: Any,
 ) -> Lyapunov:
     """Lyapunov spectrum averaged over ``cycles`` drive cycles after ``transient``.
 
@@ -316,15 +399,14 @@ def lyapunov(
     exponents of qr_every = 1 to rounding). The leading k exponents do not depend on k.
     ``window`` > 0: also the finite-time exponents over consecutive windows of that many
     recorded cycles (docs/model.md section 7.10; with qr_every > 1 a multiple of it). Other
-    arguments as :func:`simulate`.
+    arguments and ``**keys`` as :func:`simulate`.
 
     Returns:
         A :class:`Lyapunov`: ``exponents`` and ``stderr`` (k,) in bits per drive cycle,
         descending, k = vectors or 2n, ``stderr_block`` (k,), and with ``window``
         ``finite_time``.
     """
-    cfg = _config(n, amplitude, omega, damping, restitution, spacing, boundary, x0, v0,
-                  transient, cycles, phase, stick_speed, max_size_mb)
+    cfg = _config(n, amplitude, omega, cycles, keys)
     cfg["lyapunov"] = 1
     cfg["vectors"] = _int32(vectors, "&lyapunov: vectors", "[0, 2n] (0 means all 2n)")
     cfg["qr_every"] = _int32(qr_every, "&lyapunov: qr_every", "[0, cycles] (0: adaptive)")
@@ -345,7 +427,7 @@ def lyapunov(
         collisions_per_cycle=float(out["collisions_per_cycle"]),
         final_x=_frozen(out["final_x"]),
         final_v=_frozen(out["final_v"]),
-        params=_used(cfg, boundary, events=False, vectors=cfg["vectors"],
+        params=_used(cfg, events=False, vectors=cfg["vectors"],
                      qr_every=cfg["qr_every"], window=cfg["window"]),
         stderr_block=_frozen(out["stderr_cycles"][:k]),
         finite_time=finite_time,
@@ -357,33 +439,23 @@ def floquet(
     n: int,
     amplitude: float,
     omega: float,
-    damping: float = SCHEMA_DEFAULT,
-    restitution: float = SCHEMA_DEFAULT,
-    spacing: float | ArrayLike = SCHEMA_DEFAULT,
-    boundary: str = SCHEMA_DEFAULT,
-    x0: ArrayLike | None = None,
-    v0: ArrayLike | None = None,
-    transient: int = SCHEMA_DEFAULT,
+    *,
     cycles: int = 1,
     period: int = SCHEMA_DEFAULT,
-    *,
-    phase: float = SCHEMA_DEFAULT,
-    stick_speed: float = SCHEMA_DEFAULT,
-    max_size_mb: float = SCHEMA_DEFAULT,
     progress: bool = False,
+    **keys: Any,
 ) -> Floquet:
     """Floquet multipliers: eigenvalues of the ``period``-cycle Poincare-map Jacobian at
     the state reached after ``transient + cycles`` drive cycles (where the CLI evaluates
     it). Run long enough to settle on a period-p orbit for them to be its multipliers.
 
-    ``period``: p in [1, 1000] (the CLI's ``jacobian_cycles``). Other arguments as
-    :func:`simulate`.
+    ``period``: p in [1, 1000] (the CLI's ``jacobian_cycles``). Other arguments and
+    ``**keys`` as :func:`simulate`.
 
     Returns:
         A :class:`Floquet`: ``multipliers`` (2n,) complex, ``jacobian`` (2n, 2n).
     """
-    cfg = _config(n, amplitude, omega, damping, restitution, spacing, boundary, x0, v0,
-                  transient, cycles, phase, stick_speed, max_size_mb)
+    cfg = _config(n, amplitude, omega, cycles, keys)
     cfg["jacobian"] = 1
     cfg["jacobian_cycles"] = _int32(period, "&lyapunov: jacobian_cycles", "[1, 1000]")
     out = _run(cfg, strobe=False, events=False, progress=progress)
@@ -401,22 +473,17 @@ def poincare_jacobian(
     v: ArrayLike,
     amplitude: float,
     omega: float,
-    damping: float = SCHEMA_DEFAULT,
-    restitution: float = SCHEMA_DEFAULT,
-    spacing: float | ArrayLike = SCHEMA_DEFAULT,
-    boundary: str = SCHEMA_DEFAULT,
-    cycles: int = SCHEMA_DEFAULT,
     *,
-    phase: float = SCHEMA_DEFAULT,
-    stick_speed: float = SCHEMA_DEFAULT,
-    max_size_mb: float = SCHEMA_DEFAULT,
+    cycles: int = SCHEMA_DEFAULT,
+    **keys: Any,
 ) -> NDArray[np.float64]:
     """Jacobian of the ``cycles``-cycle Poincare map at the state (x, v) on the section.
 
     ``x``, ``v``: (n,) displacements [length] and velocities [length/time] at drive phase
     ``phase`` (as a strobe record of :func:`simulate` with the same phase). The state is a
     fresh start: no oscillator rests on a wall, every collision is searched from here.
-    ``cycles``: 1..1000. Other arguments as :func:`simulate`.
+    ``cycles``: 1..1000. ``**keys`` as :func:`simulate`'s (x0, v0, transient aside: the
+    state is given).
 
     Returns:
         (2n, 2n) float64 matrix J with J[i, j] = d z'_i / d z_j, the state interleaved as
@@ -426,20 +493,12 @@ def poincare_jacobian(
     xs = _vector(x, "&initial: x0")
     vs = _vector(v, "&initial: v0")
     n = xs.size
-    args = dict(
-        spacing=_spacing(spacing),
-        damping=_float(damping, "damping"),
-        restitution=_float(restitution, "restitution"),
-        amplitude=_float(amplitude, "amplitude"),
-        omega=_float(omega, "omega"),
-        boundary=_name(boundary, "boundary"),
-        x0=xs,
-        v0=vs,
-        phase=_float(phase, "phase"),
-        stick_speed=_float(stick_speed, "stick_speed"),
-        max_size_mb=_float(max_size_mb, "max_size_mb"),
-        jacobian_cycles=_int32(cycles, "&lyapunov: jacobian_cycles", "[1, 1000]"),
-    )
+    cfg = _config(max(n, 1), amplitude, omega, 1, keys)
+    args = {key: cfg[key] for key in ("spacing", "damping", "restitution", "amplitude", "omega",
+                                      "boundary", "phase", "stick_speed", "max_size_mb",
+                                      "overrides")}
+    args.update(x0=xs, v0=vs,
+                jacobian_cycles=_int32(cycles, "&lyapunov: jacobian_cycles", "[1, 1000]"))
     kernels = _extension()
     jac, status, msg_len, message = kernels.ic_jacobian(**args, dry_run=1, mj=0)
     if status == _STATUS_OK:  # valid: now with room for the result
@@ -455,6 +514,7 @@ def random_start(
     x_amp: float = SCHEMA_DEFAULT,
     v_amp: float = SCHEMA_DEFAULT,
     spacing: float | ArrayLike = SCHEMA_DEFAULT,
+    **keys: Any,
 ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """The CLI's seeded random start (``&initial kind='random'``): x_i uniform in
     [-x_amp, x_amp), v_i in [-v_amp, v_amp), from the same portable generator, so that
@@ -462,7 +522,7 @@ def random_start(
 
     ``x_amp`` must be below half the smallest spacing (no overlapping start), and ``x_amp``
     and ``v_amp`` must not both be 0 (every seed would be the same start, rest): ValueError
-    with the CLI's message.
+    with the CLI's message. ``**keys``: other keys of the table, as :func:`simulate`'s.
 
     Returns:
         (x, v), each (n,) float64 [length, length/time].
@@ -474,6 +534,7 @@ def random_start(
         seed=_int32(seed, "&initial: seed", "the 32-bit integers"),
         x_amp=_float(x_amp, "x_amp"),
         v_amp=_float(v_amp, "v_amp"),
+        overrides=_overrides(_keys(keys, ("initial",))),
     )
     kernels = _extension()
     x, v, status, msg_len, message = kernels.ic_random_start(**args, dry_run=1, nf=0)

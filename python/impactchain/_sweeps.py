@@ -7,7 +7,7 @@ from collections.abc import Mapping
 from typing import Any
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import NDArray
 
 from impactchain import schema
 from impactchain._calls import (
@@ -30,15 +30,8 @@ def sweep(
     n: int,
     amplitude: float,
     omega: float,
-    damping: float = SCHEMA_DEFAULT,
-    restitution: float = SCHEMA_DEFAULT,
-    spacing: float | ArrayLike = SCHEMA_DEFAULT,
-    boundary: str = SCHEMA_DEFAULT,
-    x0: ArrayLike | None = None,
-    v0: ArrayLike | None = None,
-    transient: int = SCHEMA_DEFAULT,
-    cycles: int = 100,
     *,
+    cycles: int = 100,
     parameter: str,
     start: float,
     stop: float,
@@ -51,11 +44,9 @@ def sweep(
     lyapunov: bool = False,
     vectors: int = SCHEMA_DEFAULT,
     qr_every: int = SCHEMA_DEFAULT,
-    phase: float = SCHEMA_DEFAULT,
-    stick_speed: float = SCHEMA_DEFAULT,
-    max_size_mb: float = SCHEMA_DEFAULT,
     threads: int = 0,
     progress: bool = False,
+    **keys: Any,
 ) -> Any:
     """A parameter sweep (bifurcation diagram, Lyapunov scan): the CLI's ``&sweep``.
 
@@ -69,7 +60,8 @@ def sweep(
     all 2n). Branches run on ``threads`` OpenMP threads (0: ``OMP_NUM_THREADS``, else every
     core); the numbers are the same for any count, and the CLI's on the same namelist.
     Ctrl-C stops the sweep once the points running finish (:class:`KeyboardInterrupt`);
-    ``progress=True`` shows a tqdm bar of the points. Other arguments as :func:`simulate`.
+    ``progress=True`` shows a tqdm bar of the points. Other arguments and ``**keys`` (any
+    key of the input table) as :func:`simulate`.
 
     Returns:
         An :class:`xarray.Dataset`, the CLI file's ``/sweep`` group
@@ -90,10 +82,9 @@ def sweep(
         import xarray as xr
     except ImportError:
         raise ImportError("api.sweep returns an xarray.Dataset: pip install xarray") from None
-    cfg, args = _sweep_args(n, amplitude, omega, damping, restitution, spacing, boundary, x0,
-                            v0, transient, cycles, phase, stick_speed, max_size_mb, lyapunov,
-                            vectors, qr_every, parameter, start, stop, step, mode, parameter2,
-                            start2, stop2, step2, threads)
+    cfg, args = _sweep_args(n, amplitude, omega, cycles, keys, lyapunov, vectors, qr_every,
+                            parameter, start, stop, step, mode, parameter2, start2, stop2,
+                            step2, threads)
     kernels = _extension()
     no_control = np.zeros(4, dtype=np.int64)
     out = dict(zip(SWEEP_OUTPUTS, kernels.ic_sweep(**args, dry_run=1, nf=1, nc=1, npts=1,
@@ -106,18 +97,15 @@ def sweep(
     result = _watched(kernels.ic_sweep, dict(args, dry_run=0, x=x, **sizes), progress)
     out = dict(zip(SWEEP_OUTPUTS, result, strict=True), x=x)
     _raise_for(out["status"], out["msg_len"], out["message"])
-    return _sweep_dataset(xr, out, cfg, args, n1, n2, k, boundary)
+    return _sweep_dataset(xr, out, cfg, args, n1, n2, k)
 
 
-def _sweep_args(n: Any, amplitude: Any, omega: Any, damping: Any, restitution: Any,
-                spacing: Any, boundary: Any, x0: Any, v0: Any, transient: Any, cycles: Any,
-                phase: Any, stick_speed: Any, max_size_mb: Any, lyapunov: Any, vectors: Any,
-                qr_every: Any, parameter: Any, start: Any, stop: Any, step: Any, mode: Any,
-                parameter2: Any, start2: Any, stop2: Any, step2: Any, threads: Any
-                ) -> tuple[dict[str, Any], dict[str, Any]]:
+def _sweep_args(n: Any, amplitude: Any, omega: Any, cycles: Any, keys: Mapping[str, Any],
+                lyapunov: Any, vectors: Any, qr_every: Any, parameter: Any, start: Any,
+                stop: Any, step: Any, mode: Any, parameter2: Any, start2: Any, stop2: Any,
+                step2: Any, threads: Any) -> tuple[dict[str, Any], dict[str, Any]]:
     """The run's arguments (as :func:`_config`) and those of ``ic_sweep``."""
-    cfg = _config(n, amplitude, omega, damping, restitution, spacing, boundary, x0, v0,
-                  transient, cycles, phase, stick_speed, max_size_mb)
+    cfg = _config(n, amplitude, omega, cycles, keys)
     for name in ("record_events", "jacobian", "jacobian_cycles"):
         del cfg[name]
     cfg["lyapunov"] = int(bool(lyapunov))
@@ -145,7 +133,7 @@ def _sweep_args(n: Any, amplitude: Any, omega: Any, damping: Any, restitution: A
 
 
 def _sweep_dataset(xr: Any, out: dict[str, Any], cfg: dict[str, Any], args: dict[str, Any],
-                   n1: int, n2: int, k: int, boundary: str) -> Any:
+                   n1: int, n2: int, k: int) -> Any:
     """ic_sweep's arrays (point p = i + n1 j, Fortran order) as the file's /sweep group:
     the same dimensions, coordinates, variables and variable attributes (``units`` UDUNITS'
     as in the file, ``model_units`` the reduced ones)."""
@@ -193,7 +181,7 @@ def _sweep_dataset(xr: Any, out: dict[str, Any], cfg: dict[str, Any], args: dict
     attrs.update({key: cfg[key] for key in ("n", "amplitude", "omega", "damping",
                                              "restitution", "transient", "cycles", "phase")
                   if key not in (parameter, parameter2)})
-    used = _used(cfg, boundary, events=False, vectors=cfg["vectors"], qr_every=cfg["qr_every"])
+    used = _used(cfg, events=False, vectors=cfg["vectors"], qr_every=cfg["qr_every"])
     if parameter != "spacing" and parameter2 != "spacing":
         attrs["spacing"] = np.asarray(used["spacing"])
     attrs.update(boundary=used["boundary"], stick_speed=cfg["stick_speed"],

@@ -26,6 +26,16 @@ Python and the equivalent namelist / CLI output:
   reads it (needs xarray).
 - ``periodic_orbit(..., period=p)``: ``&continuation max_points = 1`` (Newton only): the
   orbit of that file's one point, with Newton's history and the Jacobian.
+- ``census(..., samples=m)``: ``&census``; the whole census file as an
+  :class:`xarray.DataTree` (the installed program's run on a temporary input).
+
+Every function takes any other key of the input table (``impactchain --schema``) as a
+keyword, by its name or, where several groups have it, as ``group.key`` (``**{'initial.seed':
+3}``), as the CLI's ``--set group.key=value`` (``simulate(16, 1.7, 1.5, kick=0.5)``); unknown
+keys are all named at once with the reader's "did you mean". Results are xarray objects or
+convert with one call: ``simulate``, ``lyapunov`` and ``floquet`` results' ``to_xarray()``
+gives the :class:`xarray.DataTree` of the CLI's file (``xarray.open_datatree(path)``), with
+the file's names, dimensions and units; a ``periodic_orbit``'s, its file's ``/continuation``.
 
 Long calls (:func:`simulate`, :func:`lyapunov`, :func:`floquet`, :func:`sweep`,
 :func:`continuation`, :func:`periodic_orbit`) run the Fortran in a worker thread with the GIL
@@ -37,8 +47,8 @@ returned from a stopped call. The same holds for calls running in worker threads
 running kernel, unless a program or notebook has put its own SIGINT handler in place.
 ``progress=True`` shows a tqdm progress bar (needs tqdm).
 
-Argument names are the namelist keys. ``x0 = v0 = None`` is a start at rest
-(``kind='rest'``); arrays are ``kind='explicit'`` (``v0 = None`` then means v = 0).
+Argument names are the namelist keys. No ``x0``, ``v0`` is a start at rest
+(``kind='rest'``); arrays are ``kind='explicit'`` (no ``v0`` then means v = 0).
 ``spacing`` is one number (uniform) or the n+1 bond spacings, bond 0 (left wall) first.
 
 Units are the model's reduced ones (docs/model.md section 1.5): time in units of 1/(natural angular
@@ -57,7 +67,8 @@ Example::
 
 The code lives in private modules, a room per topic: ``_calls`` (the extension, argument
 conversion, watched calls and Ctrl-C, errors), ``_runs`` (one run and its results),
-``_sweeps`` and ``_continuations``; this module is their public face.
+``_sweeps``, ``_continuations`` and ``_censuses``, ``_xarray`` (results as trees); this module
+is their public face.
 """
 
 from __future__ import annotations
@@ -69,6 +80,7 @@ from impactchain._calls import (
     extension_available,
     provenance,
 )
+from impactchain._censuses import census
 from impactchain._continuations import continuation, periodic_orbit
 from impactchain._runs import (
     IMPACT,
@@ -100,6 +112,7 @@ __all__ = [
     "sweep",
     "continuation",
     "periodic_orbit",
+    "census",
     "extension_available",
     "provenance",
     "IMPACT",

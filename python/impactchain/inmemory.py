@@ -1,11 +1,15 @@
 """Runs made in memory: the :class:`impactchain.results.Run` of results of
-:mod:`impactchain.api` (:func:`run_from_api`, :func:`run_from_sweep`), as if read from the
-command line's file, so that every figure draws them.
+:mod:`impactchain.api` (:func:`run_from_api`, :func:`run_from_sweep`,
+:func:`run_from_continuation`) and of xarray trees of a file (:func:`run_from_tree`), as if
+read from the command line's file, so that every figure draws them.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import math
+import os
+import tempfile
 from collections.abc import Mapping
 from typing import Any
 
@@ -13,10 +17,11 @@ import numpy as np
 
 from impactchain._hdf5 import _flat_points, _frozen, _point_values
 from impactchain.namelist import equivalent_namelist
-from impactchain.results import (FILE_UNITS, SCHEMA_VERSION, Events, FinalState, Lyapunov, Params,
-                                 Run, State, Stats, Strobe, Sweep)
+from impactchain.results import (FILE_UNITS, SCHEMA_VERSION, Continuation, Events, FinalState,
+                                 Lyapunov, Params, Run, State, Stats, Strobe, Sweep)
 
-__all__ = ["IN_MEMORY", "run_from_api", "run_from_sweep", "is_sweep_dataset"]
+__all__ = ["IN_MEMORY", "run_from_api", "run_from_sweep", "is_sweep_dataset",
+           "run_from_continuation", "is_continuation_dataset", "run_from_tree", "is_tree"]
 
 
 IN_MEMORY = "(in memory, impactchain.api)"
@@ -164,3 +169,58 @@ def _simulation_parts(sim: Any, params: Params, events: bool) -> dict[str, Any]:
             speed=_frozen(sim.event_speed),
             kind=_frozen(np.asarray(sim.event_kind, dtype=np.int64)))
     return parts
+
+
+def is_continuation_dataset(data: Any) -> bool:
+    """Is ``data`` an :func:`impactchain.api.continuation` result (an xarray Dataset of
+    /continuation, as the file's group)?"""
+    attrs = getattr(data, "attrs", None)
+    return (hasattr(data, "data_vars") and isinstance(attrs, Mapping)
+            and "end_reason" in attrs and "special_kind" in data)
+
+
+def run_from_continuation(ds: Any) -> Run:
+    """A :class:`Run` holding the continuation of :func:`impactchain.api.continuation` (an
+    xarray Dataset, the file's /continuation group), for the figures. The group does not
+    hold the chain's parameters: ``Run.params`` has n, the section's phase and NaN (the
+    figures leave unknown parameters out of their titles)."""
+    if not is_continuation_dataset(ds):
+        raise TypeError(f"{type(ds).__name__} is not a continuation of "
+                        "impactchain.api.continuation")
+    fields = {name: _frozen(np.asarray(ds[name].values)) for name in Continuation.__annotations__
+              if name in ds}
+    fields["stable"] = _frozen(fields["stable"] == 1)
+    fields["special_kind"] = _frozen(np.asarray([str(k) for k in ds["special_kind"].values]))
+    cont = Continuation(parameter=str(ds.attrs["parameter"]), phase=float(ds.attrs["phase"]),
+                        end_reason=str(ds.attrs["end_reason"]), **fields)
+    n = int(ds.sizes["oscillator"])
+    nan = math.nan
+    params = Params(n=n, damping=nan, restitution=nan, amplitude=nan, omega=nan, boundary="",
+                    drive_period=nan, phase=float(ds.attrs["phase"]), transient=0, cycles=0,
+                    spacing=_frozen(np.full(n + 1, nan)))
+    return Run(path=IN_MEMORY, schema_version=SCHEMA_VERSION, code_version="",
+               input_namelist="", complete=True, params=params, units=FILE_UNITS,
+               continuation=cont)
+
+
+def is_tree(data: Any) -> bool:
+    """Is ``data`` an :class:`xarray.DataTree` (``xarray.open_datatree(file)``, or the
+    ``to_xarray()`` of an :mod:`impactchain.api` result)?"""
+    return type(data).__name__ == "DataTree" and hasattr(data, "to_netcdf")
+
+
+def run_from_tree(tree: Any, require: Any = (), purpose: str | None = None) -> Run:
+    """The :class:`Run` of an xarray tree of an impactchain file: xarray writes it as the
+    netCDF-4 file it mirrors, which :func:`impactchain.io.read_run` reads (with ``require``
+    and ``purpose``); ``Run.path`` is the tree's source file, if it was read from one. A group
+    of a tree (``tree["sweep"]``) stands for its whole tree."""
+    from impactchain.io import read_run
+
+    tree = tree.root
+
+    with tempfile.TemporaryDirectory() as folder:
+        path = os.path.join(folder, "tree.h5")
+        tree.to_netcdf(path, engine="h5netcdf")
+        run = read_run(path, require=require, purpose=purpose)
+    source = tree.encoding.get("source", IN_MEMORY)
+    return dataclasses.replace(run, path=str(source))

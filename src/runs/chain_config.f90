@@ -10,7 +10,8 @@ module chain_config
     use chain_error, only: error_t, set_error, fmt_real, fmt_int, fmt_int8
     use chain_files, only: same_file
     use chain_model, only: model_t
-    use chain_namelist, only: alias_t, check_namelist, apply_override, groups_in, lower
+    use chain_namelist, only: alias_t, check_namelist, apply_override, groups_in, lower, &
+                              schema_keys
     use chain_inputs, only: input_key_t, input_keys, input_specs, max_list
     use chain_input_values, only: read_inputs, check_inputs, echo_inputs, set_input, is_given, &
                                   has_value, list_count, real_input, int_input, int8_input, &
@@ -69,6 +70,8 @@ contains
         call check_namelist(source, cfg%input_text, input_specs(), err, paper_symbols)
         if (allocated(err)) return
         if (present(overrides)) then
+            call check_override_keys(source, overrides, err)
+            if (allocated(err)) return
             do j = 1, size(overrides)
                 call apply_override(cfg%input_text, trim(overrides(j)), input_specs(), err, &
                                     paper_symbols)
@@ -104,6 +107,37 @@ contains
         end if
         call validate_config(cfg, err)
     end subroutine read_config_text
+
+    !> Two or more overrides with unknown keys (of known groups) are named at once, as the
+    !> reader names those of a file (one is named by apply_override, with the override
+    !> written out): each group's unknown keys go into a namelist that check_namelist reads.
+    subroutine check_override_keys(source, overrides, err)
+        character(len=*), intent(in) :: source
+        character(len=*), intent(in) :: overrides(:)
+        type(error_t), allocatable, intent(out) :: err
+        character(len=:), allocatable :: text, group, keys, key
+        integer :: j, g, dot, eq, n_unknown
+
+        text = ''
+        n_unknown = 0
+        do g = 1, size(group_names)
+            group = trim(group_names(g))
+            keys = ''
+            do j = 1, size(overrides)
+                dot = index(overrides(j), '.')
+                eq = index(overrides(j), '=')
+                if (dot < 2 .or. eq < dot + 2) cycle
+                if (lower(overrides(j)(:dot - 1)) /= group) cycle
+                key = trim(adjustl(overrides(j)(dot + 1:eq - 1)))
+                if (any(schema_keys(input_specs(), group) == lower(key))) cycle
+                keys = keys//" "//key//" = 0"
+                n_unknown = n_unknown + 1
+            end do
+            if (len(keys) > 0) text = text//"&"//group//keys//" /"//new_line('a')
+        end do
+        if (n_unknown > 1) call check_namelist(trim(source)//" (overrides)", text, &
+                                               input_specs(), err, paper_symbols)
+    end subroutine check_override_keys
 
     !> The keys the schema marks required, in each group given: "&chain: n (number of
     !> oscillators) is required, in [1, 10000000]".

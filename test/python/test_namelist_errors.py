@@ -341,6 +341,11 @@ def test_every_unknown_key_is_named_at_once(impactchain_exe, tmp_path):
     (["--set", "chian.n=3"], "did you mean &chain", 1),
     (["--set", "chain.A=3"], "unknown key 'A' (did you mean 'amplitude'? A is the paper's "
      "drive amplitude", 1),
+    # issue 31, 2: several unknown keys are named at once, each with its "did you mean"
+    (["--set", "chain.w=1.5", "--set", "run.cycle=5", "--set", "chain.n=4"],
+     "2 unknown keys:\n  in.nml (overrides):1: &chain: unknown key 'w' (did you mean "
+     "'omega'? w is the paper's drive frequency)\n  in.nml (overrides):2: &run: unknown key "
+     "'cycle' (did you mean 'cycles'?)", 1),
     # issue 30, 7: a value cannot close its group and open another, or comment out the rest
     (["--set", "chain.n=4 / &run cycles=5"], "--set chain.n=4 / &run cycles=5: the value", 1),
     (["--set", "chain.n=4 ! x"], "--set chain.n=4 ! x: the value", 1),

@@ -13,7 +13,8 @@ import numpy as np
 
 from impactchain.analysis import panel_ranges
 from impactchain.figures._style import _SYMBOLS, FigureError
-from impactchain.inmemory import is_sweep_dataset, run_from_sweep
+from impactchain.inmemory import (is_continuation_dataset, is_sweep_dataset, is_tree,
+                                  run_from_continuation, run_from_sweep, run_from_tree)
 from impactchain.io import read_run
 from impactchain.results import Run, Strobe, Sweep
 
@@ -25,34 +26,45 @@ class SupportsRun(Protocol):
     def to_run(self) -> Run: ...
 
 
-RunLike = Union[Run, str, "os.PathLike[str]", SupportsRun]
-"""What the figure functions take for one run."""
+RunLike = Union[Run, str, "os.PathLike[str]", SupportsRun, Any]
+"""What the figure functions take for one run: a :class:`Run`, a path to a file, an
+:mod:`impactchain.api` result, an xarray tree of a file (``xarray.open_datatree(path)``, an
+api result's ``to_xarray()``) or the Dataset of ``api.sweep`` or ``api.continuation``."""
 
 
 def as_run(data: RunLike, require: Iterable[str] = (), purpose: str | None = None) -> Run:
     """The :class:`Run` of ``data``: a Run, a file path (read with ``require``, see
     :func:`impactchain.io.read_run`), an object with ``to_run()`` (``impactchain.api``
-    results) or the Dataset of :func:`impactchain.api.sweep`."""
+    results), an xarray tree of a file or the Dataset of :func:`impactchain.api.sweep` or
+    :func:`impactchain.api.continuation`."""
     if isinstance(data, Run):
         return data
     if isinstance(data, (str, os.PathLike)):
         return read_run(data, require=require, purpose=purpose)
+    if is_tree(data):
+        return run_from_tree(data, require, purpose)
     if is_sweep_dataset(data):
         return run_from_sweep(data)
+    if is_continuation_dataset(data):
+        return run_from_continuation(data)
     if isinstance(data, SupportsRun):
         run = data.to_run()
         if not isinstance(run, Run):
             raise TypeError(f"{type(data).__name__}.to_run() returned "
                             f"{type(run).__name__}, not an impactchain.io.Run")
         return run
+    if callable(getattr(data, "to_xarray", None)) and not hasattr(data, "data_vars"):
+        return as_run(data.to_xarray(), require, purpose)  # (api.PeriodicOrbit)
     raise TypeError(f"cannot draw a {type(data).__name__}: give an impactchain.io.Run, a path "
-                    "to an impactchain file or an impactchain.api result")
+                    "to an impactchain file, an xarray tree of one or an impactchain.api "
+                    "result")
 
 
 def _as_runs(data: RunLike | Sequence[RunLike], require: Iterable[str] = (),
              purpose: str | None = None) -> list[Run]:
     single = (isinstance(data, (Run, str, os.PathLike)) or isinstance(data, SupportsRun)
-              or is_sweep_dataset(data))
+              or is_tree(data) or hasattr(data, "data_vars")  # (a Dataset is one result)
+              or hasattr(data, "to_xarray"))
     items = [data] if single else list(data)  # type: ignore[arg-type]
     return [as_run(item, require, purpose) for item in items]
 

@@ -65,9 +65,10 @@ def _title(run: Run, skip: str | Sequence[str] = ()) -> str:
     parts = [f"n = {p.n}"]
     for name, value in (("amplitude", p.amplitude), ("omega", p.omega),
                         ("damping", p.damping), ("restitution", p.restitution)):
-        if name not in skipped:
+        if name not in skipped and not math.isnan(value):  # (NaN: a group alone, no /params)
             parts.append(f"${_SYMBOLS[name][1]}$ = {value:g}")
-    parts.append(f"{p.boundary} ends")
+    if p.boundary:
+        parts.append(f"{p.boundary} ends")
     title = ", ".join(parts)
     if not run.complete:
         title += " (interrupted run)"

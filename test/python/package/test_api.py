@@ -1038,3 +1038,197 @@ def test_ctrl_c_stops_kernels_in_a_thread_pool() -> None:
     finally:
         child.kill()
     assert child.returncode == 0 and out.split() == ["KeyboardInterrupt"], (out, err)
+
+
+# ------------------------------------------------- 6. any input key, one data model (xarray)
+
+KICKED = dict(n=6, amplitude=1.7, omega=1.5, transient=5, cycles=30)
+
+
+def _strobe_of(path: Path) -> tuple[np.ndarray, np.ndarray]:
+    with h5py.File(path) as f:
+        return f["strobe/x"][()], f["strobe/v"][()]
+
+
+def test_any_input_key_is_the_cli_run(cli: Path, tmp_path: Path) -> None:
+    """Issue 31, 2: &initial kick, which has no argument of its own, set from Python by its
+    name or as group.key: the CLI's records for the same namelist, bit for bit (and not
+    those of a run without it)."""
+    text = namelist(**KICKED).replace("&run", "&initial kick = 0.75 /\n&run", 1)
+    assert run_cli(cli, text, tmp_path).returncode == 0
+    x, v = _strobe_of(tmp_path / "run.h5")
+    for keys in ({"kick": 0.75}, {"initial.kick": 0.75}):
+        sim = api.simulate(**KICKED, **keys)
+        np.testing.assert_array_equal(sim.x.view(np.uint64), x.view(np.uint64))
+        np.testing.assert_array_equal(sim.v.view(np.uint64), v.view(np.uint64))
+        assert sim.params["overrides"] == ("initial.kick=0.75",)
+    assert not np.array_equal(api.simulate(**KICKED).x, x)
+
+
+def test_any_input_key_in_every_function() -> None:
+    """Every run function passes the keys it has no argument for (here &run max_period,
+    &initial kick): a bad value gets the reader's message for that key."""
+    orbit = {key: value for key, value in KICKED.items() if key != "cycles"}
+    calls = {
+        "simulate": lambda **k: api.simulate(**KICKED, **k),
+        "lyapunov": lambda **k: api.lyapunov(**KICKED, **k),
+        "floquet": lambda **k: api.floquet(**KICKED, **k),
+        "poincare_jacobian": lambda **k: api.poincare_jacobian(np.zeros(3), np.zeros(3), 1.7,
+                                                               1.5, **k),
+        "random_start": lambda **k: api.random_start(4, v_amp=0.1, **k),
+        "sweep": lambda **k: api.sweep(**KICKED, parameter="amplitude", start=1.7, stop=1.8,
+                                       step=0.1, **k),
+        "continuation": lambda **k: api.continuation(**orbit, parameter="amplitude",
+                                                     stop=1.8, step=0.1, **k),
+        "periodic_orbit": lambda **k: api.periodic_orbit(**orbit, **k),
+    }
+    for name, call in calls.items():
+        with pytest.raises(ValueError, match=r"&initial: kick = 50000000\. is outside"):
+            call(**{"initial.kick": 5e7})
+        with pytest.raises(ValueError, match=r"max_period"):
+            call(max_period=-1)
+
+
+def test_unknown_keys_are_named_at_once() -> None:
+    """Issue 32, 8 from Python: the paper's symbols and misspelt keys, every one named in
+    one message with the reader's "did you mean"."""
+    with pytest.raises(ValueError) as caught:
+        api.simulate(6, 1.7, 1.5, w=1.5, K=0.7, kik=0.1)
+    message = str(caught.value)
+    assert "3 unknown keys" in message, message
+    assert "did you mean 'omega'" in message and "did you mean 'restitution'" in message
+    assert "did you mean 'kick'" in message
+    with pytest.raises(ValueError, match=r"unknown key 'kik'.*did you mean 'kick'"):
+        api.simulate(6, 1.7, 1.5, kik=0.1)
+    with pytest.raises(TypeError, match=r"^file is a key of &initial and &output: name one"):
+        api.simulate(6, 1.7, 1.5, file="a.h5")
+    with pytest.raises(TypeError, match=r"&lyapunov enabled is not set through \*\*keys"):
+        api.simulate(6, 1.7, 1.5, enabled=True)
+
+
+def _small_files(cli: Path, folder: Path) -> dict[str, Path]:
+    """A run, a sweep, a continuation (branch) and a census file, as the recipes write them
+    (small ones of the same kinds)."""
+    inputs = {
+        "run": namelist(**KICKED, lyapunov=True, period=1),
+        "sweep": namelist(**{**KICKED, "cycles": 5}, events=False)
+        + "&sweep parameter = 'amplitude', start = 1.7, stop = 1.9, step = 0.1 /\n",
+        "branch": _continuation_namelist(3.0, CONTINUATIONS["fold"][1]),
+        "census": namelist(**{**KICKED, "cycles": 20}, events=False)
+        + "&census samples = 6, seed = 1, x_amp = 0.3, v_amp = 1.0 /\n",
+    }
+    files = {}
+    for kind, text in inputs.items():
+        (folder / kind).mkdir()
+        result = run_cli(cli, text, folder / kind)
+        assert result.returncode == 0, result.stderr
+        files[kind] = folder / kind / "run.h5"
+    return files
+
+
+def test_open_datatree_reads_every_kind_of_file(cli: Path, tmp_path: Path) -> None:
+    """Issue 32, 5: ``xarray.open_datatree(file)`` reads a whole run, sweep, branch and census
+    file: every group, each dataset with the file schema's dimensions and units."""
+    xr = pytest.importorskip("xarray")
+    from impactchain import schema
+
+    groups = {"run": {"strobe", "events", "final", "stats", "lyapunov", "floquet", "params"},
+              "sweep": {"sweep", "params"}, "branch": {"continuation", "params"},
+              "census": {"census", "params"}}
+    for kind, path in _small_files(cli, tmp_path).items():
+        with xr.open_datatree(path, engine="h5netcdf") as tree:
+            assert groups[kind] <= set(tree.children), (kind, list(tree.children))
+            assert tree.attrs["schema_version"] >= 1
+            for group in groups[kind]:
+                for name, variable in tree[group].variables.items():
+                    entry = schema.output(f"/{group}/{name}")
+                    if entry["units"]:
+                        assert variable.attrs["units"] == entry["units"], (group, name)
+
+
+def test_results_convert_to_the_files_tree(cli: Path, tmp_path: Path) -> None:
+    """Issue 32, 5: ``to_xarray()`` of simulate, lyapunov and floquet results is the tree of
+    the CLI's file: the same names, dimensions and units in each group, the same values."""
+    xr = pytest.importorskip("xarray")
+    assert run_cli(cli, namelist(**KICKED, lyapunov=True, period=1), tmp_path).returncode == 0
+    trees = [api.simulate(**KICKED).to_xarray(), api.lyapunov(**KICKED).to_xarray(),
+             api.floquet(**KICKED, period=1).to_xarray()]
+    with xr.open_datatree(tmp_path / "run.h5", engine="h5netcdf") as file:
+        for tree in trees:
+            for group in tree.children:
+                mine, theirs = tree[group].ds, file[group].ds
+                for name, variable in mine.variables.items():
+                    assert name in theirs.variables, (group, name)
+                    assert variable.dims == theirs[name].dims, (group, name)
+                    assert variable.attrs.get("units") == theirs[name].attrs.get("units")
+                for name in mine.attrs:
+                    assert name in theirs.attrs, (group, name)
+        for name in ("x", "v"):
+            np.testing.assert_array_equal(trees[0]["strobe"][name].values,
+                                          file["strobe"][name].values)
+        np.testing.assert_array_equal(trees[1]["lyapunov/exponents"].values,
+                                      file["lyapunov/exponents"].values)
+        np.testing.assert_array_equal(trees[2]["floquet/jacobian"].values,
+                                      file["floquet/jacobian"].values)
+
+
+def test_census_is_the_cli_file(cli: Path, tmp_path: Path) -> None:
+    """api.census returns the CLI's census file as an xarray tree, every value the same;
+    its keys go as the CLI's --set, so a wrong one gets the CLI's message."""
+    xr = pytest.importorskip("xarray")
+    path = _small_files(cli, tmp_path)["census"]
+    mine = api.census(**{**KICKED, "cycles": 20}, samples=6, seed=1, x_amp=0.3, v_amp=1.0)
+    with xr.open_datatree(path, engine="h5netcdf") as file:
+        xr.testing.assert_identical(mine["census"].ds, file["census"].ds)
+        xr.testing.assert_identical(mine["params"].ds, file["params"].ds)
+    with pytest.raises(ValueError, match=r"samples"):
+        api.census(6, 1.7, 1.5, samples=0)
+
+
+def test_figures_take_files_trees_and_results_alike(cli: Path, tmp_path: Path) -> None:
+    """Issue 32, 5: the figures draw a file, its xarray tree or Dataset, and api results
+    alike: branches and multipliers of api.continuation (which failed with "SchemaError:
+    values: no such file" and "give an impactchain.api result"), the run figures of a
+    tree."""
+    xr = pytest.importorskip("xarray")
+    import matplotlib.pyplot as plt
+
+    from impactchain import figures
+
+    files = _small_files(cli, tmp_path)
+    amplitude, group, _, _ = CONTINUATIONS["fold"]
+    ds = api.continuation(**FIG10, amplitude=amplitude, **group)
+    tree = xr.open_datatree(files["branch"], engine="h5netcdf")
+    for draw in (figures.branches, figures.multipliers):
+        lines = []
+        for data in (files["branch"], ds, tree):
+            fig = draw(data)
+            lines.append([line.get_ydata() for line in fig.axes[0].get_lines()])
+            plt.close(fig)
+        for drawn in lines[1:]:
+            assert len(drawn) == len(lines[0])
+            for a, b in zip(drawn, lines[0]):
+                np.testing.assert_array_equal(a, b)
+    run_tree = xr.open_datatree(files["run"], engine="h5netcdf")
+    simulation = api.simulate(**KICKED)
+    for data in (files["run"], run_tree, run_tree["strobe"], simulation,
+                 simulation.to_xarray()):
+        plt.close(figures.space_time_amplitude(data))
+    tree.close()
+    run_tree.close()
+
+
+def test_periodic_orbit_converts_to_the_files_group(cli: Path, tmp_path: Path) -> None:
+    """PeriodicOrbit.to_xarray() is the CLI file's /continuation group of the same input
+    (&continuation max_points = 1), bit for bit, and the figures draw the orbit as that."""
+    xr = pytest.importorskip("xarray")
+    import matplotlib.pyplot as plt
+
+    from impactchain import figures
+
+    text = _continuation_namelist(3.0, dict(parameter="amplitude", max_points=1))
+    assert run_cli(cli, text, tmp_path).returncode == 0
+    orbit = api.periodic_orbit(**FIG10, amplitude=3.0)
+    assert_same_bits(orbit.to_xarray(), _file_group(xr, tmp_path / "run.h5"))
+    for draw in (figures.multipliers, figures.branches):
+        plt.close(draw(orbit))
