@@ -15,12 +15,20 @@ module chain_branch_points
     implicit none
     private
     public :: branch_options_t, branch_point_t, special_point_t, branches_t, special_kinds
+    public :: end_kinds
     public :: cursor_t, setting_t, cursor_from_orbit, cursor_from_pass, impacts_per_bond
     public :: store, add_special, add_reason
 
     !> The kinds of special point, as stored.
-    character(len=*), parameter :: special_kinds(4) = &
-        [character(len=15) :: 'fold', 'period-doubling', 'neimark-sacker', 'grazing']
+    character(len=*), parameter :: special_kinds(5) = &
+        [character(len=15) :: 'fold', 'period-doubling', 'neimark-sacker', 'grazing', 'corner']
+
+    !> How a branch can end, as stored (docs/model.md 12.5): its last allowed point, a bound
+    !> of the parameter, a grazing, a simultaneous impact of one oscillator with both
+    !> neighbours (a corner of the impact surfaces), a change of the impacts where no monitor
+    !> vanishes, or a failure of Newton.
+    character(len=*), parameter :: end_kinds(6) = &
+        [character(len=10) :: 'max_points', 'bound', 'grazing', 'corner', 'impacts', 'newton']
 
     type :: branch_options_t
         character(len=:), allocatable :: parameter !! one of chain_parameter's orbit_parameters
@@ -58,6 +66,7 @@ module chain_branch_points
         integer :: n_specials = 0
         type(special_point_t), allocatable :: specials(:)
         character(len=:), allocatable :: end_reason !! of every branch, one line each
+        character(len=:), allocatable :: end_kind   !! of every branch, one of end_kinds a line
         logical :: stopped = .false. !! the monitor stopped the work: the result is partial
         !> Newton's result from the guess, converged or not (converged: the first point's orbit)
         type(orbit_t) :: start
@@ -214,12 +223,17 @@ contains
         res%specials(res%n_specials) = special_point_t(point, kind, value)
     end subroutine add_special
 
-    subroutine add_reason(res, line)
+    !> A branch ended: its kind (one of end_kinds) and the line that says why.
+    subroutine add_reason(res, kind, line)
         type(branches_t), intent(inout) :: res
-        character(len=*), intent(in) :: line
+        character(len=*), intent(in) :: kind, line
 
-        if (len(res%end_reason) > 0) res%end_reason = res%end_reason//new_line('a')
+        if (len(res%end_reason) > 0) then
+            res%end_reason = res%end_reason//new_line('a')
+            res%end_kind = res%end_kind//new_line('a')
+        end if
         res%end_reason = res%end_reason//line
+        res%end_kind = res%end_kind//kind
     end subroutine add_reason
 
 end module chain_branch_points

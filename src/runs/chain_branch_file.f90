@@ -171,8 +171,8 @@ contains
 
     !> The run's header (without the continued parameter, which /params cannot hold as one
     !> number) and /continuation: the datasets of continuation_table, the group's attributes
-    !> (the parameter, the section's phase, the parameter's start, stop and step, why the
-    !> branches ended) and every dataset's names, units and dimensions.
+    !> (the parameter, the section's phase, the parameter's start, stop and step, why and how
+    !> the branches ended) and every dataset's names, units and dimensions.
     subroutine write_continuation(out, cfg, res, err)
         type(output_t), intent(inout) :: out
         type(config_t), intent(in) :: cfg
@@ -197,6 +197,7 @@ contains
             call h5_write_attr(f, 'continuation', 'stop', cfg%cont_stop, err)
             call h5_write_attr(f, 'continuation', 'step', cfg%cont_step, err)
             call h5_write_attr(f, 'continuation', 'end_reason', res%end_reason, err)
+            call h5_write_attr(f, 'continuation', 'end_kind', res%end_kind, err)
             if (allocated(err)) return
             call index_coordinate(f, 'continuation/point', 0, np, err)
             call index_coordinate(f, 'continuation/oscillator', 1, n, err)
