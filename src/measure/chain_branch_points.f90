@@ -20,15 +20,17 @@ module chain_branch_points
     public :: store, add_special, add_reason
 
     !> The kinds of special point, as stored.
-    character(len=*), parameter :: special_kinds(5) = &
-        [character(len=15) :: 'fold', 'period-doubling', 'neimark-sacker', 'grazing', 'corner']
+    character(len=*), parameter :: special_kinds(6) = &
+        [character(len=15) :: 'fold', 'period-doubling', 'neimark-sacker', 'grazing', 'corner', &
+         'section']
 
     !> How a branch can end, as stored (docs/model.md 12.5): its last allowed point, a bound
     !> of the parameter, a grazing, a simultaneous impact of one oscillator with both
-    !> neighbours (a corner of the impact surfaces), a change of the impacts where no monitor
-    !> vanishes, or a failure of Newton.
-    character(len=*), parameter :: end_kinds(6) = &
-        [character(len=10) :: 'max_points', 'bound', 'grazing', 'corner', 'impacts', 'newton']
+    !> neighbours (a corner of the impact surfaces), an impact at the section, a change of the
+    !> impacts where no monitor vanishes, or a failure of Newton.
+    character(len=*), parameter :: end_kinds(7) = &
+        [character(len=10) :: 'max_points', 'bound', 'grazing', 'corner', 'section', 'impacts', &
+         'newton']
 
     type :: branch_options_t
         character(len=:), allocatable :: parameter !! one of chain_parameter's orbit_parameters

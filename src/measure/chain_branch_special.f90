@@ -9,6 +9,7 @@ module chain_branch_special
     use chain_kinds, only: wp, two_pi
     use chain_error, only: error_t, fmt_real, fmt_int
     use chain_event_log, only: event_impact
+    use chain_model, only: model_t, set_model_parameter, bond_gaps
     use chain_orbit, only: orbit_t
     use chain_branch_points, only: cursor_t, setting_t, branches_t, special_kinds, store, &
                                    add_special
@@ -170,7 +171,8 @@ contains
     !> last orbit with the impacts of `here` (a trial where the corrector fails counts as
     !> changed), to 1e-11 in the parameter, and what happens there (`kind`): a grazing when its
     !> smallest gap or impact speed is below 1e-4, else a corner when its corner monitor (the
-    !> shortest time between impacts on neighbouring bonds) is, else '' (no monitor vanishes).
+    !> shortest time between impacts on neighbouring bonds) is, else an impact at the section
+    !> when a gap of its state on the section is, else '' (no monitor vanishes).
     !> The orbit is stored as a special point of its kind, or as a plain point when `kind` is
     !> '' and `keep`; `value` is where the vanishing monitor extrapolates to zero.
     subroutine locate_nonsmooth(set, here, h, keep, res, kind, value, err)
@@ -220,6 +222,11 @@ contains
         else if (corner_last < vanishing) then
             kind = 'corner'
             value = secant_root(here%y(m + 1), last_same%y(m + 1), corner_before, corner_last)
+        else if (section_gap(set, last_same) < vanishing) then
+            ! (the orbit goes on, but the map of this section jumps where an impact crosses it)
+            kind = 'section'
+            value = secant_root(here%y(m + 1), last_same%y(m + 1), section_gap(set, here), &
+                                section_gap(set, last_same))
         else
             kind = ''
             if (.not. keep) return
@@ -297,6 +304,19 @@ contains
         end do
     end subroutine corner_monitor
 
+    !> The smallest gap of c's state on the section: zero where an impact falls on the section.
+    pure real(wp) function section_gap(set, c) result(gap)
+        type(setting_t), intent(in) :: set
+        type(cursor_t), intent(in) :: c
+        type(model_t) :: model
+        integer :: m
+
+        m = size(c%y) - 1
+        model = set%model
+        call set_model_parameter(model, set%opt%parameter, c%y(m + 1))
+        gap = minval(bond_gaps(model%spacing, model%walls, c%y(1:m:2)))
+    end function section_gap
+
     !> Why a branch ended at the non-smooth point of kind `kind` (of locate_nonsmooth) just
     !> stored, at `value`.
     function nonsmooth_reason(set, res, kind, value) result(reason)
@@ -320,6 +340,11 @@ contains
                      fmt_real(value)//": oscillator "//fmt_int(oscillator)//" is hit by "// &
                      "both neighbours at one instant (the map is not smooth there), the "// &
                      "branch ends"
+        case ('section')
+            reason = "an impact at the section at "//set%opt%parameter//" = "// &
+                     fmt_real(value)//" (a gap of the orbit's state on the section vanishes: "// &
+                     "the map of this section jumps there, a section at another phase "// &
+                     "goes on), the branch ends"
         case default
             associate (o => res%points(res%n_points)%orbit)
                 reason = "the impacts change at "//set%opt%parameter//" = "// &

@@ -417,7 +417,7 @@ contains
                  '', 'why each branch ended, one line per branch', 'always')
         call add(t, 'continuation', '/continuation/@end_kind', 'attribute', '', 'string', '', &
                  '', 'how each branch ended, one line per branch: max_points, bound, '// &
-                 'grazing, corner, impacts or newton', 'always')
+                 'grazing, corner, section, impacts or newton', 'always')
         call add(t, 'continuation', '/continuation/point', 'dataset', 'point', 'int32', '1', '', &
                  'point index (in the order found, branch after branch)', 'always')
         call add(t, 'continuation', '/continuation/oscillator', 'dataset', 'oscillator', 'int32', &
