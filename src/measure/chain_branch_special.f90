@@ -33,19 +33,21 @@ contains
         real(wp), intent(in) :: h
         type(branches_t), intent(inout) :: res
         type(error_t), allocatable, intent(out) :: err
-        type(cursor_t) :: found(3)
-        real(wp) :: at(3)
-        logical :: seen(3)
+        type(cursor_t) :: found(4)
+        real(wp) :: at(4)
+        logical :: seen(4)
         integer :: k, j, m, rank
 
         m = size(here%y) - 1
         seen(1) = here%tangent(m + 1)*next%tangent(m + 1) < 0
         seen(2) = (here%det_plus < 0) .neqv. (next%det_plus < 0)
         seen(3) = here%unstable_pairs /= next%unstable_pairs
+        ! a real multiplier through +1 where the parameter does not turn: a branch point
+        seen(4) = ((here%det_minus < 0) .neqv. (next%det_minus < 0)) .and. .not. seen(1)
         at = huge(1.0_wp)
         ! (the first pair to cross: pairs of a symmetric chain come twice and cross together)
         rank = min(here%unstable_pairs, next%unstable_pairs) + 1
-        do k = 1, 3
+        do k = 1, 4
             if (.not. seen(k)) cycle
             call locate(set, here, h, k, rank, found(k), at(k), err)
             if (allocated(err)) return
@@ -55,12 +57,26 @@ contains
             k = minloc(at, 1, mask=seen)
             call store(set, found(k), res, err)
             if (allocated(err)) return
-            call add_special(res, res%n_points, special_kinds(k), found(k)%y(m + 1))
+            call add_special(res, res%n_points, special_kind_of(k), found(k)%y(m + 1))
             seen(k) = .false.
         end do
     end subroutine locate_specials
 
-    !> The zero of test function `kind` (1 fold, 2 period doubling, 3 Neimark-Sacker) on the
+    !> The special kind of test function k (1 fold, 2 period doubling, 3 Neimark-Sacker,
+    !> 4 branch point).
+    pure function special_kind_of(k) result(kind)
+        integer, intent(in) :: k
+        character(len=:), allocatable :: kind
+
+        if (k <= 3) then
+            kind = trim(special_kinds(k))
+        else
+            kind = 'branch-point'
+        end if
+    end function special_kind_of
+
+    !> The zero of test function `kind` (1 fold, 2 period doubling, 3 Neimark-Sacker,
+    !> 4 branch point) on the
     !> branch between arclength 0 (`here`) and h, by regula falsi (Illinois) on the arclength,
     !> each trial corrected onto the branch; to 1e-11 in the parameter or a bracket of 1e-9.
     subroutine locate(set, here, h, kind, rank, found, s_found, err)
@@ -135,6 +151,8 @@ contains
             if (dot_product(c%tangent, reference) < 0) f = -f
         case (2)
             f = c%det_plus
+        case (4)
+            f = c%det_minus
         case default
             associate (re => c%orbit%multipliers_re, im => c%orbit%multipliers_im)
                 moduli = pack(hypot(re, im), im > 0)
@@ -157,7 +175,7 @@ contains
 
         associate (re => orbit%multipliers_re, im => orbit%multipliers_im)
             select case (kind)
-            case (1)
+            case (1, 4)
                 confirmed = minval(hypot(re - 1, im)) < within
             case (2)
                 confirmed = minval(hypot(re + 1, im)) < within

@@ -33,6 +33,7 @@ module chain_branch_file
         integer, allocatable :: period(:), branch(:)      !! (np)
         real(wp), allocatable :: multipliers_re(:, :), multipliers_im(:, :) !! (2n, np)
         integer, allocatable :: stable(:)                 !! (np) 1 stable, 0 not
+        integer, allocatable :: symmetric(:)              !! (np) 1 its own mirror image, 0 not
         real(wp), allocatable :: min_gap(:), min_impact_speed(:) !! (np) +inf: none
         integer, allocatable :: impacts(:)                !! (np) impacts per period
         real(wp), allocatable :: residual(:)              !! (np) Newton's last residual
@@ -158,6 +159,7 @@ contains
             table%period = [(pts(j)%orbit%cycles, j=1, np)]
             table%branch = pts%branch
             table%stable = merge(1, 0, pts%stable)
+            table%symmetric = merge(1, 0, pts%symmetric)
             table%impacts = [(pts(j)%orbit%impacts, j=1, np)]
             table%iterations = [(pts(j)%orbit%iterations, j=1, np)]
             table%special_index = specials%point - 1
@@ -214,6 +216,7 @@ contains
             call h5_write(f, 'continuation/multipliers_re', t%multipliers_re, err)
             call h5_write(f, 'continuation/multipliers_im', t%multipliers_im, err)
             call h5_write(f, 'continuation/stable', t%stable, err)
+            call h5_write(f, 'continuation/symmetric', t%symmetric, err)
             call h5_write(f, 'continuation/min_gap', t%min_gap, err)
             call h5_write(f, 'continuation/min_impact_speed', t%min_impact_speed, err)
             call h5_write(f, 'continuation/impacts_per_period', t%impacts, err)
