@@ -259,8 +259,31 @@ def test_impact_at_the_section_ends_a_branch(impactchain_exe, tmp_path):
     with h5py.File(tmp_path / "section.h5") as f:
         g = f["continuation"]
         assert g.attrs["end_kind"] == "section"
-        assert [k.decode() for k in g["special_kind"][:]] == ["section"]
-        assert abs(g["special_value"][0] - 0.8984724) < 1e-6
+        # (after a branch point on the way: the mirror-symmetric orbit's pitchfork)
+        assert [k.decode() for k in g["special_kind"][:]] == ["branch-point", "section"]
+        assert g["special_index"][-1] == g["values"].shape[0] - 1
+        assert abs(g["special_value"][-1] - 0.8984724) < 1e-6
         x = g["x"][-1]
         gaps = np.r_[1 + x[0], 1 + np.diff(x), 1 - x[-1]]
         assert gaps.min() < 1e-6
+
+
+def test_branch_point_file(impactchain_exe, tmp_path):
+    """Continued up from A = 5, a real multiplier of the mirror-symmetric orbit crosses +1 at
+    A = 5.0040468 while the parameter goes on: a branch point, located with a multiplier 1 to
+    1e-8; the branch is followed on through it, every orbit on it its own mirror image half a
+    drive period later."""
+    text = (CHAIN12 + "&continuation parameter = 'amplitude', stop = 5.01, step = 0.001 /\n"
+            "&output file = 'bp.h5' /\n")
+    result = run_namelist(impactchain_exe, text, tmp_path)
+    assert "branch-point at" in result.stdout
+    with h5py.File(tmp_path / "bp.h5") as f:
+        g = f["continuation"]
+        assert g.attrs["end_kind"] == "bound"
+        assert [k.decode() for k in g["special_kind"][:]] == ["branch-point"]
+        assert abs(g["special_value"][0] - 5.0040468) < 1e-7
+        i = g["special_index"][0]
+        rho = g["multipliers_re"][i] + 1j * g["multipliers_im"][i]
+        assert np.abs(rho - 1).min() < 1e-8
+        assert (g["symmetric"][:] == 1).all()
+        assert i < g["values"].shape[0] - 1       # the branch goes on through it
