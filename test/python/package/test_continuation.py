@@ -287,9 +287,10 @@ def test_missing_attribute(cont_file: Path) -> None:
 @pytest.mark.parametrize(
     ("name", "data", "message"),
     [
-        ("special_kind", np.array(["fold", "cusp", "fold", "grazing"], dtype=h5py.string_dtype()),
+        ("special_kind", np.array(["fold", "cusp", "fold", "grazing", "corner", "section",
+                                   "branch-point"], dtype=h5py.string_dtype()),
          "special_kind holds 'cusp'"),
-        ("special_index", np.array([1, 4, 10, 12], dtype=np.int32),
+        ("special_index", np.array([1, 2, 4, 5, 8, 10, 12], dtype=np.int32),
          r"special_index holds values outside 0..11"),
         ("stable", np.full(12, 2, dtype=np.int8), "stable holds values other than 0 and 1"),
         ("period", np.full(12, 3, dtype=np.int32), "2 iterates, fewer than the largest period 3"),
@@ -395,9 +396,10 @@ def test_branches_mark_the_special_points_at_every_crossing(cont_file: Path) -> 
         p = PERIOD[index]
         np.testing.assert_array_equal(markers[kind][:, 0], np.full(p, VALUES[index]))
         np.testing.assert_array_equal(markers[kind][:, 1], cont.strobe_x[index, :p, 0])
-    assert len({tuple(c.get_paths()[0].vertices.ravel()) for c in ax.collections}) == 4
+    assert len({tuple(c.get_paths()[0].vertices.ravel()) for c in ax.collections}) == 7
     assert _legend(ax) == ["stable", "unstable", "fold", "period doubling", "Neimark-Sacker",
-                           "grazing"]
+                           "grazing", "simultaneous impact (corner)", "impact at the section",
+                           "branch point"]
 
 
 def test_branches_legend_shows_only_what_is_drawn(make_continuation: Callable[..., Path]
@@ -479,7 +481,8 @@ def test_multipliers_are_the_largest_moduli(cont_file: Path) -> None:
         np.testing.assert_array_equal(markers[kind], [[VALUES[index], modulus[index]]])
     assert ax.get_yscale() == "linear"  # moduli from 0.81 to 2.6
     assert _legend(ax) == ["stable", "unstable", "fold", "period doubling", "Neimark-Sacker",
-                           "grazing"]
+                           "grazing", "simultaneous impact (corner)", "impact at the section",
+                           "branch point"]
 
 
 def test_multipliers_on_a_log_scale_when_they_span_decades(cont_file: Path) -> None:
