@@ -286,9 +286,9 @@ contains
         value = mu_last - g_last*(mu_last - mu_before)/(g_last - g_before)
     end function secant_root
 
-    !> The corner monitor of an orbit at parameter value mu: the shortest time between two impacts on neighbouring
-    !> bonds (the two impacts of the oscillator between them), the period taken as a circle
-    !> (huge: none). It reaches zero where an oscillator is hit by both neighbours at one
+    !> The corner monitor of an orbit at parameter value mu: the shortest time between two
+    !> impacts on neighbouring bonds (the two impacts of the oscillator between them), the
+    !> period taken as a circle (huge: none). It reaches zero where an oscillator is hit by both neighbours at one
     !> instant: there the order of the two impacts swaps, and the map, whose pair impacts do not
     !> commute, is not smooth. `oscillator`: that oscillator (0: none).
     pure subroutine corner_monitor(set, orbit, mu, shortest, oscillator)
