@@ -216,7 +216,24 @@ contains
         end do
         if (newton_only) call report_newton(res%start)
         write (output_unit, '(a)') '  '//res%end_reason
+        write (output_unit, '(a)') '  ends: '//comma_lines(res%end_kind)
     end subroutine report_branches
+
+    !> The lines of `text` joined by ', '.
+    pure function comma_lines(text) result(joined)
+        character(len=*), intent(in) :: text
+        character(len=:), allocatable :: joined
+        integer :: j
+
+        joined = ''
+        do j = 1, len(text)
+            if (text(j:j) == new_line('a')) then
+                joined = joined//', '
+            else
+                joined = joined//text(j:j)
+            end if
+        end do
+    end function comma_lines
 
     !> Newton's outcome: converged or not, its steps and last residual; for a converged orbit
     !> its stability (stable: every Floquet multiplier inside the unit circle), the largest

@@ -305,15 +305,17 @@ contains
     !> them; the caller checked the capacities. `strobe_x` is the caller's array: written,
     !> never zeroed.
     subroutine put_continuation_results(values, x, v, strobe_x, periods, branch, mult_re, &
-                                        mult_im, stable, min_gap, min_impact_speed, impacts, &
-                                        residual, iterations, special_index, special_kind, &
-                                        special_value, end_reason, start_x, start_v, start_jac, &
+                                        mult_im, stable, symmetric, min_gap, min_impact_speed, &
+                                        impacts, residual, iterations, special_index, &
+                                        special_kind, special_value, end_reason, end_kind, &
+                                        start_x, start_v, start_jac, &
                                         start_mult_re, start_mult_im, start_residuals, &
                                         start_bonds, start_min_gap, start_min_impact_speed, &
                                         start_reason, res, table, bonds)
         real(c_double), intent(out) :: values(:), x(:, :), v(:, :)
         real(c_double), intent(inout) :: strobe_x(:, :, :)
-        integer(c_int), intent(out) :: periods(:), branch(:), stable(:), impacts(:)
+        integer(c_int), intent(out) :: periods(:), branch(:), stable(:), symmetric(:)
+        integer(c_int), intent(out) :: impacts(:), end_kind(:)
         integer(c_int), intent(out) :: iterations(:), special_index(:), special_kind(:, :)
         real(c_double), intent(out) :: mult_re(:, :), mult_im(:, :), min_gap(:)
         real(c_double), intent(out) :: min_impact_speed(:), residual(:), special_value(:)
@@ -334,6 +336,7 @@ contains
         mult_re = 0
         mult_im = 0
         stable = 0
+        symmetric = 0
         min_gap = 0
         min_impact_speed = 0
         impacts = 0
@@ -343,6 +346,7 @@ contains
         special_kind = 0
         special_value = 0
         end_reason = 0
+        end_kind = 0
         start_reason = 0
         start_x = 0
         start_v = 0
@@ -365,6 +369,7 @@ contains
         mult_re(:, :np) = table%multipliers_re
         mult_im(:, :np) = table%multipliers_im
         stable(:np) = table%stable
+        symmetric(:np) = table%symmetric
         min_gap(:np) = table%min_gap
         min_impact_speed(:np) = table%min_impact_speed
         impacts(:np) = table%impacts
@@ -376,6 +381,7 @@ contains
         end do
         special_value(:ns) = table%special_value
         call put_text(res%end_reason, end_reason)
+        call put_text(res%end_kind, end_kind)
 
         associate (o => res%start)
             start_x = o%x

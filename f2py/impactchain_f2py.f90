@@ -369,9 +369,10 @@ subroutine ic_continuation(n, nsp, spacing, damping, restitution, amplitude, ome
                            npar, parameter, stop, step, period, max_points, doublings, nov, &
                            overrides, dry_run, nf, npcap, nlong, nscap, ntext, nrcap, nbcap, &
                            sizes, values, x, v, &
-                           strobe_x, periods, branch, mult_re, mult_im, stable, min_gap, &
-                           min_impact_speed, impacts, residual, iterations, special_index, &
-                           special_kind, special_value, end_reason, start_x, start_v, &
+                           strobe_x, periods, branch, mult_re, mult_im, stable, symmetric, &
+                           min_gap, min_impact_speed, impacts, residual, iterations, &
+                           special_index, special_kind, special_value, end_reason, end_kind, &
+                           start_x, start_v, &
                            start_jac, start_mult_re, start_mult_im, start_residuals, &
                            start_bonds, start_min_gap, start_min_impact_speed, start_reason, &
                            control, status, msg_len, message)
@@ -393,16 +394,17 @@ subroutine ic_continuation(n, nsp, spacing, damping, restitution, amplitude, ome
     real(c_double), intent(in) :: spacing(nsp), damping, restitution, amplitude, omega
     real(c_double), intent(in) :: x0(nx0), v0(nv0), phase, stick_speed, stop, step
     integer(c_int), intent(in) :: boundary(nb), parameter(npar)
-    integer(c_int), intent(out) :: sizes(8)
+    integer(c_int), intent(out) :: sizes(9)
     real(c_double), intent(out) :: values(npcap), x(nf, npcap), v(nf, npcap)
     real(c_double), intent(inout) :: strobe_x(nf, nlong, npcap) ! caller-allocated
     integer(c_int), intent(out) :: periods(npcap), branch(npcap), stable(npcap)
+    integer(c_int), intent(out) :: symmetric(npcap)
     integer(c_int), intent(out) :: impacts(npcap), iterations(npcap)
     real(c_double), intent(out) :: mult_re(2*nf, npcap), mult_im(2*nf, npcap)
     real(c_double), intent(out) :: min_gap(npcap), min_impact_speed(npcap), residual(npcap)
     integer(c_int), intent(out) :: special_index(nscap), special_kind(16, nscap)
     real(c_double), intent(out) :: special_value(nscap)
-    integer(c_int), intent(out) :: end_reason(ntext), start_reason(ntext)
+    integer(c_int), intent(out) :: end_reason(ntext), end_kind(ntext), start_reason(ntext)
     real(c_double), intent(out) :: start_x(nf), start_v(nf), start_jac(2*nf, 2*nf)
     real(c_double), intent(out) :: start_mult_re(2*nf), start_mult_im(2*nf)
     real(c_double), intent(out) :: start_residuals(nrcap), start_min_gap
@@ -422,9 +424,10 @@ subroutine ic_continuation(n, nsp, spacing, damping, restitution, amplitude, ome
     call put_message('', status_ok, status, msg_len, message)
     sizes = 0
     call put_continuation_results(values, x, v, strobe_x, periods, branch, mult_re, &
-                                  mult_im, stable, min_gap, min_impact_speed, impacts, residual, &
-                                  iterations, special_index, special_kind, special_value, &
-                                  end_reason, start_x, start_v, start_jac, start_mult_re, &
+                                  mult_im, stable, symmetric, min_gap, min_impact_speed, &
+                                  impacts, residual, iterations, special_index, special_kind, &
+                                  special_value, end_reason, end_kind, start_x, start_v, &
+                                  start_jac, start_mult_re, &
                                   start_mult_im, start_residuals, start_bonds, start_min_gap, &
                                   start_min_impact_speed, start_reason)
     call make_config(cfg, int(n), spacing, damping, restitution, amplitude, omega, boundary, &
@@ -452,18 +455,21 @@ subroutine ic_continuation(n, nsp, spacing, damping, restitution, amplitude, ome
     ns = res%n_specials
     bonds = impact_bonds(res%start)
     sizes = [np, ns, table%longest, len(res%end_reason), merge(1, 0, res%start%converged), &
-             size(res%start%residuals), size(bonds), len(res%start%reason)]
+             size(res%start%residuals), size(bonds), len(res%start%reason), &
+             len(res%end_kind)]
     if (np > npcap .or. ns > nscap .or. table%longest > nlong .or. sizes(4) > ntext .or. &
-        sizes(6) > nrcap .or. sizes(7) > nbcap .or. sizes(8) > ntext) then
+        sizes(6) > nrcap .or. sizes(7) > nbcap .or. sizes(8) > ntext .or. &
+        sizes(9) > ntext) then
         call put_message("python layer: more results than the capacities", status_capacity, &
                          status, msg_len, message)
         return
     end if
 
     call put_continuation_results(values, x, v, strobe_x, periods, branch, mult_re, &
-                                  mult_im, stable, min_gap, min_impact_speed, impacts, residual, &
-                                  iterations, special_index, special_kind, special_value, &
-                                  end_reason, start_x, start_v, start_jac, start_mult_re, &
+                                  mult_im, stable, symmetric, min_gap, min_impact_speed, &
+                                  impacts, residual, iterations, special_index, special_kind, &
+                                  special_value, end_reason, end_kind, start_x, start_v, &
+                                  start_jac, start_mult_re, &
                                   start_mult_im, start_residuals, start_bonds, start_min_gap, &
                                   start_min_impact_speed, start_reason, &
                                   res, table, bonds)

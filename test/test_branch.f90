@@ -6,7 +6,8 @@
 !> doubling against the simulator on either side of it, and the branch switched to there (its
 !> own doubling, the product of its multipliers); one branch from two starts, its special
 !> points located at the same parameter. Newton's result from the guess is kept, converged
-!> (the first point) or not (no point, the reason said).
+!> (the first point) or not (no point, the reason said). A branch that meets a simultaneous
+!> impact ends there, named a corner, its points kept.
 !> A continuation run tells its monitor the transient's cycles, then its points, and stops
 !> when asked.
 module test_branch
@@ -66,6 +67,8 @@ contains
         call period_doubling(t)
         call two_starts(t)
         call failed_start(t)
+        call corner_end(t)
+        call branch_point(t)
         call monitored_run(t)
     end subroutine run_branch_tests
 
@@ -406,6 +409,111 @@ contains
                    size(res%start%residuals) == res%start%iterations + 1, &
                    'failed start: the reason kept and said: '//res%end_reason)
     end subroutine failed_start
+
+    !> A chain of 12 (b = 0.02, K = 0.85, w = 2.3, a = 1, walls) at A = 5 and its unstable
+    !> 22-impact period-1 orbit, by Newton from rest after 500 cycles.
+    subroutine chain12_orbit(model, start)
+        type(model_t), intent(out) :: model
+        type(orbit_t), intent(out) :: start
+        integer :: i
+
+        model = model_of(make_flow(0.02_wp, 5.0_wp, 2.3_wp), 0.85_wp, [(1.0_wp, i=0, 12)], &
+                         .true., 1.0e-9_wp)
+        call settle(model, 500_i8, 1, start)
+    end subroutine chain12_orbit
+
+    !> The unstable 22-impact period-1 orbit of a chain of 12 (b = 0.02, K = 0.85, w = 2.3,
+    !> a = 1, walls; Newton from rest after 500 cycles at A = 5), continued down: near
+    !> A = 4.8296 oscillator 4 is hit by both neighbours at one instant. The branch ends there
+    !> named a corner, with the points before it kept; the stored orbit has two impacts on
+    !> neighbouring bonds within 1e-6 in time, and neither grazing monitor near zero.
+    subroutine corner_end(t)
+        type(tally_t), intent(inout) :: t
+        type(model_t) :: model
+        type(orbit_t) :: start
+        type(branches_t) :: res
+        type(branch_options_t) :: opt
+        type(error_t), allocatable :: err
+        real(wp), allocatable :: times(:)
+        integer, allocatable :: bonds(:)
+        real(wp) :: apart
+        integer :: j, k
+
+        call chain12_orbit(model, start)
+        call check(t, start%converged .and. start%impacts == 22, &
+                   'corner: the unstable 22-impact orbit at A = 5')
+        if (.not. start%converged) return
+        opt%parameter = 'amplitude'
+        opt%stop = 4.8_wp
+        opt%step = -0.01_wp
+        call follow_branches(model, 0.0_wp, 1, start%x, start%v, opt, res, err)
+        call check(t, .not. allocated(err), 'corner: a result, not an error')
+        if (allocated(err)) return
+        print '(a)', '    '//res%end_reason
+        call check(t, res%end_kind == 'corner' .and. res%n_specials == 1 .and. &
+                   res%n_points >= 8, 'corner: the end named, the points kept')
+        if (res%n_specials /= 1) return
+        call check(t, res%specials(1)%kind == 'corner' .and. &
+                   res%specials(1)%point == res%n_points .and. &
+                   abs(res%specials(1)%value - 4.8295554_wp) < 1.0e-6_wp, &
+                   'corner: the last point, at A = 4.8295554')
+        associate (o => res%points(res%n_points)%orbit)
+            call check(t, o%min_gap > 0.1_wp .and. o%min_impact_speed > 0.1_wp, &
+                       'corner: no grazing there')
+            bonds = impact_bonds(o)
+            times = pack(o%event_time, o%event_kind == 0)
+            apart = huge(1.0_wp)
+            do j = 1, size(bonds)
+                do k = j + 1, size(bonds)
+                    if (abs(bonds(j) - bonds(k)) == 1) apart = min(apart, times(k) - times(j))
+                end do
+            end do
+            call check(t, apart < 1.0e-6_wp, 'corner: two impacts of one oscillator at once')
+        end associate
+    end subroutine corner_end
+
+    !> The same orbit continued up from A = 5: a real multiplier crosses +1 at A = 5.0040468
+    !> while the parameter keeps its direction, the pitchfork of the mirror symmetry. It is
+    !> located as a branch point with a multiplier 1 to 1e-8; the orbits before it are their
+    !> own mirror images, and the branch goes on through it.
+    subroutine branch_point(t)
+        type(tally_t), intent(inout) :: t
+        type(model_t) :: model
+        type(orbit_t) :: start
+        type(branches_t) :: res
+        type(branch_options_t) :: opt
+        type(error_t), allocatable :: err
+        integer :: i, s, p
+
+        call chain12_orbit(model, start)
+        if (.not. start%converged) return
+        opt%parameter = 'amplitude'
+        opt%stop = 5.01_wp
+        opt%step = 0.001_wp
+        call follow_branches(model, 0.0_wp, 1, start%x, start%v, opt, res, err)
+        call check(t, .not. allocated(err), 'branch point: a result, not an error')
+        if (allocated(err)) return
+        print '(a)', '    '//res%end_reason
+        s = 0
+        do i = 1, res%n_specials
+            if (res%specials(i)%kind == 'branch-point') s = i
+        end do
+        call check(t, s > 0, 'branch point: found')
+        if (s == 0) return
+        p = res%specials(s)%point
+        associate (o => res%points(p)%orbit)
+            write (*, '(a,f15.11,a,es9.2)') '    branch point at A = ', res%specials(s)%value, &
+                ', |multiplier - 1| = ', minval(abs(cmplx(o%multipliers_re - 1, &
+                                                          o%multipliers_im, wp)))
+            call check_close(t, res%specials(s)%value, 5.0040468_wp, &
+                             'branch point: at A = 5.0040468', 1.0e-7_wp)
+            call check(t, minval(abs(cmplx(o%multipliers_re - 1, o%multipliers_im, wp))) < &
+                       1.0e-8_wp, 'branch point: a multiplier 1 to 1e-8')
+        end associate
+        call check(t, all(res%points(:p)%symmetric), 'branch point: symmetric orbits up to it')
+        call check(t, res%n_points > p .and. res%end_kind == 'bound', &
+                   'branch point: the branch goes on through it to the bound')
+    end subroutine branch_point
 
     !> Figure 10's chain at A = 1 from rest after 50 transient cycles, continued in A up to
     !> three points: the monitor sees every transient cycle, then every point; a stop asked

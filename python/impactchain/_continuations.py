@@ -28,8 +28,9 @@ from impactchain._runs import PeriodicOrbit
 from impactchain.schema import SCHEMA_DEFAULT, with_schema_defaults
 
 #: ic_continuation's sizes: points, special points, longest period, length of end_reason,
-#: start converged, start residuals, start impacts, length of start_reason
-_CONTINUATION_SIZES = ("npcap", "nscap", "nlong", "ntext", None, "nrcap", "nbcap", "ntext")
+#: start converged, start residuals, start impacts, length of start_reason, of end_kind
+_CONTINUATION_SIZES = ("npcap", "nscap", "nlong", "ntext", None, "nrcap", "nbcap", "ntext",
+                       "ntext")
 _FIRST_CONTINUATION_BYTES = 64 << 20  # memory of the first guess of a continuation's points
 
 
@@ -56,11 +57,13 @@ def continuation(
     ``'restitution'`` or ``'spacing'``, whose value among the arguments is the start) towards
     ``stop``, first step ``step`` (its sign: the direction), at most ``max_points`` orbits per
     branch, and ``doublings`` levels of the period-doubled branches born at its period
-    doublings (docs/model.md section 12). Folds, period doublings, Neimark-Sacker points and
-    grazings are located; a branch ends at a grazing, at a bound of the parameter, after
-    ``max_points`` or when Newton fails, and says why (``end_reason``). ``**keys`` (any key
-    of the input table) as :func:`simulate`'s. Ctrl-C stops the work at its next transient
-    cycle or orbit (:class:`KeyboardInterrupt`); ``progress=True`` shows a tqdm bar of them.
+    doublings (docs/model.md section 12). Folds, period doublings, Neimark-Sacker points,
+    branch points and grazings are located; a branch ends at a grazing, a corner (one
+    oscillator hit by both neighbours at once) or an impact at the section, at a bound of the
+    parameter, after ``max_points`` or when Newton fails, and says why (``end_reason``) and
+    which (``end_kind``). ``**keys`` (any key of the input table) as :func:`simulate`'s.
+    Ctrl-C stops the work at its next transient cycle or orbit (:class:`KeyboardInterrupt`);
+    ``progress=True`` shows a tqdm bar of them.
 
     Returns:
         An :class:`xarray.Dataset`, identical to the CLI file's ``/continuation`` group
@@ -69,11 +72,12 @@ def continuation(
         ``multiplier``, ``iterate`` (section crossings of the longest period), ``special``;
         variables ``values`` (the parameter), ``x``, ``v``, ``strobe_x`` (NaN beyond a
         point's period), ``period``, ``branch``, ``multipliers_re``, ``multipliers_im``,
-        ``stable``, ``min_gap``, ``min_impact_speed`` (inf: none), ``impacts_per_period``,
+        ``stable``, ``symmetric`` (its own mirror image half a drive period later),
+        ``min_gap``, ``min_impact_speed`` (inf: none), ``impacts_per_period``,
         ``residual``, ``iterations``, ``special_index`` (0-based point), ``special_kind``,
         ``special_value``; attributes ``parameter``, ``phase``, ``start``, ``stop``,
-        ``step``, ``end_reason``. A failure of Newton at the start is a result: no point,
-        and ``end_reason`` says why.
+        ``step``, ``end_reason``, ``end_kind``. A failure of Newton at the start is a
+        result: no point, and ``end_reason`` says why.
 
     Raises:
         ImportError: xarray is missing. ValueError: a bad argument, with the CLI's message.
@@ -187,16 +191,17 @@ def _continue(args: dict[str, Any], progress: bool) -> dict[str, Any]:
             if key is not None:
                 room[key] = max(room[key], int(size))
     _raise_for(out["status"], out["msg_len"], out["message"])
-    points, specials, longest, reason, _, residuals, impacts, start_reason = (
+    points, specials, longest, reason, _, residuals, impacts, start_reason, kind = (
         int(i) for i in out["sizes"])
     cut = {"strobe_x": (slice(None), slice(longest), slice(points)),
            "x": (slice(None), slice(points)), "v": (slice(None), slice(points)),
            "mult_re": (slice(None), slice(points)), "mult_im": (slice(None), slice(points)),
            "special_kind": (slice(None), slice(specials)),
-           "end_reason": slice(reason), "start_reason": slice(start_reason),
+           "end_reason": slice(reason), "end_kind": slice(kind),
+           "start_reason": slice(start_reason),
            "start_residuals": slice(residuals), "start_bonds": slice(impacts)}
-    for key in ("values", "periods", "branch", "stable", "min_gap", "min_impact_speed",
-                "impacts", "residual", "iterations"):
+    for key in ("values", "periods", "branch", "stable", "symmetric", "min_gap",
+                "min_impact_speed", "impacts", "residual", "iterations"):
         cut[key] = slice(points)
     for key in ("special_index", "special_value"):
         cut[key] = slice(specials)
@@ -251,6 +256,7 @@ def _continuation_dataset(xr: Any, out: dict[str, Any], cfg: dict[str, Any],
         "multipliers_re": described("multipliers_re", out["mult_re"].T),
         "multipliers_im": described("multipliers_im", out["mult_im"].T),
         "stable": described("stable", out["stable"]),
+        "symmetric": described("symmetric", out["symmetric"]),
         "min_gap": described("min_gap", out["min_gap"]),
         "min_impact_speed": described("min_impact_speed", out["min_impact_speed"]),
         "impacts_per_period": described("impacts_per_period", out["impacts"]),
@@ -263,5 +269,6 @@ def _continuation_dataset(xr: Any, out: dict[str, Any], cfg: dict[str, Any],
     spacing = np.asarray(cfg["spacing"])
     start = float(spacing[0]) if parameter == "spacing" else cfg[parameter]
     attrs = dict(parameter=parameter, phase=cfg["phase"], start=start, stop=args["stop"],
-                 step=args["step"], end_reason=_text(out["end_reason"]))
+                 step=args["step"], end_reason=_text(out["end_reason"]),
+                 end_kind=_text(out["end_kind"]))
     return xr.Dataset(data, coords=coords, attrs=attrs)

@@ -62,7 +62,8 @@ FILE_UNITS: Mapping[str, str] = _FileUnits()
 :class:`_FileUnits`)."""
 
 
-SPECIAL_KINDS = ("fold", "period-doubling", "neimark-sacker", "grazing")
+SPECIAL_KINDS = ("fold", "period-doubling", "neimark-sacker", "grazing", "corner", "section",
+                 "branch-point")
 """``/continuation/special_kind``: the special points a continuation locates."""
 
 ATTRACTOR_KINDS = ("periodic", "chaotic", "aperiodic-nonchaotic")

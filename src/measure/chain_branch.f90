@@ -23,14 +23,14 @@ module chain_branch
     use chain_lapack, only: solve_linear
     use chain_monitor, only: monitor_t, stage_points
     use chain_branch_points, only: branch_options_t, branch_point_t, special_point_t, &
-                                   branches_t, special_kinds, cursor_t, setting_t, &
+                                   branches_t, special_kinds, end_kinds, cursor_t, setting_t, &
                                    cursor_from_orbit, store, add_reason
     use chain_branch_corrector, only: correct, tangent_at
-    use chain_branch_special, only: locate_specials, locate_grazing, grazing_reason
+    use chain_branch_special, only: locate_specials, locate_nonsmooth, nonsmooth_reason
     implicit none
     private
     public :: branch_options_t, branch_point_t, special_point_t, branches_t, follow_branches
-    public :: special_kinds
+    public :: special_kinds, end_kinds
 
 contains
 
@@ -56,6 +56,7 @@ contains
         if (allocated(err)) return
         allocate (res%points(16), res%specials(4))
         res%end_reason = ''
+        res%end_kind = ''
         set%model = model
         set%phase = phase
         set%cycles = cycles
@@ -68,7 +69,8 @@ contains
         if (allocated(err)) return
         res%start = start
         if (.not. start%converged) then
-            call add_reason(res, "branch 0: Newton failed at the start ("//opt%parameter// &
+            call add_reason(res, 'newton', "branch 0: Newton failed at the start ("// &
+                            opt%parameter// &
                             " = "//fmt_real(model_parameter(model, opt%parameter))//"): "// &
                             start%reason)
             return
@@ -131,6 +133,7 @@ contains
         class(monitor_t), intent(inout), optional :: monitor
         type(cursor_t) :: here
         real(wp), allocatable :: direction(:)
+        character(len=:), allocatable :: failure
         integer :: m
 
         stopped = .false.
@@ -139,9 +142,10 @@ contains
         if (set%opt%max_points == 1) then
             ! Newton only: no tangent (it need not exist, at a fold)
             call store(set, here, res, err)
-            if (.not. allocated(err)) call add_reason(res, "branch 0 (period "// &
-                                                      fmt_int(set%cycles)//"): max_points "// &
-                                                      "= 1: the orbit only, no continuation")
+            if (.not. allocated(err)) call add_reason(res, 'max_points', "branch 0 "// &
+                                                      "(period "//fmt_int(set%cycles)// &
+                                                      "): max_points = 1: the orbit only, "// &
+                                                      "no continuation")
             return
         end if
         ! the first tangent: the null vector of [J - I, dP/dmu] with dmu of the step's sign
@@ -149,7 +153,16 @@ contains
         direction = 0
         direction(m + 1) = sign(1.0_wp, set%opt%step)
         call tangent_at(set, here, direction, err)
-        if (allocated(err)) return
+        if (allocated(err)) then
+            ! (a result, not an error: the orbit is kept and the branch ends at once)
+            failure = err%message
+            deallocate (err)
+            call store(set, here, res, err)
+            if (.not. allocated(err)) call add_reason(res, 'newton', "branch 0 (period "// &
+                                                      fmt_int(set%cycles)//"): no tangent "// &
+                                                      "at the start: "//failure)
+            return
+        end if
         call walk(set, here, res, .false., stopped, err, monitor)
     end subroutine follow_one
 
@@ -181,7 +194,8 @@ contains
                         res%points(index)%orbit%v, orbit, err, set%opt%newton)
         if (allocated(err)) return
         if (.not. orbit%converged) then
-            call add_reason(res, "branch "//fmt_int(doubled%branch)//": Newton failed on "// &
+            call add_reason(res, 'newton', "branch "//fmt_int(doubled%branch)// &
+                            ": Newton failed on "// &
                             "the doubled orbit at "//set%opt%parameter//" = "//fmt_real(mu)// &
                             ": "//orbit%reason)
             return
@@ -202,10 +216,10 @@ contains
         type(error_t), allocatable, intent(out) :: err
         class(monitor_t), intent(inout), optional :: monitor
         type(cursor_t) :: next
-        character(len=:), allocatable :: reason, failure
-        real(wp) :: h, mu_next
+        character(len=:), allocatable :: reason, failure, kind
+        real(wp) :: h, mu_next, value
         integer :: count, iterations
-        logical :: ok, compare, crossed, grazed
+        logical :: ok, compare, crossed, reached
 
         stopped = .false.
         call store(set, here, res, err)
@@ -219,26 +233,37 @@ contains
         h = abs(set%opt%step)
         compare = .not. switched
         reason = ''
+        kind = ''
         do
             if (count >= set%opt%max_points) then
+                kind = 'max_points'
                 reason = "max_points = "//fmt_int(set%opt%max_points)//" reached"
                 exit
             end if
             call correct(set, here, h, next, ok, iterations, failure, err, crossed)
             if (allocated(err)) return
             if (.not. ok .and. crossed .and. compare) then
-                ! Newton fails where the impacts change: a grazing, if the last orbit with
-                ! the old impacts has a vanishing gap or impact speed
-                call locate_grazing(set, here, h, res, err, grazed)
+                ! Newton fails where the impacts change: a grazing or a corner, if a monitor
+                ! of the last orbit with the old impacts vanishes
+                call locate_nonsmooth(set, here, h, .false., res, kind, value, err)
                 if (allocated(err)) return
-                if (grazed) then
-                    reason = grazing_reason(set, res)
+                if (len(kind) > 0) then
+                    reason = nonsmooth_reason(set, res, kind, value)
                     exit
                 end if
             end if
             if (.not. ok) then
                 h = h/2
                 if (h < set%opt%min_step) then
+                    ! (the failing step may end at a grazing or a corner all the same)
+                    if (compare) call locate_nonsmooth(set, here, 2*h, .false., res, kind, &
+                                                       value, err)
+                    if (allocated(err)) return
+                    if (len(kind) > 0) then
+                        reason = nonsmooth_reason(set, res, kind, value)
+                        exit
+                    end if
+                    kind = 'newton'
                     reason = "Newton failed at "//set%opt%parameter//" = "// &
                              fmt_real(here%y(size(here%y)))//" (step "//fmt_real(2*h)// &
                              "): "//failure
@@ -248,12 +273,24 @@ contains
             end if
             mu_next = next%y(size(next%y))
             if (compare .and. any(next%impacts /= here%impacts)) then
-                call locate_grazing(set, here, h, res, err)
+                ! (past a bound the impacts may change beyond it: the branch ends on the
+                ! bound if the orbit there keeps them)
+                reached = .false.
+                if (mu_next < set%low .or. mu_next > set%high) &
+                    call end_at_bound(set, here, next, res, reason, err, here%impacts, reached)
                 if (allocated(err)) return
-                reason = grazing_reason(set, res)
+                if (reached) then
+                    kind = 'bound'
+                    exit
+                end if
+                call locate_nonsmooth(set, here, h, .true., res, kind, value, err)
+                if (allocated(err)) return
+                if (len(kind) == 0) kind = 'impacts'
+                reason = nonsmooth_reason(set, res, kind, value)
                 exit
             end if
             if (mu_next < set%low .or. mu_next > set%high) then
+                kind = 'bound'
                 call end_at_bound(set, here, next, res, reason, err)
                 exit
             end if
@@ -273,18 +310,22 @@ contains
             if (iterations >= 5) h = h/2
         end do
         if (allocated(err)) return
-        call add_reason(res, "branch "//fmt_int(set%branch)//" (period "// &
+        call add_reason(res, kind, "branch "//fmt_int(set%branch)//" (period "// &
                         fmt_int(set%cycles)//"): "//reason)
     end subroutine walk
 
     !> The next point past a bound of the parameter: the branch ends on the bound, with the
-    !> orbit there found by Newton at the bound's value from the interpolated state.
-    subroutine end_at_bound(set, here, next, res, reason, err)
+    !> orbit there found by Newton at the bound's value from the interpolated state. With
+    !> `impacts`, only an orbit with these impacts per bond is the branch's (`reached`; else
+    !> nothing is stored).
+    subroutine end_at_bound(set, here, next, res, reason, err, impacts, reached)
         type(setting_t), intent(in) :: set
         type(cursor_t), intent(in) :: here, next
         type(branches_t), intent(inout) :: res
         character(len=:), allocatable, intent(out) :: reason
         type(error_t), allocatable, intent(out) :: err
+        integer, intent(in), optional :: impacts(:)
+        logical, intent(out), optional :: reached
         type(model_t) :: model
         type(orbit_t) :: orbit
         type(cursor_t) :: last
@@ -303,6 +344,7 @@ contains
         call set_model_parameter(model, set%opt%parameter, bound)
         call find_orbit(model, set%phase, set%cycles, z(1::2), z(2::2), orbit, err, &
                         set%opt%newton)
+        if (present(reached)) reached = .false.
         if (allocated(err)) return
         reason = "reached the bound "//set%opt%parameter//" = "//fmt_real(bound)
         if (.not. orbit%converged) then
@@ -310,6 +352,10 @@ contains
             return
         end if
         call cursor_from_orbit(set, bound, orbit, last)
+        if (present(impacts)) then
+            if (any(last%impacts /= impacts)) return
+        end if
+        if (present(reached)) reached = .true.
         call store(set, last, res, err)
     end subroutine end_at_bound
 

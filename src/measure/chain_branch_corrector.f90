@@ -100,11 +100,18 @@ contains
             y = y + rhs(:, 1)
             deallocate (rhs)
         end do
-        ok = .true.
         next%y = y
         call cursor_from_pass(set, model, pass, iterations, next, err)
         if (allocated(err)) return
         call tangent_at(set, next, here%tangent, err)
+        if (allocated(err)) then
+            ! (the orbit has no tangent, at a simultaneous impact or a singular bordered
+            ! matrix: this trial fails, not the run)
+            failure = err%message
+            deallocate (err)
+            return
+        end if
+        ok = .true.
     end subroutine correct
 
     !> [[J - I, p_mu], [t]]: the Jacobian of the corrector's equations.

@@ -8,19 +8,30 @@ module chain_branch_points
     use chain_kinds, only: wp, i8
     use chain_error, only: error_t
     use chain_model, only: model_t, set_model_parameter
-    use chain_engine, only: chain_t, chain_positions, chain_time
+    use chain_engine, only: chain_t, chain_positions, chain_velocities, chain_time, &
+                            chain_cycle, chain_period
     use chain_event_log, only: event_log_t, event_log_init, event_impact
     use chain_section, only: chain_at_section, advance_to_point
     use chain_orbit, only: orbit_t, orbit_options_t, orbit_pass_t, describe_orbit, interleave
     implicit none
     private
     public :: branch_options_t, branch_point_t, special_point_t, branches_t, special_kinds
+    public :: end_kinds
     public :: cursor_t, setting_t, cursor_from_orbit, cursor_from_pass, impacts_per_bond
     public :: store, add_special, add_reason
 
     !> The kinds of special point, as stored.
-    character(len=*), parameter :: special_kinds(4) = &
-        [character(len=15) :: 'fold', 'period-doubling', 'neimark-sacker', 'grazing']
+    character(len=*), parameter :: special_kinds(7) = &
+        [character(len=15) :: 'fold', 'period-doubling', 'neimark-sacker', 'grazing', 'corner', &
+         'section', 'branch-point']
+
+    !> How a branch can end, as stored (docs/model.md 12.5): its last allowed point, a bound
+    !> of the parameter, a grazing, a simultaneous impact of one oscillator with both
+    !> neighbours (a corner of the impact surfaces), an impact at the section, a change of the
+    !> impacts where no monitor vanishes, or a failure of Newton.
+    character(len=*), parameter :: end_kinds(7) = &
+        [character(len=10) :: 'max_points', 'bound', 'grazing', 'corner', 'section', 'impacts', &
+         'newton']
 
     type :: branch_options_t
         character(len=:), allocatable :: parameter !! one of chain_parameter's orbit_parameters
@@ -42,6 +53,8 @@ module chain_branch_points
         type(orbit_t) :: orbit    !! state, multipliers, impacts, grazing monitors
         real(wp), allocatable :: strobe_x(:, :) !! (n, p): positions at the p section crossings
         logical :: stable = .false. !! every multiplier inside the unit circle
+        !> its own mirror image half a drive period later (docs/model.md 12.3)
+        logical :: symmetric = .false.
     end type branch_point_t
 
     type :: special_point_t
@@ -58,6 +71,7 @@ module chain_branch_points
         integer :: n_specials = 0
         type(special_point_t), allocatable :: specials(:)
         character(len=:), allocatable :: end_reason !! of every branch, one line each
+        character(len=:), allocatable :: end_kind   !! of every branch, one of end_kinds a line
         logical :: stopped = .false. !! the monitor stopped the work: the result is partial
         !> Newton's result from the guess, converged or not (converged: the first point's orbit)
         type(orbit_t) :: start
@@ -71,6 +85,7 @@ module chain_branch_points
         type(orbit_t) :: orbit
         integer, allocatable :: impacts(:)   !! impacts per bond 0..n over one period
         real(wp) :: det_plus = 0             !! det(J + I)
+        real(wp) :: det_minus = 0            !! det(J - I)
         integer :: unstable_pairs = 0        !! complex pairs outside the unit circle
     end type cursor_t
 
@@ -129,13 +144,17 @@ contains
         associate (o => c%orbit)
             c%impacts = impacts_per_bond(set%model%n, o%event_bond, o%event_kind)
             c%det_plus = 1
+            c%det_minus = 1
             c%unstable_pairs = 0
             do j = 1, size(o%multipliers_re)
                 if (o%multipliers_im(j) == 0) then
                     c%det_plus = c%det_plus*(1 + o%multipliers_re(j))
+                    c%det_minus = c%det_minus*(1 - o%multipliers_re(j))
                 else
                     c%det_plus = c%det_plus*hypot(1 + o%multipliers_re(j), &
                                                   o%multipliers_im(j))
+                    c%det_minus = c%det_minus*hypot(1 - o%multipliers_re(j), &
+                                                    o%multipliers_im(j))
                     if (o%multipliers_im(j) > 0 .and. &
                         hypot(o%multipliers_re(j), o%multipliers_im(j)) > 1) &
                         c%unstable_pairs = c%unstable_pairs + 1
@@ -178,6 +197,8 @@ contains
         call set_model_parameter(model, set%opt%parameter, p%value)
         allocate (p%strobe_x(model%n, set%cycles))
         p%strobe_x(:, 1) = c%orbit%x
+        call mirror_symmetric(model, set%phase, c%orbit%x, c%orbit%v, p%symmetric, err)
+        if (allocated(err)) return
         if (set%cycles > 1) then
             call chain_at_section(model, set%phase, c%orbit%x, c%orbit%v, chain, err)
             if (allocated(err)) return
@@ -198,6 +219,44 @@ contains
         res%points(res%n_points) = p
     end subroutine store
 
+    !> The orbit through (x, v) on the section `phase` is its own mirror image half a drive
+    !> period later (docs/model.md 9: x(i) -> -x(n+1-i), v(i) -> -v(n+1-i), the drive shifted
+    !> by half a period), to 1e-7 of its size; never on a chain that is not mirror-symmetric
+    !> (its spacings a(k) and a(n-k) differ).
+    subroutine mirror_symmetric(model, phase, x, v, symmetric, err)
+        type(model_t), intent(in) :: model
+        real(wp), intent(in) :: phase, x(:), v(:)
+        logical, intent(out) :: symmetric
+        type(error_t), allocatable, intent(out) :: err
+        real(wp), parameter :: within = 1.0e-7_wp
+        type(chain_t) :: chain
+        type(event_log_t) :: log
+        real(wp) :: s, period, size_of
+        integer(i8) :: cycle
+        integer :: n
+
+        symmetric = .false.
+        n = model%n
+        associate (a => model%spacing)
+            if (any(a /= a(ubound(a, 1):lbound(a, 1):-1))) return
+        end associate
+        call chain_at_section(model, phase, x, v, chain, err)
+        if (allocated(err)) return
+        call event_log_init(log, .false., 0)
+        period = chain_period(chain)
+        s = chain_time(chain) + period/2
+        cycle = chain_cycle(chain)
+        if (s >= period) then
+            s = s - period
+            cycle = cycle + 1
+        end if
+        call advance_to_point(chain, cycle, s, log, err)
+        if (allocated(err)) return
+        size_of = 1 + max(maxval(abs(x)), maxval(abs(v)))
+        symmetric = max(maxval(abs(chain_positions(chain) + x(n:1:-1))), &
+                        maxval(abs(chain_velocities(chain) + v(n:1:-1)))) <= within*size_of
+    end subroutine mirror_symmetric
+
     subroutine add_special(res, point, kind, value)
         type(branches_t), intent(inout) :: res
         integer, intent(in) :: point
@@ -214,12 +273,17 @@ contains
         res%specials(res%n_specials) = special_point_t(point, kind, value)
     end subroutine add_special
 
-    subroutine add_reason(res, line)
+    !> A branch ended: its kind (one of end_kinds) and the line that says why.
+    subroutine add_reason(res, kind, line)
         type(branches_t), intent(inout) :: res
-        character(len=*), intent(in) :: line
+        character(len=*), intent(in) :: kind, line
 
-        if (len(res%end_reason) > 0) res%end_reason = res%end_reason//new_line('a')
+        if (len(res%end_reason) > 0) then
+            res%end_reason = res%end_reason//new_line('a')
+            res%end_kind = res%end_kind//new_line('a')
+        end if
         res%end_reason = res%end_reason//line
+        res%end_kind = res%end_kind//kind
     end subroutine add_reason
 
 end module chain_branch_points

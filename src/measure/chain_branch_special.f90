@@ -1,18 +1,22 @@
 !> The special points of a branch (docs/model.md section 12.3): between two points, a fold (the
 !> tangent's parameter component changes sign), a period doubling (det(J + I) does) or a
 !> Neimark-Sacker point (complex multipliers leave the unit circle), each located by regula
-!> falsi on the arclength and confirmed by its multiplier; and a grazing, where the impacts per
-!> bond change, located by bisection. Each is stored as a point of the branch.
+!> falsi on the arclength and confirmed by its multiplier; and where the impacts per bond change,
+!> located by bisection and named by the monitor that vanishes there: a grazing (a gap or an
+!> impact speed) or a corner (two impacts of one oscillator at one instant). Each is stored as
+!> a point of the branch.
 module chain_branch_special
-    use chain_kinds, only: wp
-    use chain_error, only: error_t, fmt_real
+    use chain_kinds, only: wp, two_pi
+    use chain_error, only: error_t, fmt_real, fmt_int
+    use chain_event_log, only: event_impact
+    use chain_model, only: model_t, set_model_parameter, bond_gaps
     use chain_orbit, only: orbit_t
     use chain_branch_points, only: cursor_t, setting_t, branches_t, special_kinds, store, &
                                    add_special
     use chain_branch_corrector, only: correct
     implicit none
     private
-    public :: locate_specials, locate_grazing, grazing_reason
+    public :: locate_specials, locate_nonsmooth, nonsmooth_reason
 
 contains
 
@@ -29,19 +33,21 @@ contains
         real(wp), intent(in) :: h
         type(branches_t), intent(inout) :: res
         type(error_t), allocatable, intent(out) :: err
-        type(cursor_t) :: found(3)
-        real(wp) :: at(3)
-        logical :: seen(3)
+        type(cursor_t) :: found(4)
+        real(wp) :: at(4)
+        logical :: seen(4)
         integer :: k, j, m, rank
 
         m = size(here%y) - 1
         seen(1) = here%tangent(m + 1)*next%tangent(m + 1) < 0
         seen(2) = (here%det_plus < 0) .neqv. (next%det_plus < 0)
         seen(3) = here%unstable_pairs /= next%unstable_pairs
+        ! a real multiplier through +1 where the parameter does not turn: a branch point
+        seen(4) = ((here%det_minus < 0) .neqv. (next%det_minus < 0)) .and. .not. seen(1)
         at = huge(1.0_wp)
         ! (the first pair to cross: pairs of a symmetric chain come twice and cross together)
         rank = min(here%unstable_pairs, next%unstable_pairs) + 1
-        do k = 1, 3
+        do k = 1, 4
             if (.not. seen(k)) cycle
             call locate(set, here, h, k, rank, found(k), at(k), err)
             if (allocated(err)) return
@@ -51,12 +57,26 @@ contains
             k = minloc(at, 1, mask=seen)
             call store(set, found(k), res, err)
             if (allocated(err)) return
-            call add_special(res, res%n_points, special_kinds(k), found(k)%y(m + 1))
+            call add_special(res, res%n_points, special_kind_of(k), found(k)%y(m + 1))
             seen(k) = .false.
         end do
     end subroutine locate_specials
 
-    !> The zero of test function `kind` (1 fold, 2 period doubling, 3 Neimark-Sacker) on the
+    !> The special kind of test function k (1 fold, 2 period doubling, 3 Neimark-Sacker,
+    !> 4 branch point).
+    pure function special_kind_of(k) result(kind)
+        integer, intent(in) :: k
+        character(len=:), allocatable :: kind
+
+        if (k <= 3) then
+            kind = trim(special_kinds(k))
+        else
+            kind = 'branch-point'
+        end if
+    end function special_kind_of
+
+    !> The zero of test function `kind` (1 fold, 2 period doubling, 3 Neimark-Sacker,
+    !> 4 branch point) on the
     !> branch between arclength 0 (`here`) and h, by regula falsi (Illinois) on the arclength,
     !> each trial corrected onto the branch; to 1e-11 in the parameter or a bracket of 1e-9.
     subroutine locate(set, here, h, kind, rank, found, s_found, err)
@@ -131,6 +151,8 @@ contains
             if (dot_product(c%tangent, reference) < 0) f = -f
         case (2)
             f = c%det_plus
+        case (4)
+            f = c%det_minus
         case default
             associate (re => c%orbit%multipliers_re, im => c%orbit%multipliers_im)
                 moduli = pack(hypot(re, im), im > 0)
@@ -153,7 +175,7 @@ contains
 
         associate (re => orbit%multipliers_re, im => orbit%multipliers_im)
             select case (kind)
-            case (1)
+            case (1, 4)
                 confirmed = minval(hypot(re - 1, im)) < within
             case (2)
                 confirmed = minval(hypot(re + 1, im)) < within
@@ -164,22 +186,27 @@ contains
     end function confirmed
 
     !> The impacts change within arclength h of `here`: bisection on the arclength for the
-    !> last orbit with the impacts of `here` (a trial where Newton fails counts as changed),
-    !> to 1e-11 in the parameter. It is stored as a grazing point, unconditionally or, with
-    !> `grazed`, only when its smallest gap or impact speed is below 1e-4 (else Newton failed
-    !> for another reason than a grazing and nothing is stored).
-    subroutine locate_grazing(set, here, h, res, err, grazed)
+    !> last orbit with the impacts of `here` (a trial where the corrector fails counts as
+    !> changed), to 1e-11 in the parameter, and what happens there (`kind`): a grazing when its
+    !> smallest gap or impact speed is below 1e-4, else a corner when its corner monitor (the
+    !> shortest time between impacts on neighbouring bonds) is, else an impact at the section
+    !> when a gap of its state on the section is, else '' (no monitor vanishes).
+    !> The orbit is stored as a special point of its kind, or as a plain point when `kind` is
+    !> '' and `keep`; `value` is where the vanishing monitor extrapolates to zero.
+    subroutine locate_nonsmooth(set, here, h, keep, res, kind, value, err)
         type(setting_t), intent(in) :: set
         type(cursor_t), intent(in) :: here
         real(wp), intent(in) :: h
+        logical, intent(in) :: keep
         type(branches_t), intent(inout) :: res
+        character(len=:), allocatable, intent(out) :: kind
+        real(wp), intent(out) :: value
         type(error_t), allocatable, intent(out) :: err
-        logical, intent(out), optional :: grazed
         real(wp), parameter :: vanishing = 1.0e-4_wp
         type(cursor_t) :: trial, last_same
         character(len=:), allocatable :: failure
-        real(wp) :: s_lo, s_hi, s, mu_lo, mu_hi, value
-        integer :: k, iterations, m
+        real(wp) :: s_lo, s_hi, s, mu_lo, mu_hi, corner_before, corner_last
+        integer :: k, iterations, m, oscillator
         logical :: ok
 
         m = size(here%y) - 1
@@ -204,53 +231,146 @@ contains
                 if (allocated(trial%y)) mu_hi = trial%y(m + 1)
             end if
         end do
-        if (present(grazed)) then
-            grazed = min(last_same%orbit%min_gap, last_same%orbit%min_impact_speed) < vanishing
-            if (.not. grazed) return
+        value = last_same%y(m + 1)
+        call corner_monitor(set, here%orbit, here%y(m + 1), corner_before, oscillator)
+        call corner_monitor(set, last_same%orbit, last_same%y(m + 1), corner_last, oscillator)
+        if (min(last_same%orbit%min_gap, last_same%orbit%min_impact_speed) < vanishing) then
+            kind = 'grazing'
+            value = grazing_value(here, last_same)
+        else if (corner_last < vanishing) then
+            kind = 'corner'
+            value = secant_root(here%y(m + 1), last_same%y(m + 1), corner_before, corner_last)
+        else if (section_gap(set, last_same) < vanishing) then
+            ! (the orbit goes on, but the map of this section jumps where an impact crosses it)
+            kind = 'section'
+            value = secant_root(here%y(m + 1), last_same%y(m + 1), section_gap(set, here), &
+                                section_gap(set, last_same))
+        else
+            kind = ''
+            if (.not. keep) return
         end if
-        value = grazing_value(here, last_same)
         call store(set, last_same, res, err)
-        if (.not. allocated(err)) call add_special(res, res%n_points, 'grazing', value)
-    end subroutine locate_grazing
+        if (allocated(err) .or. len(kind) == 0) return
+        call add_special(res, res%n_points, kind, value)
+    end subroutine locate_nonsmooth
 
     !> Where the grazing monitor of the last orbit with the old impacts (its smallest gap or
     !> impact speed, whichever is smaller) reaches zero, by the secant through it and the
     !> branch's point before the bisection: as an impact vanishes its saltation grows as
     !> 1 / speed, and Newton stops converging before the speed is zero, so the last orbit
-    !> stands some 1e-5 short of the grazing. The orbit's own parameter when the secant does
-    !> not apply (a monitor that did not decrease, or a root farther than the two points'
-    !> distance).
+    !> stands some 1e-5 short of the grazing.
     pure real(wp) function grazing_value(before, last) result(value)
         type(cursor_t), intent(in) :: before, last
-        real(wp) :: g_last, g_before, mu_last, mu_before
         integer :: m
 
         m = size(last%y) - 1
-        mu_last = last%y(m + 1)
-        mu_before = before%y(m + 1)
-        value = mu_last
         if (last%orbit%min_impact_speed < last%orbit%min_gap) then
-            g_last = last%orbit%min_impact_speed
-            g_before = before%orbit%min_impact_speed
+            value = secant_root(before%y(m + 1), last%y(m + 1), &
+                                before%orbit%min_impact_speed, last%orbit%min_impact_speed)
         else
-            g_last = last%orbit%min_gap
-            g_before = before%orbit%min_gap
+            value = secant_root(before%y(m + 1), last%y(m + 1), before%orbit%min_gap, &
+                                last%orbit%min_gap)
         end if
+    end function grazing_value
+
+    !> Where a monitor, g_before at mu_before and g_last at mu_last, reaches zero along their
+    !> secant; mu_last itself when the secant does not apply (a monitor that did not decrease,
+    !> or a root farther than the two points' distance).
+    pure real(wp) function secant_root(mu_before, mu_last, g_before, g_last) result(value)
+        real(wp), intent(in) :: mu_before, mu_last, g_before, g_last
+
+        value = mu_last
         if (.not. (g_before > g_last .and. g_last >= 0 .and. g_before < huge(1.0_wp))) return
         if (abs(g_last*(mu_last - mu_before)/(g_last - g_before)) > abs(mu_last - mu_before)) &
             return
         value = mu_last - g_last*(mu_last - mu_before)/(g_last - g_before)
-    end function grazing_value
+    end function secant_root
 
-    !> Why a branch ended at the grazing just stored.
-    function grazing_reason(set, res) result(reason)
+    !> The corner monitor of an orbit at parameter value mu: the shortest time between two
+    !> impacts on neighbouring bonds (the two impacts of the oscillator between them), the
+    !> period taken as a circle (huge: none). It reaches zero where an oscillator is hit by both neighbours at one
+    !> instant: there the order of the two impacts swaps, and the map, whose pair impacts do not
+    !> commute, is not smooth. `oscillator`: that oscillator (0: none).
+    pure subroutine corner_monitor(set, orbit, mu, shortest, oscillator)
+        type(setting_t), intent(in) :: set
+        type(orbit_t), intent(in) :: orbit
+        real(wp), intent(in) :: mu
+        real(wp), intent(out) :: shortest
+        integer, intent(out) :: oscillator
+        integer, allocatable :: bonds(:)
+        real(wp), allocatable :: times(:)
+        real(wp) :: omega, period, apart
+        integer :: j, k
+
+        omega = set%model%omega
+        if (set%opt%parameter == 'omega') omega = mu
+        period = set%cycles*two_pi/omega
+        bonds = pack(orbit%event_bond, orbit%event_kind == event_impact)
+        times = pack(orbit%event_time, orbit%event_kind == event_impact)
+        shortest = huge(1.0_wp)
+        oscillator = 0
+        do j = 1, size(bonds)
+            do k = j + 1, size(bonds)
+                if (abs(bonds(j) - bonds(k)) /= 1) cycle
+                apart = abs(times(k) - times(j))
+                apart = min(apart, period - apart)
+                if (apart < shortest) then
+                    shortest = apart
+                    oscillator = max(bonds(j), bonds(k))
+                end if
+            end do
+        end do
+    end subroutine corner_monitor
+
+    !> The smallest gap of c's state on the section: zero where an impact falls on the section.
+    pure real(wp) function section_gap(set, c) result(gap)
+        type(setting_t), intent(in) :: set
+        type(cursor_t), intent(in) :: c
+        type(model_t) :: model
+        integer :: m
+
+        m = size(c%y) - 1
+        model = set%model
+        call set_model_parameter(model, set%opt%parameter, c%y(m + 1))
+        gap = minval(bond_gaps(model%spacing, model%walls, c%y(1:m:2)))
+    end function section_gap
+
+    !> Why a branch ended at the non-smooth point of kind `kind` (of locate_nonsmooth) just
+    !> stored, at `value`.
+    function nonsmooth_reason(set, res, kind, value) result(reason)
         type(setting_t), intent(in) :: set
         type(branches_t), intent(in) :: res
+        character(len=*), intent(in) :: kind
+        real(wp), intent(in) :: value
         character(len=:), allocatable :: reason
+        integer :: oscillator
+        real(wp) :: apart
 
-        reason = "grazing at "//set%opt%parameter//" = "// &
-                 fmt_real(res%specials(res%n_specials)%value)// &
-                 ": the impacts change there, the branch ends"
-    end function grazing_reason
+        select case (kind)
+        case ('grazing')
+            reason = "grazing at "//set%opt%parameter//" = "//fmt_real(value)// &
+                     ": the impacts change there, the branch ends"
+        case ('corner')
+            associate (p => res%points(res%n_points))
+                call corner_monitor(set, p%orbit, p%value, apart, oscillator)
+            end associate
+            reason = "simultaneous impact (corner) at "//set%opt%parameter//" = "// &
+                     fmt_real(value)//": oscillator "//fmt_int(oscillator)//" is hit by "// &
+                     "both neighbours at one instant (the map is not smooth there), the "// &
+                     "branch ends"
+        case ('section')
+            reason = "an impact at the section at "//set%opt%parameter//" = "// &
+                     fmt_real(value)//" (a gap of the orbit's state on the section vanishes: "// &
+                     "the map of this section jumps there, a section at another phase "// &
+                     "goes on), the branch ends"
+        case default
+            associate (o => res%points(res%n_points)%orbit)
+                reason = "the impacts change at "//set%opt%parameter//" = "// &
+                         fmt_real(value)//" where no monitor vanishes (smallest gap "// &
+                         fmt_real(o%min_gap)//", impact speed "// &
+                         fmt_real(o%min_impact_speed)//"), the branch ends"
+            end associate
+        end select
+    end function nonsmooth_reason
 
 end module chain_branch_special

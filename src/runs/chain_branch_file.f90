@@ -33,6 +33,7 @@ module chain_branch_file
         integer, allocatable :: period(:), branch(:)      !! (np)
         real(wp), allocatable :: multipliers_re(:, :), multipliers_im(:, :) !! (2n, np)
         integer, allocatable :: stable(:)                 !! (np) 1 stable, 0 not
+        integer, allocatable :: symmetric(:)              !! (np) 1 its own mirror image, 0 not
         real(wp), allocatable :: min_gap(:), min_impact_speed(:) !! (np) +inf: none
         integer, allocatable :: impacts(:)                !! (np) impacts per period
         real(wp), allocatable :: residual(:)              !! (np) Newton's last residual
@@ -158,6 +159,7 @@ contains
             table%period = [(pts(j)%orbit%cycles, j=1, np)]
             table%branch = pts%branch
             table%stable = merge(1, 0, pts%stable)
+            table%symmetric = merge(1, 0, pts%symmetric)
             table%impacts = [(pts(j)%orbit%impacts, j=1, np)]
             table%iterations = [(pts(j)%orbit%iterations, j=1, np)]
             table%special_index = specials%point - 1
@@ -171,8 +173,8 @@ contains
 
     !> The run's header (without the continued parameter, which /params cannot hold as one
     !> number) and /continuation: the datasets of continuation_table, the group's attributes
-    !> (the parameter, the section's phase, the parameter's start, stop and step, why the
-    !> branches ended) and every dataset's names, units and dimensions.
+    !> (the parameter, the section's phase, the parameter's start, stop and step, why and how
+    !> the branches ended) and every dataset's names, units and dimensions.
     subroutine write_continuation(out, cfg, res, err)
         type(output_t), intent(inout) :: out
         type(config_t), intent(in) :: cfg
@@ -197,6 +199,7 @@ contains
             call h5_write_attr(f, 'continuation', 'stop', cfg%cont_stop, err)
             call h5_write_attr(f, 'continuation', 'step', cfg%cont_step, err)
             call h5_write_attr(f, 'continuation', 'end_reason', res%end_reason, err)
+            call h5_write_attr(f, 'continuation', 'end_kind', res%end_kind, err)
             if (allocated(err)) return
             call index_coordinate(f, 'continuation/point', 0, np, err)
             call index_coordinate(f, 'continuation/oscillator', 1, n, err)
@@ -213,6 +216,7 @@ contains
             call h5_write(f, 'continuation/multipliers_re', t%multipliers_re, err)
             call h5_write(f, 'continuation/multipliers_im', t%multipliers_im, err)
             call h5_write(f, 'continuation/stable', t%stable, err)
+            call h5_write(f, 'continuation/symmetric', t%symmetric, err)
             call h5_write(f, 'continuation/min_gap', t%min_gap, err)
             call h5_write(f, 'continuation/min_impact_speed', t%min_impact_speed, err)
             call h5_write(f, 'continuation/impacts_per_period', t%impacts, err)

@@ -415,6 +415,9 @@ contains
                  '{parameter}', 'the first step of the parameter', 'always')
         call add(t, 'continuation', '/continuation/@end_reason', 'attribute', '', 'string', '', &
                  '', 'why each branch ended, one line per branch', 'always')
+        call add(t, 'continuation', '/continuation/@end_kind', 'attribute', '', 'string', '', &
+                 '', 'how each branch ended, one line per branch: max_points, bound, '// &
+                 'grazing, corner, section, impacts or newton', 'always')
         call add(t, 'continuation', '/continuation/point', 'dataset', 'point', 'int32', '1', '', &
                  'point index (in the order found, branch after branch)', 'always')
         call add(t, 'continuation', '/continuation/oscillator', 'dataset', 'oscillator', 'int32', &
@@ -449,6 +452,9 @@ contains
                  'always')
         call add(t, 'continuation', '/continuation/stable', 'dataset', 'point', 'int32', '1', '', &
                  'stability (1: every multiplier inside the unit circle)', 'always')
+        call add(t, 'continuation', '/continuation/symmetric', 'dataset', 'point', 'int32', '1', &
+                 '', 'mirror symmetry (1: the orbit is its own mirror image half a drive '// &
+                 'period later)', 'always')
         call add(t, 'continuation', '/continuation/min_gap', 'dataset', 'point', 'float64', '1', &
                  'length', &
                  'smallest gap at a local minimum over one period, other than a bond''s own '// &
@@ -465,7 +471,8 @@ contains
         call add(t, 'continuation', '/continuation/special_index', 'dataset', 'special', 'int32', &
                  '1', '', 'the point (0-based index) of the special point', 'always')
         call add(t, 'continuation', '/continuation/special_kind', 'dataset', 'special', 'string', &
-                 '1', '', 'fold, period-doubling, neimark-sacker or grazing', 'always')
+                 '1', '', 'fold, period-doubling, neimark-sacker, grazing, corner, '// &
+                 'section or branch-point', 'always')
         call add(t, 'continuation', '/continuation/special_value', 'dataset', 'special', &
                  'float64', '1', '{parameter}', '{parameter} at the special point', 'always')
     end subroutine entries_continuation

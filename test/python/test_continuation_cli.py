@@ -96,9 +96,66 @@ def test_newton_failure_is_a_result(impactchain_exe, tmp_path):
              "&output file = 'none.h5' /\n")
     result = run_namelist(impactchain_exe, text, tmp_path)
     assert "Newton failed at the start" in result.stdout
+    assert "ends: newton" in result.stdout
     with h5py.File(tmp_path / "none.h5") as f:
         assert f["continuation/values"].shape == (0,)
         assert "Newton failed" in f["continuation"].attrs["end_reason"]
+        assert f["continuation"].attrs["end_kind"] == "newton"
+
+
+#: The unstable period-1 orbit with 22 impacts of a chain of 12 (Newton from rest after 500
+#: cycles at A = 5).
+CHAIN12 = ("&chain n = 12, amplitude = 5.0, omega = 2.3, damping = 0.02, restitution = 0.85, "
+           "spacing = 1.0, boundary = 'fixed' /\n&initial kind = 'rest' /\n"
+           "&run transient = 500 /\n")
+
+
+def test_corner_ends_a_branch(impactchain_exe, tmp_path):
+    """Continued down from A = 5, the orbit reaches a corner near A = 4.8296, where
+    oscillator 4 is hit by both neighbours at one instant (the parameter column cannot be
+    carried there): the branch ends named a corner, not a grazing (neither monitor is near
+    zero), and the points before it are written (the run used to stop with an error)."""
+    text = (CHAIN12 + "&continuation parameter = 'amplitude', stop = 4.8, step = -0.01 /\n"
+            "&output file = 'corner.h5' /\n")
+    result = run_namelist(impactchain_exe, text, tmp_path)
+    assert "ends: corner" in result.stdout
+    with h5py.File(tmp_path / "corner.h5") as f:
+        g = f["continuation"]
+        assert g.attrs["end_kind"] == "corner"
+        assert "simultaneous impact (corner)" in g.attrs["end_reason"]
+        assert [k.decode() for k in g["special_kind"][:]] == ["corner"]
+        assert g["special_index"][0] == g["values"].shape[0] - 1 >= 8
+        assert abs(g["special_value"][0] - 4.8295554) < 1e-6
+        assert (g["min_gap"][:] > 0.1).all() and (g["min_impact_speed"][:] > 0.1).all()
+        assert (g["impacts_per_period"][:] == 22).all()
+
+
+def test_corner_beyond_the_bound(impactchain_exe, tmp_path):
+    """The same branch to A = 4.84: a step that overshoots both the bound and the corner
+    beyond it ends on the bound, where the orbit still has its 22 impacts, as a run with
+    ten times smaller steps does."""
+    text = (CHAIN12 + "&continuation parameter = 'amplitude', stop = 4.84, step = -0.01 /\n"
+            "&output file = 'bound.h5' /\n")
+    run_namelist(impactchain_exe, text, tmp_path)
+    with h5py.File(tmp_path / "bound.h5") as f:
+        g = f["continuation"]
+        assert g.attrs["end_kind"] == "bound"
+        assert g["values"][-1] == 4.84 and g["impacts_per_period"][-1] == 22
+
+
+def test_newton_failure_keeps_the_branch(impactchain_exe, tmp_path):
+    """Continued in the damping down to 0, the corrector's iterates leave the physical range
+    and Newton fails at the smallest step: the branch ends named a Newton failure, with
+    every point found before it written."""
+    text = (CHAIN12 + "&continuation parameter = 'damping', stop = 0.0, step = -0.005 /\n"
+            "&output file = 'newton.h5' /\n")
+    result = run_namelist(impactchain_exe, text, tmp_path)
+    assert "ends: newton" in result.stdout
+    with h5py.File(tmp_path / "newton.h5") as f:
+        g = f["continuation"]
+        assert g.attrs["end_kind"] == "newton"
+        assert "Newton failed at damping" in g.attrs["end_reason"]
+        assert g["values"].shape[0] > 10 and g["values"][0] == 0.02
 
 
 def test_existing_output_is_kept(impactchain_exe, tmp_path):
@@ -189,3 +246,44 @@ def test_newton_only_tells_a_failure(impactchain_exe, tmp_path):
                         told["converged"]), told
     assert told["stability"] == "unknown (no orbit converged)"
     assert "impacts per period" not in told
+
+
+def test_impact_at_the_section_ends_a_branch(impactchain_exe, tmp_path):
+    """Continued in the restitution, an impact of the orbit drifts onto the section (phase 0)
+    near K = 0.89847: a gap of the state on the section vanishes and the map of that section
+    jumps. The branch ends named so, not as a failure of Newton ("a negative gap")."""
+    text = (CHAIN12 + "&continuation parameter = 'restitution', stop = 1.0, step = 0.02 /\n"
+            "&output file = 'section.h5' /\n")
+    result = run_namelist(impactchain_exe, text, tmp_path)
+    assert "ends: section" in result.stdout
+    with h5py.File(tmp_path / "section.h5") as f:
+        g = f["continuation"]
+        assert g.attrs["end_kind"] == "section"
+        # (after a branch point on the way: the mirror-symmetric orbit's pitchfork)
+        assert [k.decode() for k in g["special_kind"][:]] == ["branch-point", "section"]
+        assert g["special_index"][-1] == g["values"].shape[0] - 1
+        assert abs(g["special_value"][-1] - 0.8984724) < 1e-6
+        x = g["x"][-1]
+        gaps = np.r_[1 + x[0], 1 + np.diff(x), 1 - x[-1]]
+        assert gaps.min() < 1e-6
+
+
+def test_branch_point_file(impactchain_exe, tmp_path):
+    """Continued up from A = 5, a real multiplier of the mirror-symmetric orbit crosses +1 at
+    A = 5.0040468 while the parameter goes on: a branch point, located with a multiplier 1 to
+    1e-8; the branch is followed on through it, every orbit on it its own mirror image half a
+    drive period later."""
+    text = (CHAIN12 + "&continuation parameter = 'amplitude', stop = 5.01, step = 0.001 /\n"
+            "&output file = 'bp.h5' /\n")
+    result = run_namelist(impactchain_exe, text, tmp_path)
+    assert "branch-point at" in result.stdout
+    with h5py.File(tmp_path / "bp.h5") as f:
+        g = f["continuation"]
+        assert g.attrs["end_kind"] == "bound"
+        assert [k.decode() for k in g["special_kind"][:]] == ["branch-point"]
+        assert abs(g["special_value"][0] - 5.0040468) < 1e-7
+        i = g["special_index"][0]
+        rho = g["multipliers_re"][i] + 1j * g["multipliers_im"][i]
+        assert np.abs(rho - 1).min() < 1e-8
+        assert (g["symmetric"][:] == 1).all()
+        assert i < g["values"].shape[0] - 1       # the branch goes on through it

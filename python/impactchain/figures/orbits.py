@@ -29,6 +29,9 @@ SPECIAL_STYLES = {
     "period-doubling": ("period doubling", "D", "tab:purple"),
     "neimark-sacker": ("Neimark-Sacker", "^", "tab:green"),
     "grazing": ("grazing", "X", "tab:red"),
+    "corner": ("simultaneous impact (corner)", "P", "tab:brown"),
+    "section": ("impact at the section", "v", "tab:gray"),
+    "branch-point": ("branch point", "o", "tab:cyan"),
 }
 """Legend label, marker and colour of each kind of special point of a continuation."""
 

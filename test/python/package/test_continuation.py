@@ -38,13 +38,15 @@ N = 3
 
 # Branch 0: period 1 from A = 1.0 to 1.6, stable up to its period doubling at point 4;
 # branch 1: period 2 from the doubling, A = 1.4 to 1.8, stable up to a Neimark-Sacker point
-# at point 10, ending at a grazing at point 11. A fold on branch 0 at point 1 (for the
-# legend; synthetic data need not be a real bifurcation diagram).
+# at point 10, ending at a grazing at point 11. A fold on branch 0 at point 1, a corner at
+# point 2, an impact at the section at point 5 and a branch point on branch 1 at point 8 (for
+# the legend; synthetic data need not be a real bifurcation diagram).
 VALUES = (1.0, 1.1, 1.2, 1.3, 1.4, 1.5, 1.6, 1.4, 1.5, 1.6, 1.7, 1.8)
 BRANCH = (0, 0, 0, 0, 0, 0, 0, 1, 1, 1, 1, 1)
 PERIOD = (1, 1, 1, 1, 1, 1, 1, 2, 2, 2, 2, 2)
 STABLE = (1, 1, 1, 1, 0, 0, 0, 1, 1, 1, 0, 0)
-SPECIAL = ((1, "fold"), (4, "period-doubling"), (10, "neimark-sacker"), (11, "grazing"))
+SPECIAL = ((1, "fold"), (2, "corner"), (4, "period-doubling"), (5, "section"),
+           (8, "branch-point"), (10, "neimark-sacker"), (11, "grazing"))
 END_REASON = "grazing at amplitude = 1.8: the branch ends"
 
 
@@ -285,9 +287,10 @@ def test_missing_attribute(cont_file: Path) -> None:
 @pytest.mark.parametrize(
     ("name", "data", "message"),
     [
-        ("special_kind", np.array(["fold", "cusp", "fold", "grazing"], dtype=h5py.string_dtype()),
+        ("special_kind", np.array(["fold", "cusp", "fold", "grazing", "corner", "section",
+                                   "branch-point"], dtype=h5py.string_dtype()),
          "special_kind holds 'cusp'"),
-        ("special_index", np.array([1, 4, 10, 12], dtype=np.int32),
+        ("special_index", np.array([1, 2, 4, 5, 8, 10, 12], dtype=np.int32),
          r"special_index holds values outside 0..11"),
         ("stable", np.full(12, 2, dtype=np.int8), "stable holds values other than 0 and 1"),
         ("period", np.full(12, 3, dtype=np.int32), "2 iterates, fewer than the largest period 3"),
@@ -386,15 +389,17 @@ def test_branches_mark_the_special_points_at_every_crossing(cont_file: Path) -> 
     ax = figures.branches(cont_file).axes[0]
     markers = _markers(ax)
     assert sorted(markers) == sorted(SPECIAL_KINDS)
-    # one marker per crossing of the special orbit: 1 + 1 (period 1), 2 + 2 (period 2)
-    assert sum(len(xy) for xy in markers.values()) == sum(PERIOD[i] for i, _ in SPECIAL) == 6
+    # one marker per crossing of the special orbit: 1 + 1 + 1 + 1 (period 1), 2 + 2 + 2
+    # (period 2)
+    assert sum(len(xy) for xy in markers.values()) == sum(PERIOD[i] for i, _ in SPECIAL) == 10
     for index, kind in SPECIAL:
         p = PERIOD[index]
         np.testing.assert_array_equal(markers[kind][:, 0], np.full(p, VALUES[index]))
         np.testing.assert_array_equal(markers[kind][:, 1], cont.strobe_x[index, :p, 0])
-    assert len({tuple(c.get_paths()[0].vertices.ravel()) for c in ax.collections}) == 4
+    assert len({tuple(c.get_paths()[0].vertices.ravel()) for c in ax.collections}) == 7
     assert _legend(ax) == ["stable", "unstable", "fold", "period doubling", "Neimark-Sacker",
-                           "grazing"]
+                           "grazing", "simultaneous impact (corner)", "impact at the section",
+                           "branch point"]
 
 
 def test_branches_legend_shows_only_what_is_drawn(make_continuation: Callable[..., Path]
@@ -476,7 +481,8 @@ def test_multipliers_are_the_largest_moduli(cont_file: Path) -> None:
         np.testing.assert_array_equal(markers[kind], [[VALUES[index], modulus[index]]])
     assert ax.get_yscale() == "linear"  # moduli from 0.81 to 2.6
     assert _legend(ax) == ["stable", "unstable", "fold", "period doubling", "Neimark-Sacker",
-                           "grazing"]
+                           "grazing", "simultaneous impact (corner)", "impact at the section",
+                           "branch point"]
 
 
 def test_multipliers_on_a_log_scale_when_they_span_decades(cont_file: Path) -> None:
