@@ -37,11 +37,12 @@ program bench
         'fig10-sweep', 'fig13-scan', 'strobe', 'strobe-record', 'orbit-n16', 'orbit-n64-p8', &
         'census-fig3', 'clv-default', 'clv-n64']
     character(len=:), allocatable :: only
-    logical :: tsv, quick, yardsticks_only, provenance_only
+    logical :: tsv, quick, yardsticks_only, provenance_only, flat_only, ratio_only
     real(wp) :: min_time, budget
     integer :: reps, j
 
-    call parse_arguments(only, tsv, quick, yardsticks_only, provenance_only)
+    call parse_arguments(only, tsv, quick, yardsticks_only, provenance_only, flat_only, &
+                         ratio_only)
     ! budget: the most a row spends on timed cycles; a row whose cycle takes seconds (the full
     ! spectrum at n = 1024) is timed in fewer repetitions, or in its calibration block alone
     min_time = 0.5_wp
@@ -54,6 +55,14 @@ program bench
     end if
     call print_machine(tsv)
     if (provenance_only) stop
+    if (flat_only) then
+        call heavy_flat(7)
+        stop
+    end if
+    if (ratio_only) then
+        call exponents_ratio(7)
+        stop
+    end if
     if (yardsticks_only .or. len(only) == 0) call print_yardsticks()
     if (yardsticks_only) stop
     if (.not. tsv) call print_table_head()
@@ -169,12 +178,14 @@ contains
     end function new_chain
 
     !> `cycles` recorded cycles from where the chain stands (on the section), timed.
-    subroutine run_block(cfg, chain, cycles, seconds, res)
+    subroutine run_block(cfg, chain, cycles, seconds, res, cpu)
         type(config_t), intent(inout) :: cfg
         type(chain_t), intent(inout) :: chain
         integer(int64), intent(in) :: cycles
         real(wp), intent(out) :: seconds
         type(record_result_t), intent(out) :: res
+        logical, intent(in), optional :: cpu !! time in the process's CPU time
+        logical :: use_cpu
         type(memory_sink_t) :: sink
         type(error_t), allocatable :: err
         real(wp) :: t0, start_s
@@ -184,9 +195,17 @@ contains
         call chain_start(chain, start_cycle, start_s)
         cfg%record%transient = chain_cycle(chain) - start_cycle
         cfg%record%cycles = cycles
+        use_cpu = .false.
+        if (present(cpu)) use_cpu = cpu
         t0 = wall_seconds()
+        if (use_cpu) call cpu_time(t0)
         call record_cycles(cfg%record, chain, sink, res, err)
-        seconds = wall_seconds() - t0
+        if (use_cpu) then
+            call cpu_time(seconds)
+            seconds = seconds - t0
+        else
+            seconds = wall_seconds() - t0
+        end if
         if (allocated(err)) call fail(err%message)
     end subroutine run_block
 
@@ -436,6 +455,82 @@ contains
                         'x_amp=0.3, v_amp=4', n, 0.0_wp, 1.5_wp, 0.0_wp, 1.0_wp, 0.3_wp, &
                         4.0_wp, 50_i8, 0)
     end subroutine case_heavy
+
+    !> Issue #34's item 4, the cost per collision flat in n, measured on a shared machine: the
+    !> collision-heavy chains at n = 16, 1024 and 16384 in one process, each block about the
+    !> same number of collisions, timed alternately (`rounds` rounds) in the process's CPU time
+    !> (other jobs' load stretches wall time, not CPU time); the best block of each n.
+    subroutine heavy_flat(rounds)
+        integer, intent(in) :: rounds
+        integer, parameter :: sizes(3) = [16, 1024, 16384]
+        type(config_t) :: cfg(3)
+        type(chain_t) :: chains(3)
+        type(record_result_t) :: res
+        real(wp) :: seconds, best(3)
+        integer(int64) :: cycles(3)
+        integer :: j, r
+
+        do j = 1, 3
+            cfg(j) = make_config(sizes(j), 0.0_wp, 1.5_wp, 0.0_wp, 1.0_wp, 0.3_wp, 4.0_wp)
+            chains(j) = new_chain(cfg(j))
+            call run_block(cfg(j), chains(j), 50_i8, seconds, res)
+            ! about 2 million collisions per block (62 per cycle at n = 16, 3.9 per bond)
+            cycles(j) = max(1_int64, 2000000_int64/(4_int64*(sizes(j) + 1)))
+        end do
+        best = huge(1.0_wp)
+        do r = 1, rounds
+            do j = 1, 3
+                call run_block(cfg(j), chains(j), cycles(j), seconds, res, cpu=.true.)
+                best(j) = min(best(j), 1.0e9_wp*seconds/real(res%impacts, wp))
+            end do
+        end do
+        write (output_unit, '(a)') '| n | CPU ns per collision (best of '//itoa(rounds)// &
+            ' alternating blocks) | over n = 16 |', '|---:|---:|---:|'
+        do j = 1, 3
+            write (output_unit, '(a, i0, a, f0.1, a, f0.3, a)') '| ', sizes(j), ' | ', best(j), &
+                ' | ', best(j)/best(1), ' |'
+        end do
+    end subroutine heavy_flat
+
+    !> Issue #34's item 3, the paper's default case with all 32 exponents against the case
+    !> without, measured like heavy_flat: from one state after the transient, the three runs
+    !> (no exponents, adaptive QR, QR every cycle) timed alternately in CPU time, the best
+    !> block of each.
+    subroutine exponents_ratio(rounds)
+        integer, intent(in) :: rounds
+        character(len=*), parameter :: names(3) = [character(len=28) :: 'no exponents', &
+            '32 exponents, adaptive QR', '32 exponents, QR every cycle']
+        type(config_t) :: cfg(3)
+        type(chain_t) :: chains(3)
+        type(record_result_t) :: res
+        real(wp) :: seconds, best(3)
+        integer(int64), parameter :: cycles = 20000
+        integer :: j, r
+
+        cfg(1) = make_config(16, 1.7_wp, 1.5_wp, 0.05_wp, 0.7_wp, 0.3_wp, 0.3_wp)
+        chains(1) = new_chain(cfg(1))
+        call run_block(cfg(1), chains(1), 500_i8, seconds, res)
+        do j = 2, 3
+            cfg(j) = cfg(1)
+            chains(j) = chains(1)
+            cfg(j)%record%lyapunov = .true.
+            cfg(j)%record%vectors = 32
+            cfg(j)%record%qr_every = merge(0, 1, j == 2)
+        end do
+        best = huge(1.0_wp)
+        do r = 1, rounds
+            do j = 1, 3
+                call run_block(cfg(j), chains(j), cycles, seconds, res, cpu=.true.)
+                best(j) = min(best(j), 1.0e6_wp*seconds/real(res%cycles_done, wp))
+            end do
+        end do
+        write (output_unit, '(a)') '| n = 16, paper default | CPU us per drive cycle (best of '// &
+            itoa(rounds)//' alternating blocks) | over no exponents |', '|---|---:|---:|'
+        do j = 1, 3
+            write (output_unit, '(a, f0.2, a, f0.3, a)') '| '//trim(names(j))//' | ', best(j), &
+                ' | ', best(j)/best(1), ' |'
+        end do
+    end subroutine exponents_ratio
 
     !> Figure 10 (n = 8, K = 0.5, w = 1.9, b = 0.05): A from 6 down to 1, 300 cycles per
     !> point of which the last 50 are kept, continuing each point from the previous one's
@@ -782,9 +877,11 @@ contains
         write (output_unit, '(a)') line
     end subroutine print_state
 
-    subroutine parse_arguments(only, tsv, quick, yardsticks_only, provenance_only)
+    subroutine parse_arguments(only, tsv, quick, yardsticks_only, provenance_only, flat_only, &
+                               ratio_only)
         character(len=:), allocatable, intent(out) :: only
-        logical, intent(out) :: tsv, quick, yardsticks_only, provenance_only
+        logical, intent(out) :: tsv, quick, yardsticks_only, provenance_only, flat_only
+        logical, intent(out) :: ratio_only
         integer :: j, length
         character(len=:), allocatable :: arg
         logical :: want_case
@@ -792,6 +889,8 @@ contains
         only = ''
         tsv = .false.
         provenance_only = .false.
+        flat_only = .false.
+        ratio_only = .false.
         quick = .false.
         yardsticks_only = .false.
         want_case = .false.
@@ -816,6 +915,10 @@ contains
                     yardsticks_only = .true.
                 case ('--provenance')
                     provenance_only = .true.
+                case ('--flat')
+                    flat_only = .true.
+                case ('--ratio')
+                    ratio_only = .true.
                 case ('--list')
                     do length = 1, size(case_names)
                         write (output_unit, '(a)') trim(case_names(length))
@@ -826,7 +929,11 @@ contains
                         '[--yardsticks] [--tsv] [--quick] [--list]', &
                         '  Times the engine and prints a Markdown table (see bench/README.md);', &
                         '  --yardsticks: only the yardsticks (sin+cos+exp, dgemm, QR).', &
-                        '  --provenance: only where it runs (compiler, BLAS, kernels, CPU).'
+                        '  --provenance: only where it runs (compiler, BLAS, kernels, CPU).', &
+                        '  --flat: the collision-heavy chains at n = 16, 1024, 16384 in one', &
+                        '          process, timed alternately in CPU time: ns per collision', &
+                        '  --ratio: the paper default case with all 32 exponents (adaptive QR,', &
+                        '          and QR every cycle) over the case without, the same way'
                     stop
                 case default
                     call fail("unknown argument '"//arg//"' (see --help)")

@@ -1,7 +1,7 @@
 !> The event queue against a brute-force minimum: after every update of a random bond, with
 !> ties in time, the top is the earliest (time, bond) pair and the ties are the bonds due
-!> then, for queue sizes around the branching of the heap and either side of the size below
-!> which the queue is scanned instead.
+!> then, for queue sizes of one block (no heap), either side of one and two blocks, and enough
+!> blocks for a heap of several levels.
 module test_queue
     use chain_kinds, only: wp
     use chain_queue, only: queue_t, queue_init, queue_set, queue_top, queue_shift, queue_ties
@@ -16,12 +16,17 @@ contains
         type(tally_t), intent(inout) :: t
         integer :: n_bonds
 
-        ! short queues are scanned, longer ones kept as a heap (chain_queue's scan_limit = 32):
-        ! both forms, on either side of the limit
+        ! chain_queue's blocks hold 32 bonds: one block (no heap), and either side of the
+        ! second and third block's start
         do n_bonds = 1, 40
             call random_updates(t, n_bonds, 400)
         end do
+        do n_bonds = 62, 66
+            call random_updates(t, n_bonds, 2000)
+        end do
+        ! heaps of 32 and 157 blocks (three and four levels), the last block part full
         call random_updates(t, 1000, 20000)
+        call random_updates(t, 5001, 20000)
     end subroutine run_queue_tests
 
     subroutine random_updates(t, n_bonds, updates)

@@ -60,8 +60,7 @@ contains
         chain%cycle = state%cycle
         chain%s = state%time
         allocate (chain%contact(n), chain%action(0:n), chain%counts%site_counts(0:n))
-        allocate (chain%y_now(n), chain%vy_now(n), chain%stamp(n))
-        chain%stamp = -1
+        allocate (chain%free(n))
         allocate (chain%row_stamp(n), chain%touched(n))
         chain%row_stamp = -1
         chain%contact = contact_free
