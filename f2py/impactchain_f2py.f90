@@ -385,11 +385,9 @@ subroutine ic_continuation(n, nsp, spacing, damping, restitution, amplitude, ome
                             status_capacity, status_internal
     implicit none
     !f2py threadsafe
-    integer(c_int), intent(in) :: nov
+    integer(c_int), intent(in) :: n, nsp, nb, nx0, nv0, explicit, npar, period, max_points, nov
+    integer(c_int), intent(in) :: doublings, dry_run, nf, npcap, nlong, nscap, ntext, nrcap, nbcap
     integer(c_int), intent(in) :: overrides(nov) !! `group.key=value` lines, byte values
-    integer(c_int), intent(in) :: n, nsp, nb, nx0, nv0, explicit, npar, period, max_points
-    integer(c_int), intent(in) :: doublings, dry_run, nf, npcap, nlong, nscap, ntext, nrcap
-    integer(c_int), intent(in) :: nbcap
     integer(c_int64_t), intent(in) :: transient
     real(c_double), intent(in) :: spacing(nsp), damping, restitution, amplitude, omega
     real(c_double), intent(in) :: x0(nx0), v0(nv0), phase, stick_speed, stop, step
@@ -397,8 +395,7 @@ subroutine ic_continuation(n, nsp, spacing, damping, restitution, amplitude, ome
     integer(c_int), intent(out) :: sizes(9)
     real(c_double), intent(out) :: values(npcap), x(nf, npcap), v(nf, npcap)
     real(c_double), intent(inout) :: strobe_x(nf, nlong, npcap) ! caller-allocated
-    integer(c_int), intent(out) :: periods(npcap), branch(npcap), stable(npcap)
-    integer(c_int), intent(out) :: symmetric(npcap)
+    integer(c_int), intent(out) :: periods(npcap), branch(npcap), stable(npcap), symmetric(npcap)
     integer(c_int), intent(out) :: impacts(npcap), iterations(npcap)
     real(c_double), intent(out) :: mult_re(2*nf, npcap), mult_im(2*nf, npcap)
     real(c_double), intent(out) :: min_gap(npcap), min_impact_speed(npcap), residual(npcap)
@@ -407,29 +404,26 @@ subroutine ic_continuation(n, nsp, spacing, damping, restitution, amplitude, ome
     integer(c_int), intent(out) :: end_reason(ntext), end_kind(ntext), start_reason(ntext)
     real(c_double), intent(out) :: start_x(nf), start_v(nf), start_jac(2*nf, 2*nf)
     real(c_double), intent(out) :: start_mult_re(2*nf), start_mult_im(2*nf)
-    real(c_double), intent(out) :: start_residuals(nrcap), start_min_gap
-    real(c_double), intent(out) :: start_min_impact_speed
+    real(c_double), intent(out) :: start_residuals(nrcap), start_min_gap, start_min_impact_speed
     integer(c_int), intent(out) :: start_bonds(nbcap)
     integer(c_int64_t), intent(inout), target :: control(4)
-    integer(c_int), intent(out) :: status, msg_len
-    integer(c_int), intent(out) :: message(1024)
+    integer(c_int), intent(out) :: status, msg_len, message(1024)
     type(config_t) :: cfg
     type(branches_t) :: res
     type(continuation_table_t) :: table
     type(shared_monitor_t) :: monitor
     type(error_t), allocatable :: err
     integer, allocatable :: bonds(:)
-    integer :: np, ns
 
     call put_message('', status_ok, status, msg_len, message)
     sizes = 0
-    call put_continuation_results(values, x, v, strobe_x, periods, branch, mult_re, &
-                                  mult_im, stable, symmetric, min_gap, min_impact_speed, &
-                                  impacts, residual, iterations, special_index, special_kind, &
+    call put_continuation_results(values, x, v, strobe_x, periods, branch, mult_re, mult_im, &
+                                  stable, symmetric, min_gap, min_impact_speed, impacts, &
+                                  residual, iterations, special_index, special_kind, &
                                   special_value, end_reason, end_kind, start_x, start_v, &
-                                  start_jac, start_mult_re, &
-                                  start_mult_im, start_residuals, start_bonds, start_min_gap, &
-                                  start_min_impact_speed, start_reason)
+                                  start_jac, start_mult_re, start_mult_im, start_residuals, &
+                                  start_bonds, start_min_gap, start_min_impact_speed, &
+                                  start_reason)
     call make_config(cfg, int(n), spacing, damping, restitution, amplitude, omega, boundary, &
                      explicit /= 0, x0, v0, int(transient, i8), 1_i8, phase, stick_speed, &
                      4096.0_c_double, .false., .false., 0, 1, .false., 1, err, &
@@ -451,28 +445,24 @@ subroutine ic_continuation(n, nsp, spacing, damping, restitution, amplitude, ome
     call run_continuation(cfg, res, err, monitor)
     if (call_ended(control, err, status, msg_len, message)) return
     call continuation_table(cfg%model%n, res, table)
-    np = res%n_points
-    ns = res%n_specials
     bonds = impact_bonds(res%start)
-    sizes = [np, ns, table%longest, len(res%end_reason), merge(1, 0, res%start%converged), &
-             size(res%start%residuals), size(bonds), len(res%start%reason), &
-             len(res%end_kind)]
-    if (np > npcap .or. ns > nscap .or. table%longest > nlong .or. sizes(4) > ntext .or. &
-        sizes(6) > nrcap .or. sizes(7) > nbcap .or. sizes(8) > ntext .or. &
-        sizes(9) > ntext) then
+    sizes = [res%n_points, res%n_specials, table%longest, len(res%end_reason), &
+             merge(1, 0, res%start%converged), size(res%start%residuals), size(bonds), &
+             len(res%start%reason), len(res%end_kind)]
+    if (any(sizes([1, 2, 3, 4, 6, 7, 8, 9]) > [npcap, nscap, nlong, ntext, nrcap, nbcap, &
+                                                ntext, ntext])) then
         call put_message("python layer: more results than the capacities", status_capacity, &
                          status, msg_len, message)
         return
     end if
 
-    call put_continuation_results(values, x, v, strobe_x, periods, branch, mult_re, &
-                                  mult_im, stable, symmetric, min_gap, min_impact_speed, &
-                                  impacts, residual, iterations, special_index, special_kind, &
+    call put_continuation_results(values, x, v, strobe_x, periods, branch, mult_re, mult_im, &
+                                  stable, symmetric, min_gap, min_impact_speed, impacts, &
+                                  residual, iterations, special_index, special_kind, &
                                   special_value, end_reason, end_kind, start_x, start_v, &
-                                  start_jac, start_mult_re, &
-                                  start_mult_im, start_residuals, start_bonds, start_min_gap, &
-                                  start_min_impact_speed, start_reason, &
-                                  res, table, bonds)
+                                  start_jac, start_mult_re, start_mult_im, start_residuals, &
+                                  start_bonds, start_min_gap, start_min_impact_speed, &
+                                  start_reason, res, table, bonds)
 end subroutine ic_continuation
 
 !> Where the extension runs (chain_provenance: code version, compiler and flags, BLAS and the

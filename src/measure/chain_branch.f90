@@ -219,7 +219,7 @@ contains
         character(len=:), allocatable :: reason, failure, kind
         real(wp) :: h, mu_next, value
         integer :: count, iterations
-        logical :: ok, compare, crossed, reached
+        logical :: ok, compare, crossed
 
         stopped = .false.
         call store(set, here, res, err)
@@ -273,20 +273,7 @@ contains
             end if
             mu_next = next%y(size(next%y))
             if (compare .and. any(next%impacts /= here%impacts)) then
-                ! (past a bound the impacts may change beyond it: the branch ends on the
-                ! bound if the orbit there keeps them)
-                reached = .false.
-                if (mu_next < set%low .or. mu_next > set%high) &
-                    call end_at_bound(set, here, next, res, reason, err, here%impacts, reached)
-                if (allocated(err)) return
-                if (reached) then
-                    kind = 'bound'
-                    exit
-                end if
-                call locate_nonsmooth(set, here, h, .true., res, kind, value, err)
-                if (allocated(err)) return
-                if (len(kind) == 0) kind = 'impacts'
-                reason = nonsmooth_reason(set, res, kind, value)
+                call end_at_impact_change(set, here, next, h, res, kind, reason, err)
                 exit
             end if
             if (mu_next < set%low .or. mu_next > set%high) then
@@ -313,6 +300,34 @@ contains
         call add_reason(res, kind, "branch "//fmt_int(set%branch)//" (period "// &
                         fmt_int(set%cycles)//"): "//reason)
     end subroutine walk
+
+    !> The step from `here` to `next` changes the impacts. Past a bound they may change beyond
+    !> it: the branch ends on the bound if the orbit there keeps them; else it ends at the
+    !> grazing or corner located in the step ('impacts' when no monitor vanishes there).
+    subroutine end_at_impact_change(set, here, next, h, res, kind, reason, err)
+        type(setting_t), intent(in) :: set
+        type(cursor_t), intent(in) :: here, next
+        real(wp), intent(in) :: h
+        type(branches_t), intent(inout) :: res
+        character(len=:), allocatable, intent(out) :: kind, reason
+        type(error_t), allocatable, intent(out) :: err
+        real(wp) :: mu_next, value
+        logical :: reached
+
+        mu_next = next%y(size(next%y))
+        reached = .false.
+        if (mu_next < set%low .or. mu_next > set%high) &
+            call end_at_bound(set, here, next, res, reason, err, here%impacts, reached)
+        if (allocated(err)) return
+        if (reached) then
+            kind = 'bound'
+            return
+        end if
+        call locate_nonsmooth(set, here, h, .true., res, kind, value, err)
+        if (allocated(err)) return
+        if (len(kind) == 0) kind = 'impacts'
+        reason = nonsmooth_reason(set, res, kind, value)
+    end subroutine end_at_impact_change
 
     !> The next point past a bound of the parameter: the branch ends on the bound, with the
     !> orbit there found by Newton at the bound's value from the interpolated state. With
