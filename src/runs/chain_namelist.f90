@@ -372,8 +372,16 @@ contains
         type(key_spec_t), intent(in) :: schema(:)
         character(len=*), intent(in) :: group
         character(len=16), allocatable :: names(:)
+        integer :: i, k
 
-        names = pack(schema%name, schema%group == group)
+        ! (a loop, not pack(schema%name, ...): the component array would be copied)
+        allocate (names(count(schema%group == group)))
+        k = 0
+        do i = 1, size(schema)
+            if (schema(i)%group /= group) cycle
+            k = k + 1
+            names(k) = schema(i)%name
+        end do
     end function schema_keys
 
     !> Is `token` (without its repeat count) a value of type `kind`?
