@@ -204,15 +204,18 @@ class Floquet:
     """(n,) displacement where the Jacobian was evaluated (the end of the run) [length]."""
     v: NDArray[np.float64]
     """(n,) velocity there [length/time]."""
+    params: Mapping[str, Any]
+    """The arguments as used (as :attr:`Simulation.params`), with ``jacobian_cycles``."""
 
     def to_xarray(self) -> Any:
         """The Jacobian and multipliers as the :class:`xarray.DataTree` of the CLI's file:
-        ``/floquet`` (``jacobian``, ``multipliers_re``, ``multipliers_im``) and ``/final``
-        (the state), with the file's names, dimensions and units."""
-        return tree({"/floquet/jacobian": self.jacobian,
+        ``/params``, ``/floquet`` (``jacobian``, ``multipliers_re``, ``multipliers_im``) and
+        ``/final`` (the state), with the file's names, dimensions and units."""
+        return tree({**_params_values(self.params),
+                     "/floquet/jacobian": self.jacobian,
                      "/floquet/multipliers_re": self.multipliers.real,
                      "/floquet/multipliers_im": self.multipliers.imag,
-                     **_final_values(self, self.x.size)}, {})
+                     **_final_values(self, self.x.size)}, _root(self.params))
 
 
 @dataclass(frozen=True, eq=False)
@@ -464,6 +467,7 @@ def floquet(
         jacobian=_frozen(out["jac"]),
         x=_frozen(out["final_x"]),
         v=_frozen(out["final_v"]),
+        params=_used(cfg, events=False, jacobian_cycles=cfg["jacobian_cycles"]),
     )
 
 

@@ -131,6 +131,9 @@ def equivalent_namelist(config: Mapping[str, Any], lyapunov: bool) -> str:
         lines.append(f"&lyapunov enabled = .true., vectors = {int(config.get('vectors', 0))}, "
                      f"qr_every = {int(config.get('qr_every', 1))}"
                      + (f", window = {window}" if window else "") + " /")
+    if "jacobian_cycles" in config:  # a Floquet run: the Jacobian only, no exponents
+        lines.append("&lyapunov enabled = .false., jacobian = .true., jacobian_cycles = "
+                     f"{int(config['jacobian_cycles'])} /")
     overrides = config.get("overrides", ())
     if overrides:  # the other keys given, which the command line takes as they are
         lines.append("! with: " + " ".join(f"--set {line}" for line in overrides))

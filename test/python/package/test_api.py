@@ -1170,6 +1170,18 @@ def test_results_convert_to_the_files_tree(cli: Path, tmp_path: Path) -> None:
                                       file["lyapunov/exponents"].values)
         np.testing.assert_array_equal(trees[2]["floquet/jacobian"].values,
                                       file["floquet/jacobian"].values)
+    # each tree is a file's: its root says so, and a Floquet tree's equivalent input is the
+    # CLI's run of the same Jacobian
+    for tree in trees:
+        assert tree.attrs["schema_version"] >= 2 and tree.attrs["complete"] == 1
+    floquet_input = trees[2].attrs["input_namelist"]
+    assert "jacobian = .true., jacobian_cycles = 1" in floquet_input
+    (tmp_path / "again").mkdir()
+    assert run_cli(cli, floquet_input, tmp_path / "again").returncode == 0
+    [written] = (tmp_path / "again").glob("*.h5")
+    with xr.open_datatree(written, engine="h5netcdf") as again:
+        np.testing.assert_array_equal(trees[2]["floquet/jacobian"].values,
+                                      again["floquet/jacobian"].values)
 
 
 def test_census_is_the_cli_file(cli: Path, tmp_path: Path) -> None:
