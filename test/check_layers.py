@@ -23,8 +23,9 @@ from pathlib import Path
 OUTSIDE = {"app": ["api"], "mpi/app": ["api"], "f2py": ["api"], "bench": ["api", "base"]}
 
 #: folders of test/ that hold tests of no one layer, and what they test
-TEST_ROOTS = {"test": "the Fortran suites and their two programs (fpm 0.12 compiles no test "
-                      "module in a subfolder that uses test/'s own modules)",
+TEST_ROOTS = {"test": "the tree's own checks (check_layers.py, check_sizes.py)",
+              "test/support/src": "the Fortran suites' shared helpers, a package of their "
+                                  "own (test/support/fpm.toml) that every test area uses",
               "test/python": "the simulator's tests, through its command line",
               "test/python/package": "the Python package impactchain (python/impactchain)",
               "test/docs": "the documentation site"}

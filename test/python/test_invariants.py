@@ -1,5 +1,5 @@
 """Invariants of the simulator seen from outside (issue #15; the Fortran side is
-test/test_invariants.f90): the Lyapunov sum rule on command-line runs of every kind (free
+test/engine/test_invariants.f90): the Lyapunov sum rule on command-line runs of every kind (free
 ends whose collisions die out, inelastic collapse, a section phase, QR every few cycles,
 disordered spacings, a conservative chain), and momentum through every impact and every
 inelastic collapse of a free chain, seen in its centre of mass."""

@@ -56,7 +56,7 @@ def test_a_test_area_named_like_no_layer_fails(tmp_path):
     """test/ mirrors src/ (test/README.md): a folder of tests is named like the layer it
     tests; the Fortran area test/model passes, test/physics and test/python/output do not."""
     shutil.copytree(ROOT / "src", tmp_path / "src")
-    for source in ("test/testing.f90", "test/model/test_gaps.f90", "test/physics/test_flow.f90",
+    for source in ("test/support/src/testing.f90", "test/model/test_gaps.f90", "test/physics/test_flow.f90",
                    "test/python/test_cli.py", "test/python/output/test_file.py",
                    "test/python/package/test_io.py"):
         (tmp_path / source).parent.mkdir(parents=True, exist_ok=True)

@@ -23,8 +23,8 @@ module test_lyapunov
                               lyapunov_result, running_capacity, running_rows, &
                               lyapunov_pack, lyapunov_unpack
     use chain_lapack, only: qr_orthonormalise, qr_workspace_t
-    use test_engine, only: make_chain
-    use test_invariants, only: check_sum_rule
+    use test_chains, only: make_chain
+    use test_sum_rule, only: check_sum_rule
     use test_chains, only: flow_of
     use chain_monitor, only: monitor_t, stage_transient, stage_records, stage_events
     use testing, only: tally_t, check, check_close

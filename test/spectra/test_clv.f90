@@ -24,7 +24,7 @@ module test_clv
     use chain_clv, only: fold_upper, initial_c, unstable_angle, site_weights, vector_numbers
     use chain_scratch, only: scratch_records_t, scratch_open, scratch_append, scratch_read, &
                              scratch_close, scratch_block
-    use test_engine, only: make_chain
+    use test_chains, only: make_chain
     use test_chains, only: model_of, flow_of
     use chain_blocking, only: blocking_t, blocking_start, blocking_add, blocking_error
     use chain_monitor, only: monitor_t, stage_backward

@@ -13,12 +13,12 @@ module test_engine
     use chain_state, only: contact_free, event_counts_t
     use chain_event_log, only: event_log_t, event_log_init, event_log_clear
     use chain_section, only: advance_to_point
-    use test_chains, only: init_chain, flow_of
+    use test_chains, only: init_chain, flow_of, make_chain
     use test_invariants, only: walk_t, walk_events
     use testing, only: tally_t, check, check_close
     implicit none
     private
-    public :: run_engine_tests, make_chain
+    public :: run_engine_tests
 
 contains
 
@@ -33,28 +33,6 @@ contains
         call exact_grazing(t)
         call plastic_cluster(t)
     end subroutine run_engine_tests
-
-    !> A chain with a deterministic, spread-out start.
-    subroutine make_chain(chain, n, amplitude, omega, damping, restitution, walls, x_amp, &
-                          v_amp, err, spacing)
-        type(chain_t), intent(out) :: chain
-        integer, intent(in) :: n
-        real(wp), intent(in) :: amplitude, omega, damping, restitution, x_amp, v_amp
-        logical, intent(in) :: walls
-        type(error_t), allocatable, intent(out) :: err
-        real(wp), intent(in), optional :: spacing
-        real(wp) :: x(n), v(n), a
-        integer :: i
-
-        a = 1
-        if (present(spacing)) a = spacing
-        do i = 1, n
-            x(i) = x_amp*sin(1.7_wp*i + 0.3_wp)
-            v(i) = v_amp*cos(2.3_wp*i)
-        end do
-        call init_chain(chain, make_flow(damping, amplitude, omega), restitution, &
-                        [(a, i=0, n)], walls, 1.0e-9_wp, x, v, 0_i8, 0.0_wp, err)
-    end subroutine make_chain
 
     !> Step impact by impact; compare each with the collision law applied to independently
     !> propagated pre-impact states.

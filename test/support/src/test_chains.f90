@@ -11,7 +11,7 @@ module test_chains
     use chain_engine, only: chain_t, chain_init, chain_model
     implicit none
     private
-    public :: init_chain, model_of, flow_of, fig10_model
+    public :: init_chain, model_of, flow_of, fig10_model, make_chain
 
 contains
 
@@ -73,4 +73,25 @@ contains
         flow = make_flow(model%damping, model%amplitude, model%omega)
     end function flow_of
 
+    !> A chain with a deterministic, spread-out start.
+    subroutine make_chain(chain, n, amplitude, omega, damping, restitution, walls, x_amp, &
+                          v_amp, err, spacing)
+        type(chain_t), intent(out) :: chain
+        integer, intent(in) :: n
+        real(wp), intent(in) :: amplitude, omega, damping, restitution, x_amp, v_amp
+        logical, intent(in) :: walls
+        type(error_t), allocatable, intent(out) :: err
+        real(wp), intent(in), optional :: spacing
+        real(wp) :: x(n), v(n), a
+        integer :: i
+
+        a = 1
+        if (present(spacing)) a = spacing
+        do i = 1, n
+            x(i) = x_amp*sin(1.7_wp*i + 0.3_wp)
+            v(i) = v_amp*cos(2.3_wp*i)
+        end do
+        call init_chain(chain, make_flow(damping, amplitude, omega), restitution, &
+                        [(a, i=0, n)], walls, 1.0e-9_wp, x, v, 0_i8, 0.0_wp, err)
+    end subroutine make_chain
 end module test_chains

@@ -5,7 +5,6 @@
 !> determinant at any section phase). The walker `walk_events` and the sum-rule check
 !> `check_sum_rule` are shared with the engine and Lyapunov suites.
 module test_invariants
-    use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
     use chain_kinds, only: wp, i8
     use chain_error, only: error_t, fmt_int
     use chain_sim, only: uniform
@@ -27,9 +26,10 @@ module test_invariants
     use chain_floquet, only: poincare_jacobian, floquet_multipliers
     use test_chains, only: init_chain, flow_of
     use testing, only: tally_t, check, check_close
+    use test_sum_rule, only: check_sum_rule, real_text
     implicit none
     private
-    public :: run_invariant_tests, walk_t, walk_events, check_sum_rule
+    public :: run_invariant_tests, walk_t, walk_events
 
     !> What a walk through a run, instant by instant, saw.
     type :: walk_t
@@ -85,58 +85,6 @@ contains
         tol = 64*eps*(maxval(model%spacing) + maxval(abs(chain_positions(chain))) + &
                       hypot(flow%p_sin, flow%q_cos))
     end function gap_rounding
-
-    !> The sum rule: the sum of all 2n exponents in nats per cycle is -2 b n T + 2 ln(K) c,
-    !> c the mean number of impacts per cycle (the flow multiplies phase-space volume by
-    !> exp(-2 b n T) per cycle, every impact by K**2). Checked to 1e-9 of the larger of 1 and
-    !> the expected sum: the logarithms of the QR diagonals add up to the logarithm of each
-    !> cycle's determinant, exact to rounding. With K = 0 and impacts the sum is -infinity.
-    subroutine check_sum_rule(t, label, n, flow, restitution, collisions_per_cycle, &
-                              bits_per_cycle, sticks)
-        type(tally_t), intent(inout) :: t
-        character(len=*), intent(in) :: label
-        integer, intent(in) :: n
-        type(flow_t), intent(in) :: flow
-        real(wp), intent(in) :: restitution, collisions_per_cycle, bits_per_cycle(:)
-        integer(i8), intent(in) :: sticks
-        real(wp) :: total, expected
-        logical :: infinite
-
-        call check(t, size(bits_per_cycle) == 2*n, 'sum rule '//label//': all 2n exponents')
-        if (size(bits_per_cycle) /= 2*n) return
-        ! Excluded: runs with rests on a wall. A rest zeroes the resting oscillator's tangent
-        ! rows (the Jacobian is singular, as the true infinite chatter sequence makes it), so
-        ! the sum is -infinity whatever K; such runs are treated separately.
-        if (sticks > 0) return
-        infinite = .not. all(ieee_is_finite(bits_per_cycle))
-        total = -huge(1.0_wp)
-        if (.not. infinite) total = sum(bits_per_cycle)*log(2.0_wp)
-        if (restitution == 0 .and. collisions_per_cycle > 0) then
-            ! det S = K**2 = 0 at every impact: the exact sum is -infinity
-            call check(t, infinite, 'sum rule '//label//': K = 0 with impacts, the sum '// &
-                       'must be -infinity, got '//real_text(total)//' nats per cycle')
-            return
-        end if
-        expected = -2*flow%damping*n*flow%period
-        if (collisions_per_cycle > 0) expected = expected + &
-                                                 2*log(restitution)*collisions_per_cycle
-        if (infinite) then
-            call check(t, .false., 'sum rule '//label//': an exponent is -infinity, want '// &
-                       real_text(expected)//' nats per cycle in all')
-            return
-        end if
-        call check_close(t, total, expected, 'sum rule '//label//' (nats per cycle)', &
-                         abs_tol=1.0e-9_wp, rel_tol=1.0e-9_wp)
-    end subroutine check_sum_rule
-
-    function real_text(x) result(text)
-        real(wp), intent(in) :: x
-        character(len=:), allocatable :: text
-        character(len=32) :: buf
-
-        write (buf, '(es12.4)') x
-        text = trim(adjustl(buf))
-    end function real_text
 
     function k_text(k) result(text)
         real(wp), intent(in) :: k

@@ -33,7 +33,7 @@ module test_census
                                        sample_record_sizes, pack_sample, unpack_sample
     use chain_monitor, only: monitor_t, stage_samples
     use test_chains, only: flow_of
-    use test_invariants, only: check_sum_rule
+    use test_sum_rule, only: check_sum_rule
     use testing, only: tally_t, check, check_close
     implicit none
     private

@@ -17,7 +17,7 @@ module test_orbit
     use chain_floquet, only: floquet_multipliers
     use chain_lapack, only: solve_linear
     use chain_orbit, only: orbit_t, orbit_options_t, find_orbit, interleave
-    use test_engine, only: make_chain
+    use test_chains, only: make_chain
     use test_chains, only: model_of, fig10_model
     use testing, only: tally_t, check, check_close
     implicit none

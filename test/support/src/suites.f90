@@ -22,9 +22,11 @@ module suites
     !> here and run by its program with `runner%run(name, ...)`, which refuses a name missing
     !> from this list.
     character(len=*), parameter :: suite_names(*) = [character(len=10) :: &
-        'flow', 'gaps', 'impact', 'queue', 'engine', 'lyapunov', 'corners', & ! test/main.f90
-        'invariants', 'hdf5', 'orbit', 'branch', 'clv', &
-        'sweep', 'checkpoint', 'census', 'taskfarm'] ! test/sweeps.f90
+        'flow', 'gaps', 'impact', &                            ! test/model/model_tests.f90
+        'queue', 'engine', 'corners', 'invariants', &          ! test/engine/engine_tests.f90
+        'lyapunov', 'clv', &                                   ! test/spectra/spectra_tests.f90
+        'orbit', 'branch', &                                   ! test/measure/measure_tests.f90
+        'hdf5', 'sweep', 'checkpoint', 'census', 'taskfarm'] ! test/runs/runs_tests.f90
 
     abstract interface
         !> The checks of one suite, added to the tally.
@@ -92,7 +94,7 @@ contains
         k = findloc(suite_names, name, 1)
         if (k == 0) then
             write (error_unit, '(a)') self%program//": suite '"//name// &
-                "' is missing from suite_names in test/suites.f90"
+                "' is missing from suite_names in test/support/src/suites.f90"
             stop 2, quiet=.true.
         end if
         self%own = self%own//' '//name

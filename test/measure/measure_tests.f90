@@ -1,0 +1,15 @@
+!> fpm test: the suites of the measure layer (src/measure): periodic orbits, Floquet
+!> multipliers and their branches; each can be run alone (`fpm test -- <suite>`, see
+!> test/support/src/suites.f90); prints "N passed, M failed".
+program measure_tests
+    use suites, only: suite_runner_t
+    use test_orbit, only: run_orbit_tests
+    use test_branch, only: run_branch_tests
+    implicit none
+    type(suite_runner_t) :: runner
+
+    call runner%start()
+    call runner%run('orbit', run_orbit_tests)
+    call runner%run('branch', run_branch_tests)
+    call runner%finish()
+end program measure_tests
