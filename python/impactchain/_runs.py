@@ -208,11 +208,9 @@ class Floquet:
     """The arguments as used (as :attr:`Simulation.params`), with ``jacobian_cycles``."""
 
     def to_xarray(self) -> Any:
-        """The Jacobian and multipliers as the :class:`xarray.DataTree` of the CLI's file:
-        ``/params``, ``/floquet`` (``jacobian``, ``multipliers_re``, ``multipliers_im``) and
-        ``/final`` (the state), with the file's names, dimensions and units."""
-        return tree({**_params_values(self.params),
-                     "/floquet/jacobian": self.jacobian,
+        """The run as the :class:`xarray.DataTree` of the CLI's file: ``/params``, ``/floquet``
+        and ``/final``, with the file's names, dimensions and units."""
+        return tree({**_params_values(self.params), "/floquet/jacobian": self.jacobian,
                      "/floquet/multipliers_re": self.multipliers.real,
                      "/floquet/multipliers_im": self.multipliers.imag,
                      **_final_values(self, self.x.size)}, _root(self.params))
