@@ -73,6 +73,8 @@ is their public face.
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 from impactchain._calls import (
     CONTINUATION_OUTPUTS,
     RUN_OUTPUTS,
@@ -121,8 +123,13 @@ __all__ = [
     "TOUCH",
 ]
 
+if TYPE_CHECKING:  # the names in the functions' annotations, resolved here by pdoc
+    from collections.abc import Mapping
+
 for _name in __all__:
     _public = globals()[_name]
-    if callable(_public):  # help(), reprs and pickles name the module users import
+    # help() and reprs name the module users import; the result classes keep their own, where
+    # their fields and annotations are written
+    if callable(_public) and not isinstance(_public, type):
         _public.__module__ = __name__
 del _name, _public
