@@ -30,11 +30,10 @@ program bench
     use bench_yardsticks, only: transcendental_ns, dgemm_gflops, qr_seconds
     implicit none
 
-    character(len=*), parameter :: case_names(25) = [character(len=19) :: &
+    character(len=*), parameter :: case_names(22) = [character(len=16) :: &
         'default', 'default-lyap', 'default-adaptive', 'heavy-16', 'heavy-1024', 'heavy-16384', &
         'n1024-lyap10', &
         'n64-full', 'n256-full', 'n1024-full', 'n4096-lyap10', 'n4096-lyap64', 'n4096-lyap256', &
-        'n64-full-adaptive', 'n256-full-adaptive', 'n1024-full-adaptive', &
         'fig10-sweep', 'fig13-scan', 'strobe', 'strobe-record', 'orbit-n16', 'orbit-n64-p8', &
         'census-fig3', 'clv-default', 'clv-n64']
     character(len=:), allocatable :: only
@@ -105,7 +104,7 @@ contains
             call case_chain(row, 'paper default parameters, 10 leading exponents', &
                             1024, 1.7_wp, 1.5_wp, 0.05_wp, 0.7_wp, 0.3_wp, 0.3_wp, 200_i8, 10)
         case ('n64-full', 'n256-full', 'n1024-full', 'n4096-lyap10', 'n4096-lyap64', &
-              'n4096-lyap256', 'n64-full-adaptive', 'n256-full-adaptive', 'n1024-full-adaptive')
+              'n4096-lyap256')
             call case_spectrum(row, name)
         case ('fig10-sweep')
             call case_fig10(row)
@@ -301,25 +300,21 @@ contains
     !> w = 1.5, b = 0.05, K = 0.7, spacing 1), QR every cycle: the full spectrum (k = 2n) at
     !> n = 64, 256 and 1024, and k = 10, 64 and 256 leading exponents at n = 4096. The
     !> transient (without exponents) brings the chain onto its attractor; at n >= 256 the
-    !> collisions stay near the walls, so the cost of a cycle is the frame's. The rows named
-    !> -adaptive are the full spectra with the default adaptive QR schedule (the same
-    !> exponents, docs/model.md 7.2), outside the scaling fit.
+    !> collisions stay near the walls, so the cost of a cycle is the frame's.
     subroutine case_spectrum(row, name)
         type(row_t), intent(inout) :: row
         character(len=*), intent(in) :: name
-        integer :: n, k, qr_every
+        integer :: n, k
         integer(int64) :: transient
 
-        qr_every = 1
-        if (index(name, '-adaptive') > 0) qr_every = 0
         select case (name)
-        case ('n64-full', 'n64-full-adaptive')
+        case ('n64-full')
             n = 64
             k = 2*n
-        case ('n256-full', 'n256-full-adaptive')
+        case ('n256-full')
             n = 256
             k = 2*n
-        case ('n1024-full', 'n1024-full-adaptive')
+        case ('n1024-full')
             n = 1024
             k = 2*n
         case ('n4096-lyap10')
@@ -333,17 +328,14 @@ contains
             k = 256
         end select
         transient = 200
-        if (k == 2*n .and. qr_every == 0) then
-            row%label = 'paper default parameters, full spectrum ('//itoa(k)// &
-                        ' exponents, adaptive QR, the default)'
-        else if (k == 2*n) then
+        if (k == 2*n) then
             row%label = 'paper default parameters, full spectrum ('//itoa(k)// &
                         ' exponents, QR every cycle)'
         else
             row%label = 'paper default parameters, '//itoa(k)//' leading exponents'
         end if
         call case_chain(row, row%label, n, 1.7_wp, 1.5_wp, 0.05_wp, 0.7_wp, 0.3_wp, 0.3_wp, &
-                        transient, k, qr_every=qr_every)
+                        transient, k)
     end subroutine case_spectrum
 
     !> Covariant Lyapunov vectors (docs/model.md section 14) of the full spectrum at the paper's

@@ -34,7 +34,7 @@ BASELINE = Path(__file__).resolve().parent / "scipy_baseline.py"
 HEAVY = ("heavy-16", "heavy-1024", "heavy-16384")
 #: Left out by --quick unless named with --case: one drive cycle takes tens of seconds with the
 #: reference BLAS (the 2048 x 2048 frame's QR).
-SLOW = ("n1024-full", "n1024-full-adaptive")
+SLOW = ("n1024-full",)
 
 # Targets (issue #18 items 4 and 5), every one a ratio to a yardstick of the same run:
 # S = ns per sin + cos + exp (one "sincos + exp pair"), G = single-core dgemm GFLOP/s, and
@@ -83,10 +83,6 @@ TARGET_CLV_OVER_SPECTRUM = 3.0
 #: the covariant-vector rows: their cost is not the frame's QR alone (the scaling fit and the
 #: QR targets leave them out)
 CLV = ("clv-default", "clv-n64")
-#: the full spectra with the default adaptive QR schedule (issue #34, item 2): the same
-#: exponents with fewer factorisations; in the targets, outside the scaling fit (whose model
-#: is one QR per cycle)
-ADAPTIVE_FULL = ("n64-full-adaptive", "n256-full-adaptive", "n1024-full-adaptive")
 
 
 @dataclass
@@ -479,7 +475,6 @@ def targets(rows: dict[str, Row], y: Yardsticks, baselines: list[dict]) -> list[
             want = TARGET_QR_DGEMM if r.vectors >= 64 else TARGET_QR_DGEMM_THIN
             got = r.seconds / r.cycles / y.dgemm_equivalent(r.qr_flops)
             kind = "full spectrum" if r.vectors == 2 * r.n else f"{r.vectors} exponents"
-            kind += ", adaptive QR" if r.name in ADAPTIVE_FULL else ""
             add(f"n = {r.n}, {kind}: drive cycle <= {want:g} x its QR flops at G",
                 f"{got:.2f} x ({num(r.us_per_cycle / 1000)} ms)", got <= want)
     return out
@@ -499,8 +494,7 @@ def scaling_fit(rows: list[Row]) -> list[str]:
     the few collisions at the walls, is the cost), least squares in logs; and the one-variable
     slopes that the rows allow: the full spectrum (k = 2n) in n, n = 4096 in k, and the
     collision-heavy rows in n."""
-    lyap = [r for r in rows if r.vectors and r.n >= 64 and r.cycles
-            and r.name not in CLV + ADAPTIVE_FULL]
+    lyap = [r for r in rows if r.vectors and r.n >= 64 and r.cycles and r.name not in CLV]
     out: list[str] = []
     if lyap:
         n = np.array([r.n for r in lyap], float)
