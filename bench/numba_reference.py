@@ -27,7 +27,6 @@ from __future__ import annotations
 import argparse
 import math
 import sys
-import time
 
 import numpy as np
 from numba import njit
@@ -57,6 +56,7 @@ class Params:
         self.amp = A / math.sqrt(d2)
 
     def packed(self) -> np.ndarray:
+        """What the compiled functions take as p: A, w, b, K, gam, P, Q, T, amp (indices 0-8)."""
         return np.array([self.A, self.w, self.b, self.K, self.gam, self.P, self.Q, self.T,
                          self.amp])
 
