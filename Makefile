@@ -73,7 +73,7 @@ help:
 	@echo "make test     set up, build, run fpm test and pytest"
 	@echo "make figures  regenerate every figure of the paper into figures/"
 	@echo "make census-figures  only the attractor censuses' figures (minutes)"
-	@echo "make bench    build with the release profile and run the benchmark table"
+	@echo "make bench    build with the release profile, run the benchmark table and the numba reference"
 	@echo "make recipe-reference  rewrite test/recipes/reference.json (results meant to change)"
 	@echo "make api-docs the API reference (Fortran and Python) into docs/api/"
 	@echo "make docs     the documentation site into site/ (tutorials executed, references generated)"
@@ -158,8 +158,16 @@ python-test: build
 
 test: fortran-test python-test docs-test
 
-bench: build
+# the benchmark's own packages (numba for the reference implementation): not needed by make test
+BENCH_STAMP := $(VENV)/.bench-requirements-installed
+
+$(BENCH_STAMP): requirements-bench.txt $(PY_STAMP)
+	$(PY) -m pip install --quiet -r requirements-bench.txt
+	touch $@
+
+bench: build $(BENCH_STAMP)
 	$(PY) bench/run_bench.py --fpm $(FPM)
+	$(PY) bench/reference_bench.py
 
 # Every recipe's reference values, as pytest checks them within their tolerances
 # (test/python/test_recipes.py). Run it only when a change is meant to alter results, and
