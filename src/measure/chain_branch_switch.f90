@@ -1,4 +1,4 @@
-!> Branch switching (docs/model.md sections 12.4 and 12.6): the real eigenvector of the
+!> Branch switching (docs/model.md section 12.4): the real eigenvector of the
 !> Jacobian J for a multiplier -1 (a period doubling) or +1 (a branch point), and the start
 !> cursors of the two asymmetric branches born at a branch point of a mirror-symmetric branch.
 !> The branches themselves are followed by chain_branch.

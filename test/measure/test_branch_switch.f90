@@ -1,4 +1,4 @@
-!> Branch switching at a branch point (docs/model.md 12.6), against what cannot be tuned: on
+!> Branch switching at a branch point (docs/model.md 12.4), against what cannot be tuned: on
 !> the mirror-symmetric 22-impact branch of the chain of 12 the branch point has a multiplier
 !> +1; the two branches switched to there are labelled not symmetric (their parent is), and
 !> are each other's mirror images: the mirror of a point of one is, by Newton at the same

@@ -1,4 +1,4 @@
-!> The undamped single impact oscillator against Budd and Dux (1994) (docs/model.md 12.6):
+!> The undamped single impact oscillator against Budd and Dux (1994) (docs/model.md 12.4):
 !> x'' + x = A sin(w t), one wall at x = sigma (bond 1, spacing sigma) and the other far
 !> (bond 0, spacing 1000). Its (1,1) orbits, one impact of speed V per drive period, satisfy
 !>
