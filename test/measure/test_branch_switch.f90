@@ -2,15 +2,17 @@
 !> the mirror-symmetric 22-impact branch of the chain of 12 the branch point has a multiplier
 !> +1; the two branches switched to there are labelled not symmetric (their parent is), and
 !> are each other's mirror images: the mirror of a point of one is, by Newton at the same
-!> parameter, the orbit of the other there.
+!> parameter, the orbit of the other there. And a fold is no branch point: on figure 10's
+!> chain made asymmetric (a(0) = 1.05), a single multiplier crosses +1 at its fold.
 module test_branch_switch
-    use chain_kinds, only: wp
+    use chain_kinds, only: wp, i8
     use chain_error, only: error_t
     use chain_model, only: model_t, set_model_parameter
     use chain_orbit, only: orbit_t, find_orbit
     use chain_branch, only: branch_options_t, branches_t, follow_branches
     use chain_branch_points, only: mirror_image
-    use test_branch, only: chain12_orbit
+    use test_branch, only: chain12_orbit, settle
+    use test_chains, only: fig10_model
     use testing, only: tally_t, check, check_close
     implicit none
     private
@@ -22,7 +24,61 @@ contains
         type(tally_t), intent(inout) :: t
 
         call crossing_branches(t)
+        call simple_fold(t)
     end subroutine run_switch_tests
+
+    !> Figure 10's chain with the left wall's spacing 1.05 (not mirror-symmetric), its
+    !> eight-impact orbit from rest at A = 3 followed down: it folds with one multiplier +1
+    !> (det(J - I) changes sign, the next multiplier 0.2 away), in the same step as the
+    !> parameter turns: stored as a fold, not as a branch point.
+    subroutine simple_fold(t)
+        type(tally_t), intent(inout) :: t
+        type(model_t) :: model
+        type(orbit_t) :: start
+        type(branches_t) :: res
+        type(branch_options_t) :: opt
+        type(error_t), allocatable :: err
+        real(wp), allocatable :: distance(:)
+        integer :: i, folds, branch_points, f
+
+        model = fig10_model(3.0_wp)
+        model%spacing(0) = 1.05_wp
+        call settle(model, 5_i8, 1, start)
+        call check(t, start%converged .and. start%impacts == 8, &
+                   'simple fold: an eight-impact orbit at A = 3, a(0) = 1.05')
+        if (.not. start%converged) return
+        opt%parameter = 'amplitude'
+        opt%stop = 2
+        opt%step = -0.05_wp
+        call follow_branches(model, 0.0_wp, 1, start%x, start%v, opt, res, err)
+        call check(t, .not. allocated(err), 'simple fold: followed')
+        if (allocated(err)) return
+        print '(a)', '    '//res%end_reason
+        folds = 0
+        branch_points = 0
+        f = 0
+        do i = 1, res%n_specials
+            if (res%specials(i)%kind == 'fold') then
+                folds = folds + 1
+                f = res%specials(i)%point
+            end if
+            if (res%specials(i)%kind == 'branch-point') branch_points = branch_points + 1
+        end do
+        call check(t, folds == 1 .and. branch_points == 0, &
+                   'simple fold: one fold, no branch point')
+        call check(t, .not. any(res%points(:res%n_points)%symmetric), &
+                   'simple fold: no orbit of the asymmetric chain is symmetric')
+        if (f == 0) return
+        associate (o => res%points(f)%orbit)
+            distance = abs(cmplx(o%multipliers_re - 1, o%multipliers_im, wp))
+            write (*, '(a,f15.11,a,es9.2,a,es9.2)') '    simple fold at A = ', &
+                res%points(f)%value, ', |rho - 1| = ', minval(distance), ', the next ', &
+                minval(distance, mask=distance > minval(distance))
+            call check(t, minval(distance) < 1.0e-6_wp .and. &
+                       minval(distance, mask=distance > minval(distance)) > 0.1_wp, &
+                       'simple fold: one multiplier +1, the others away from it')
+        end associate
+    end subroutine simple_fold
 
     !> The chain of 12 from A = 5 up to 5.01 with branch_points = 1: its branch point, then
     !> the two branches crossing there (branches 1 and 2), each starting at the branch point's
