@@ -4,7 +4,8 @@
 !> special points between two points detected by test functions and located on the branch
 !> (fold: the tangent's parameter component; period doubling: det(J + I); Neimark-Sacker: the
 !> complex multipliers outside the unit circle; grazing: the impacts per bond change), and
-!> branch switching at a period doubling onto the period-2p branch.
+!> branch switching at a period doubling onto the period-2p branch and at a branch point onto
+!> the two branches crossing there (chain_branch_switch).
 !>
 !> The branch stops at the bounds of the parameter (the interval from its start to `stop`),
 !> after `max_points` points, at a grazing (the map is not smooth there: the branch ends and
@@ -12,7 +13,7 @@
 !> an error.
 !>
 !> Here the branches are followed: the first through the guess, step by step, to its end, and
-!> the period-doubled ones switched to. What a branch is made of: chain_branch_points (its
+!> those switched to. What a branch is made of: chain_branch_points (its
 !> types come from here too); the corrector: chain_branch_corrector; the special points:
 !> chain_branch_special.
 module chain_branch
