@@ -4,7 +4,8 @@
 !> special points between two points detected by test functions and located on the branch
 !> (fold: the tangent's parameter component; period doubling: det(J + I); Neimark-Sacker: the
 !> complex multipliers outside the unit circle; grazing: the impacts per bond change), and
-!> branch switching at a period doubling onto the period-2p branch.
+!> branch switching at a period doubling onto the period-2p branch and at a branch point onto
+!> the two branches crossing there (chain_branch_switch).
 !>
 !> The branch stops at the bounds of the parameter (the interval from its start to `stop`),
 !> after `max_points` points, at a grazing (the map is not smooth there: the branch ends and
@@ -12,7 +13,7 @@
 !> an error.
 !>
 !> Here the branches are followed: the first through the guess, step by step, to its end, and
-!> the period-doubled ones switched to. What a branch is made of: chain_branch_points (its
+!> those switched to. What a branch is made of: chain_branch_points (its
 !> types come from here too); the corrector: chain_branch_corrector; the special points:
 !> chain_branch_special.
 module chain_branch
@@ -20,13 +21,13 @@ module chain_branch
     use chain_error, only: error_t, set_error, fmt_int, fmt_real
     use chain_model, only: model_t, model_parameter, set_model_parameter, is_model_parameter
     use chain_orbit, only: orbit_t, find_orbit
-    use chain_lapack, only: solve_linear
     use chain_monitor, only: monitor_t, stage_points
     use chain_branch_points, only: branch_options_t, branch_point_t, special_point_t, &
                                    branches_t, special_kinds, end_kinds, cursor_t, setting_t, &
                                    cursor_from_orbit, store, add_reason
     use chain_branch_corrector, only: correct, tangent_at
     use chain_branch_special, only: locate_specials, locate_nonsmooth, nonsmooth_reason
+    use chain_branch_switch, only: real_eigenvector, branch_point_starts
     implicit none
     private
     public :: branch_options_t, branch_point_t, special_point_t, branches_t, follow_branches
@@ -35,7 +36,8 @@ module chain_branch
 contains
 
     !> Follow the branch of period-`cycles` orbits through the guess (x, v) at the model's
-    !> value of opt%parameter, and the period-doubled branches opt%doublings asks for.
+    !> value of opt%parameter, the period-doubled branches opt%doublings asks for, then the
+    !> branches crossing at branch points that opt%branch_points asks for.
     !> `monitor` is told the points found (of max_points per branch) and may stop the work.
     subroutine follow_branches(model, phase, cycles, x, v, opt, res, err, monitor)
         type(model_t), intent(in) :: model
@@ -94,7 +96,41 @@ contains
             end do
             first = last + 1
         end do
+        call follow_crossing_branches(set, res, err, monitor)
     end subroutine follow_branches
+
+    !> The branches crossing the ones followed so far at their branch points, two at each,
+    !> opt%branch_points levels deep: level 1 at the branch points of every branch followed so
+    !> far, each further level at those located on the branches of the level before.
+    subroutine follow_crossing_branches(set, res, err, monitor)
+        type(setting_t), intent(inout) :: set
+        type(branches_t), intent(inout) :: res
+        type(error_t), allocatable, intent(out) :: err
+        class(monitor_t), intent(inout), optional :: monitor
+        integer, allocatable :: level(:)
+        integer :: depth, first, last, s
+        logical :: stopped
+
+        ! level(b): how many branch points branch b is away from those followed before
+        ! (set%branch: the last branch followed, with points or not)
+        allocate (level(set%branch + 1))
+        level = 0
+        first = 1
+        do depth = 1, set%opt%branch_points
+            last = res%n_specials
+            do s = first, last
+                if (res%specials(s)%kind /= 'branch-point') cycle
+                if (level(res%points(res%specials(s)%point)%branch + 1) /= depth - 1) cycle
+                set%branch = size(level)
+                level = [level, depth, depth]
+                call switch_at_branch_point(set, res, res%specials(s)%point, stopped, err, &
+                                            monitor)
+                res%stopped = stopped
+                if (allocated(err) .or. stopped) return
+            end do
+            first = last + 1
+        end do
+    end subroutine follow_crossing_branches
 
     !> Refuse options no branch can be followed with.
     subroutine check_options(model, opt, err)
@@ -115,6 +151,9 @@ contains
                            "direction)")
         else if (opt%doublings < 0) then
             call set_error(err, "continuation: doublings = "//fmt_int(opt%doublings)// &
+                           " is not >= 0")
+        else if (opt%branch_points < 0) then
+            call set_error(err, "continuation: branch_points = "//fmt_int(opt%branch_points)// &
                            " is not >= 0")
         else if (opt%parameter == 'spacing' .and. &
                  any(model%spacing /= model%spacing(1))) then
@@ -187,7 +226,7 @@ contains
         doubled%cycles = 2*res%points(index)%orbit%cycles
         mu = res%points(index)%value
         call set_model_parameter(doubled%model, set%opt%parameter, mu)
-        call doubling_eigenvector(res%points(index)%orbit%jacobian, e, err)
+        call real_eigenvector(res%points(index)%orbit%jacobian, -1.0_wp, e, err)
         if (allocated(err)) return
         ! the doubling orbit is a (degenerate) period-2p orbit: its own first point
         call find_orbit(doubled%model, set%phase, doubled%cycles, res%points(index)%orbit%x, &
@@ -204,6 +243,33 @@ contains
         here%tangent = [e, 0.0_wp]
         call walk(doubled, here, res, .true., stopped, err, monitor)
     end subroutine switch_at_doubling
+
+    !> Switch at the branch point at point `index` onto the two branches that cross there
+    !> (chain_branch_switch), numbered set%branch and set%branch + 1, each followed from the
+    !> branch point's orbit.
+    subroutine switch_at_branch_point(set, res, index, stopped, err, monitor)
+        type(setting_t), intent(in) :: set
+        type(branches_t), intent(inout) :: res
+        integer, intent(in) :: index
+        logical, intent(out) :: stopped
+        type(error_t), allocatable, intent(out) :: err
+        class(monitor_t), intent(inout), optional :: monitor
+        type(setting_t) :: crossing
+        type(cursor_t) :: starts(2)
+        integer :: side
+
+        stopped = .false.
+        crossing = set
+        crossing%cycles = res%points(index)%orbit%cycles
+        call set_model_parameter(crossing%model, set%opt%parameter, res%points(index)%value)
+        call branch_point_starts(crossing, res%points(index), starts, err)
+        if (allocated(err)) return
+        do side = 1, 2
+            crossing%branch = set%branch + side - 1
+            call walk(crossing, starts(side), res, .true., stopped, err, monitor)
+            if (allocated(err) .or. stopped) return
+        end do
+    end subroutine switch_at_branch_point
 
     !> Store `here` and step along the branch until it ends. `switched`: the first step leaves a
     !> branch crossing, where the test functions are not compared.
@@ -373,33 +439,5 @@ contains
         if (present(reached)) reached = .true.
         call store(set, last, res, err)
     end subroutine end_at_bound
-
-    !> The unit eigenvector of J for its real eigenvalue nearest -1, by inverse iteration on
-    !> J + I (nearly singular at a period doubling).
-    subroutine doubling_eigenvector(jacobian, e, err)
-        real(wp), intent(in) :: jacobian(:, :)
-        real(wp), allocatable, intent(out) :: e(:)
-        type(error_t), allocatable, intent(out) :: err
-        real(wp), allocatable :: a(:, :), b(:, :)
-        integer :: m, i, k, info
-
-        m = size(jacobian, 1)
-        allocate (b(m, 1))
-        b(:, 1) = [(1.0_wp + 0.1_wp*i, i=1, m)]
-        do k = 1, 3
-            a = jacobian
-            do i = 1, m
-                a(i, i) = a(i, i) + 1 + 1.0e-12_wp
-            end do
-            call solve_linear(a, b, info)
-            if (info > 0) exit
-            b = b/norm2(b(:, 1))
-        end do
-        if (.not. all(abs(b) < huge(1.0_wp))) then
-            call set_error(err, "continuation: no eigenvector for the multiplier -1")
-            return
-        end if
-        e = b(:, 1)
-    end subroutine doubling_eigenvector
 
 end module chain_branch

@@ -18,7 +18,7 @@ module chain_branch_points
     public :: branch_options_t, branch_point_t, special_point_t, branches_t, special_kinds
     public :: end_kinds
     public :: cursor_t, setting_t, cursor_from_orbit, cursor_from_pass, impacts_per_bond
-    public :: store, add_special, add_reason
+    public :: store, add_special, add_reason, mirror_image
 
     !> The kinds of special point, as stored.
     character(len=*), parameter :: special_kinds(7) = &
@@ -41,6 +41,9 @@ module chain_branch_points
         !> levels of period-doubled branches followed (0: none; 1: the 2p branches from the
         !> first branch's period doublings; 2: also the 4p branches from those; ...)
         integer :: doublings = 0
+        !> levels of branch switching at branch points (0: none; 1: the two branches crossing
+        !> at each branch point of the branches above; 2: also at those located on these; ...)
+        integer :: branch_points = 0
         real(wp) :: max_step = 0  !! largest |step| (0: 20 |step|)
         real(wp) :: min_step = 0  !! smallest |step| before Newton's failure ends (0: 1e-6 |step|)
         type(orbit_options_t) :: newton
@@ -219,27 +222,44 @@ contains
         res%points(res%n_points) = p
     end subroutine store
 
-    !> The orbit through (x, v) on the section `phase` is its own mirror image half a drive
-    !> period later (docs/model.md 9: x(i) -> -x(n+1-i), v(i) -> -v(n+1-i), the drive shifted
-    !> by half a period), to 1e-7 of its size; never on a chain that is not mirror-symmetric
-    !> (its spacings a(k) and a(n-k) differ).
+    !> The orbit through (x, v) on the section `phase` is its own mirror image (mirror_image)
+    !> to 1e-7 of its size; never on a chain that is not mirror-symmetric (its spacings a(k)
+    !> and a(n-k) differ).
     subroutine mirror_symmetric(model, phase, x, v, symmetric, err)
         type(model_t), intent(in) :: model
         real(wp), intent(in) :: phase, x(:), v(:)
         logical, intent(out) :: symmetric
         type(error_t), allocatable, intent(out) :: err
         real(wp), parameter :: within = 1.0e-7_wp
-        type(chain_t) :: chain
-        type(event_log_t) :: log
-        real(wp) :: s, period, size_of
-        integer(i8) :: cycle
-        integer :: n
+        real(wp), allocatable :: x_mirror(:), v_mirror(:)
+        real(wp) :: size_of
 
         symmetric = .false.
-        n = model%n
         associate (a => model%spacing)
             if (any(a /= a(ubound(a, 1):lbound(a, 1):-1))) return
         end associate
+        call mirror_image(model, phase, x, v, x_mirror, v_mirror, err)
+        if (allocated(err)) return
+        size_of = 1 + max(maxval(abs(x)), maxval(abs(v)))
+        symmetric = max(maxval(abs(x_mirror - x)), maxval(abs(v_mirror - v))) <= within*size_of
+    end subroutine mirror_symmetric
+
+    !> The mirror image S of the orbit through (x, v) on the section `phase` of a
+    !> mirror-symmetric chain, on the same section (docs/model.md 9: x(i) -> -x(n+1-i),
+    !> v(i) -> -v(n+1-i), the drive shifted by half a period): the state half a drive period
+    !> after the section, from a fresh chain, mirrored.
+    subroutine mirror_image(model, phase, x, v, x_mirror, v_mirror, err)
+        type(model_t), intent(in) :: model
+        real(wp), intent(in) :: phase, x(:), v(:)
+        real(wp), allocatable, intent(out) :: x_mirror(:), v_mirror(:)
+        type(error_t), allocatable, intent(out) :: err
+        type(chain_t) :: chain
+        type(event_log_t) :: log
+        real(wp) :: s, period
+        integer(i8) :: cycle
+        integer :: n
+
+        n = model%n
         call chain_at_section(model, phase, x, v, chain, err)
         if (allocated(err)) return
         call event_log_init(log, .false., 0)
@@ -252,10 +272,11 @@ contains
         end if
         call advance_to_point(chain, cycle, s, log, err)
         if (allocated(err)) return
-        size_of = 1 + max(maxval(abs(x)), maxval(abs(v)))
-        symmetric = max(maxval(abs(chain_positions(chain) + x(n:1:-1))), &
-                        maxval(abs(chain_velocities(chain) + v(n:1:-1)))) <= within*size_of
-    end subroutine mirror_symmetric
+        x_mirror = -chain_positions(chain)
+        x_mirror = x_mirror(n:1:-1)
+        v_mirror = -chain_velocities(chain)
+        v_mirror = v_mirror(n:1:-1)
+    end subroutine mirror_image
 
     subroutine add_special(res, point, kind, value)
         type(branches_t), intent(inout) :: res

@@ -84,6 +84,7 @@ contains
         opt%step = cfg%cont_step
         opt%max_points = cfg%cont_max_points
         opt%doublings = cfg%cont_doublings
+        opt%branch_points = cfg%cont_branch_points
     end function continuation_options
 
     !> The branches the input asks for, from its guess. `monitor` is told the transient's

@@ -359,6 +359,7 @@ contains
             cfg%cont_step = real_input(s, 'continuation', 'step')
             cfg%cont_period = int_input(s, 'continuation', 'period')
             cfg%cont_doublings = int_input(s, 'continuation', 'doublings')
+            cfg%cont_branch_points = int_input(s, 'continuation', 'branch_points')
         end associate
     end subroutine copy_continuation
 

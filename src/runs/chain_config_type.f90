@@ -36,6 +36,7 @@ module chain_config_type
         character(len=:), allocatable :: cont_parameter
         real(wp) :: cont_stop = 0, cont_step = 0
         integer :: cont_period = 1, cont_max_points = 200, cont_doublings = 0
+        integer :: cont_branch_points = 0
         ! &census: the attractors reached from random starts (chain_census)
         logical :: census = .false.
         integer :: census_samples = 100, census_seed = 1

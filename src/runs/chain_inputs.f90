@@ -169,6 +169,9 @@ module chain_inputs
                     help='most orbits along the branch (1: Newton only)'), &
         input_key_t('continuation', 'doublings', key_integer, default='0', range='0..8', &
                     low=0, high=8, units='1', help='period doublings followed'), &
+        input_key_t('continuation', 'branch_points', key_integer, default='0', range='0..4', &
+                    low=0, high=4, units='1', &
+                    help='levels of switching at branch points (two branches each)'), &
         input_key_t('census', 'samples', key_integer, default='100', &
                     default_text='100 (plane_points**2 with a plane)', &
                     range='[1, 10000000]', low=1, high=1.0e7_wp, units='1', &

@@ -5,11 +5,15 @@ program measure_tests
     use suites, only: suite_runner_t
     use test_orbit, only: run_orbit_tests
     use test_branch, only: run_branch_tests
+    use test_branch_switch, only: run_switch_tests
+    use test_budd_dux, only: run_budd_dux_tests
     implicit none
     type(suite_runner_t) :: runner
 
     call runner%start()
     call runner%run('orbit', run_orbit_tests)
     call runner%run('branch', run_branch_tests)
+    call runner%run('switch', run_switch_tests)
+    call runner%run('buddux', run_budd_dux_tests)
     call runner%finish()
 end program measure_tests

@@ -28,7 +28,7 @@ module test_branch
     use testing, only: tally_t, check, check_close
     implicit none
     private
-    public :: run_branch_tests
+    public :: run_branch_tests, chain12_orbit, settle
 
     !> Records what it is told and asks to stop at a given count of one stage.
     type, extends(monitor_t) :: counting_monitor_t

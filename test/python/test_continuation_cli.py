@@ -32,6 +32,8 @@ BAD = {
                    ["max_points = 0", ">= 1"]),
     "doublings": ("parameter = 'amplitude', stop = 2, step = 0.1, doublings = -1",
                   ["doublings = -1", "0..8"]),
+    "branch_points": ("parameter = 'amplitude', stop = 2, step = 0.1, branch_points = 5",
+                      ["branch_points = 5", "0..4"]),
     "stop out of range": ("parameter = 'restitution', stop = 1.5, step = 0.1",
                           ["&continuation: stop = 1.5", "restitution"]),
     "stop and step missing": ("parameter = 'amplitude'", ["stop and step are required"]),
@@ -287,3 +289,38 @@ def test_branch_point_file(impactchain_exe, tmp_path):
         assert np.abs(rho - 1).min() < 1e-8
         assert (g["symmetric"][:] == 1).all()
         assert i < g["values"].shape[0] - 1       # the branch goes on through it
+
+
+def test_switching_at_the_branch_point(impactchain_exe, tmp_path):
+    """The same run with branch_points = 1: after branch 0, the two branches crossing at its
+    branch point, 1 and 2, each from the branch point's orbit, in /continuation like the
+    doubled branches. Their orbits are not their own mirror images (branch 0's are), they
+    move off the branch point, and the same steps along the two reach the same A (the suite
+    `switch` compares their states by the mirror, by Newton at the same A)."""
+    text = (CHAIN12 + "&continuation parameter = 'amplitude', stop = 5.01, step = 0.001, "
+            "branch_points = 1 /\n&output file = 'switch.h5' /\n")
+    result = run_namelist(impactchain_exe, text, tmp_path)
+    assert "branch-point at" in result.stdout
+    with h5py.File(tmp_path / "switch.h5") as f:
+        g = f["continuation"]
+        branch = g["branch"][:]
+        assert sorted(set(branch)) == [0, 1, 2]
+        assert len(g.attrs["end_kind"].splitlines()) == 3
+        kinds = [k.decode() for k in g["special_kind"][:]]
+        bp = g["special_index"][kinds.index("branch-point")]
+        assert branch[bp] == 0
+        one, two = np.flatnonzero(branch == 1), np.flatnonzero(branch == 2)
+        for first in (one[0], two[0]):
+            assert g["values"][first] == g["values"][bp]
+            assert (g["x"][first] == g["x"][bp]).all() and (g["v"][first] == g["v"][bp]).all()
+        assert (g["symmetric"][:bp + 1] == 1).all()
+        assert (g["symmetric"][one[1:]] == 0).all() and (g["symmetric"][two[1:]] == 0).all()
+        rho = g["multipliers_re"][:] + 1j * g["multipliers_im"][:]
+        assert np.abs(rho[bp] - 1).min() < 1e-8
+        # mirror images: the same steps from the branch point reach the same A (to the
+        # conditioning of J - I there, a multiplier within 1e-4 of 1), apart in the state
+        k = min(len(one), len(two), 6)
+        assert np.allclose(g["values"][one[:k]], g["values"][two[:k]], rtol=0, atol=1e-6)
+        assert (g["impacts_per_period"][np.r_[one, two]] == 22).all()
+        assert np.abs(g["x"][one[k - 1]] - g["x"][two[k - 1]]).max() > 1e-3
+
