@@ -61,7 +61,9 @@ def continuation(
     branch points and grazings are located; a branch ends at a grazing, a corner (one
     oscillator hit by both neighbours at once) or an impact at the section, at a bound of the
     parameter, after ``max_points`` or when Newton fails, and says why (``end_reason``) and
-    which (``end_kind``). ``**keys`` (any key of the input table) as :func:`simulate`'s.
+    which (``end_kind``). ``**keys`` (any key of the input table) as :func:`simulate`'s,
+    and the ``&continuation`` keys not named here (``branch_points``: levels of switching
+    onto the branches crossing at branch points).
     Ctrl-C stops the work at its next transient cycle or orbit (:class:`KeyboardInterrupt`);
     ``progress=True`` shows a tqdm bar of them.
 
@@ -153,7 +155,8 @@ def _continuation_args(n: Any, amplitude: Any, omega: Any, keys: Mapping[str, An
                        parameter: Any, stop: Any, step: Any, period: Any, max_points: Any,
                        doublings: Any) -> tuple[dict[str, Any], dict[str, Any]]:
     """The run's arguments (as :func:`_config`) and those of ``ic_continuation``."""
-    cfg = _config(n, amplitude, omega, 1, keys)
+    # (the &continuation keys this function does not name, e.g. branch_points, as overrides)
+    cfg = _config(n, amplitude, omega, 1, keys, home=("continuation",))
     args = {key: cfg[key] for key in ("n", "spacing", "damping", "restitution", "amplitude",
                                       "omega", "boundary", "explicit", "x0", "v0",
                                       "transient", "phase", "stick_speed", "overrides")}

@@ -851,6 +851,25 @@ def test_continuation_is_the_cli_file(name: str, cli: Path, tmp_path: Path) -> N
     assert ds.x.dims == ("point", "oscillator") and ds.strobe_x.sizes["iterate"] == 1
 
 
+def test_continuation_takes_the_other_continuation_keys(cli: Path, tmp_path: Path) -> None:
+    """A key of &continuation that api.continuation does not name (branch_points) goes as the
+    CLI's: the chain of 12's branch point and the two branches switched to there, the same
+    file group bit for bit."""
+    xr = pytest.importorskip("xarray")
+    pytest.importorskip("h5netcdf")
+    chain = dict(n=12, omega=2.3, damping=0.02, restitution=0.85, transient=500)
+    group = dict(parameter="amplitude", stop=5.01, step=0.001)
+    text = (namelist(**chain, amplitude=5.0, cycles=1, events=False)
+            + "&continuation parameter = 'amplitude', stop = 5.01, step = 0.001, "
+            "branch_points = 1 /\n")
+    result = run_cli(cli, text, tmp_path)
+    assert result.returncode == 0, result.stderr
+    ds = api.continuation(**chain, amplitude=5.0, **group, branch_points=1)
+    assert_same_bits(ds, _file_group(xr, tmp_path / "run.h5"))
+    assert sorted(set(ds.branch.values.tolist())) == [0, 1, 2]
+    assert "branch-point" in list(ds.special_kind.values)
+
+
 def test_continuation_capacity_retry_is_invisible(monkeypatch: pytest.MonkeyPatch) -> None:
     """With room for one of everything at first, the call runs again with the sizes the
     first call reported, and returns what the first guess gives."""
