@@ -443,7 +443,8 @@ contains
                  'drive cycles', 'period of the orbit', 'always')
         call add(t, 'continuation', '/continuation/branch', 'dataset', 'point', 'int32', '1', '', &
                  'branch index (0: the first; 1, 2, ...: branches switched to at period '// &
-                 'doublings)', 'always')
+                 'doublings and branch points; each starts at its parent''s special point)', &
+                 'always')
         call add(t, 'continuation', '/continuation/multipliers_re', 'dataset', &
                  'point multiplier', 'float64', '1', '', 'Floquet multiplier, real part', &
                  'always')
