@@ -27,6 +27,7 @@ module chain_branch
                                    cursor_from_orbit, store, add_reason
     use chain_branch_corrector, only: correct, tangent_at
     use chain_branch_special, only: locate_specials, locate_nonsmooth, nonsmooth_reason
+    use chain_branch_graze, only: pass_grazing
     implicit none
     private
     public :: branch_options_t, branch_point_t, special_point_t, branches_t, follow_branches
@@ -205,8 +206,9 @@ contains
         call walk(doubled, here, res, .true., stopped, err, monitor)
     end subroutine switch_at_doubling
 
-    !> Store `here` and step along the branch until it ends. `switched`: the first step leaves a
-    !> branch crossing, where the test functions are not compared.
+    !> Store `here` and step along the branch until it ends, through the grazings met on the
+    !> way (go_through). `switched`: the first step leaves a branch crossing, where the test
+    !> functions are not compared.
     subroutine walk(set, here, res, switched, stopped, err, monitor)
         type(setting_t), intent(in) :: set
         type(cursor_t), intent(inout) :: here
@@ -215,21 +217,17 @@ contains
         logical, intent(out) :: stopped
         type(error_t), allocatable, intent(out) :: err
         class(monitor_t), intent(inout), optional :: monitor
-        type(cursor_t) :: next
+        type(cursor_t) :: next, located
         character(len=:), allocatable :: reason, failure, kind
         real(wp) :: h, mu_next, value
         integer :: count, iterations
-        logical :: ok, compare, crossed
+        logical :: ok, compare, crossed, passed
 
-        stopped = .false.
         call store(set, here, res, err)
         if (allocated(err)) return
-        count = 1
-        if (present(monitor)) then
-            stopped = .not. monitor%keep_going(stage_points, int(count, i8), &
-                                               int(set%opt%max_points, i8))
-            if (stopped) return
-        end if
+        count = 0
+        call count_point(set, count, stopped, monitor)
+        if (stopped) return
         h = abs(set%opt%step)
         compare = .not. switched
         reason = ''
@@ -242,11 +240,17 @@ contains
             end if
             call correct(set, here, h, next, ok, iterations, failure, err, crossed)
             if (allocated(err)) return
-            if (.not. ok .and. crossed .and. compare) then
+            if (.not. ok .and. (crossed .or. h/2 < set%opt%min_step) .and. compare) then
                 ! Newton fails where the impacts change: a grazing or a corner, if a monitor
-                ! of the last orbit with the old impacts vanishes
-                call locate_nonsmooth(set, here, h, .false., res, kind, value, err)
+                ! of the last orbit with the old impacts vanishes (the failing step may end at
+                ! one all the same at the smallest step)
+                call locate_nonsmooth(set, here, merge(h, 2*(h/2), crossed), .false., res, &
+                                      kind, value, err, located)
                 if (allocated(err)) return
+                call go_through(set, kind, located, value, res, here, h, passed, err)
+                if (passed) call count_point(set, count, stopped, monitor)
+                if (allocated(err) .or. stopped) return
+                if (passed) cycle
                 if (len(kind) > 0) then
                     reason = nonsmooth_reason(set, res, kind, value)
                     exit
@@ -255,14 +259,6 @@ contains
             if (.not. ok) then
                 h = h/2
                 if (h < set%opt%min_step) then
-                    ! (the failing step may end at a grazing or a corner all the same)
-                    if (compare) call locate_nonsmooth(set, here, 2*h, .false., res, kind, &
-                                                       value, err)
-                    if (allocated(err)) return
-                    if (len(kind) > 0) then
-                        reason = nonsmooth_reason(set, res, kind, value)
-                        exit
-                    end if
                     kind = 'newton'
                     reason = "Newton failed at "//set%opt%parameter//" = "// &
                              fmt_real(here%y(size(here%y)))//" (step "//fmt_real(2*h)// &
@@ -273,7 +269,13 @@ contains
             end if
             mu_next = next%y(size(next%y))
             if (compare .and. any(next%impacts /= here%impacts)) then
-                call end_at_impact_change(set, here, next, h, res, kind, reason, err)
+                call end_at_impact_change(set, here, next, h, res, kind, reason, err, located, &
+                                          value)
+                if (allocated(err)) return
+                call go_through(set, kind, located, value, res, here, h, passed, err)
+                if (passed) call count_point(set, count, stopped, monitor)
+                if (allocated(err) .or. stopped) return
+                if (passed) cycle
                 exit
             end if
             if (mu_next < set%low .or. mu_next > set%high) then
@@ -285,12 +287,8 @@ contains
             if (allocated(err)) return
             call store(set, next, res, err)
             if (allocated(err)) return
-            count = count + 1
-            if (present(monitor)) then
-                stopped = .not. monitor%keep_going(stage_points, int(count, i8), &
-                                                   int(set%opt%max_points, i8))
-                if (stopped) return
-            end if
+            call count_point(set, count, stopped, monitor)
+            if (stopped) return
             here = next
             compare = .true.
             if (iterations <= 2) h = min(1.5_wp*h, set%opt%max_step)
@@ -301,17 +299,60 @@ contains
                         fmt_int(set%cycles)//"): "//reason)
     end subroutine walk
 
+    !> One more point stored: the monitor is told and may stop the work.
+    subroutine count_point(set, count, stopped, monitor)
+        type(setting_t), intent(in) :: set
+        integer, intent(inout) :: count
+        logical, intent(out) :: stopped
+        class(monitor_t), intent(inout), optional :: monitor
+
+        count = count + 1
+        stopped = .false.
+        if (present(monitor)) stopped = .not. monitor%keep_going(stage_points, int(count, i8), &
+                                                                 int(set%opt%max_points, i8))
+    end subroutine count_point
+
+    !> At a grazing just stored (`kind`, the orbit `located` at `value`, `here` the point before
+    !> it): the first orbit of the family on the other side (chain_branch_graze), with a new
+    !> impact of speed 1e-3 or at 1e-4 |step| from the grazing, stored, becomes `here`
+    !> (`passed`); the step starts at its distance from the grazing.
+    subroutine go_through(set, kind, located, value, res, here, h, passed, err)
+        type(setting_t), intent(in) :: set
+        character(len=*), intent(in) :: kind
+        type(cursor_t), intent(in) :: located
+        real(wp), intent(in) :: value
+        type(branches_t), intent(inout) :: res
+        type(cursor_t), intent(inout) :: here
+        real(wp), intent(inout) :: h
+        logical, intent(out) :: passed
+        type(error_t), allocatable, intent(out) :: err
+        real(wp), parameter :: v_new = 1.0e-3_wp
+        type(cursor_t) :: found
+
+        passed = .false.
+        if (kind /= 'grazing') return
+        call pass_grazing(set, located, here, value, res%points(res%n_points)%symmetric, &
+                          1.0e-4_wp*abs(set%opt%step), v_new, found, passed, err)
+        if (allocated(err) .or. .not. passed) return
+        call store(set, found, res, err)
+        if (allocated(err)) return
+        h = min(norm2(found%y - located%y), abs(set%opt%step))
+        here = found
+    end subroutine go_through
+
     !> The step from `here` to `next` changes the impacts. Past a bound they may change beyond
     !> it: the branch ends on the bound if the orbit there keeps them; else it ends at the
     !> grazing or corner located in the step ('impacts' when no monitor vanishes there).
-    subroutine end_at_impact_change(set, here, next, h, res, kind, reason, err)
+    subroutine end_at_impact_change(set, here, next, h, res, kind, reason, err, located, value)
         type(setting_t), intent(in) :: set
         type(cursor_t), intent(in) :: here, next
         real(wp), intent(in) :: h
         type(branches_t), intent(inout) :: res
         character(len=:), allocatable, intent(out) :: kind, reason
         type(error_t), allocatable, intent(out) :: err
-        real(wp) :: mu_next, value
+        type(cursor_t), intent(out) :: located !! the orbit stored there
+        real(wp), intent(out) :: value         !! where its monitor vanishes
+        real(wp) :: mu_next
         logical :: reached
 
         mu_next = next%y(size(next%y))
@@ -323,7 +364,8 @@ contains
             kind = 'bound'
             return
         end if
-        call locate_nonsmooth(set, here, h, .true., res, kind, value, err)
+        value = mu_next
+        call locate_nonsmooth(set, here, h, .true., res, kind, value, err, located)
         if (allocated(err)) return
         if (len(kind) == 0) kind = 'impacts'
         reason = nonsmooth_reason(set, res, kind, value)
