@@ -27,7 +27,7 @@ module chain_branch
                                    cursor_from_orbit, store, add_reason
     use chain_branch_corrector, only: correct, tangent_at
     use chain_branch_special, only: locate_specials, locate_nonsmooth, nonsmooth_reason
-    use chain_branch_graze, only: pass_grazing
+    use chain_branch_graze, only: pass_grazing, grazing_from_gap
     implicit none
     private
     public :: branch_options_t, branch_point_t, special_point_t, branches_t, follow_branches
@@ -327,13 +327,26 @@ contains
         logical, intent(out) :: passed
         type(error_t), allocatable, intent(out) :: err
         real(wp), parameter :: v_new = 1.0e-3_wp
-        type(cursor_t) :: found
+        type(cursor_t) :: found, graze
+        real(wp) :: mu_g
+        logical :: better
 
         passed = .false.
         if (kind /= 'grazing') return
         call pass_grazing(set, located, here, value, res%points(res%n_points)%symmetric, &
                           1.0e-4_wp*abs(set%opt%step), v_new, found, passed, err)
         if (allocated(err) .or. .not. passed) return
+        if (located%orbit%min_impact_speed < located%orbit%min_gap) then
+            ! the grazing stored again where the vanished impact's side locates it better
+            call grazing_from_gap(set, found, value, graze, mu_g, better, err)
+            if (allocated(err)) return
+            if (better) then
+                res%n_points = res%n_points - 1
+                call store(set, graze, res, err)
+                if (allocated(err)) return
+                res%specials(res%n_specials)%value = mu_g
+            end if
+        end if
         call store(set, found, res, err)
         if (allocated(err)) return
         h = min(norm2(found%y - located%y), abs(set%opt%step))

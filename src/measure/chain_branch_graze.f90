@@ -5,10 +5,11 @@
 !>
 !> Location: the grazing monitor of the orbits with the old impacts (the gap minimum g(t*),
 !> g'(t*) = 0 with t* from the closed-form flow, or the impact speed V) is a smooth function of
-!> the arclength s along the branch (V grows like s where the parameter grows like V**2), so
-!> its zero is found by secant steps in s, each trial corrected onto the branch: the solution
-!> of G(z, mu) = 0, g(t*) = 0, g'(t*) = 0 reduced to the branch. The parameter there is the
-!> secant root through the last two orbits of g (linear in mu) or of V**2 (V**2 is).
+!> the arclength s along the branch (a periodic orbit's new impact has V proportional to
+!> mu - mu_g: its kick moves the next approach's gap minimum by O(V)), so its zero is found by
+!> secant steps in s, each trial corrected onto the branch: the solution of G(z, mu) = 0,
+!> g(t*) = 0, g'(t*) = 0 reduced to the branch. The parameter there is the secant root
+!> through the last two orbits.
 !>
 !> The other side: the orbit with the changed impacts at a small distance in the parameter,
 !> by Newton from the grazing orbit moved along the old branch's tangent, on the side where it
@@ -26,7 +27,7 @@ module chain_branch_graze
     use chain_branch_corrector, only: correct, tangent_at
     implicit none
     private
-    public :: refine_grazing, pass_grazing
+    public :: refine_grazing, pass_grazing, grazing_from_gap
 
 contains
 
@@ -91,9 +92,9 @@ contains
         end if
     end function monitor
 
-    !> Where the monitor reaches zero, by the secant through two orbits in the parameter of g
-    !> or of V**2 (the quantities smooth in it); the last orbit's parameter when the secant
-    !> does not apply.
+    !> Where the monitor reaches zero, by the secant through two orbits in the parameter (g
+    !> and V are both smooth in it there); the last orbit's parameter when the secant does
+    !> not apply.
     pure real(wp) function root(before, last, by_speed) result(value)
         type(cursor_t), intent(in) :: before, last
         logical, intent(in) :: by_speed
@@ -105,10 +106,6 @@ contains
         mu1 = last%y(m + 1)
         g0 = monitor(before, by_speed)
         g1 = monitor(last, by_speed)
-        if (by_speed) then
-            g0 = g0**2
-            g1 = g1**2
-        end if
         value = mu1
         if (.not. (g0 > g1 .and. g1 >= 0 .and. g0 < huge(1.0_wp) .and. mu0 /= mu1)) return
         value = mu1 - g1*(mu1 - mu0)/(g1 - g0)
@@ -151,6 +148,68 @@ contains
             ahead = -ahead
         end do
     end subroutine pass_grazing
+
+    !> The grazing located again from the side where the impact is gone (`found`, past an
+    !> impact whose speed vanished at about mu_g): that family is smooth up to it, so the
+    !> secant on its gap minimum in the parameter, Newton at each trial, converges to
+    !> rounding where Newton on the impacting side (its Jacobian growing like 1/V) cannot.
+    !> ok: `graze` is its orbit there, at `value`.
+    subroutine grazing_from_gap(set, found, mu_g, graze, value, ok, err)
+        type(setting_t), intent(in) :: set
+        type(cursor_t), intent(in) :: found
+        real(wp), intent(in) :: mu_g
+        type(cursor_t), intent(out) :: graze
+        real(wp), intent(out) :: value
+        logical, intent(out) :: ok
+        type(error_t), allocatable, intent(out) :: err
+        type(cursor_t) :: trial, last
+        real(wp) :: mu(2), gap(2), next
+        integer :: k, m
+
+        ok = .false.
+        m = size(found%y) - 1
+        last = found
+        mu = [2*found%y(m + 1) - mu_g, found%y(m + 1)]
+        call orbit_at(set, found, mu(1), trial, ok, err)
+        if (.not. ok) return
+        gap = [trial%orbit%min_gap, found%orbit%min_gap]
+        do k = 1, 30
+            if (gap(2) <= 1.0e-14_wp .or. .not. gap(1) > gap(2)) exit
+            next = mu(2) - gap(2)*(mu(2) - mu(1))/(gap(2) - gap(1))
+            call orbit_at(set, found, next, trial, ok, err)
+            if (allocated(err)) return
+            if (.not. ok) exit
+            if (.not. trial%orbit%min_gap < gap(2)) exit
+            mu = [mu(2), next]
+            gap = [gap(2), trial%orbit%min_gap]
+            last = trial
+        end do
+        ok = gap(1) > gap(2) .and. gap(2) < 1.0e-10_wp
+        graze = last
+        value = mu(2) - gap(2)*(mu(2) - mu(1))/(gap(2) - gap(1))
+    end subroutine grazing_from_gap
+
+    !> The orbit of c's family at the parameter value mu, by Newton from c's state: ok when
+    !> it converges with c's impacts and no touch of its own.
+    subroutine orbit_at(set, c, mu, found, ok, err)
+        type(setting_t), intent(in) :: set
+        type(cursor_t), intent(in) :: c
+        real(wp), intent(in) :: mu
+        type(cursor_t), intent(out) :: found
+        logical, intent(out) :: ok
+        type(error_t), allocatable, intent(out) :: err
+        type(model_t) :: model
+        type(orbit_t) :: orbit
+
+        ok = .false.
+        model = set%model
+        call set_model_parameter(model, set%opt%parameter, mu)
+        call find_orbit(model, set%phase, set%cycles, c%orbit%x, c%orbit%v, orbit, err, &
+                        set%opt%newton)
+        if (allocated(err) .or. .not. orbit%converged) return
+        call cursor_from_orbit(set, mu, orbit, found)
+        ok = all(found%impacts == c%impacts) .and. orbit%min_gap >= 0
+    end subroutine orbit_at
 
     !> Newton from z at mu: ok when it converges to an orbit with other impacts than g's,
     !> which has a tangent (oriented to `ahead` in the parameter).

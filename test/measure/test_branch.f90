@@ -289,7 +289,7 @@ contains
     !> the mirror-symmetric chain cross the unit circle together; the pairs that turn real
     !> outside it later are no Neimark-Sacker point), then a grazing where an impact's speed
     !> vanishes. Both runs must locate both at the same amplitude: the Neimark-Sacker point to
-    !> 1e-9 and the grazing (extrapolated from where Newton still converges) to 1e-8.
+    !> 1e-9 and the grazing (located again past it, where the impact is gone) to 1e-10.
     subroutine two_starts(t)
         type(tally_t), intent(inout) :: t
         type(branches_t) :: res(2)
@@ -312,8 +312,9 @@ contains
             if (allocated(err)) return
             print '(a)', '    '//res(r)%end_reason
         end do
-        call check(t, all(res%n_specials == 2), 'two starts: two special points each')
-        if (any(res%n_specials /= 2)) return
+        ! (the branch goes on through the grazing: special points beyond it may follow)
+        call check(t, all(res%n_specials >= 2), 'two starts: two special points each')
+        if (any(res%n_specials < 2)) return
         call check(t, res(1)%specials(1)%kind == 'neimark-sacker' .and. &
                    res(2)%specials(1)%kind == 'neimark-sacker' .and. &
                    res(1)%specials(2)%kind == 'grazing' .and. &
@@ -326,7 +327,7 @@ contains
         call check_close(t, res(1)%specials(1)%value, res(2)%specials(1)%value, &
                          'two starts: the same Neimark-Sacker point', 1.0e-9_wp)
         call check_close(t, res(1)%specials(2)%value, res(2)%specials(2)%value, &
-                         'two starts: the same grazing', 1.0e-8_wp)
+                         'two starts: the same grazing', 1.0e-10_wp)
     end subroutine two_starts
 
     !> A guess from which Newton fails (test_corners' chain, resting on the left wall once
