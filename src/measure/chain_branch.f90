@@ -6,10 +6,11 @@
 !> complex multipliers outside the unit circle; grazing: the impacts per bond change), and
 !> branch switching at a period doubling onto the period-2p branch.
 !>
-!> The branch stops at the bounds of the parameter (the interval from its start to `stop`),
-!> after `max_points` points, at a grazing (the map is not smooth there: the branch ends and
-!> says so) or when Newton fails at the smallest step; each is a result with its reason, not
-!> an error.
+!> The branch goes through a grazing onto the family with the changed impacts
+!> (chain_branch_graze). It stops at the bounds of the parameter (the interval from its start
+!> to `stop`), after `max_points` points, at a corner or an impact at the section, at a
+!> grazing with no orbit found on its other side, or when Newton fails at the smallest step;
+!> each is a result with its reason, not an error.
 !>
 !> Here the branches are followed: the first through the guess, step by step, to its end, and
 !> the period-doubled ones switched to. What a branch is made of: chain_branch_points (its
