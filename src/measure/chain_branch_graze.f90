@@ -114,10 +114,10 @@ contains
     !> From the grazing orbit `g` at the parameter value mu_g (its tangent that of the old
     !> branch; `before` the branch's point before it), the first orbit of the family on the
     !> other side, with other impacts than `g`; `found` gets its tangent, oriented away from
-    !> the grazing; ok = .false. when Newton finds none. Where a gap touched zero (an impact
-    !> appears), Newton starts from the first-order orbit with the new impact of speed v_new
-    !> (new_impact_orbit); where an impact's speed vanished, from g's state at mu_g + delta,
-    !> then mu_g - delta (the side ahead first).
+    !> the grazing; ok = .false. when Newton finds none. Where a gap of an orbit without
+    !> impacts touched zero, Newton starts from the first-order orbit with the new impact of
+    !> speed v_new (new_impact_orbit: its kick carried by the free flow); else from g's state
+    !> at mu_g + delta, then mu_g - delta (the side ahead first).
     subroutine pass_grazing(set, g, before, mu_g, symmetric, delta, v_new, found, ok, err)
         type(setting_t), intent(in) :: set
         type(cursor_t), intent(in) :: g, before
@@ -132,7 +132,7 @@ contains
 
         ok = .false.
         m = size(g%y) - 1
-        if (g%orbit%min_gap < g%orbit%min_impact_speed) then
+        if (g%orbit%min_gap < g%orbit%min_impact_speed .and. g%orbit%impacts == 0) then
             call new_impact_orbit(set, g, before, mu_g, symmetric, v_new, z, mu, ok)
             if (ok) call newton_other_side(set, g, z, mu, sign(1.0_wp, mu - mu_g), found, ok, &
                                            err)
