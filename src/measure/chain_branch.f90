@@ -28,7 +28,7 @@ module chain_branch
                                    cursor_from_orbit, store, add_reason
     use chain_branch_corrector, only: correct, tangent_at
     use chain_branch_special, only: locate_specials, locate_nonsmooth, nonsmooth_reason
-    use chain_branch_graze, only: pass_grazing, grazing_from_gap
+    use chain_branch_graze, only: pass_grazing, grazing_from_gap, orbit_at
     implicit none
     private
     public :: branch_options_t, branch_point_t, special_point_t, branches_t, follow_branches
@@ -316,7 +316,10 @@ contains
     !> At a grazing just stored (`kind`, the orbit `located` at `value`, `here` the point before
     !> it): the first orbit of the family on the other side (chain_branch_graze), with a new
     !> impact of speed 1e-3 or at 1e-4 |step| from the grazing, stored, becomes `here`
-    !> (`passed`); the step starts at its distance from the grazing.
+    !> (`passed`); the step starts at its distance from the grazing. Where an impact's speed
+    !> vanished, the grazing is stored again as located from the other side, and that first
+    !> orbit found again from there (the impacting side's value is only as good as Newton
+    !> with a Jacobian like 1/u, and would round differently with other BLAS kernels).
     subroutine go_through(set, kind, located, value, res, here, h, passed, err)
         type(setting_t), intent(in) :: set
         character(len=*), intent(in) :: kind
@@ -329,16 +332,17 @@ contains
         type(error_t), allocatable, intent(out) :: err
         real(wp), parameter :: v_new = 1.0e-3_wp
         type(cursor_t) :: found, graze
-        real(wp) :: mu_g
+        real(wp) :: mu_g, delta
         logical :: better
 
         passed = .false.
         if (kind /= 'grazing') return
+        delta = 1.0e-4_wp*abs(set%opt%step)
         call pass_grazing(set, located, here, value, res%points(res%n_points)%symmetric, &
-                          1.0e-4_wp*abs(set%opt%step), v_new, found, passed, err)
+                          delta, v_new, found, passed, err)
         if (allocated(err) .or. .not. passed) return
+        graze = located
         if (located%orbit%min_impact_speed < located%orbit%min_gap) then
-            ! the grazing stored again where the vanished impact's side locates it better
             call grazing_from_gap(set, found, value, graze, mu_g, better, err)
             if (allocated(err)) return
             if (better) then
@@ -346,13 +350,40 @@ contains
                 call store(set, graze, res, err)
                 if (allocated(err)) return
                 res%specials(res%n_specials)%value = mu_g
+                call first_past(set, graze, mu_g + sign(delta, found%y(size(found%y)) - mu_g), &
+                                found, err)
+                if (allocated(err)) return
+            else
+                graze = located
             end if
         end if
         call store(set, found, res, err)
         if (allocated(err)) return
-        h = min(norm2(found%y - located%y), abs(set%opt%step))
+        h = min(norm2(found%y - graze%y), abs(set%opt%step))
         here = found
     end subroutine go_through
+
+    !> The orbit of graze's family at mu, with its tangent oriented along found's: it replaces
+    !> found when Newton finds it.
+    subroutine first_past(set, graze, mu, found, err)
+        type(setting_t), intent(in) :: set
+        type(cursor_t), intent(in) :: graze
+        real(wp), intent(in) :: mu
+        type(cursor_t), intent(inout) :: found
+        type(error_t), allocatable, intent(out) :: err
+        type(cursor_t) :: again
+        logical :: ok
+
+        call orbit_at(set, graze, mu, again, ok, err)
+        if (allocated(err) .or. .not. ok) return
+        call tangent_at(set, again, found%tangent, err)
+        if (allocated(err)) then
+            ! (no tangent there: the first orbit stays as found)
+            deallocate (err)
+            return
+        end if
+        found = again
+    end subroutine first_past
 
     !> The step from `here` to `next` changes the impacts. Past a bound they may change beyond
     !> it: the branch ends on the bound if the orbit there keeps them; else it ends at the

@@ -27,7 +27,7 @@ module chain_branch_graze
     use chain_branch_corrector, only: correct, tangent_at
     implicit none
     private
-    public :: refine_grazing, pass_grazing, grazing_from_gap
+    public :: refine_grazing, pass_grazing, grazing_from_gap, orbit_at
 
 contains
 
