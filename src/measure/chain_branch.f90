@@ -7,10 +7,11 @@
 !> branch switching at a period doubling onto the period-2p branch and at a branch point onto
 !> the two branches crossing there (chain_branch_switch).
 !>
-!> The branch stops at the bounds of the parameter (the interval from its start to `stop`),
-!> after `max_points` points, at a grazing (the map is not smooth there: the branch ends and
-!> says so) or when Newton fails at the smallest step; each is a result with its reason, not
-!> an error.
+!> The branch goes through a grazing onto the family with the changed impacts
+!> (chain_branch_graze). It stops at the bounds of the parameter (the interval from its start
+!> to `stop`), after `max_points` points, at a corner or an impact at the section, at a
+!> grazing with no orbit found on its other side, or when Newton fails at the smallest step;
+!> each is a result with its reason, not an error.
 !>
 !> Here the branches are followed: the first through the guess, step by step, to its end, and
 !> those switched to. What a branch is made of: chain_branch_points (its
@@ -28,6 +29,7 @@ module chain_branch
     use chain_branch_corrector, only: correct, tangent_at
     use chain_branch_special, only: locate_specials, locate_nonsmooth, nonsmooth_reason
     use chain_branch_switch, only: real_eigenvector, branch_point_starts
+    use chain_branch_graze, only: pass_grazing, grazing_from_gap, orbit_at
     implicit none
     private
     public :: branch_options_t, branch_point_t, special_point_t, branches_t, follow_branches
@@ -271,8 +273,9 @@ contains
         end do
     end subroutine switch_at_branch_point
 
-    !> Store `here` and step along the branch until it ends. `switched`: the first step leaves a
-    !> branch crossing, where the test functions are not compared.
+    !> Store `here` and step along the branch until it ends, through the grazings met on the
+    !> way (go_through). `switched`: the first step leaves a branch crossing, where the test
+    !> functions are not compared.
     subroutine walk(set, here, res, switched, stopped, err, monitor)
         type(setting_t), intent(in) :: set
         type(cursor_t), intent(inout) :: here
@@ -281,21 +284,17 @@ contains
         logical, intent(out) :: stopped
         type(error_t), allocatable, intent(out) :: err
         class(monitor_t), intent(inout), optional :: monitor
-        type(cursor_t) :: next
+        type(cursor_t) :: next, located
         character(len=:), allocatable :: reason, failure, kind
         real(wp) :: h, mu_next, value
         integer :: count, iterations
-        logical :: ok, compare, crossed
+        logical :: ok, compare, crossed, passed
 
-        stopped = .false.
         call store(set, here, res, err)
         if (allocated(err)) return
-        count = 1
-        if (present(monitor)) then
-            stopped = .not. monitor%keep_going(stage_points, int(count, i8), &
-                                               int(set%opt%max_points, i8))
-            if (stopped) return
-        end if
+        count = 0
+        call count_point(set, count, stopped, monitor)
+        if (stopped) return
         h = abs(set%opt%step)
         compare = .not. switched
         reason = ''
@@ -308,11 +307,17 @@ contains
             end if
             call correct(set, here, h, next, ok, iterations, failure, err, crossed)
             if (allocated(err)) return
-            if (.not. ok .and. crossed .and. compare) then
+            if (.not. ok .and. (crossed .or. h/2 < set%opt%min_step) .and. compare) then
                 ! Newton fails where the impacts change: a grazing or a corner, if a monitor
-                ! of the last orbit with the old impacts vanishes
-                call locate_nonsmooth(set, here, h, .false., res, kind, value, err)
+                ! of the last orbit with the old impacts vanishes (the failing step may end at
+                ! one all the same at the smallest step)
+                call locate_nonsmooth(set, here, merge(h, 2*(h/2), crossed), .false., res, &
+                                      kind, value, err, located)
                 if (allocated(err)) return
+                call go_through(set, kind, located, value, res, here, h, passed, err)
+                if (passed) call count_point(set, count, stopped, monitor)
+                if (allocated(err) .or. stopped) return
+                if (passed) cycle
                 if (len(kind) > 0) then
                     reason = nonsmooth_reason(set, res, kind, value)
                     exit
@@ -321,14 +326,6 @@ contains
             if (.not. ok) then
                 h = h/2
                 if (h < set%opt%min_step) then
-                    ! (the failing step may end at a grazing or a corner all the same)
-                    if (compare) call locate_nonsmooth(set, here, 2*h, .false., res, kind, &
-                                                       value, err)
-                    if (allocated(err)) return
-                    if (len(kind) > 0) then
-                        reason = nonsmooth_reason(set, res, kind, value)
-                        exit
-                    end if
                     kind = 'newton'
                     reason = "Newton failed at "//set%opt%parameter//" = "// &
                              fmt_real(here%y(size(here%y)))//" (step "//fmt_real(2*h)// &
@@ -339,7 +336,13 @@ contains
             end if
             mu_next = next%y(size(next%y))
             if (compare .and. any(next%impacts /= here%impacts)) then
-                call end_at_impact_change(set, here, next, h, res, kind, reason, err)
+                call end_at_impact_change(set, here, next, h, res, kind, reason, err, located, &
+                                          value)
+                if (allocated(err)) return
+                call go_through(set, kind, located, value, res, here, h, passed, err)
+                if (passed) call count_point(set, count, stopped, monitor)
+                if (allocated(err) .or. stopped) return
+                if (passed) cycle
                 exit
             end if
             if (mu_next < set%low .or. mu_next > set%high) then
@@ -351,12 +354,8 @@ contains
             if (allocated(err)) return
             call store(set, next, res, err)
             if (allocated(err)) return
-            count = count + 1
-            if (present(monitor)) then
-                stopped = .not. monitor%keep_going(stage_points, int(count, i8), &
-                                                   int(set%opt%max_points, i8))
-                if (stopped) return
-            end if
+            call count_point(set, count, stopped, monitor)
+            if (stopped) return
             here = next
             compare = .true.
             if (iterations <= 2) h = min(1.5_wp*h, set%opt%max_step)
@@ -367,17 +366,104 @@ contains
                         fmt_int(set%cycles)//"): "//reason)
     end subroutine walk
 
+    !> One more point stored: the monitor is told and may stop the work.
+    subroutine count_point(set, count, stopped, monitor)
+        type(setting_t), intent(in) :: set
+        integer, intent(inout) :: count
+        logical, intent(out) :: stopped
+        class(monitor_t), intent(inout), optional :: monitor
+
+        count = count + 1
+        stopped = .false.
+        if (present(monitor)) stopped = .not. monitor%keep_going(stage_points, int(count, i8), &
+                                                                 int(set%opt%max_points, i8))
+    end subroutine count_point
+
+    !> At a grazing just stored (`kind`, the orbit `located` at `value`, `here` the point before
+    !> it): the first orbit of the family on the other side (chain_branch_graze), with a new
+    !> impact of speed 1e-3 or at 1e-4 |step| from the grazing, stored, becomes `here`
+    !> (`passed`); the step starts at its distance from the grazing. Where an impact's speed
+    !> vanished, the grazing is stored again as located from the other side, and that first
+    !> orbit found again from there (the impacting side's value is only as good as Newton
+    !> with a Jacobian like 1/u, and would round differently with other BLAS kernels).
+    subroutine go_through(set, kind, located, value, res, here, h, passed, err)
+        type(setting_t), intent(in) :: set
+        character(len=*), intent(in) :: kind
+        type(cursor_t), intent(in) :: located
+        real(wp), intent(in) :: value
+        type(branches_t), intent(inout) :: res
+        type(cursor_t), intent(inout) :: here
+        real(wp), intent(inout) :: h
+        logical, intent(out) :: passed
+        type(error_t), allocatable, intent(out) :: err
+        real(wp), parameter :: v_new = 1.0e-3_wp
+        type(cursor_t) :: found, graze
+        real(wp) :: mu_g, delta
+        logical :: better
+
+        passed = .false.
+        if (kind /= 'grazing') return
+        delta = 1.0e-4_wp*abs(set%opt%step)
+        call pass_grazing(set, located, here, value, res%points(res%n_points)%symmetric, &
+                          delta, v_new, found, passed, err)
+        if (allocated(err) .or. .not. passed) return
+        graze = located
+        if (located%orbit%min_impact_speed < located%orbit%min_gap) then
+            call grazing_from_gap(set, found, value, graze, mu_g, better, err)
+            if (allocated(err)) return
+            if (better) then
+                res%n_points = res%n_points - 1
+                call store(set, graze, res, err)
+                if (allocated(err)) return
+                res%specials(res%n_specials)%value = mu_g
+                call first_past(set, graze, mu_g + sign(delta, found%y(size(found%y)) - mu_g), &
+                                found, err)
+                if (allocated(err)) return
+            else
+                graze = located
+            end if
+        end if
+        call store(set, found, res, err)
+        if (allocated(err)) return
+        h = min(norm2(found%y - graze%y), abs(set%opt%step))
+        here = found
+    end subroutine go_through
+
+    !> The orbit of graze's family at mu, with its tangent oriented along found's: it replaces
+    !> found when Newton finds it.
+    subroutine first_past(set, graze, mu, found, err)
+        type(setting_t), intent(in) :: set
+        type(cursor_t), intent(in) :: graze
+        real(wp), intent(in) :: mu
+        type(cursor_t), intent(inout) :: found
+        type(error_t), allocatable, intent(out) :: err
+        type(cursor_t) :: again
+        logical :: ok
+
+        call orbit_at(set, graze, mu, again, ok, err)
+        if (allocated(err) .or. .not. ok) return
+        call tangent_at(set, again, found%tangent, err)
+        if (allocated(err)) then
+            ! (no tangent there: the first orbit stays as found)
+            deallocate (err)
+            return
+        end if
+        found = again
+    end subroutine first_past
+
     !> The step from `here` to `next` changes the impacts. Past a bound they may change beyond
     !> it: the branch ends on the bound if the orbit there keeps them; else it ends at the
     !> grazing or corner located in the step ('impacts' when no monitor vanishes there).
-    subroutine end_at_impact_change(set, here, next, h, res, kind, reason, err)
+    subroutine end_at_impact_change(set, here, next, h, res, kind, reason, err, located, value)
         type(setting_t), intent(in) :: set
         type(cursor_t), intent(in) :: here, next
         real(wp), intent(in) :: h
         type(branches_t), intent(inout) :: res
         character(len=:), allocatable, intent(out) :: kind, reason
         type(error_t), allocatable, intent(out) :: err
-        real(wp) :: mu_next, value
+        type(cursor_t), intent(out) :: located !! the orbit stored there
+        real(wp), intent(out) :: value         !! where its monitor vanishes
+        real(wp) :: mu_next
         logical :: reached
 
         mu_next = next%y(size(next%y))
@@ -389,7 +475,8 @@ contains
             kind = 'bound'
             return
         end if
-        call locate_nonsmooth(set, here, h, .true., res, kind, value, err)
+        value = mu_next
+        call locate_nonsmooth(set, here, h, .true., res, kind, value, err, located)
         if (allocated(err)) return
         if (len(kind) == 0) kind = 'impacts'
         reason = nonsmooth_reason(set, res, kind, value)

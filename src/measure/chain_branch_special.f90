@@ -14,6 +14,7 @@ module chain_branch_special
     use chain_branch_points, only: cursor_t, setting_t, branches_t, special_kinds, store, &
                                    add_special
     use chain_branch_corrector, only: correct
+    use chain_branch_graze, only: refine_grazing
     implicit none
     private
     public :: locate_specials, locate_nonsmooth, nonsmooth_reason
@@ -192,8 +193,9 @@ contains
     !> shortest time between impacts on neighbouring bonds) is, else an impact at the section
     !> when a gap of its state on the section is, else '' (no monitor vanishes).
     !> The orbit is stored as a special point of its kind, or as a plain point when `kind` is
-    !> '' and `keep`; `value` is where the vanishing monitor extrapolates to zero.
-    subroutine locate_nonsmooth(set, here, h, keep, res, kind, value, err)
+    !> '' and `keep`; `value` is where the vanishing monitor extrapolates to zero. A grazing is
+    !> refined to rounding (chain_branch_graze); `located`: the orbit stored, with its tangent.
+    subroutine locate_nonsmooth(set, here, h, keep, res, kind, value, err, located)
         type(setting_t), intent(in) :: set
         type(cursor_t), intent(in) :: here
         real(wp), intent(in) :: h
@@ -202,6 +204,7 @@ contains
         character(len=:), allocatable, intent(out) :: kind
         real(wp), intent(out) :: value
         type(error_t), allocatable, intent(out) :: err
+        type(cursor_t), intent(out), optional :: located
         real(wp), parameter :: vanishing = 1.0e-4_wp
         type(cursor_t) :: trial, last_same
         character(len=:), allocatable :: failure
@@ -236,7 +239,8 @@ contains
         call corner_monitor(set, last_same%orbit, last_same%y(m + 1), corner_last, oscillator)
         if (min(last_same%orbit%min_gap, last_same%orbit%min_impact_speed) < vanishing) then
             kind = 'grazing'
-            value = grazing_value(here, last_same)
+            call refine_grazing(set, here, s_lo, s_hi, last_same, value, err)
+            if (allocated(err)) return
         else if (corner_last < vanishing) then
             kind = 'corner'
             value = secant_root(here%y(m + 1), last_same%y(m + 1), corner_before, corner_last)
@@ -250,28 +254,10 @@ contains
             if (.not. keep) return
         end if
         call store(set, last_same, res, err)
+        if (present(located)) located = last_same
         if (allocated(err) .or. len(kind) == 0) return
         call add_special(res, res%n_points, kind, value)
     end subroutine locate_nonsmooth
-
-    !> Where the grazing monitor of the last orbit with the old impacts (its smallest gap or
-    !> impact speed, whichever is smaller) reaches zero, by the secant through it and the
-    !> branch's point before the bisection: as an impact vanishes its saltation grows as
-    !> 1 / speed, and Newton stops converging before the speed is zero, so the last orbit
-    !> stands some 1e-5 short of the grazing.
-    pure real(wp) function grazing_value(before, last) result(value)
-        type(cursor_t), intent(in) :: before, last
-        integer :: m
-
-        m = size(last%y) - 1
-        if (last%orbit%min_impact_speed < last%orbit%min_gap) then
-            value = secant_root(before%y(m + 1), last%y(m + 1), &
-                                before%orbit%min_impact_speed, last%orbit%min_impact_speed)
-        else
-            value = secant_root(before%y(m + 1), last%y(m + 1), before%orbit%min_gap, &
-                                last%orbit%min_gap)
-        end if
-    end function grazing_value
 
     !> Where a monitor, g_before at mu_before and g_last at mu_last, reaches zero along their
     !> secant; mu_last itself when the secant does not apply (a monitor that did not decrease,

@@ -63,26 +63,37 @@ def test_continuation_with_a_sweep_is_refused(impactchain_exe, tmp_path):
 
 def test_grazing_branch_file(impactchain_exe, tmp_path):
     """The non-impacting branch of figure 10's chain: its file, read as netCDF by xarray,
-    holds the forced response at every point but the last, and ends at the grazing
-    A = sqrt((1 - w^2)^2 + (2 b w)^2) (docs/model.md section 12)."""
-    text = (CHAIN + "&continuation parameter = 'amplitude', stop = 3.5, step = 0.1 /\n"
+    holds the forced response at every point up to the grazing
+    A = sqrt((1 - w^2)^2 + (2 b w)^2) (docs/model.md section 12.3), which is stored once, and
+    goes on through it onto the orbits with the two impacts of the wall bonds."""
+    text = (CHAIN + "&continuation parameter = 'amplitude', stop = 3.5, step = 0.1, "
+            "max_points = 30 /\n"
             "&output file = 'branch.h5' /\n")
     result = run_namelist(impactchain_exe, text, tmp_path)
-    assert "grazing at" in result.stdout
     ds = xr.open_dataset(tmp_path / "branch.h5", engine="h5netcdf", group="continuation")
     assert ds.attrs["parameter"] == "amplitude"
-    assert "grazing" in ds.attrs["end_reason"]
+    assert ds.attrs["end_kind"].strip() == "max_points"
+    assert "grazing at   2.6169065707434" in result.stdout
+    assert "max_points = 30 reached" in result.stdout
     w, b = 1.9, 0.05
     d2 = (1 - w**2) ** 2 + (2 * b * w) ** 2
-    assert list(ds.special_kind.values.astype(str)) == ["grazing"]
-    assert abs(float(ds.special_value[0]) - np.sqrt(d2)) < 1e-9
+    kinds = list(ds.special_kind.values.astype(str))
+    assert kinds[0] == "grazing"
+    assert abs(float(ds.special_value[0]) - np.sqrt(d2)) < 1e-10
+    g = int(ds.special_index[0])
     amplitude = ds["values"].values
+    assert abs(amplitude[g] - np.sqrt(d2)) < 1e-10
+    assert (np.abs(amplitude - np.sqrt(d2)) < 1e-8).sum() == 1   # stored once
     xp = -2 * b * w * amplitude / d2           # the forced response at phase 0: Q
-    assert np.allclose(ds.x.values[:-1], xp[:-1, None], atol=1e-12, rtol=0)
-    assert (ds.stable.values == 1).all()
+    assert np.allclose(ds.x.values[:g], xp[:g, None], atol=1e-12, rtol=0)
+    assert (ds.stable.values[:g + 1] == 1).all()
     assert ((ds.residual.values >= 0) & (ds.residual.values <= 1e-11)).all()
-    assert (ds.impacts_per_period.values == 0).all()
-    assert np.isinf(ds.min_impact_speed.values).all()
+    impacts = ds.impacts_per_period.values
+    assert (impacts[:g + 1] == 0).all() and (impacts[g + 1:] == 2).all()
+    # (max_points counts the points stepped to; the located special points come on top)
+    assert len(amplitude) == 30 + len(kinds) and (amplitude[g + 1:] < np.sqrt(d2)).all()
+    assert np.isinf(ds.min_impact_speed.values[:g + 1]).all()
+    assert np.isclose(ds.min_impact_speed.values[g + 1], 1e-3, rtol=1e-3)
     assert ds.x.dims == ("point", "oscillator")
     assert ds.multipliers_re.dims == ("point", "multiplier")
     with h5py.File(tmp_path / "branch.h5") as f:

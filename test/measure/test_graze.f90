@@ -1,0 +1,140 @@
+!> Through a grazing (docs/model.md section 12.5), against what cannot be tuned: figure 10's
+!> chain followed up from rest in the amplitude is the forced response up to its grazing at
+!> the closed form A = a sqrt((1 - w**2)**2 + (2 b w)**2), located to 1e-10 and stored once;
+!> the branch goes on onto the impacting orbits (the mirror pair of wall bonds grazes
+!> together: two impacts more per cycle; that family turns back at the grazing, its orbits
+!> lie below it), whose first points are fixed points of the map.
+module test_graze
+    use chain_kinds, only: wp
+    use chain_error, only: error_t
+    use chain_flow, only: flow_t, make_flow, forced_response
+    use chain_model, only: model_t
+    use chain_orbit, only: orbit_pass_t, orbit_pass, interleave
+    use chain_branch, only: branch_options_t, branches_t, follow_branches
+    use test_chains, only: fig10_model
+    use testing, only: tally_t, check, check_close
+    implicit none
+    private
+    public :: run_graze_tests
+
+contains
+
+    subroutine run_graze_tests(t)
+        type(tally_t), intent(inout) :: t
+        type(branches_t) :: res
+        type(branch_options_t) :: opt
+        type(error_t), allocatable :: err
+        integer :: j
+
+        opt%parameter = 'amplitude'
+        opt%stop = 3
+        opt%step = 0.1_wp
+        opt%max_points = 60
+        call follow_branches(fig10_model(1.0_wp), 0.0_wp, 1, [(0.0_wp, j=1, 8)], &
+                             [(0.0_wp, j=1, 8)], opt, res, err)
+        call check(t, .not. allocated(err), 'through a grazing: followed')
+        if (allocated(err)) then
+            print *, err%message
+            return
+        end if
+        print '(a)', '    '//res%end_reason
+        call check(t, res%start%converged .and. res%n_points > 0, &
+                   'through a grazing: the start converged')
+        if (res%n_points > 0) call check(t, all(res%start%x == res%points(1)%orbit%x) .and. &
+                                         all(res%start%v == res%points(1)%orbit%v) .and. &
+                                         all(res%start%residuals == &
+                                             res%points(1)%orbit%residuals), &
+                                         'through a grazing: the start is the first point')
+        call grazing_located(t, res)
+    end subroutine run_graze_tests
+
+    !> The grazing: one special point at the closed form, the forced response before it, its
+    !> orbit stored once, and the impacting orbits after it.
+    subroutine grazing_located(t, res)
+        type(tally_t), intent(inout) :: t
+        type(branches_t), intent(in) :: res
+        type(model_t) :: model
+        type(flow_t) :: flow
+        real(wp) :: xp, vp, worst, grazing
+        integer :: j, g, s
+
+        model = fig10_model(1.0_wp)
+        grazing = sqrt((1 - model%omega**2)**2 + (2*model%damping*model%omega)**2)
+        s = 0
+        do j = res%n_specials, 1, -1
+            if (res%specials(j)%kind == 'grazing') s = j
+        end do
+        call check(t, s > 0, 'through a grazing: a grazing special point')
+        if (s == 0) return
+        g = res%specials(s)%point
+        write (*, '(a,es22.14,a,es9.2,a,i0,a,i0)') '    grazing at ', res%specials(s)%value, &
+            ', |A - closed form| = ', abs(res%specials(s)%value - grazing), ', point ', g, &
+            ' of ', res%n_points
+        call check_close(t, res%specials(s)%value, grazing, &
+                         'through a grazing: at a sqrt(D2) to 1e-10', 1.0e-10_wp)
+        call check_close(t, res%points(g)%value, grazing, &
+                         'through a grazing: the orbit stored there, to 1e-10', 1.0e-10_wp)
+        call check(t, count(abs(res%points(:res%n_points)%value - grazing) < 1.0e-8_wp) == 1, &
+                   'through a grazing: its orbit stored once')
+        worst = 0
+        do j = 1, g - 1
+            flow = make_flow(model%damping, res%points(j)%value, model%omega)
+            call forced_response(flow, 0.0_wp, xp, vp)
+            worst = max(worst, maxval(abs(res%points(j)%orbit%x - xp)), &
+                        maxval(abs(res%points(j)%orbit%v - vp)))
+        end do
+        write (*, '(a,i0,a,es9.2)') '    ', g - 1, &
+            ' points before it, |orbit - forced response| <= ', worst
+        call check_close(t, worst, 0.0_wp, 'through a grazing: the forced response before it', &
+                         1.0e-12_wp)
+        call check(t, all(res%points(:g - 1)%value < grazing), &
+                   'through a grazing: points below it')
+        call check(t, res%n_points >= g + 3, 'through a grazing: points past it')
+        if (res%n_points < g + 3) return
+        call impacting_side(t, res, g, grazing)
+    end subroutine grazing_located
+
+    !> Past the grazing at point g: the impacts per cycle go up by the mirror pair (walls 0 and
+    !> n graze together), every point impacts, and the first three are fixed points of the map.
+    subroutine impacting_side(t, res, g, grazing)
+        type(tally_t), intent(inout) :: t
+        type(branches_t), intent(in) :: res
+        integer, intent(in) :: g
+        real(wp), intent(in) :: grazing
+        type(model_t) :: model
+        type(orbit_pass_t) :: pass
+        type(error_t), allocatable :: err
+        real(wp) :: worst
+        integer :: j
+
+        write (*, '(a,i0,a,i0,a,es9.2)') '    impacts per cycle: ', res%points(g)%orbit%impacts, &
+            ' at the grazing, ', res%points(g + 1)%orbit%impacts, ' past it, at A - A_g = ', &
+            res%points(g + 1)%value - grazing
+        call check(t, res%points(g)%orbit%impacts == 0 .and. &
+                   all(res%points(g + 1:res%n_points)%orbit%impacts == 2), &
+                   'through a grazing: two impacts per cycle past it (the mirror pair)')
+        ! (the impacting family turns back at the grazing: its orbits lie below it)
+        call check(t, abs(res%points(g + 1)%value - grazing) < 1.0e-3_wp .and. &
+                   all(res%points(g + 1:g + 3)%value < grazing), &
+                   'through a grazing: the first point past it next to it, below it')
+        do j = g + 1, g + 3
+            write (*, '(a,es9.2,a,es9.2,a,es9.2)') '    A - A_g = ', &
+                res%points(j)%value - grazing, ', impact speed ', &
+                res%points(j)%orbit%min_impact_speed, ', largest |multiplier| ', &
+                maxval(hypot(res%points(j)%orbit%multipliers_re, &
+                             res%points(j)%orbit%multipliers_im))
+        end do
+        worst = 0
+        do j = g + 1, g + 3
+            model = fig10_model(res%points(j)%value)
+            call orbit_pass(model, 0.0_wp, 1, interleave(res%points(j)%orbit%x, &
+                                                         res%points(j)%orbit%v), pass, err)
+            call check(t, .not. allocated(err), 'through a grazing: the map past it')
+            if (allocated(err)) return
+            worst = max(worst, maxval(abs(pass%image - pass%z)))
+        end do
+        write (*, '(a,es9.2)') '    first three points past it: |P(z) - z| <= ', worst
+        call check_close(t, worst, 0.0_wp, 'through a grazing: fixed points past it', 1.0e-10_wp)
+    end subroutine impacting_side
+
+end module test_graze
