@@ -5,11 +5,13 @@ program measure_tests
     use suites, only: suite_runner_t
     use test_orbit, only: run_orbit_tests
     use test_branch, only: run_branch_tests
+    use test_curve, only: run_curve_tests
     implicit none
     type(suite_runner_t) :: runner
 
     call runner%start()
     call runner%run('orbit', run_orbit_tests)
     call runner%run('branch', run_branch_tests)
+    call runner%run('curve', run_curve_tests)
     call runner%finish()
 end program measure_tests
