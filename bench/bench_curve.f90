@@ -7,7 +7,7 @@ module bench_curve
     use, intrinsic :: iso_fortran_env, only: output_unit
     use impactchain, only: wp, error_t, config_t, model_t, orbit_t, find_orbit, &
                            branch_options_t, branches_t, follow_branches, curve_options_t, &
-                           curve_t, follow_fold_curve
+                           curve_t, follow_curve
     use impactchain_drivers, only: continuation_guess, fmt_int
     implicit none
     private
@@ -34,6 +34,7 @@ contains
                 cycle
             end if
             k = fold%specials(1)%point
+            opt%follow = 'fold'
             opt%parameter = 'amplitude'
             opt%parameter2 = 'omega'
             opt%step2 = 0.002_wp
@@ -96,12 +97,12 @@ contains
                 newton = min(newton, t1 - t0)
                 opt%max_points = 1
                 call cpu_time(t0)
-                call follow_fold_curve(model_at(model, mu), 0.0_wp, 1, orbit%x, orbit%v, mu, &
+                call follow_curve(model_at(model, mu), 0.0_wp, 1, orbit%x, orbit%v, mu, &
                                        opt, curve, err)
                 call cpu_time(t1)
                 start = t1 - t0
                 opt%max_points = 3
-                call follow_fold_curve(model_at(model, mu), 0.0_wp, 1, orbit%x, orbit%v, mu, &
+                call follow_curve(model_at(model, mu), 0.0_wp, 1, orbit%x, orbit%v, mu, &
                                        opt, curve, err)
                 call cpu_time(t3)
                 three = t3 - t1

@@ -1,8 +1,9 @@
-!> Fold curves in two parameters (docs/model.md section 12.6): from a fold of a one-parameter
-!> branch (chain_branch), its curve in (parameter, parameter2) by pseudo-arclength
-!> continuation of the minimally augmented system of chain_curve_system, with the orbit and
-!> its multipliers at each point, and the fold-flip points met on the way (det(J + I) changes
-!> sign between two points; confirmed by a real multiplier near -1).
+!> Fold and period-doubling curves in two parameters (docs/model.md section 12.6): from a fold
+!> or period doubling of a one-parameter branch (chain_branch), its curve in
+!> (parameter, parameter2) by pseudo-arclength continuation of the minimally augmented system
+!> of chain_curve_system, with the orbit and its multipliers at each point, and the fold-flip
+!> points met on the way (the other test, det(J + I) on a fold curve, det(J - I) on a
+!> period-doubling curve, changes sign between two points).
 module chain_curve
     use chain_kinds, only: wp
     use chain_error, only: error_t, set_error, fmt_int, fmt_real
@@ -12,13 +13,18 @@ module chain_curve
     use chain_curve_system, only: curve_setting_t, curve_state_t, evaluate, null_vectors
     implicit none
     private
-    public :: curve_options_t, curve_t, follow_fold_curve
+    public :: curve_options_t, curve_t, follow_curve, curve_kinds
 
     !> Newton's tolerance on |P(z) - z| (relative, as chain_orbit's) and on s.
     real(wp), parameter :: tolerance = 1.0e-11_wp
 
+    !> The kinds of special point a curve follows.
+    character(len=*), parameter :: curve_kinds(2) = [character(len=15) :: 'fold', &
+                                                     'period-doubling']
+
     type :: curve_options_t
-        character(len=:), allocatable :: parameter  !! the fold's parameter
+        character(len=:), allocatable :: follow     !! one of curve_kinds
+        character(len=:), allocatable :: parameter  !! the special point's parameter
         character(len=:), allocatable :: parameter2 !! the second parameter
         real(wp) :: stop2 = 0     !! the far bound of parameter2
         real(wp) :: step2 = 0     !! arclength step; its sign: parameter2's direction at the start
@@ -26,7 +32,7 @@ module chain_curve
     end type curve_options_t
 
     type :: curve_t
-        character(len=:), allocatable :: kind   !! the special point followed ('fold')
+        character(len=:), allocatable :: kind   !! the special point followed (curve_kinds)
         integer :: n_points = 0
         real(wp), allocatable :: values(:), values2(:) !! (point)
         type(orbit_t), allocatable :: orbits(:) !! the orbit and its multipliers at each point
@@ -38,9 +44,10 @@ module chain_curve
 
 contains
 
-    !> The fold curve through the fold orbit (x, v) at parameter value mu (parameter2 as in
-    !> `model`): the start is refined at fixed parameter2, then followed to stop2 or max_points.
-    subroutine follow_fold_curve(model, phase, cycles, x, v, mu, opt, curve, err)
+    !> The curve of kind opt%follow through the orbit (x, v) at parameter value mu (parameter2
+    !> as in `model`): the start is refined at fixed parameter2, then followed to stop2 or
+    !> max_points.
+    subroutine follow_curve(model, phase, cycles, x, v, mu, opt, curve, err)
         type(model_t), intent(in) :: model
         real(wp), intent(in) :: phase, x(:), v(:), mu
         integer, intent(in) :: cycles
@@ -53,7 +60,15 @@ contains
         character(len=:), allocatable :: failure
         integer :: m
 
-        curve%kind = 'fold'
+        if (.not. allocated(opt%follow)) then
+            call set_error(err, "curve: no kind to follow (fold or period-doubling)")
+            return
+        else if (.not. any(curve_kinds == opt%follow)) then
+            call set_error(err, "curve: follow = '"//opt%follow//"' is none of fold, "// &
+                           "period-doubling")
+            return
+        end if
+        curve%kind = opt%follow
         allocate (curve%values(opt%max_points), curve%values2(opt%max_points), &
                   curve%orbits(opt%max_points), curve%codim2_kind(opt%max_points), &
                   curve%codim2_index(opt%max_points))
@@ -62,6 +77,7 @@ contains
         set%cycles = cycles
         set%parameter = opt%parameter
         set%parameter2 = opt%parameter2
+        set%shift = merge(-1.0_wp, 1.0_wp, opt%follow == 'fold')
         m = 2*size(x)
         y = [interleave(x, v), mu, model_parameter(model, opt%parameter2)]
         call evaluate(set_with_nulls(set, y), y, st, err, .false.)
@@ -72,19 +88,19 @@ contains
         call newton(set, [y], anchor, y, st, failure, err)
         if (allocated(err)) return
         if (len(failure) > 0) then
-            call set_error(err, "fold curve: the start does not converge: "//failure)
+            call set_error(err, opt%follow//" curve: the start does not converge: "//failure)
             return
         end if
         call tangent_of(st, anchor, tangent, failure)
         if (len(failure) > 0) then
-            call set_error(err, "fold curve: "//failure)
+            call set_error(err, opt%follow//" curve: "//failure)
             return
         end if
         if (tangent(m + 2)*opt%step2 < 0) tangent = -tangent
         call keep(set, y, st, curve, err)
         if (allocated(err)) return
         call walk(set, opt, y, st, tangent, curve, err)
-    end subroutine follow_fold_curve
+    end subroutine follow_curve
 
     !> Steps of |step2| along the tangent (halved up to four times when Newton fails) to stop2
     !> or max_points; the bordering vectors follow the null vectors.
@@ -164,7 +180,7 @@ contains
             rhs = reshape([-st%residual, -dot_product(anchor, y - guess)], [m + 2, 1])
             call solve_linear(a, rhs, info)
             if (info > 0) then
-                failure = "singular Newton matrix of the fold curve"
+                failure = "singular Newton matrix of the curve"
                 return
             end if
             y = y + rhs(:, 1)
@@ -190,14 +206,14 @@ contains
         rhs(n, 1) = 1
         call solve_linear(a, rhs, info)
         if (info > 0) then
-            failure = "singular tangent system of the fold curve"
+            failure = "singular tangent system of the curve"
             return
         end if
         tangent = rhs(:, 1)/norm2(rhs(:, 1))
         if (dot_product(tangent, direction) < 0) tangent = -tangent
     end subroutine tangent_of
 
-    !> The setting with bordering vectors from the null vectors of J - I at y.
+    !> The setting with bordering vectors from the null vectors of J + shift I at y.
     function set_with_nulls(set, y) result(out)
         type(curve_setting_t), intent(in) :: set
         real(wp), intent(in) :: y(:)
@@ -210,7 +226,7 @@ contains
         out%c = out%b
         call evaluate(out, y, st, err, .false.)
         if (allocated(err) .or. .not. allocated(st%pass%jacobian)) return
-        call null_vectors(st%pass%jacobian, out%c, out%b)
+        call null_vectors(st%pass%jacobian, out%shift, out%c, out%b)
     end function set_with_nulls
 
     !> Stores the point y (the converged state st): its orbit, multipliers and fold-flip test.
@@ -235,23 +251,25 @@ contains
         curve%values(k) = y(m + 1)
         curve%values2(k) = y(m + 2)
         if (k == 1) return
-        if (flip_sign(curve%orbits(k - 1)) /= flip_sign(curve%orbits(k))) then
+        if (flip_sign(curve%orbits(k - 1), set%shift) /= flip_sign(curve%orbits(k), set%shift)) &
+            then
             curve%n_codim2 = curve%n_codim2 + 1
             curve%codim2_kind(curve%n_codim2) = 'fold-flip'
             curve%codim2_index(curve%n_codim2) = k
         end if
     end subroutine keep
 
-    !> The sign of det(J + I): the product of 1 + mu over the real multipliers (a complex pair
-    !> contributes |1 + mu|**2 > 0).
-    pure integer function flip_sign(orbit)
+    !> The sign of the other curve's test, det(J - shift I) up to sign: the product of
+    !> 1 - shift mu over the real multipliers (a complex pair contributes a square > 0).
+    pure integer function flip_sign(orbit, shift)
         type(orbit_t), intent(in) :: orbit
+        real(wp), intent(in) :: shift
         real(wp) :: product_
         integer :: j
 
         product_ = 1
         do j = 1, size(orbit%multipliers_re)
-            if (orbit%multipliers_im(j) == 0) product_ = product_*(1 + orbit%multipliers_re(j))
+            if (orbit%multipliers_im(j) == 0) product_ = product_*(1 - shift*orbit%multipliers_re(j))
         end do
         flip_sign = merge(1, -1, product_ >= 0)
     end function flip_sign

@@ -1,7 +1,7 @@
-!> The minimally augmented system of a fold curve in two parameters (docs/model.md section
-!> 12.6; Govaerts 2000): unknowns y = (z, mu1, mu2), equations P(z) - z = 0 and s = 0, s from
-!> the bordered system [[J - I, b], [c^T, 0]] (w, s) = (0, 1), which is regular at a simple
-!> fold. The orbit rows of Newton's matrix are exact, [J - I, P_mu1, P_mu2]; the row of s is
+!> The minimally augmented system of a fold or period-doubling curve in two parameters
+!> (docs/model.md section 12.6; Govaerts 2000): unknowns y = (z, mu1, mu2), equations
+!> P(z) - z = 0 and s = 0, s from the bordered system [[J + shift I, b], [c^T, 0]] (w, s) =
+!> (0, 1) (shift -1 at a fold, +1 at a period doubling), regular at a simple one. The orbit rows of Newton's matrix are exact, [J - I, P_mu1, P_mu2]; the row of s is
 !> s_y = -v^T J_y w (v from the transposed system) with J_y by central differences of exact
 !> Jacobians: the residual is exact, only Newton's matrix is approximate.
 module chain_curve_system
@@ -21,6 +21,7 @@ module chain_curve_system
         real(wp) :: phase = 0
         integer :: cycles = 1
         character(len=:), allocatable :: parameter, parameter2
+        real(wp) :: shift = -1 !! the test matrix J + shift I: -1 fold, +1 period doubling
         real(wp), allocatable :: b(:), c(:) !! the bordering vectors (unit, near the null vectors)
     end type curve_setting_t
 
@@ -54,7 +55,7 @@ contains
         st%failure = ''
         call pass_at(set, y, st%pass, model, st%failure, err)
         if (allocated(err) .or. len(st%failure) > 0) return
-        call border(st%pass%jacobian, set%b, set%c, st%w, st%v, st%s, st%failure)
+        call border(st%pass%jacobian, set%shift, set%b, set%c, st%w, st%v, st%s, st%failure)
         if (len(st%failure) > 0) return
         st%residual = [st%pass%image - st%pass%z, st%s]
         st%ok = .true.
@@ -133,9 +134,9 @@ contains
         end do
     end subroutine s_gradient
 
-    !> [[J - I, b], [c^T, 0]] (w, s) = (0, 1) and its transpose (v, s) = (0, 1).
-    subroutine border(jacobian, b, c, w, v, s, failure)
-        real(wp), intent(in) :: jacobian(:, :), b(:), c(:)
+    !> [[J + shift I, b], [c^T, 0]] (w, s) = (0, 1) and its transpose (v, s) = (0, 1).
+    subroutine border(jacobian, shift, b, c, w, v, s, failure)
+        real(wp), intent(in) :: jacobian(:, :), shift, b(:), c(:)
         real(wp), allocatable, intent(out) :: w(:), v(:)
         real(wp), intent(out) :: s
         character(len=:), allocatable, intent(inout) :: failure
@@ -146,7 +147,7 @@ contains
         allocate (a(m + 1, m + 1), rhs(m + 1, 2))
         a(:m, :m) = jacobian
         do i = 1, m
-            a(i, i) = a(i, i) - 1
+            a(i, i) = a(i, i) + shift
         end do
         a(:m, m + 1) = b
         a(m + 1, :m) = c
@@ -157,7 +158,7 @@ contains
         if (info == 0) then
             a(:m, :m) = transpose(jacobian)
             do i = 1, m
-                a(i, i) = a(i, i) - 1
+                a(i, i) = a(i, i) + shift
             end do
             a(:m, m + 1) = c
             a(m + 1, :m) = b
@@ -166,7 +167,7 @@ contains
             call solve_linear(a, rhs(:, 2:2), info)
         end if
         if (info > 0) then
-            failure = "singular bordered matrix of the fold test"
+            failure = "singular bordered matrix of the test function"
             return
         end if
         w = rhs(:m, 1)
@@ -174,10 +175,10 @@ contains
         s = rhs(m + 1, 1)
     end subroutine border
 
-    !> Unit approximations of the right and left null vectors of J - I near a fold, by two
-    !> steps of inverse iteration each.
-    subroutine null_vectors(jacobian, right, left)
-        real(wp), intent(in) :: jacobian(:, :)
+    !> Unit approximations of the right and left null vectors of J + shift I near a fold or
+    !> period doubling, by two steps of inverse iteration each.
+    subroutine null_vectors(jacobian, shift, right, left)
+        real(wp), intent(in) :: jacobian(:, :), shift
         real(wp), allocatable, intent(out) :: right(:), left(:)
         real(wp), allocatable :: a(:, :), at(:, :), x(:, :)
         integer :: m, i, step, info
@@ -185,7 +186,7 @@ contains
         m = size(jacobian, 1)
         a = jacobian
         do i = 1, m
-            a(i, i) = a(i, i) - 1
+            a(i, i) = a(i, i) + shift
         end do
         at = transpose(a)
         allocate (x(m, 2))
