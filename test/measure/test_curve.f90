@@ -28,7 +28,29 @@ contains
 
         call fold_curve(t)
         call doubling_curve(t)
+        call unknown_kind(t)
     end subroutine run_curve_tests
+
+    !> A kind no curve follows is an error that names it and the kinds allowed.
+    subroutine unknown_kind(t)
+        type(tally_t), intent(inout) :: t
+        type(curve_options_t) :: opt
+        type(curve_t) :: curve
+        type(error_t), allocatable :: err
+        integer :: k
+
+        opt%follow = 'cusp'
+        opt%parameter = 'amplitude'
+        opt%parameter2 = 'omega'
+        opt%step2 = 0.01_wp
+        call follow_curve(fig10_model(3.0_wp), 0.0_wp, 1, [(0.0_wp, k=1, 8)], &
+                          [(0.0_wp, k=1, 8)], 3.0_wp, opt, curve, err)
+        call check(t, allocated(err), 'curve: follow = cusp refused')
+        if (.not. allocated(err)) return
+        call check(t, index(err%message, "'cusp'") > 0 .and. &
+                   index(err%message, 'period-doubling') > 0, &
+                   'curve: the error names the value and the kinds allowed')
+    end subroutine unknown_kind
 
     subroutine fold_curve(t)
         type(tally_t), intent(inout) :: t
