@@ -80,8 +80,7 @@ contains
         set%shift = merge(-1.0_wp, 1.0_wp, opt%follow == 'fold')
         m = 2*size(x)
         y = [interleave(x, v), mu, model_parameter(model, opt%parameter2)]
-        call evaluate(set_with_nulls(set, y), y, st, err, .false.)
-        if (allocated(err)) return
+        ! (a start the map cannot pass keeps unit bordering vectors; Newton then says why)
         set = set_with_nulls(set, y)
         ! the start: parameter2 held (the last row), then the tangent with parameter2 rising
         anchor = [spread(0.0_wp, 1, m + 1), 1.0_wp]
