@@ -28,6 +28,7 @@ program bench
     use bench_kit, only: row_t, wall_seconds, peak_memory_kib, print_machine, &
                          print_table_head, print_row_markdown, print_row_tsv
     use bench_yardsticks, only: transcendental_ns, dgemm_gflops, qr_seconds
+    use bench_curve, only: curve_ratio
     implicit none
 
     character(len=*), parameter :: case_names(22) = [character(len=16) :: &
@@ -37,12 +38,12 @@ program bench
         'fig10-sweep', 'fig13-scan', 'strobe', 'strobe-record', 'orbit-n16', 'orbit-n64-p8', &
         'census-fig3', 'clv-default', 'clv-n64']
     character(len=:), allocatable :: only
-    logical :: tsv, quick, yardsticks_only, provenance_only, flat_only, ratio_only
+    logical :: tsv, quick, yardsticks_only, provenance_only, flat_only, ratio_only, curve_only
     real(wp) :: min_time, budget
     integer :: reps, j
 
     call parse_arguments(only, tsv, quick, yardsticks_only, provenance_only, flat_only, &
-                         ratio_only)
+                         ratio_only, curve_only)
     ! budget: the most a row spends on timed cycles; a row whose cycle takes seconds (the full
     ! spectrum at n = 1024) is timed in fewer repetitions, or in its calibration block alone
     min_time = 0.5_wp
@@ -61,6 +62,11 @@ program bench
     end if
     if (ratio_only) then
         call exponents_ratio(7)
+        stop
+    end if
+    if (curve_only) then
+        call curve_ratio([make_config(8, 3.0_wp, 1.9_wp, 0.05_wp, 0.5_wp, 0.0_wp, 0.0_wp), &
+                          make_config(16, 3.0_wp, 1.9_wp, 0.05_wp, 0.5_wp, 0.0_wp, 0.0_wp)], 5)
         stop
     end if
     if (yardsticks_only .or. len(only) == 0) call print_yardsticks()
@@ -913,10 +919,10 @@ contains
     end subroutine print_state
 
     subroutine parse_arguments(only, tsv, quick, yardsticks_only, provenance_only, flat_only, &
-                               ratio_only)
+                               ratio_only, curve_only)
         character(len=:), allocatable, intent(out) :: only
         logical, intent(out) :: tsv, quick, yardsticks_only, provenance_only, flat_only
-        logical, intent(out) :: ratio_only
+        logical, intent(out) :: ratio_only, curve_only
         integer :: j, length
         character(len=:), allocatable :: arg
         logical :: want_case
@@ -926,6 +932,7 @@ contains
         provenance_only = .false.
         flat_only = .false.
         ratio_only = .false.
+        curve_only = .false.
         quick = .false.
         yardsticks_only = .false.
         want_case = .false.
@@ -954,6 +961,8 @@ contains
                     flat_only = .true.
                 case ('--ratio')
                     ratio_only = .true.
+                case ('--curve')
+                    curve_only = .true.
                 case ('--list')
                     do length = 1, size(case_names)
                         write (output_unit, '(a)') trim(case_names(length))
@@ -968,7 +977,9 @@ contains
                         '  --flat: the collision-heavy chains at n = 16, 1024, 16384 in one', &
                         '          process, timed alternately in CPU time: ns per collision', &
                         '  --ratio: the paper default case with all 32 exponents (adaptive QR,', &
-                        '          and QR every cycle) over the case without, the same way'
+                        '          and QR every cycle) over the case without, the same way', &
+                        '  --curve: one point of a fold curve in (A, w) over one Newton solve', &
+                        '          at n = 8 and 16, the same way'
                     stop
                 case default
                     call fail("unknown argument '"//arg//"' (see --help)")

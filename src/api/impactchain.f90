@@ -28,6 +28,7 @@ module impactchain
     use chain_section, only: advance_to_point
     use chain_floquet, only: poincare_jacobian
     use chain_orbit, only: orbit_t, orbit_options_t, find_orbit, orbit_gap_minimum, impact_bonds
+    use chain_curve, only: curve_options_t, curve_t, follow_curve
     use chain_branch, only: branch_options_t, branch_point_t, special_point_t, branches_t, &
                             follow_branches
     use chain_branch_file, only: run_continuation, continuation_to_file
@@ -54,6 +55,7 @@ module impactchain
     public :: stage_backward, stage_name, orbit_t, orbit_options_t, find_orbit
     public :: orbit_gap_minimum, impact_bonds, branch_options_t, branch_point_t
     public :: special_point_t, branches_t, follow_branches, run_continuation
+    public :: curve_options_t, curve_t, follow_curve
     public :: continuation_to_file, run_sweep, sweep_summary_t, census_to_file
     public :: census_result_t, attractor_t, kind_names, code_version, provenance
     public :: provenance_item_t, provenance_text

@@ -1,0 +1,287 @@
+!> Fold and period-doubling curves in two parameters (docs/model.md section 12.6): from a fold
+!> or period doubling of a one-parameter branch (chain_branch), its curve in
+!> (parameter, parameter2) by pseudo-arclength continuation of the minimally augmented system
+!> of chain_curve_system, with the orbit and its multipliers at each point, and the fold-flip
+!> points met on the way (the other test, det(J + I) on a fold curve, det(J - I) on a
+!> period-doubling curve, changes sign between two points).
+module chain_curve
+    use chain_kinds, only: wp
+    use chain_error, only: error_t, set_error, fmt_int, fmt_real
+    use chain_model, only: model_t, model_parameter, set_model_parameter
+    use chain_orbit, only: orbit_t, orbit_options_t, describe_orbit, interleave
+    use chain_lapack, only: solve_linear
+    use chain_curve_system, only: curve_setting_t, curve_state_t, evaluate, null_vectors
+    implicit none
+    private
+    public :: curve_options_t, curve_t, follow_curve, curve_kinds
+
+    !> Newton's tolerance on |P(z) - z| (relative, as chain_orbit's) and on s.
+    real(wp), parameter :: tolerance = 1.0e-11_wp
+
+    !> The kinds of special point a curve follows.
+    character(len=*), parameter :: curve_kinds(2) = [character(len=15) :: 'fold', &
+                                                     'period-doubling']
+
+    type :: curve_options_t
+        character(len=:), allocatable :: follow     !! one of curve_kinds
+        character(len=:), allocatable :: parameter  !! the special point's parameter
+        character(len=:), allocatable :: parameter2 !! the second parameter
+        real(wp) :: stop2 = 0     !! the far bound of parameter2
+        real(wp) :: step2 = 0     !! arclength step; its sign: parameter2's direction at the start
+        integer :: max_points = 100
+    end type curve_options_t
+
+    type :: curve_t
+        character(len=:), allocatable :: kind   !! the special point followed (curve_kinds)
+        integer :: n_points = 0
+        real(wp), allocatable :: values(:), values2(:) !! (point)
+        type(orbit_t), allocatable :: orbits(:) !! the orbit and its multipliers at each point
+        integer :: n_codim2 = 0
+        character(len=9), allocatable :: codim2_kind(:) !! 'fold-flip'
+        integer, allocatable :: codim2_index(:)  !! the point after the sign change
+        character(len=:), allocatable :: end_reason
+    end type curve_t
+
+contains
+
+    !> The curve of kind opt%follow through the orbit (x, v) at parameter value mu (parameter2
+    !> as in `model`): the start is refined at fixed parameter2, then followed to stop2 or
+    !> max_points.
+    subroutine follow_curve(model, phase, cycles, x, v, mu, opt, curve, err)
+        type(model_t), intent(in) :: model
+        real(wp), intent(in) :: phase, x(:), v(:), mu
+        integer, intent(in) :: cycles
+        type(curve_options_t), intent(in) :: opt
+        type(curve_t), intent(out) :: curve
+        type(error_t), allocatable, intent(out) :: err
+        type(curve_setting_t) :: set
+        type(curve_state_t) :: st
+        real(wp), allocatable :: y(:), tangent(:), anchor(:)
+        character(len=:), allocatable :: failure
+        integer :: m
+
+        if (.not. allocated(opt%follow)) then
+            call set_error(err, "curve: no kind to follow (fold or period-doubling)")
+            return
+        else if (.not. any(curve_kinds == opt%follow)) then
+            call set_error(err, "curve: follow = '"//opt%follow//"' is none of fold, "// &
+                           "period-doubling")
+            return
+        end if
+        curve%kind = opt%follow
+        allocate (curve%values(opt%max_points), curve%values2(opt%max_points), &
+                  curve%orbits(opt%max_points), curve%codim2_kind(opt%max_points), &
+                  curve%codim2_index(opt%max_points))
+        set%model = model
+        set%phase = phase
+        set%cycles = cycles
+        set%parameter = opt%parameter
+        set%parameter2 = opt%parameter2
+        set%shift = merge(-1.0_wp, 1.0_wp, opt%follow == 'fold')
+        m = 2*size(x)
+        y = [interleave(x, v), mu, model_parameter(model, opt%parameter2)]
+        ! (a start the map cannot pass keeps unit bordering vectors; Newton then says why)
+        set = set_with_nulls(set, y)
+        ! the start: parameter2 held (the last row), then the tangent with parameter2 rising
+        anchor = [spread(0.0_wp, 1, m + 1), 1.0_wp]
+        call newton(set, [y], anchor, y, st, failure, err)
+        if (allocated(err)) return
+        if (len(failure) > 0) then
+            call set_error(err, opt%follow//" curve: the start does not converge: "//failure)
+            return
+        end if
+        call tangent_of(st, anchor, tangent, failure)
+        if (len(failure) > 0) then
+            call set_error(err, opt%follow//" curve: "//failure)
+            return
+        end if
+        if (tangent(m + 2)*opt%step2 < 0) tangent = -tangent
+        call keep(set, y, st, curve, err)
+        if (allocated(err)) return
+        call walk(set, opt, y, st, tangent, curve, err)
+    end subroutine follow_curve
+
+    !> Steps of |step2| along the tangent (halved up to four times when Newton fails) to stop2
+    !> or max_points; the bordering vectors follow the null vectors.
+    subroutine walk(set, opt, y, st, tangent, curve, err)
+        type(curve_setting_t), intent(inout) :: set
+        type(curve_options_t), intent(in) :: opt
+        real(wp), intent(inout) :: y(:), tangent(:)
+        type(curve_state_t), intent(inout) :: st
+        type(curve_t), intent(inout) :: curve
+        type(error_t), allocatable, intent(out) :: err
+        real(wp), allocatable :: next(:), fresh(:)
+        character(len=:), allocatable :: failure
+        real(wp) :: h
+        integer :: m, halvings
+
+        m = size(y) - 2
+        curve%end_reason = 'max_points'
+        do while (curve%n_points < opt%max_points)
+            h = abs(opt%step2)
+            do halvings = 0, 4
+                call newton(set, y + h*tangent, tangent, next, st, failure, err)
+                if (allocated(err)) return
+                if (len(failure) == 0) exit
+                h = h/2
+            end do
+            if (len(failure) > 0) then
+                curve%end_reason = 'newton: '//failure
+                return
+            end if
+            if ((next(m + 2) - opt%stop2)*(y(m + 2) - opt%stop2) <= 0) then
+                curve%end_reason = 'bound'
+                return
+            end if
+            y = next
+            set%b = st%v/norm2(st%v)
+            set%c = st%w/norm2(st%w)
+            call tangent_of(st, tangent, fresh, failure)
+            tangent = fresh
+            if (len(failure) > 0) then
+                curve%end_reason = 'newton: '//failure
+                return
+            end if
+            call keep(set, y, st, curve, err)
+            if (allocated(err)) return
+        end do
+    end subroutine walk
+
+    !> Newton on (P(z) - z, s, anchor . (y - guess)) = 0 from the guess.
+    subroutine newton(set, guess, anchor, y, st, failure, err)
+        type(curve_setting_t), intent(in) :: set
+        real(wp), intent(in) :: guess(:), anchor(:)
+        real(wp), allocatable, intent(out) :: y(:)
+        type(curve_state_t), intent(out) :: st
+        character(len=:), allocatable, intent(out) :: failure
+        type(error_t), allocatable, intent(out) :: err
+        integer, parameter :: max_iterations = 30
+        real(wp), allocatable :: a(:, :), rhs(:, :)
+        integer :: m, iteration, info
+
+        m = size(guess) - 2
+        y = guess
+        do iteration = 0, max_iterations
+            call evaluate(set, y, st, err, .true.)
+            if (allocated(err)) return
+            failure = st%failure
+            if (len(failure) > 0) return
+            ! (on the residual, not the step: figure 10's symmetric chain has a second
+            ! multiplier near +1 at its fold, so z is determined only to ~1e-7 along that
+            ! direction while the residual reaches rounding)
+            if (st%pass%residual <= tolerance .and. abs(st%s) <= tolerance .and. &
+                iteration > 0) return
+            if (iteration == max_iterations) exit
+            if (allocated(a)) deallocate (a)
+            allocate (a(m + 2, m + 2))
+            a(:m + 1, :) = st%rows
+            a(m + 2, :) = anchor
+            rhs = reshape([-st%residual, -dot_product(anchor, y - guess)], [m + 2, 1])
+            call solve_linear(a, rhs, info)
+            if (info > 0) then
+                failure = "singular Newton matrix of the curve"
+                return
+            end if
+            y = y + rhs(:, 1)
+        end do
+        failure = "no convergence in "//fmt_int(max_iterations)//" iterations"
+    end subroutine newton
+
+    !> The unit tangent of the curve at st: rows t = 0, direction . t = 1.
+    subroutine tangent_of(st, direction, tangent, failure)
+        type(curve_state_t), intent(in) :: st
+        real(wp), intent(in) :: direction(:)
+        real(wp), allocatable, intent(out) :: tangent(:)
+        character(len=:), allocatable, intent(out) :: failure
+        real(wp), allocatable :: a(:, :), rhs(:, :)
+        integer :: n, info
+
+        failure = ''
+        n = size(direction)
+        allocate (a(n, n), rhs(n, 1))
+        a(:n - 1, :) = st%rows
+        a(n, :) = direction
+        rhs = 0
+        rhs(n, 1) = 1
+        call solve_linear(a, rhs, info)
+        if (info > 0) then
+            failure = "singular tangent system of the curve"
+            return
+        end if
+        tangent = rhs(:, 1)/norm2(rhs(:, 1))
+        if (dot_product(tangent, direction) < 0) tangent = -tangent
+    end subroutine tangent_of
+
+    !> The setting with bordering vectors from the null vectors of J + shift I at y.
+    function set_with_nulls(set, y) result(out)
+        type(curve_setting_t), intent(in) :: set
+        real(wp), intent(in) :: y(:)
+        type(curve_setting_t) :: out
+        type(curve_state_t) :: st
+        type(error_t), allocatable :: err
+
+        out = set
+        out%b = spread(1.0_wp, 1, size(y) - 2)
+        out%c = out%b
+        call evaluate(out, y, st, err, .false.)
+        if (allocated(err) .or. .not. allocated(st%pass%jacobian)) return
+        call null_vectors(st%pass%jacobian, out%shift, out%c, out%b)
+    end function set_with_nulls
+
+    !> Stores the point y (the converged state st): its orbit, multipliers and fold-flip test.
+    subroutine keep(set, y, st, curve, err)
+        type(curve_setting_t), intent(in) :: set
+        real(wp), intent(in) :: y(:)
+        type(curve_state_t), intent(in) :: st
+        type(curve_t), intent(inout) :: curve
+        type(error_t), allocatable, intent(out) :: err
+        integer :: m, k
+
+        m = size(y) - 2
+        k = curve%n_points + 1
+        curve%orbits(k)%converged = .true.
+        curve%orbits(k)%reason = ''
+        curve%orbits(k)%cycles = set%cycles
+        curve%orbits(k)%phase = set%phase
+        curve%orbits(k)%residuals = [st%pass%residual]
+        call describe_orbit(model_at(set, y), st%pass, curve%orbits(k), err)
+        if (allocated(err)) return
+        curve%n_points = k
+        curve%values(k) = y(m + 1)
+        curve%values2(k) = y(m + 2)
+        if (k == 1) return
+        if (flip_sign(curve%orbits(k - 1), set%shift) /= flip_sign(curve%orbits(k), set%shift)) &
+            then
+            curve%n_codim2 = curve%n_codim2 + 1
+            curve%codim2_kind(curve%n_codim2) = 'fold-flip'
+            curve%codim2_index(curve%n_codim2) = k
+        end if
+    end subroutine keep
+
+    !> The sign of the other curve's test, det(J - shift I) up to sign: the product of
+    !> 1 - shift mu over the real multipliers (a complex pair contributes a square > 0).
+    pure integer function flip_sign(orbit, shift)
+        type(orbit_t), intent(in) :: orbit
+        real(wp), intent(in) :: shift
+        real(wp) :: product_
+        integer :: j
+
+        product_ = 1
+        do j = 1, size(orbit%multipliers_re)
+            if (orbit%multipliers_im(j) == 0) product_ = product_*(1 - shift*orbit%multipliers_re(j))
+        end do
+        flip_sign = merge(1, -1, product_ >= 0)
+    end function flip_sign
+
+    !> The model at y's two parameters.
+    function model_at(set, y) result(model)
+        type(curve_setting_t), intent(in) :: set
+        real(wp), intent(in) :: y(:)
+        type(model_t) :: model
+
+        model = set%model
+        call set_model_parameter(model, set%parameter, y(size(y) - 1))
+        call set_model_parameter(model, set%parameter2, y(size(y)))
+    end function model_at
+
+end module chain_curve

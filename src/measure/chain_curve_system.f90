@@ -1,0 +1,215 @@
+!> The minimally augmented system of a fold or period-doubling curve in two parameters
+!> (docs/model.md section 12.6; Govaerts 2000): unknowns y = (z, mu1, mu2), equations
+!> P(z) - z = 0 and s = 0, s from the bordered system [[J + shift I, b], [c^T, 0]] (w, s) =
+!> (0, 1) (shift -1 at a fold, +1 at a period doubling), regular at a simple one. The orbit rows of Newton's matrix are exact, [J - I, P_mu1, P_mu2]; the row of s is
+!> s_y = -v^T J_y w (v from the transposed system) with J_y by central differences of exact
+!> Jacobians: the residual is exact, only Newton's matrix is approximate.
+module chain_curve_system
+    use chain_kinds, only: wp
+    use chain_error, only: error_t
+    use chain_model, only: model_t, set_model_parameter
+    use chain_orbit, only: orbit_pass_t, orbit_pass
+    use chain_parameter, only: map_parameter_derivative
+    use chain_lapack, only: solve_linear
+    implicit none
+    private
+    public :: curve_setting_t, curve_state_t, evaluate, border, null_vectors
+
+    !> What stays fixed along one curve.
+    type :: curve_setting_t
+        type(model_t) :: model
+        real(wp) :: phase = 0
+        integer :: cycles = 1
+        character(len=:), allocatable :: parameter, parameter2
+        real(wp) :: shift = -1 !! the test matrix J + shift I: -1 fold, +1 period doubling
+        real(wp), allocatable :: b(:), c(:) !! the bordering vectors (unit, near the null vectors)
+    end type curve_setting_t
+
+    !> The system at one y: the residual (P(z) - z, s), Newton's m + 1 rows, and the
+    !> bordered system's solutions w (right) and v (left).
+    type :: curve_state_t
+        type(orbit_pass_t) :: pass
+        real(wp), allocatable :: residual(:)
+        real(wp), allocatable :: rows(:, :)
+        real(wp), allocatable :: w(:), v(:)
+        real(wp) :: s = 0
+        logical :: ok = .false.
+        character(len=:), allocatable :: failure
+    end type curve_state_t
+
+contains
+
+    !> The system at y; with `rows`, also Newton's matrix. ok = .false. with `failure` when the
+    !> orbit cannot be passed (a negative gap, a rest) or the bordered matrix is singular.
+    subroutine evaluate(set, y, st, err, rows)
+        type(curve_setting_t), intent(in) :: set
+        real(wp), intent(in) :: y(:)
+        type(curve_state_t), intent(out) :: st
+        type(error_t), allocatable, intent(out) :: err
+        logical, intent(in) :: rows
+        real(wp), allocatable :: p1(:), p2(:), d_s(:)
+        type(model_t) :: model
+        integer :: m, i
+
+        m = size(y) - 2
+        st%failure = ''
+        call pass_at(set, y, st%pass, model, st%failure, err)
+        if (allocated(err) .or. len(st%failure) > 0) return
+        call border(st%pass%jacobian, set%shift, set%b, set%c, st%w, st%v, st%s, st%failure)
+        if (len(st%failure) > 0) return
+        st%residual = [st%pass%image - st%pass%z, st%s]
+        st%ok = .true.
+        if (.not. rows) return
+        call map_parameter_derivative(model, set%phase, set%cycles, y(1:m:2), y(2:m:2), &
+                                      set%parameter, st%pass%jacobian, p1, err)
+        if (allocated(err)) return
+        call map_parameter_derivative(model, set%phase, set%cycles, y(1:m:2), y(2:m:2), &
+                                      set%parameter2, st%pass%jacobian, p2, err)
+        if (allocated(err)) return
+        call s_gradient(set, y, st%w, st%v, d_s, st%failure, err)
+        if (allocated(err) .or. len(st%failure) > 0) then
+            st%ok = .false.
+            return
+        end if
+        allocate (st%rows(m + 1, m + 2))
+        st%rows(:m, :m) = st%pass%jacobian
+        do i = 1, m
+            st%rows(i, i) = st%rows(i, i) - 1
+        end do
+        st%rows(:m, m + 1) = p1
+        st%rows(:m, m + 2) = p2
+        st%rows(m + 1, :) = d_s
+    end subroutine evaluate
+
+    !> One pass of the map at y (both parameters set), and the model it used.
+    subroutine pass_at(set, y, pass, model, failure, err)
+        type(curve_setting_t), intent(in) :: set
+        real(wp), intent(in) :: y(:)
+        type(orbit_pass_t), intent(out) :: pass
+        type(model_t), intent(out) :: model
+        character(len=:), allocatable, intent(inout) :: failure
+        type(error_t), allocatable, intent(out) :: err
+        integer :: m
+
+        m = size(y) - 2
+        model = set%model
+        call set_model_parameter(model, set%parameter, y(m + 1))
+        call set_model_parameter(model, set%parameter2, y(m + 2))
+        call orbit_pass(model, set%phase, set%cycles, y(:m), pass, err)
+        if (allocated(err)) return
+        if (.not. pass%admissible) then
+            failure = "a negative gap"
+        else if (pass%rests) then
+            failure = "the orbit sticks on a wall (rest): not supported"
+        else if (pass%collapse) then
+            failure = "the cluster rule acts on the orbit: not supported"
+        end if
+    end subroutine pass_at
+
+    !> s_y = -v^T J_y w, J_y by central differences of exact Jacobians (a relative step 1e-6:
+    !> the Jacobians are exact to rounding, the difference's error is of order step**2).
+    subroutine s_gradient(set, y, w, v, d_s, failure, err)
+        type(curve_setting_t), intent(in) :: set
+        real(wp), intent(in) :: y(:), w(:), v(:)
+        real(wp), allocatable, intent(out) :: d_s(:)
+        character(len=:), allocatable, intent(inout) :: failure
+        type(error_t), allocatable, intent(out) :: err
+        real(wp), parameter :: relative = 1.0e-6_wp
+        type(orbit_pass_t) :: plus, minus
+        type(model_t) :: model
+        real(wp), allocatable :: e(:)
+        real(wp) :: h
+        integer :: k
+
+        allocate (d_s(size(y)), e(size(y)))
+        do k = 1, size(y)
+            h = relative*(1 + abs(y(k)))
+            e = 0
+            e(k) = h
+            call pass_at(set, y + e, plus, model, failure, err)
+            if (allocated(err) .or. len(failure) > 0) return
+            call pass_at(set, y - e, minus, model, failure, err)
+            if (allocated(err) .or. len(failure) > 0) return
+            d_s(k) = -dot_product(v, matmul(plus%jacobian - minus%jacobian, w))/(2*h)
+        end do
+    end subroutine s_gradient
+
+    !> [[J + shift I, b], [c^T, 0]] (w, s) = (0, 1) and its transpose (v, s) = (0, 1).
+    subroutine border(jacobian, shift, b, c, w, v, s, failure)
+        real(wp), intent(in) :: jacobian(:, :), shift, b(:), c(:)
+        real(wp), allocatable, intent(out) :: w(:), v(:)
+        real(wp), intent(out) :: s
+        character(len=:), allocatable, intent(inout) :: failure
+        real(wp), allocatable :: a(:, :), rhs(:, :)
+        integer :: m, i, info
+
+        m = size(b)
+        allocate (a(m + 1, m + 1), rhs(m + 1, 2))
+        a(:m, :m) = jacobian
+        do i = 1, m
+            a(i, i) = a(i, i) + shift
+        end do
+        a(:m, m + 1) = b
+        a(m + 1, :m) = c
+        a(m + 1, m + 1) = 0
+        rhs = 0
+        rhs(m + 1, 1) = 1
+        call solve_linear(a, rhs(:, 1:1), info)
+        if (info == 0) then
+            a(:m, :m) = transpose(jacobian)
+            do i = 1, m
+                a(i, i) = a(i, i) + shift
+            end do
+            a(:m, m + 1) = c
+            a(m + 1, :m) = b
+            a(m + 1, m + 1) = 0
+            rhs(m + 1, 2) = 1
+            call solve_linear(a, rhs(:, 2:2), info)
+        end if
+        if (info > 0) then
+            failure = "singular bordered matrix of the test function"
+            return
+        end if
+        w = rhs(:m, 1)
+        v = rhs(:m, 2)
+        s = rhs(m + 1, 1)
+    end subroutine border
+
+    !> Unit approximations of the right and left null vectors of J + shift I near a fold or
+    !> period doubling, by two steps of inverse iteration each.
+    subroutine null_vectors(jacobian, shift, right, left)
+        real(wp), intent(in) :: jacobian(:, :), shift
+        real(wp), allocatable, intent(out) :: right(:), left(:)
+        real(wp), allocatable :: a(:, :), at(:, :), x(:, :)
+        integer :: m, i, step, info
+
+        m = size(jacobian, 1)
+        a = jacobian
+        do i = 1, m
+            a(i, i) = a(i, i) + shift
+        end do
+        at = transpose(a)
+        allocate (x(m, 2))
+        x = 1
+        do step = 1, 2
+            block
+                real(wp), allocatable :: lu(:, :)
+                lu = a
+                call solve_linear(lu, x(:, 1:1), info)
+                if (info > 0) exit
+                lu = at
+                call solve_linear(lu, x(:, 2:2), info)
+                if (info > 0) exit
+            end block
+            x(:, 1) = x(:, 1)/norm2(x(:, 1))
+            x(:, 2) = x(:, 2)/norm2(x(:, 2))
+        end do
+        if (info > 0) then
+            ! exactly singular: any unit vectors border it regularly once Newton moves
+            x = 1/sqrt(real(m, wp))
+        end if
+        right = x(:, 1)
+        left = x(:, 2)
+    end subroutine null_vectors
+
+end module chain_curve_system
