@@ -618,7 +618,9 @@ _LONG_CALLS = {
                      "parameter='amplitude', stop=3.0, step=0.01)"),
 }
 _CHILD = """
-import sys, time
+import signal, sys, time
+signal.signal(signal.SIGINT, signal.default_int_handler)  # as at a terminal, even if this
+# test runs where SIGINT is ignored (a background job): the child would inherit that
 from impactchain import api
 print("calling", flush=True)
 try:
@@ -1022,7 +1024,9 @@ def test_complex_x0_is_refused() -> None:
 
 
 _POOL_CHILD = """
-import sys, time
+import signal, sys, time
+signal.signal(signal.SIGINT, signal.default_int_handler)  # as at a terminal, even if this
+# test runs where SIGINT is ignored (a background job): the child would inherit that
 from concurrent.futures import ThreadPoolExecutor
 from impactchain import _calls, api
 calls = [lambda: api.simulate(16, 1.7, 1.5, transient=10**10, cycles=2)] * 3
