@@ -52,8 +52,6 @@ contains
         class(monitor_t), intent(inout), optional :: monitor
         type(setting_t) :: set
         type(orbit_t) :: start
-        integer, allocatable :: level(:)
-        integer :: depth, first, last, s
         logical :: stopped
 
         call check_options(model, opt, err)
@@ -82,57 +80,51 @@ contains
         call follow_one(set, start, res, stopped, err, monitor)
         res%stopped = stopped
         if (allocated(err) .or. stopped) return
-        ! level(b): how many doublings branch b is away from the first
-        level = [0]
-        first = 1
-        do depth = 1, opt%doublings
-            last = res%n_specials
-            do s = first, last
-                if (res%specials(s)%kind /= 'period-doubling') cycle
-                if (level(res%points(res%specials(s)%point)%branch + 1) /= depth - 1) cycle
-                set%branch = size(level)
-                level = [level, depth]
-                call switch_at_doubling(set, res, res%specials(s)%point, stopped, err, monitor)
-                res%stopped = stopped
-                if (allocated(err) .or. stopped) return
-            end do
-            first = last + 1
-        end do
-        call follow_crossing_branches(set, res, err, monitor)
+        call switch_levels(set, res, 'period-doubling', opt%doublings, err, monitor)
+        if (allocated(err) .or. res%stopped) return
+        call switch_levels(set, res, 'branch-point', opt%branch_points, err, monitor)
     end subroutine follow_branches
 
-    !> The branches crossing the ones followed so far at their branch points, two at each,
-    !> opt%branch_points levels deep: level 1 at the branch points of every branch followed so
-    !> far, each further level at those located on the branches of the level before.
-    subroutine follow_crossing_branches(set, res, err, monitor)
+    !> Switch at the special points of `kind` ('period-doubling': onto the period-2p branch;
+    !> 'branch-point': onto the two branches crossing there), `levels` deep: level 1 at those of
+    !> every branch followed so far, each further level at those on the branches of the level
+    !> before. set%branch: the last branch followed, with points or not.
+    subroutine switch_levels(set, res, kind, levels, err, monitor)
         type(setting_t), intent(inout) :: set
         type(branches_t), intent(inout) :: res
+        character(len=*), intent(in) :: kind
+        integer, intent(in) :: levels
         type(error_t), allocatable, intent(out) :: err
         class(monitor_t), intent(inout), optional :: monitor
         integer, allocatable :: level(:)
         integer :: depth, first, last, s
         logical :: stopped
 
-        ! level(b): how many branch points branch b is away from those followed before
-        ! (set%branch: the last branch followed, with points or not)
+        ! level(b): how many switches branch b is away from the branches followed before
         allocate (level(set%branch + 1))
         level = 0
         first = 1
-        do depth = 1, set%opt%branch_points
+        do depth = 1, levels
             last = res%n_specials
             do s = first, last
-                if (res%specials(s)%kind /= 'branch-point') cycle
+                if (res%specials(s)%kind /= kind) cycle
                 if (level(res%points(res%specials(s)%point)%branch + 1) /= depth - 1) cycle
                 set%branch = size(level)
-                level = [level, depth, depth]
-                call switch_at_branch_point(set, res, res%specials(s)%point, stopped, err, &
+                if (kind == 'period-doubling') then
+                    level = [level, depth]
+                    call switch_at_doubling(set, res, res%specials(s)%point, stopped, err, &
                                             monitor)
+                else
+                    level = [level, depth, depth]
+                    call switch_at_branch_point(set, res, res%specials(s)%point, stopped, err, &
+                                                monitor)
+                end if
                 res%stopped = stopped
                 if (allocated(err) .or. stopped) return
             end do
             first = last + 1
         end do
-    end subroutine follow_crossing_branches
+    end subroutine switch_levels
 
     !> Refuse options no branch can be followed with.
     subroutine check_options(model, opt, err)

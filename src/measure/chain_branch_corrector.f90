@@ -6,7 +6,7 @@ module chain_branch_corrector
     use chain_kinds, only: wp
     use chain_error, only: error_t, set_error, fmt_int, fmt_real
     use chain_model, only: model_t, set_model_parameter
-    use chain_orbit, only: orbit_pass_t, orbit_pass
+    use chain_orbit, only: orbit_pass_t, orbit_pass, pass_refusal
     use chain_parameter, only: map_parameter_derivative
     use chain_lapack, only: solve_linear
     use chain_branch_points, only: cursor_t, setting_t, cursor_from_pass, impacts_per_bond
@@ -59,15 +59,9 @@ contains
                                          pass%log%kind(:pass%log%count)) /= here%impacts)) &
                     crossed = .true.
             end if
-            if (.not. pass%admissible) then
-                failure = "a negative gap"
-            else if (pass%rests) then
-                failure = "the orbit sticks on a wall (rest): not supported"
-            else if (pass%collapse) then
-                failure = "the cluster rule acts on the orbit: not supported"
-            else if (pass%residual/4 > previous .and. iterations >= 2) then
+            failure = pass_refusal(pass)
+            if (len(failure) == 0 .and. pass%residual/4 > previous .and. iterations >= 2) &
                 failure = "Newton diverges (residual "//fmt_real(pass%residual)//")"
-            end if
             if (len(failure) > 0) return
             if (pass%residual <= set%opt%newton%tolerance) exit
             ! the rounding floor: a full step that gained less than a factor 10 close to the

@@ -8,7 +8,7 @@ module chain_curve_system
     use chain_kinds, only: wp
     use chain_error, only: error_t
     use chain_model, only: model_t, set_model_parameter
-    use chain_orbit, only: orbit_pass_t, orbit_pass
+    use chain_orbit, only: orbit_pass_t, orbit_pass, pass_refusal
     use chain_parameter, only: map_parameter_derivative
     use chain_lapack, only: solve_linear
     implicit none
@@ -89,6 +89,7 @@ contains
         type(model_t), intent(out) :: model
         character(len=:), allocatable, intent(inout) :: failure
         type(error_t), allocatable, intent(out) :: err
+        character(len=:), allocatable :: refusal
         integer :: m
 
         m = size(y) - 2
@@ -97,13 +98,8 @@ contains
         call set_model_parameter(model, set%parameter2, y(m + 2))
         call orbit_pass(model, set%phase, set%cycles, y(:m), pass, err)
         if (allocated(err)) return
-        if (.not. pass%admissible) then
-            failure = "a negative gap"
-        else if (pass%rests) then
-            failure = "the orbit sticks on a wall (rest): not supported"
-        else if (pass%collapse) then
-            failure = "the cluster rule acts on the orbit: not supported"
-        end if
+        refusal = pass_refusal(pass)
+        if (len(refusal) > 0) failure = refusal
     end subroutine pass_at
 
     !> s_y = -v^T J_y w, J_y by central differences of exact Jacobians (a relative step 1e-6:

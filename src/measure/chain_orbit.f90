@@ -25,7 +25,7 @@ module chain_orbit
     implicit none
     private
     public :: orbit_t, orbit_options_t, find_orbit, orbit_gap_minimum, interleave
-    public :: orbit_pass_t, orbit_pass, describe_orbit, impact_bonds
+    public :: orbit_pass_t, orbit_pass, pass_refusal, describe_orbit, impact_bonds
 
     !> How Newton is run.
     type :: orbit_options_t
@@ -213,6 +213,23 @@ contains
         end associate
         pass%residual = maxval(abs(pass%image - z))/(1 + maxval(abs(z)))
     end subroutine orbit_pass
+
+    !> Why a continuation's Newton cannot use this pass (a negative gap, a rest, the cluster
+    !> rule), or '' when it can.
+    pure function pass_refusal(pass) result(refusal)
+        type(orbit_pass_t), intent(in) :: pass
+        character(len=:), allocatable :: refusal
+
+        if (.not. pass%admissible) then
+            refusal = "a negative gap"
+        else if (pass%rests) then
+            refusal = "the orbit sticks on a wall (rest): not supported"
+        else if (pass%collapse) then
+            refusal = "the cluster rule acts on the orbit: not supported"
+        else
+            refusal = ''
+        end if
+    end function pass_refusal
 
     !> The orbit's state, Jacobian, events and, when converged, multipliers and gap monitor.
     subroutine describe_orbit(model, pass, orbit, err)

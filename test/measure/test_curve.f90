@@ -8,14 +8,12 @@ module test_curve
     use chain_kinds, only: wp, i8
     use chain_error, only: error_t
     use chain_model, only: model_t, set_model_parameter
-    use chain_engine, only: chain_t, chain_positions, chain_velocities
-    use chain_event_log, only: event_log_t, event_log_init
-    use chain_section, only: advance_to_point, chain_at_section
-    use chain_orbit, only: orbit_t, find_orbit
+    use chain_orbit, only: orbit_t
     use chain_branch, only: branch_options_t, branches_t, follow_branches
     use chain_curve, only: curve_options_t, curve_t, follow_curve
     use chain_flow, only: make_flow
     use test_chains, only: fig10_model, model_of
+    use test_branch, only: settle
     use testing, only: tally_t, check, check_close
     implicit none
     private
@@ -146,7 +144,7 @@ contains
         integer :: j
 
         k = 0
-        call settle(oscillator(8.0_wp, omega), 1000_i8, start)
+        call settle(oscillator(8.0_wp, omega), 1000_i8, 1, start)
         opt%parameter = 'amplitude'
         opt%stop = 4.5_wp
         opt%step = -0.05_wp
@@ -194,30 +192,12 @@ contains
 
         model = fig10_model(3.0_wp)
         call set_model_parameter(model, 'omega', omega)
-        call settle(model, 5_i8, start)
+        call settle(model, 5_i8, 1, start)
         opt%parameter = 'amplitude'
         opt%stop = 2
         opt%step = -0.05_wp
         call follow_branches(model, 0.0_wp, 1, start%x, start%v, opt, res, err)
     end subroutine fold_at
-
-    !> Newton for a period-1 orbit from the state `transient` cycles after a start at rest.
-    subroutine settle(model, transient, orbit)
-        type(model_t), intent(in) :: model
-        integer(i8), intent(in) :: transient
-        type(orbit_t), intent(out) :: orbit
-        type(chain_t) :: chain
-        type(error_t), allocatable :: err
-        type(event_log_t) :: events
-        integer :: i
-
-        call chain_at_section(model, 0.0_wp, [(0.0_wp, i=1, model%n)], [(0.0_wp, i=1, model%n)], &
-                              chain, err)
-        call event_log_init(events, .false., 0)
-        call advance_to_point(chain, transient, 0.0_wp, events, err)
-        call find_orbit(model, 0.0_wp, 1, chain_positions(chain), chain_velocities(chain), &
-                        orbit, err)
-    end subroutine settle
 
     !> The distance of the multiplier nearest `target` from it.
     pure real(wp) function distance_to(orbit, target)
