@@ -16,6 +16,8 @@ module chain_branch_file
     use chain_hdf5, only: h5_write, h5_write_attr, h5_write_strings
     use chain_describe, only: describe_group, index_coordinate
     use chain_monitor, only: monitor_t
+    use chain_curve, only: curve_t
+    use chain_curve_file, only: run_curve, write_curve
     use, intrinsic :: ieee_arithmetic, only: ieee_value, ieee_quiet_nan, ieee_positive_inf
     implicit none
     private
@@ -110,11 +112,16 @@ contains
         type(error_t), allocatable, intent(out) :: err
         class(monitor_t), intent(inout), optional :: monitor
         type(output_t) :: out
+        type(curve_t) :: curve
 
         call output_begin(out, cfg%output_file, cfg%overwrite, err)
         if (allocated(err)) return
         call run_continuation(cfg, res, err, monitor)
         if (.not. (allocated(err) .or. res%stopped)) call write_continuation(out, cfg, res, err)
+        if (.not. (allocated(err) .or. res%stopped) .and. len(cfg%cont_follow) > 0) then
+            call run_curve(cfg, res, curve)
+            call write_curve(out, cfg, curve, err)
+        end if
         if (allocated(err) .or. res%stopped) then
             call output_abort(out)
             return

@@ -360,6 +360,20 @@ contains
             cfg%cont_period = int_input(s, 'continuation', 'period')
             cfg%cont_doublings = int_input(s, 'continuation', 'doublings')
             cfg%cont_branch_points = int_input(s, 'continuation', 'branch_points')
+            cfg%cont_follow = lower(trim(adjustl(string_input(s, 'continuation', 'follow'))))
+            cfg%cont_parameter2 = lower(trim(adjustl(string_input(s, 'continuation', &
+                                                                  'parameter2'))))
+            if (len(cfg%cont_follow) > 0) then
+                if (.not. (has_value(s, 'continuation', 'stop2') .and. &
+                           has_value(s, 'continuation', 'step2') .and. &
+                           len(cfg%cont_parameter2) > 0)) then
+                    call set_error(err, "&continuation: follow = '"//cfg%cont_follow// &
+                                   "' needs parameter2, stop2 and step2")
+                    return
+                end if
+                cfg%cont_stop2 = real_input(s, 'continuation', 'stop2')
+                cfg%cont_step2 = real_input(s, 'continuation', 'step2')
+            end if
         end associate
     end subroutine copy_continuation
 

@@ -323,6 +323,7 @@ contains
             call set_error(err, "&continuation: parameter = 'spacing' needs one spacing for "// &
                            "every bond (&chain spacing = one value)")
         end if
+        if (.not. allocated(err)) call validate_curve(cfg, err)
         if (allocated(err) .or. cfg%cont_max_points == 1) return
         associate (start => model_parameter(cfg%model, cfg%cont_parameter))
         if (.not. (ieee_is_finite(cfg%cont_stop) .and. cfg%cont_stop /= start)) then
@@ -349,6 +350,28 @@ contains
         if (allocated(err)) err%message = "&continuation: stop = "//fmt_real(cfg%cont_stop)// &
                                           ": "//err%message
     end subroutine validate_continuation
+
+    !> The curve's second parameter is another parameter than the first, and its step moves.
+    subroutine validate_curve(cfg, err)
+        type(config_t), intent(in) :: cfg
+        type(error_t), allocatable, intent(out) :: err
+
+        if (len(cfg%cont_follow) == 0) return
+        if (cfg%cont_parameter2 == cfg%cont_parameter) then
+            call set_error(err, "&continuation: parameter2 = '"//cfg%cont_parameter2// &
+                           "' must differ from parameter = '"//cfg%cont_parameter//"'")
+        else if (cfg%cont_parameter2 == 'spacing' .and. &
+                 any(cfg%model%spacing /= cfg%model%spacing(1))) then
+            call set_error(err, "&continuation: parameter2 = 'spacing' needs one spacing "// &
+                           "for every bond (&chain spacing = one value)")
+        else if (.not. (ieee_is_finite(cfg%cont_step2) .and. cfg%cont_step2 /= 0)) then
+            call set_error(err, "&continuation: step2 = "//fmt_real(cfg%cont_step2)// &
+                           " must be finite and nonzero")
+        else if (.not. ieee_is_finite(cfg%cont_stop2)) then
+            call set_error(err, "&continuation: stop2 = "//fmt_real(cfg%cont_stop2)// &
+                           " must be finite")
+        end if
+    end subroutine validate_curve
 
     !> A census's starts must not overlap (as &initial random's), and it runs at one point
     !> or along one swept parameter.

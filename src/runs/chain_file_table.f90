@@ -21,14 +21,11 @@
 !> Infrastructure, no model section.
 module chain_file_table
     use chain_inputs, only: input_keys, find_input
+    use chain_file_entry, only: output_entry_t, add
+    use chain_file_table_orbits, only: entries_continuation, entries_curve
     implicit none
     private
     public :: output_entry_t, output_table
-
-    type :: output_entry_t
-        character(len=:), allocatable :: file, path, kind, dims, dtype, units, model_units, &
-                                         long_name, when
-    end type output_entry_t
 
 contains
 
@@ -44,18 +41,10 @@ contains
         call entries_resume(t)
         call entries_sweep(t)
         call entries_continuation(t)
+        call entries_curve(t)
         call entries_census_attributes(t)
         call entries_census(t)
     end function output_table
-
-    subroutine add(t, file, path, kind, dims, dtype, units, model_units, long_name, when)
-        type(output_entry_t), allocatable, intent(inout) :: t(:)
-        character(len=*), intent(in) :: file, path, kind, dims, dtype, units, model_units, &
-                                        long_name, when
-
-        t = [t, output_entry_t(file, path, kind, dims, dtype, units, model_units, long_name, &
-                               when)]
-    end subroutine add
 
     !> The reduced unit of an input key as a file states it (model_units): the input table's,
     !> its one home; none for a pure number.
@@ -398,85 +387,6 @@ contains
         call add(t, 'sweep', '/sweep/ky_dimension', 'dataset', 'point point2?', 'float64', '1', &
                  '', 'Kaplan-Yorke dimension', '&lyapunov enabled')
     end subroutine entries_sweep
-
-    !> /continuation attributes, /continuation.
-    subroutine entries_continuation(t)
-        type(output_entry_t), allocatable, intent(inout) :: t(:)
-
-        call add(t, 'continuation', '/continuation/@parameter', 'attribute', '', 'string', '', &
-                 '', 'the continued parameter', 'always')
-        call add(t, 'continuation', '/continuation/@phase', 'attribute', '', 'float64', 'radian', &
-                 '', 'phase of the Poincare section', 'always')
-        call add(t, 'continuation', '/continuation/@start', 'attribute', '', 'float64', '1', &
-                 '{parameter}', 'the parameter''s start (&chain''s value)', 'always')
-        call add(t, 'continuation', '/continuation/@stop', 'attribute', '', 'float64', '1', &
-                 '{parameter}', 'the parameter''s bound', 'always')
-        call add(t, 'continuation', '/continuation/@step', 'attribute', '', 'float64', '1', &
-                 '{parameter}', 'the first step of the parameter', 'always')
-        call add(t, 'continuation', '/continuation/@end_reason', 'attribute', '', 'string', '', &
-                 '', 'why each branch ended, one line per branch', 'always')
-        call add(t, 'continuation', '/continuation/@end_kind', 'attribute', '', 'string', '', &
-                 '', 'how each branch ended, one line per branch: max_points, bound, '// &
-                 'grazing, corner, section, impacts or newton', 'always')
-        call add(t, 'continuation', '/continuation/point', 'dataset', 'point', 'int32', '1', '', &
-                 'point index (in the order found, branch after branch)', 'always')
-        call add(t, 'continuation', '/continuation/oscillator', 'dataset', 'oscillator', 'int32', &
-                 '1', '', 'oscillator index', 'always')
-        call add(t, 'continuation', '/continuation/multiplier', 'dataset', 'multiplier', 'int32', &
-                 '1', '', 'multiplier index', 'always')
-        call add(t, 'continuation', '/continuation/iterate', 'dataset', 'iterate', 'int32', '1', &
-                 '', 'section crossing of the period', 'always')
-        call add(t, 'continuation', '/continuation/special', 'dataset', 'special', 'int32', '1', &
-                 '', 'special point index', 'always')
-        call add(t, 'continuation', '/continuation/values', 'dataset', 'point', 'float64', '1', &
-                 '{parameter}', '{parameter} (the continued parameter) at the point', 'always')
-        call add(t, 'continuation', '/continuation/x', 'dataset', 'point oscillator', 'float64', &
-                 '1', 'length', &
-                 'displacement from equilibrium on the section, the orbit''s state', 'always')
-        call add(t, 'continuation', '/continuation/v', 'dataset', 'point oscillator', 'float64', &
-                 '1', 'length/time', 'velocity on the section, the orbit''s state', 'always')
-        call add(t, 'continuation', '/continuation/strobe_x', 'dataset', &
-                 'point iterate oscillator', 'float64', '1', 'length', &
-                 'displacement at the section crossings of one period (NaN beyond the period)', &
-                 'always')
-        call add(t, 'continuation', '/continuation/period', 'dataset', 'point', 'int32', '1', &
-                 'drive cycles', 'period of the orbit', 'always')
-        call add(t, 'continuation', '/continuation/branch', 'dataset', 'point', 'int32', '1', '', &
-                 'branch index (0: the first; 1, 2, ...: branches switched to at period '// &
-                 'doublings and branch points; each starts at its parent''s special point)', &
-                 'always')
-        call add(t, 'continuation', '/continuation/multipliers_re', 'dataset', &
-                 'point multiplier', 'float64', '1', '', 'Floquet multiplier, real part', &
-                 'always')
-        call add(t, 'continuation', '/continuation/multipliers_im', 'dataset', &
-                 'point multiplier', 'float64', '1', '', 'Floquet multiplier, imaginary part', &
-                 'always')
-        call add(t, 'continuation', '/continuation/stable', 'dataset', 'point', 'int32', '1', '', &
-                 'stability (1: every multiplier inside the unit circle)', 'always')
-        call add(t, 'continuation', '/continuation/symmetric', 'dataset', 'point', 'int32', '1', &
-                 '', 'mirror symmetry (1: the orbit is its own mirror image half a drive '// &
-                 'period later)', 'always')
-        call add(t, 'continuation', '/continuation/min_gap', 'dataset', 'point', 'float64', '1', &
-                 'length', &
-                 'smallest gap at a local minimum over one period, other than a bond''s own '// &
-                 'impacts (inf: none)', 'always')
-        call add(t, 'continuation', '/continuation/min_impact_speed', 'dataset', 'point', &
-                 'float64', '1', 'length/time', &
-                 'smallest impact speed over one period (inf: no impacts)', 'always')
-        call add(t, 'continuation', '/continuation/impacts_per_period', 'dataset', 'point', &
-                 'int32', '1', '', 'impacts over one period', 'always')
-        call add(t, 'continuation', '/continuation/residual', 'dataset', 'point', 'float64', '1', &
-                 '', 'Newton''s last residual |P(z) - z| / (1 + |z|)', 'always')
-        call add(t, 'continuation', '/continuation/iterations', 'dataset', 'point', 'int32', '1', &
-                 '', 'Newton iterations of the point', 'always')
-        call add(t, 'continuation', '/continuation/special_index', 'dataset', 'special', 'int32', &
-                 '1', '', 'the point (0-based index) of the special point', 'always')
-        call add(t, 'continuation', '/continuation/special_kind', 'dataset', 'special', 'string', &
-                 '1', '', 'fold, period-doubling, neimark-sacker, grazing, corner, '// &
-                 'section or branch-point', 'always')
-        call add(t, 'continuation', '/continuation/special_value', 'dataset', 'special', &
-                 'float64', '1', '{parameter}', '{parameter} at the special point', 'always')
-    end subroutine entries_continuation
 
     !> /census attributes.
     subroutine entries_census_attributes(t)

@@ -172,6 +172,17 @@ module chain_inputs
         input_key_t('continuation', 'branch_points', key_integer, default='0', range='0..4', &
                     low=0, high=4, units='1', &
                     help='levels of switching at branch points (two branches each)'), &
+        input_key_t('continuation', 'follow', key_string, default="''", &
+                    choices=' fold period-doubling', &
+                    help="the first such special point of branch 0 followed in two "// &
+                    "parameters, to /curve ('': none)"), &
+        input_key_t('continuation', 'parameter2', key_string, default="''", dynamic=.true., &
+                    choices=' amplitude omega damping restitution spacing', &
+                    help="the curve's second parameter ('': none; needed with follow)"), &
+        input_key_t('continuation', 'stop2', key_real, default_text='none (needed with follow)', &
+                    help='the value of parameter2 the curve runs towards'), &
+        input_key_t('continuation', 'step2', key_real, default_text='none (needed with follow)', &
+                    help="the curve's arclength step; its sign: parameter2's first direction"), &
         input_key_t('census', 'samples', key_integer, default='100', &
                     default_text='100 (plane_points**2 with a plane)', &
                     range='[1, 10000000]', low=1, high=1.0e7_wp, units='1', &
