@@ -70,7 +70,7 @@ def expected_dims(entry: dict[str, Any], f: h5py.File) -> tuple[str, ...]:
 def parameter_of(path: str, f: h5py.File) -> str | None:
     """The swept or continued parameter a `{parameter}` of `path` stands for."""
     group = path.split("/")[1]
-    key = "parameter2" if path == "/sweep/point2" else "parameter"
+    key = "parameter2" if path in ("/sweep/point2", "/curve/values2") else "parameter"
     if group in f and key in f[group].attrs:
         return text(f[group].attrs[key])
     return None

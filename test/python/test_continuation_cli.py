@@ -37,6 +37,24 @@ BAD = {
     "stop out of range": ("parameter = 'restitution', stop = 1.5, step = 0.1",
                           ["&continuation: stop = 1.5", "restitution"]),
     "stop and step missing": ("parameter = 'amplitude'", ["stop and step are required"]),
+    "follow without stop2": ("parameter = 'amplitude', stop = 2, step = 0.1, follow = 'fold', "
+                             "parameter2 = 'omega', step2 = 0.01",
+                             ["&continuation: follow = 'fold'", "parameter2, stop2 and step2"]),
+    "follow without parameter2": ("parameter = 'amplitude', stop = 2, step = 0.1, "
+                                  "follow = 'fold', stop2 = 2, step2 = 0.01",
+                                  ["&continuation: follow = 'fold'",
+                                   "parameter2, stop2 and step2"]),
+    "follow unknown": ("parameter = 'amplitude', stop = 2, step = 0.1, follow = 'cusp', "
+                       "parameter2 = 'omega', stop2 = 2, step2 = 0.01",
+                       ["follow = 'cusp'", "fold", "period-doubling"]),
+    "parameter2 the parameter": ("parameter = 'amplitude', stop = 2, step = 0.1, "
+                                 "follow = 'fold', parameter2 = 'amplitude', stop2 = 2, "
+                                 "step2 = 0.01",
+                                 ["&continuation: parameter2 = 'amplitude'",
+                                  "differ from parameter = 'amplitude'"]),
+    "zero step2": ("parameter = 'amplitude', stop = 2, step = 0.1, follow = 'fold', "
+                   "parameter2 = 'omega', stop2 = 2, step2 = 0",
+                   ["&continuation: step2 = 0", "nonzero"]),
 }
 
 
@@ -335,3 +353,47 @@ def test_switching_at_the_branch_point(impactchain_exe, tmp_path):
         assert (g["impacts_per_period"][np.r_[one, two]] == 22).all()
         assert np.abs(g["x"][one[k - 1]] - g["x"][two[k - 1]]).max() > 1e-3
 
+
+
+FOLD = """&chain n = 8, amplitude = 3.0, omega = 1.9, damping = 0.05, restitution = 0.5,
+       spacing = 1.0, boundary = 'fixed' /
+&initial kind = 'rest' /
+&run transient = 5 /
+&continuation parameter = 'amplitude', stop = 2.0, step = -0.05, max_points = 12,
+       follow = 'fold', parameter2 = 'omega', stop2 = 1.95, step2 = 0.01 /
+&output file = 'curve.h5' /
+"""
+
+
+def test_fold_curve_file(impactchain_exe, tmp_path):
+    """Figure 10's fold (namelists/fig10_fold.nml) followed in (A, w) (docs/model.md 12.6):
+    /curve starts at the located fold, has a multiplier +1 at every point and runs towards
+    stop2."""
+    run_namelist(impactchain_exe, FOLD, tmp_path)
+    with h5py.File(tmp_path / "curve.h5") as f:
+        cont, curve = f["continuation"], f["curve"]
+        kinds = list(cont["special_kind"][:].astype(str))
+        fold = cont["special_value"][kinds.index("fold")]
+        assert {k: curve.attrs[k].decode() if isinstance(curve.attrs[k], bytes) else
+                curve.attrs[k] for k in ("follow", "parameter", "parameter2")} == {
+            "follow": "fold", "parameter": "amplitude", "parameter2": "omega"}
+        values, values2 = curve["values"][:], curve["values2"][:]
+        assert len(values) == 12
+        # (the curve refines its start at fixed w, to the one-parameter fold's accuracy)
+        assert abs(values[0] - fold) < 1e-8 and values2[0] == 1.9
+        assert np.all(np.diff(values2) > 0) and values2[-1] <= 1.95
+        m = curve["multipliers_re"][:] + 1j * curve["multipliers_im"][:]
+        assert curve["x"].shape == (12, 8) and m.shape == (12, 16)
+        assert np.abs(m - 1).min(axis=1).max() < 1e-6
+
+
+def test_no_point_to_follow_is_said(impactchain_exe, tmp_path):
+    """A branch without a fold: /curve has no points and says why; the run succeeds."""
+    text = (CHAIN + "&continuation parameter = 'amplitude', stop = 1.2, step = 0.05, "
+            "max_points = 4, follow = 'fold', parameter2 = 'omega', stop2 = 2, step2 = 0.01 /\n"
+            "&output file = 'none.h5' /\n")
+    run_namelist(impactchain_exe, text, tmp_path)
+    with h5py.File(tmp_path / "none.h5") as f:
+        assert f["curve"]["values"].shape == (0,)
+        reason = f["curve"].attrs["end_reason"]
+        assert "no fold" in (reason.decode() if isinstance(reason, bytes) else reason)

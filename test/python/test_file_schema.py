@@ -1,8 +1,9 @@
 """Files of every kind against the file schema (`impactchain --schema`, the one table of
 src/runs/chain_file_table.f90): a run with every optional group, a 2-D sweep along omega, a
-continuation, censuses at one point and over a sweep, and a run stopped early (/resume). The recipes' files are checked the
-same way in test_recipes.py. See file_schema.py for what is compared. The Python reader
-names only the table's paths (impactchain._hdf5).
+continuation, one with its fold's curve in two parameters (/curve), censuses at one point and
+over a sweep, and a run stopped early (/resume). The recipes' files are checked the same way
+in test_recipes.py. See file_schema.py for what is compared. The Python reader names only the
+table's paths (impactchain._hdf5).
 """
 from __future__ import annotations
 
@@ -37,6 +38,13 @@ CASES = {
        amplitude = 1.0, omega = 1.9 /
 &run transient = 5 /
 &continuation parameter = 'amplitude', stop = 1.2, step = 0.05, max_points = 4 /
+&output file = 'out.h5' /
+""",
+    "curve": """&chain n = 8, amplitude = 3.0, omega = 1.9, damping = 0.05, restitution = 0.5,
+       spacing = 1.0 /
+&run transient = 5 /
+&continuation parameter = 'amplitude', stop = 2.0, step = -0.05, max_points = 8,
+       follow = 'fold', parameter2 = 'omega', stop2 = 1.95, step2 = 0.01 /
 &output file = 'out.h5' /
 """,
     "census": """&chain n = 4, amplitude = 1.0, omega = 0.9, damping = 0.05, restitution = 0.7 /
@@ -94,6 +102,8 @@ def test_every_optional_group_was_written(files):
         assert {"site_weight", "vectors"} <= set(f["clv"])
     with h5py.File(files["sweep_2d"]) as f:
         assert {"point2", "drive_period", "exponents"} <= set(f["sweep"])
+    with h5py.File(files["curve"]) as f:
+        assert len(f["curve/values"]) > 1
     with h5py.File(files["stopped"]) as f:
         assert f.attrs["complete"] == 0 and {"tangent", "lyapunov_int"} <= set(f["resume"])
 
