@@ -13,13 +13,14 @@ module chain_bridge
                            stage_events, branches_t
     use impactchain_drivers, only: set_error, fmt_real, fmt_int, fmt_int8, read_config_text, &
                                    exact, exact_list, fmt_logical, namelist_string, &
-                                   continuation_table_t, finite_or_inf
+                                   continuation_table_t, finite_or_inf, curve_table_t
     !$ use omp_lib, only: omp_set_num_threads
     implicit none
     private
     public :: array_sink_t, shared_monitor_t, make_config, sweep_group, continuation_group
     public :: put_message, put_text
     public :: run_sizes_ok, put_run_results, put_continuation_results, use_threads
+    public :: put_curve_results
     public :: call_ended
     public :: status_ok, status_invalid, status_failed, status_capacity, status_internal
     public :: status_stopped, message_capacity
@@ -398,6 +399,53 @@ contains
             call put_text(o%reason, start_reason)
         end associate
     end subroutine put_continuation_results
+
+    !> /curve's arrays (curve_table) and its end_reason into the caller's, sizes = (points,
+    !> codim-2 points, length of end_reason); status_capacity when one does not fit (only
+    !> sizes is set then).
+    subroutine put_curve_results(table, end_reason_text, sizes, values, values2, x, v, &
+                                 mult_re, mult_im, codim2_index, codim2_kind, end_reason, &
+                                 status, msg_len, message)
+        type(curve_table_t), intent(in) :: table
+        character(len=*), intent(in) :: end_reason_text
+        integer(c_int), intent(out) :: sizes(3), codim2_index(:), codim2_kind(:, :)
+        real(c_double), intent(out) :: values(:), values2(:), x(:, :), v(:, :)
+        real(c_double), intent(out) :: mult_re(:, :), mult_im(:, :)
+        integer(c_int), intent(out) :: end_reason(:), status, msg_len, message(:)
+        integer :: np, nc, j
+
+        np = size(table%values)
+        nc = size(table%codim2_index)
+        sizes = [np, nc, len(end_reason_text)]
+        values = 0
+        values2 = 0
+        x = 0
+        v = 0
+        mult_re = 0
+        mult_im = 0
+        codim2_index = 0
+        codim2_kind = 0
+        end_reason = 0
+        call put_message('', status_ok, status, msg_len, message)
+        if (np > size(values) .or. nc > size(codim2_index) .or. &
+            len(table%codim2_kind) > size(codim2_kind, 1) .or. &
+            len(end_reason_text) > size(end_reason)) then
+            call put_message("python layer: more results than the capacities", &
+                             status_capacity, status, msg_len, message)
+            return
+        end if
+        values(:np) = table%values
+        values2(:np) = table%values2
+        x(:, :np) = table%x
+        v(:, :np) = table%v
+        mult_re(:, :np) = table%multipliers_re
+        mult_im(:, :np) = table%multipliers_im
+        codim2_index(:nc) = table%codim2_index
+        do j = 1, nc
+            call put_text(trim(table%codim2_kind(j)), codim2_kind(:, j))
+        end do
+        call put_text(end_reason_text, end_reason)
+    end subroutine put_curve_results
 
     !> Copy `text` into the message buffer (truncated to its size) and set the status.
     subroutine put_message(text, code, status, msg_len, message)

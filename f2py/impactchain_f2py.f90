@@ -465,6 +465,67 @@ subroutine ic_continuation(n, nsp, spacing, damping, restitution, amplitude, ome
                                   start_reason, res, table, bonds)
 end subroutine ic_continuation
 
+!> A continuation's curve in two parameters, in memory: ic_continuation's inputs with
+!> &continuation follow, parameter2, stop2 and step2 among the overrides; /curve's arrays as
+!> chain_curve_file's curve_table, sizes = (points, codim-2 points, length of end_reason).
+!> Capacities: npcap points (max_points), nccap codim-2 points, nkind bytes of each codim-2
+!> kind, ntext of end_reason; status 3 when one is short (then only sizes is set).
+subroutine ic_curve(n, nsp, spacing, damping, restitution, amplitude, omega, nb, boundary, &
+                    explicit, nx0, x0, nv0, v0, transient, phase, stick_speed, npar, &
+                    parameter, stop, step, period, max_points, doublings, nov, overrides, nf, &
+                    npcap, nccap, nkind, ntext, sizes, values, values2, x, v, mult_re, &
+                    mult_im, codim2_index, codim2_kind, end_reason, control, status, msg_len, &
+                    message)
+    use, intrinsic :: iso_c_binding, only: c_int, c_int64_t, c_double
+    use impactchain, only: i8, error_t, config_t, branches_t, run_continuation
+    use impactchain_drivers, only: curve_t, curve_table_t, curve_table, run_curve
+    use chain_bridge, only: shared_monitor_t, make_config, continuation_group, put_message, &
+                            put_curve_results, call_ended, status_invalid, status_internal
+    implicit none
+    !f2py threadsafe
+    integer(c_int), intent(in) :: n, nsp, nb, nx0, nv0, explicit, npar, period, max_points, nov
+    integer(c_int), intent(in) :: doublings, nf, npcap, nccap, nkind, ntext
+    integer(c_int), intent(in) :: overrides(nov), boundary(nb), parameter(npar)
+    integer(c_int64_t), intent(in) :: transient
+    real(c_double), intent(in) :: spacing(nsp), damping, restitution, amplitude, omega
+    real(c_double), intent(in) :: x0(nx0), v0(nv0), phase, stick_speed, stop, step
+    integer(c_int), intent(out) :: sizes(3), codim2_index(nccap), codim2_kind(nkind, nccap)
+    real(c_double), intent(out) :: values(npcap), values2(npcap), x(nf, npcap), v(nf, npcap)
+    real(c_double), intent(out) :: mult_re(2*nf, npcap), mult_im(2*nf, npcap)
+    integer(c_int), intent(out) :: end_reason(ntext)
+    integer(c_int64_t), intent(inout), target :: control(4)
+    integer(c_int), intent(out) :: status, msg_len, message(1024)
+    type(config_t) :: cfg
+    type(branches_t) :: res
+    type(curve_t) :: curve
+    type(curve_table_t) :: table
+    type(shared_monitor_t) :: monitor
+    type(error_t), allocatable :: err
+
+    sizes = 0
+    call make_config(cfg, int(n), spacing, damping, restitution, amplitude, omega, boundary, &
+                     explicit /= 0, x0, v0, int(transient, i8), 1_i8, phase, stick_speed, &
+                     4096.0_c_double, .false., .false., 0, 1, .false., 1, err, &
+                     groups=continuation_group(parameter, stop, step, int(period), &
+                                               int(max_points), int(doublings)), &
+                     overrides=overrides)
+    if (.not. allocated(err) .and. nf /= n) &
+        err = error_t("python layer: output sizes do not match the configuration")
+    if (allocated(err)) then
+        call put_message(err%message, merge(status_internal, status_invalid, nf /= n), &
+                         status, msg_len, message)
+        return
+    end if
+    monitor%control => control
+    call run_continuation(cfg, res, err, monitor)
+    if (call_ended(control, err, status, msg_len, message)) return
+    call run_curve(cfg, res, curve)
+    call curve_table(cfg%model%n, curve, table)
+    call put_curve_results(table, curve%end_reason, sizes, values, values2, x, v, mult_re, &
+                           mult_im, codim2_index, codim2_kind, end_reason, status, msg_len, &
+                           message)
+end subroutine ic_curve
+
 !> Where the extension runs (chain_provenance: code version, compiler and flags, BLAS and the
 !> kernels it selected, CPU model), as the `key: value` lines of `impactchain --version`,
 !> byte values in text(1:text_len) (at most 4096; longer text is cut there).

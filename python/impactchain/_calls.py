@@ -61,6 +61,13 @@ CONTINUATION_OUTPUTS = (
     "start_min_impact_speed", "start_reason", "status", "msg_len", "message",
 )
 
+#: Outputs of ``_kernels.ic_curve``, in f2py's order (checked by
+#: test/python/package/test_api.py).
+CURVE_OUTPUTS = (
+    "sizes", "values", "values2", "x", "v", "mult_re", "mult_im", "codim2_index",
+    "codim2_kind", "end_reason", "status", "msg_len", "message",
+)
+
 
 def extension_available() -> bool:
     """Whether the compiled extension ``impactchain._kernels`` could be imported."""

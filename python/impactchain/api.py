@@ -26,6 +26,9 @@ Python and the equivalent namelist / CLI output:
   reads it (needs xarray).
 - ``periodic_orbit(..., period=p)``: ``&continuation max_points = 1`` (Newton only): the
   orbit of that file's one point, with Newton's history and the Jacobian.
+- ``curve(..., follow='fold', parameter2, stop2, step2, ...)``: ``&continuation follow``;
+  the file's ``/continuation`` and ``/curve`` as an :class:`xarray.DataTree`, identical to
+  the file's as ``xarray.open_datatree`` reads them (needs xarray).
 - ``census(..., samples=m)``: ``&census``; the whole census file as an
   :class:`xarray.DataTree` (the installed program's run on a temporary input).
 
@@ -38,7 +41,7 @@ gives the :class:`xarray.DataTree` of the CLI's file (``xarray.open_datatree(pat
 the file's names, dimensions and units; a ``periodic_orbit``'s, its file's ``/continuation``.
 
 Long calls (:func:`simulate`, :func:`lyapunov`, :func:`floquet`, :func:`sweep`,
-:func:`continuation`, :func:`periodic_orbit`) run the Fortran in a worker thread with the GIL
+:func:`continuation`, :func:`periodic_orbit`, :func:`curve`) run the Fortran in a worker thread with the GIL
 released while this thread watches it: Ctrl-C stops the computation at its next transient
 cycle, strobe record, sweep point or orbit, or within a cycle of millions of events (within a
 second unless one orbit alone takes longer) and raises :class:`KeyboardInterrupt`; nothing is
@@ -77,6 +80,7 @@ from typing import TYPE_CHECKING
 
 from impactchain._calls import (
     CONTINUATION_OUTPUTS,
+    CURVE_OUTPUTS,
     RUN_OUTPUTS,
     SWEEP_OUTPUTS,
     extension_available,
@@ -84,6 +88,7 @@ from impactchain._calls import (
 )
 from impactchain._censuses import census
 from impactchain._continuations import continuation, periodic_orbit
+from impactchain._curves import curve
 from impactchain._runs import (
     IMPACT,
     RELEASE,
@@ -114,6 +119,7 @@ __all__ = [
     "sweep",
     "continuation",
     "periodic_orbit",
+    "curve",
     "census",
     "extension_available",
     "provenance",

@@ -11,6 +11,8 @@ module impactchain_drivers
     use chain_exact, only: exact, exact_list, fmt_logical, namelist_string
     use chain_branch_file, only: continuation_guess, continuation_table_t, continuation_table, &
                                  finite_or_inf
+    use chain_curve_file, only: curve_table_t, curve_table, run_curve
+    use chain_curve, only: curve_t
     use chain_sweep, only: plan_sweep, sweep_plan_t, sweep_result_t, sweep_result_init, &
                            write_sweep_file, check_sweep
     use chain_sweep_run, only: run_sweep_branches
@@ -38,6 +40,7 @@ module impactchain_drivers
     public :: namelist_string
     public :: cli_schema
     public :: continuation_table_t, continuation_table, finite_or_inf, plan_sweep
+    public :: curve_t, curve_table_t, curve_table, run_curve
     public :: sweep_plan_t, sweep_result_t, sweep_result_init, run_sweep_branches
     public :: write_sweep_file, save_checkpoint, load_checkpoint, remove_file
     public :: checkpoint_every, checkpoint_path, branch_record_sizes, pack_branch

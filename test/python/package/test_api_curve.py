@@ -1,0 +1,71 @@
+"""api.curve: a fold followed in two parameters from Python is the CLI file's /continuation
+and /curve as xarray.open_datatree reads them, bit for bit; a branch without the point is a
+result; the kernel's outputs are in the documented order."""
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+from impactchain import _calls, api
+from test_api import FIG10, assert_same_bits, cli, namelist, run_cli  # noqa: F401 (fixture)
+
+# Figure 10's fold (A = 2.885 at w = 1.9, namelists/fig10_fold.nml) followed in w
+FOLD = dict(parameter="amplitude", stop=2.0, step=-0.05, max_points=12)
+CURVE = dict(follow="fold", parameter2="omega", stop2=1.95, step2=0.01)
+
+
+def _namelist(amplitude: float, group: dict[str, Any]) -> str:
+    keys = ", ".join(f"{key} = {value!r}" for key, value in group.items())
+    return (namelist(**{**FIG10, "amplitude": amplitude}, cycles=1, events=False)
+            + f"&continuation {keys} /\n")
+
+
+def _file_tree(path: Path) -> Any:
+    xr = pytest.importorskip("xarray")
+    with xr.open_datatree(path, engine="h5netcdf") as tree:
+        return {group: tree[group].to_dataset().load() for group in ("continuation", "curve")}
+
+
+def test_curve_is_the_cli_file(cli: Path, tmp_path: Path) -> None:  # noqa: F811
+    """The tree's two groups are the file's: names, dimensions, attributes, every value."""
+    pytest.importorskip("h5netcdf")
+    result = run_cli(cli, _namelist(3.0, {**FOLD, **CURVE}), tmp_path)
+    assert result.returncode == 0, result.stderr
+    tree = api.curve(**FIG10, amplitude=3.0, **FOLD, **CURVE)
+    assert set(tree.children) == {"continuation", "curve"}
+    files = _file_tree(tmp_path / "run.h5")
+    for group in ("continuation", "curve"):
+        assert_same_bits(tree[group].to_dataset(), files[group])
+    curve = tree["curve"]
+    assert curve.sizes["curve_point"] == 12 and curve.attrs["parameter2"] == "omega"
+    assert abs(float(curve["values"][0]) - 2.8851913052) < 1e-8
+
+
+def test_curve_keeps_the_continuation(cli: Path, tmp_path: Path) -> None:  # noqa: F811
+    """/continuation of a curve's tree is api.continuation's for the same branch."""
+    tree = api.curve(**FIG10, amplitude=3.0, **FOLD, **CURVE)
+    assert_same_bits(tree["continuation"].to_dataset(),
+                     api.continuation(**FIG10, amplitude=3.0, **FOLD))
+
+
+def test_no_point_to_follow_is_a_result() -> None:
+    """The forced response below its grazing has no fold: no points, and the reason."""
+    tree = api.curve(**FIG10, amplitude=1.0, parameter="amplitude", stop=1.2, step=0.05,
+                     max_points=4, **CURVE)
+    assert tree["curve"].sizes["curve_point"] == 0
+    assert "no fold" in tree["curve"].attrs["end_reason"]
+
+
+def test_bad_curve_keys_are_the_clis_errors() -> None:
+    with pytest.raises(ValueError, match="step2 = 0"):
+        api.curve(**FIG10, amplitude=3.0, **FOLD, **{**CURVE, "step2": 0.0})
+    with pytest.raises(ValueError, match="parameter2 = 'amplitude'"):
+        api.curve(**FIG10, amplitude=3.0, **FOLD, **{**CURVE, "parameter2": "amplitude"})
+
+
+def test_curve_outputs_in_documented_order() -> None:
+    """api.CURVE_OUTPUTS names the tuple f2py returns; a reordered layer must fail here."""
+    first_line = _calls._extension().ic_curve.__doc__.splitlines()[0]
+    assert tuple(first_line.split(" = ")[0].split(",")) == api.CURVE_OUTPUTS
