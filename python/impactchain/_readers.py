@@ -15,7 +15,7 @@ import numpy as np
 from impactchain._hdf5 import (SchemaError, _attr, _dataset, _flat_points, _float, _frozen, _has,
                                _has_attr, _int, _point_values, _str, _strings)
 from impactchain.results import (ATTRACTOR_KINDS, IMPACT, RELEASE, SPECIAL_KINDS, STICK, TOUCH,
-                                 Census, Clv, Continuation, Events, FinalState, FiniteTime,
+                                 Census, Clv, Continuation, Curve, Events, FinalState, FiniteTime,
                                  Lyapunov, State, Stats, Strobe, Sweep)
 
 
@@ -205,6 +205,29 @@ def _read_continuation(g: h5py.Group, path: str, n: int) -> Continuation:
         special_index=special_index,
         special_kind=special_kind,
         special_value=_dataset(g, path, "special_value", (s,), float),
+    )
+
+
+def _read_curve(g: h5py.Group, path: str, n: int) -> Curve:
+    values = _dataset(g, path, "values", (None,), float)
+    c = values.shape[0]
+    codim2_index = _dataset(g, path, "codim2_index", (None,), int)
+    k = codim2_index.shape[0]
+    if k and (codim2_index.min() < 0 or codim2_index.max() >= c):
+        raise SchemaError(f"{path}: {g.name}/codim2_index holds values outside 0..{c - 1}")
+    return Curve(
+        follow=_str(_attr(g, path, "follow")),
+        parameter=_str(_attr(g, path, "parameter")),
+        parameter2=_str(_attr(g, path, "parameter2")),
+        end_reason=_str(_attr(g, path, "end_reason")),
+        values=values,
+        values2=_dataset(g, path, "values2", (c,), float),
+        x=_dataset(g, path, "x", (c, n), float),
+        v=_dataset(g, path, "v", (c, n), float),
+        multipliers_re=_dataset(g, path, "multipliers_re", (c, 2 * n), float),
+        multipliers_im=_dataset(g, path, "multipliers_im", (c, 2 * n), float),
+        codim2_index=codim2_index,
+        codim2_kind=_strings(g, path, "codim2_kind", (k,)),
     )
 
 

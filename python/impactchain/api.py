@@ -41,8 +41,8 @@ gives the :class:`xarray.DataTree` of the CLI's file (``xarray.open_datatree(pat
 the file's names, dimensions and units; a ``periodic_orbit``'s, its file's ``/continuation``.
 
 Long calls (:func:`simulate`, :func:`lyapunov`, :func:`floquet`, :func:`sweep`,
-:func:`continuation`, :func:`periodic_orbit`, :func:`curve`) run the Fortran in a worker thread with the GIL
-released while this thread watches it: Ctrl-C stops the computation at its next transient
+:func:`continuation`, :func:`periodic_orbit`, :func:`curve`) run the Fortran in a worker
+thread with the GIL released while this thread watches it: Ctrl-C stops the computation at its next transient
 cycle, strobe record, sweep point or orbit, or within a cycle of millions of events (within a
 second unless one orbit alone takes longer) and raises :class:`KeyboardInterrupt`; nothing is
 returned from a stopped call. The same holds for calls running in worker threads (a

@@ -24,6 +24,8 @@ HDF5 path                 dataclass field         shape (h5py / numpy order)
 /continuation             ``Run.continuation``    ``values`` (P,), ``x`` (P, n),
                                                   ``strobe_x`` (P, L, n), ``multipliers_re``
                                                   (P, 2n), ``special_index`` (S,), ...
+/curve                    ``Run.curve``           ``values``, ``values2`` (C,), ``x`` (C, n),
+                                                  ``multipliers_re`` (C, 2n), ...
 /census                   ``Run.census``          ``x0``, ``v0`` (P, N, n),
                                                   ``sample_attractor`` (P, N),
                                                   ``sample_exponents`` (P, N, k),
@@ -83,17 +85,17 @@ import numpy as np
 
 from impactchain._hdf5 import (SchemaError, _attr, _collect_units, _dataset, _entry, _float,
                                _frozen, _group, _has, _has_attr, _int, _str, _version)
-from impactchain._readers import (_read_census, _read_clv, _read_continuation, _read_events,
-                                  _read_final, _read_finite_time, _read_lyapunov, _read_state,
-                                  _read_stats, _read_strobe, _read_sweep)
+from impactchain._readers import (_read_census, _read_clv, _read_continuation, _read_curve,
+                                  _read_events, _read_final, _read_finite_time, _read_lyapunov,
+                                  _read_state, _read_stats, _read_strobe, _read_sweep)
 from impactchain.inmemory import IN_MEMORY, is_sweep_dataset, run_from_api, run_from_sweep
 # (impactchain.api imports the namelist writer from here under this name)
 from impactchain.namelist import equivalent_namelist as _equivalent_namelist
 from impactchain.namelist import namelist_groups
 from impactchain.results import (ATTRACTOR_KINDS, FILE_UNITS, IMPACT, RELEASE, SCHEMA_VERSION,
-                                 SPECIAL_KINDS, STICK, TOUCH, Census, Clv, Continuation, Events,
-                                 FinalState, FiniteTime, Lyapunov, Params, Run, State, Stats,
-                                 Strobe, Sweep, period_pattern)
+                                 SPECIAL_KINDS, STICK, TOUCH, Census, Clv, Continuation, Curve,
+                                 Events, FinalState, FiniteTime, Lyapunov, Params, Run, State,
+                                 Stats, Strobe, Sweep, period_pattern)
 
 
 __all__ = [
@@ -114,6 +116,7 @@ __all__ = [
     "Sweep",
     "SPECIAL_KINDS",
     "Continuation",
+    "Curve",
     "ATTRACTOR_KINDS",
     "Census",
     "period_pattern",
@@ -123,6 +126,7 @@ __all__ = [
     "FILE_UNITS",
     "read_run",
     "read_continuation",
+    "read_curve",
     "read_census",
     "run_from_api",
     "run_from_sweep",
@@ -136,7 +140,7 @@ READABLE_VERSIONS = (1, 2)
 
 
 OPTIONAL_GROUPS = ("initial", "final", "strobe", "events", "stats", "lyapunov", "sweep",
-                   "continuation", "census", "clv", "finite_time")
+                   "continuation", "curve", "census", "clv", "finite_time")
 
 _HINTS = {
     "strobe": "the run recorded no strobe snapshots",
@@ -146,6 +150,7 @@ _HINTS = {
     "sweep/exponents": "the sweep did not compute Lyapunov exponents",
     "sweep/ky_dimension": "the sweep did not compute Lyapunov exponents",
     "continuation": "this is not a continuation file",
+    "curve": "the continuation followed no curve: no &continuation follow in its input",
     "census": "this is not a census file (no &census in its input)",
     "clv": "covariant Lyapunov vectors were not computed in this run: &lyapunov covariant = "
            ".false.",
@@ -189,6 +194,14 @@ def read_continuation(path: str | os.PathLike[str]) -> Continuation:
     run = read_run(path, require=("continuation",), groups=("continuation",))
     assert run.continuation is not None
     return run.continuation
+
+
+def read_curve(path: str | os.PathLike[str]) -> Curve:
+    """The ``/curve`` group of a continuation file with ``&continuation follow``
+    (:class:`SchemaError` when the file has none); ``read_run(path).curve``."""
+    run = read_run(path, require=("curve",), groups=("curve",))
+    assert run.curve is not None
+    return run.curve
 
 
 def read_census(path: str | os.PathLike[str]) -> Census:
@@ -270,6 +283,7 @@ def _read(f: h5py.File, path: str, wanted: set[str]) -> Run:
         "lyapunov": lambda g: _read_lyapunov(g, path),
         "sweep": lambda g: _read_sweep(g, path, n),
         "continuation": lambda g: _read_continuation(g, path, n),
+        "curve": lambda g: _read_curve(g, path, n),
         "census": lambda g: _read_census(g, path, n),
         "clv": lambda g: _read_clv(g, path, n),
         "finite_time": lambda g: _read_finite_time(g, path),

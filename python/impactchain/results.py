@@ -17,7 +17,7 @@ from impactchain.namelist import namelist_groups
 __all__ = [
     "SCHEMA_VERSION", "IMPACT", "STICK", "RELEASE", "TOUCH", "FILE_UNITS", "SPECIAL_KINDS",
     "ATTRACTOR_KINDS", "Params", "State", "FinalState", "Strobe", "Events", "Stats", "Lyapunov",
-    "Sweep", "Continuation", "period_pattern", "Census", "Clv", "FiniteTime", "Run",
+    "Sweep", "Continuation", "Curve", "period_pattern", "Census", "Clv", "FiniteTime", "Run",
 ]
 
 
@@ -267,6 +267,33 @@ class Continuation:
                 in zip(self.special_index, self.special_kind, self.special_value)]
 
 
+@dataclass(frozen=True, eq=False)
+class Curve:
+    """A fold or period-doubling curve in two parameters (``/curve``): from the first such
+    point of branch 0 of the file's continuation, one orbit per point at ``parameter =
+    values[i]``, ``parameter2 = values2[i]``, with a multiplier +1 (a fold) or -1 (a period
+    doubling). No points when the branch had no such point (``end_reason`` says so).
+    """
+
+    follow: str  # fold or period-doubling
+    parameter: str  # the continued parameter
+    parameter2: str  # the curve's second parameter
+    end_reason: str  # why the curve ended, or why it has no points
+    values: np.ndarray  # (C,) the continued parameter at each point
+    values2: np.ndarray  # (C,) the second parameter at each point
+    x: np.ndarray  # (C, n) the orbit's state on the section
+    v: np.ndarray  # (C, n)
+    multipliers_re: np.ndarray  # (C, 2n) Floquet multipliers
+    multipliers_im: np.ndarray  # (C, 2n)
+    codim2_index: np.ndarray  # (K,) 0-based point of each codimension-two point
+    codim2_kind: np.ndarray  # (K,) str, e.g. fold-flip
+
+    @property
+    def multipliers(self) -> np.ndarray:
+        """The Floquet multipliers as complex numbers, (C, 2n)."""
+        return self.multipliers_re + 1j * self.multipliers_im
+
+
 def period_pattern(periods: Iterable[int]) -> str:
     """The oscillators' periods left to right, runs of one period written ``p×count``:
     ``'1×8 2×8'`` for eight period-1 oscillators then eight period-2 ones; ``0`` is aperiodic
@@ -493,6 +520,7 @@ class Run:
     lyapunov: Lyapunov | None = None
     sweep: Sweep | None = None
     continuation: Continuation | None = None
+    curve: Curve | None = None
     census: Census | None = None
     clv: Clv | None = None
     finite_time: FiniteTime | None = None

@@ -69,3 +69,20 @@ def test_curve_outputs_in_documented_order() -> None:
     """api.CURVE_OUTPUTS names the tuple f2py returns; a reordered layer must fail here."""
     first_line = _calls._extension().ic_curve.__doc__.splitlines()[0]
     assert tuple(first_line.split(" = ")[0].split(",")) == api.CURVE_OUTPUTS
+
+
+def test_io_reads_the_curve(cli: Path, tmp_path: Path) -> None:  # noqa: F811
+    """impactchain.io reads /curve (read_curve, Run.curve) as the file holds it."""
+    from impactchain import io
+
+    result = run_cli(cli, _namelist(3.0, {**FOLD, **CURVE}), tmp_path)
+    assert result.returncode == 0, result.stderr
+    curve = io.read_curve(tmp_path / "run.h5")
+    assert (curve.follow, curve.parameter, curve.parameter2) == ("fold", "amplitude", "omega")
+    assert curve.values.shape == (12,) and curve.x.shape == (12, 8)
+    assert abs(curve.multipliers - 1).min(axis=1).max() < 1e-6
+    assert io.read_run(tmp_path / "run.h5").curve is not None
+    result = run_cli(cli, _namelist(3.0, FOLD), tmp_path)
+    assert result.returncode == 0, result.stderr
+    with pytest.raises(io.SchemaError, match="no &continuation follow"):
+        io.read_curve(tmp_path / "run.h5")
