@@ -351,10 +351,12 @@ contains
                                           ": "//err%message
     end subroutine validate_continuation
 
-    !> The curve's second parameter is another parameter than the first, and its step moves.
+    !> The curve's second parameter is another parameter than the first, its step moves, and
+    !> its bound gives a valid chain.
     subroutine validate_curve(cfg, err)
         type(config_t), intent(in) :: cfg
         type(error_t), allocatable, intent(out) :: err
+        type(config_t) :: far
 
         if (len(cfg%cont_follow) == 0) return
         if (cfg%cont_parameter2 == cfg%cont_parameter) then
@@ -371,6 +373,13 @@ contains
             call set_error(err, "&continuation: stop2 = "//fmt_real(cfg%cont_stop2)// &
                            " must be finite")
         end if
+        if (allocated(err)) return
+        far = cfg
+        far%continuation = .false.
+        call set_model_parameter(far%model, cfg%cont_parameter2, cfg%cont_stop2)
+        call validate_chain(far, err)
+        if (allocated(err)) err%message = "&continuation: stop2 = "// &
+                                          fmt_real(cfg%cont_stop2)//": "//err%message
     end subroutine validate_curve
 
     !> A census's starts must not overlap (as &initial random's), and it runs at one point

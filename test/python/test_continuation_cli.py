@@ -52,6 +52,9 @@ BAD = {
                                  "step2 = 0.01",
                                  ["&continuation: parameter2 = 'amplitude'",
                                   "differ from parameter = 'amplitude'"]),
+    "stop2 out of range": ("parameter = 'amplitude', stop = 2, step = 0.1, follow = 'fold', "
+                           "parameter2 = 'restitution', stop2 = 1.5, step2 = 0.01",
+                           ["&continuation: stop2 = 1.5", "restitution"]),
     "zero step2": ("parameter = 'amplitude', stop = 2, step = 0.1, follow = 'fold', "
                    "parameter2 = 'omega', stop2 = 2, step2 = 0",
                    ["&continuation: step2 = 0", "nonzero"]),
