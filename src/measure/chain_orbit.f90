@@ -25,7 +25,7 @@ module chain_orbit
     implicit none
     private
     public :: orbit_t, orbit_options_t, find_orbit, orbit_gap_minimum, interleave
-    public :: orbit_pass_t, orbit_pass, pass_refusal, describe_orbit, impact_bonds
+    public :: orbit_pass_t, orbit_pass, pass_refusal, describe_orbit, impact_bonds, pass_impacts
 
     !> How Newton is run.
     type :: orbit_options_t
@@ -281,6 +281,17 @@ contains
         bonds = pack(orbit%event_bond, counts_as_impact(orbit%event_kind, orbit%event_speed))
     end function impact_bonds
 
+    !> The bonds of a pass's impacts in time order (what counts as one as in impact_bonds).
+    pure function pass_impacts(pass) result(bonds)
+        type(orbit_pass_t), intent(in) :: pass
+        integer, allocatable :: bonds(:)
+
+        associate (log => pass%log)
+            bonds = pack(log%site(:log%count), counts_as_impact(log%kind(:log%count), &
+                                                                log%speed(:log%count)))
+        end associate
+    end function pass_impacts
+
     ! ------------------------------------------------------------------ the gap monitor
 
     !> The smallest gap over p cycles from (x, v) on the section, at the local minima of every
@@ -293,8 +304,10 @@ contains
     !> `gap` huge when no gap has a local minimum (no bond closes, free ends with n = 1).
     !> (x, v) is meant to lie on a period-p orbit: the state after the p cycles stands for the
     !> start, so that a minimum at the section is seen. The chain must not rest on a wall
-    !> (unsupported: the gaps would not be those of interval_minima).
-    subroutine orbit_gap_minimum(model, phase, cycles, x, v, gap, bond, time, err)
+    !> (unsupported: the gaps would not be those of interval_minima). With `only`, bond `only`
+    !> alone is looked at (a grazing curve follows one bond: the smallest of two equal gaps,
+    !> a mirror pair's, has no derivative).
+    subroutine orbit_gap_minimum(model, phase, cycles, x, v, gap, bond, time, err, only)
         type(model_t), intent(in) :: model
         real(wp), intent(in) :: phase
         integer, intent(in) :: cycles
@@ -302,12 +315,13 @@ contains
         real(wp), intent(out) :: gap, time
         integer, intent(out) :: bond
         type(error_t), allocatable, intent(out) :: err
+        integer, intent(in), optional :: only
         type(chain_t) :: chain
         type(flow_t) :: flow
         type(event_log_t) :: log
         real(wp), allocatable :: xa(:), va(:), xb(:), vb(:)
         real(wp) :: rate_before(0:model%n), rate_after(0:model%n), values(0:model%n)
-        logical :: own(0:model%n)
+        logical :: own(0:model%n), watched(0:model%n)
         real(wp) :: s_a, s_stop, s_end, s_section, elapsed, period
         integer :: k, e, next_bond
         integer(i8) :: last_cycle
@@ -315,6 +329,8 @@ contains
         gap = huge(1.0_wp)
         bond = -1
         time = 0
+        watched = .true.
+        if (present(only)) watched = [(k == only, k=0, model%n)]
         flow = make_flow(model%damping, model%amplitude, model%omega)
         call chain_at_section(model, phase, x, v, chain, err)
         if (allocated(err)) return
@@ -331,7 +347,8 @@ contains
             if (chain_cycle(chain) == last_cycle) s_end = s_section
             call chain_next_event(chain, next_bond, s_stop)
             s_stop = min(s_stop, s_end)
-            call interval_minima(model, flow, s_a, s_stop - s_a, xa, va, elapsed, gap, bond, time)
+            call interval_minima(model, flow, s_a, s_stop - s_a, xa, va, elapsed, watched, gap, &
+                                 bond, time)
             ! the state just before the events at s_stop, and just after them
             call flow_state(flow, s_a, s_stop - s_a, xa, va, xb, vb)
             call event_log_clear(log)
@@ -350,7 +367,7 @@ contains
             rate_after = gap_rates(model, va)
             values = bond_gaps(model%spacing, model%walls, xa)
             do k = 0, model%n
-                if (own(k) .or. abs(values(k)) == huge(1.0_wp)) cycle
+                if (own(k) .or. .not. watched(k) .or. abs(values(k)) == huge(1.0_wp)) cycle
                 if (rate_before(k) <= 0 .and. rate_after(k) >= 0 .and. values(k) < gap) then
                     gap = values(k)
                     bond = k
@@ -368,13 +385,14 @@ contains
         if (time >= cycles*period - 1.0e-12_wp*period) time = 0
     end subroutine orbit_gap_minimum
 
-    !> Local minima of every gap inside (0, h) from the state (x, v) at in-cycle time s0
-    !> (every oscillator moving): the smallest below `gap` replaces it, with its bond and
+    !> Local minima of every watched gap inside (0, h) from the state (x, v) at in-cycle time
+    !> s0 (every oscillator moving): the smallest below `gap` replaces it, with its bond and
     !> time `elapsed` + tau.
-    subroutine interval_minima(model, flow, s0, h, x, v, elapsed, gap, bond, time)
+    subroutine interval_minima(model, flow, s0, h, x, v, elapsed, watched, gap, bond, time)
         type(model_t), intent(in) :: model
         type(flow_t), intent(in) :: flow
         real(wp), intent(in) :: s0, h, x(:), v(:), elapsed
+        logical, intent(in) :: watched(0:)
         real(wp), intent(inout) :: gap, time
         integer, intent(inout) :: bond
         real(wp) :: xp, vp, c, y, vy, beta, tau, g, bond_spacing(0:model%n)
@@ -388,6 +406,7 @@ contains
         first = merge(0, 1, model%walls)
         last = merge(n, n - 1, model%walls)
         do k = first, last
+            if (.not. watched(k)) cycle
             call free_gap(bond_spacing, k, x - xp, v - vp, c, y, vy, beta)
             call gap_minimum(flow, c, y, vy, beta, s0, h, found, tau, g)
             if (found .and. g < gap) then
