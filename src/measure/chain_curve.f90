@@ -1,16 +1,17 @@
-!> Fold and period-doubling curves in two parameters (docs/model.md section 12.6): from a fold
-!> or period doubling of a one-parameter branch (chain_branch), its curve in
-!> (parameter, parameter2) by pseudo-arclength continuation of the minimally augmented system
-!> of chain_curve_system, with the orbit and its multipliers at each point, and the fold-flip
-!> points met on the way (the other test, det(J + I) on a fold curve, det(J - I) on a
-!> period-doubling curve, changes sign between two points).
+!> Fold, period-doubling and grazing curves in two parameters (docs/model.md section 12.6):
+!> from a fold, period doubling or grazing of a one-parameter branch (chain_branch), its curve
+!> in (parameter, parameter2) by pseudo-arclength continuation of the minimally augmented
+!> system of chain_curve_system, with the orbit and its multipliers at each point, and the
+!> fold-flip points met on the way (the other test, det(J + I) on a fold curve, det(J - I) on
+!> a period-doubling curve, changes sign between two points).
 module chain_curve
     use chain_kinds, only: wp
     use chain_error, only: error_t, set_error, fmt_int, fmt_real
     use chain_model, only: model_t, model_parameter, set_model_parameter
     use chain_orbit, only: orbit_t, orbit_options_t, describe_orbit, interleave
     use chain_lapack, only: solve_linear
-    use chain_curve_system, only: curve_setting_t, curve_state_t, evaluate, null_vectors
+    use chain_curve_system, only: curve_setting_t, curve_state_t, evaluate, null_vectors, &
+                                  lift_grazing_bond, grazing_aim
     implicit none
     private
     public :: curve_options_t, curve_t, follow_curve, curve_kinds
@@ -19,8 +20,8 @@ module chain_curve
     real(wp), parameter :: tolerance = 1.0e-11_wp
 
     !> The kinds of special point a curve follows.
-    character(len=*), parameter :: curve_kinds(2) = [character(len=15) :: 'fold', &
-                                                     'period-doubling']
+    character(len=*), parameter :: curve_kinds(3) = [character(len=15) :: 'fold', &
+                                                     'period-doubling', 'grazing']
 
     type :: curve_options_t
         character(len=:), allocatable :: follow     !! one of curve_kinds
@@ -61,11 +62,11 @@ contains
         integer :: m
 
         if (.not. allocated(opt%follow)) then
-            call set_error(err, "curve: no kind to follow (fold or period-doubling)")
+            call set_error(err, "curve: no kind to follow (fold, period-doubling or grazing)")
             return
         else if (.not. any(curve_kinds == opt%follow)) then
             call set_error(err, "curve: follow = '"//opt%follow//"' is none of fold, "// &
-                           "period-doubling")
+                           "period-doubling, grazing")
             return
         end if
         curve%kind = opt%follow
@@ -77,11 +78,17 @@ contains
         set%cycles = cycles
         set%parameter = opt%parameter
         set%parameter2 = opt%parameter2
+        set%kind = opt%follow
         set%shift = merge(-1.0_wp, 1.0_wp, opt%follow == 'fold')
         m = 2*size(x)
         y = [interleave(x, v), mu, model_parameter(model, opt%parameter2)]
-        ! (a start the map cannot pass keeps unit bordering vectors; Newton then says why)
-        set = set_with_nulls(set, y)
+        if (opt%follow == 'grazing') then
+            call lift_grazing_bond(set, y, err)
+            if (allocated(err)) return
+        else
+            ! (a start the map cannot pass keeps unit bordering vectors; Newton then says why)
+            set = set_with_nulls(set, y)
+        end if
         ! the start: parameter2 held (the last row), then the tangent with parameter2 rising
         anchor = [spread(0.0_wp, 1, m + 1), 1.0_wp]
         call newton(set, [y], anchor, y, st, failure, err)
@@ -134,8 +141,10 @@ contains
                 return
             end if
             y = next
-            set%b = st%v/norm2(st%v)
-            set%c = st%w/norm2(st%w)
+            if (set%kind /= 'grazing') then
+                set%b = st%v/norm2(st%v)
+                set%c = st%w/norm2(st%w)
+            end if
             call tangent_of(st, tangent, fresh, failure)
             tangent = fresh
             if (len(failure) > 0) then
@@ -157,10 +166,14 @@ contains
         type(error_t), allocatable, intent(out) :: err
         integer, parameter :: max_iterations = 30
         real(wp), allocatable :: a(:, :), rhs(:, :)
+        real(wp) :: s_tolerance
         integer :: m, iteration, info
 
         m = size(guess) - 2
         y = guess
+        ! (a grazing orbit's gap within grazing_aim / 2 of its aim stays positive: the orbit
+        ! stored has the curve's impacts and no other)
+        s_tolerance = merge(grazing_aim/2, tolerance, set%kind == 'grazing')
         do iteration = 0, max_iterations
             call evaluate(set, y, st, err, .true.)
             if (allocated(err)) return
@@ -169,7 +182,7 @@ contains
             ! (on the residual, not the step: figure 10's symmetric chain has a second
             ! multiplier near +1 at its fold, so z is determined only to ~1e-7 along that
             ! direction while the residual reaches rounding)
-            if (st%pass%residual <= tolerance .and. abs(st%s) <= tolerance .and. &
+            if (st%pass%residual <= tolerance .and. abs(st%s) <= s_tolerance .and. &
                 iteration > 0) return
             if (iteration == max_iterations) exit
             if (allocated(a)) deallocate (a)
@@ -249,7 +262,7 @@ contains
         curve%n_points = k
         curve%values(k) = y(m + 1)
         curve%values2(k) = y(m + 2)
-        if (k == 1) return
+        if (k == 1 .or. set%kind == 'grazing') return
         if (flip_sign(curve%orbits(k - 1), set%shift) /= flip_sign(curve%orbits(k), set%shift)) &
             then
             curve%n_codim2 = curve%n_codim2 + 1

@@ -1,19 +1,35 @@
-!> The minimally augmented system of a fold or period-doubling curve in two parameters
-!> (docs/model.md section 12.6; Govaerts 2000): unknowns y = (z, mu1, mu2), equations
-!> P(z) - z = 0 and s = 0, s from the bordered system [[J + shift I, b], [c^T, 0]] (w, s) =
-!> (0, 1) (shift -1 at a fold, +1 at a period doubling), regular at a simple one. The orbit rows of Newton's matrix are exact, [J - I, P_mu1, P_mu2]; the row of s is
-!> s_y = -v^T J_y w (v from the transposed system) with J_y by central differences of exact
-!> Jacobians: the residual is exact, only Newton's matrix is approximate.
+!> The minimally augmented systems of a curve of special points in two parameters
+!> (docs/model.md section 12.6): unknowns y = (z, mu1, mu2), equations P(z) - z = 0 and one
+!> test s = 0.
+!> - Fold or period doubling (Govaerts 2000): s from the bordered system
+!>   [[J + shift I, b], [c^T, 0]] (w, s) = (0, 1) (shift -1 at a fold, +1 at a period
+!>   doubling), regular at a simple one; its row s_y = -v^T J_y w (v from the transposed
+!>   system) with J_y by central differences of exact Jacobians.
+!> - Grazing: s = the smallest minimum of the grazing bond's gap over the orbit (chain_orbit's
+!>   gap monitor), less grazing_aim. The bond's contact is lifted out of reach while Newton
+!>   works (its spacing raised by `lift`, the gap lowered by as much): the orbit is continued
+!>   smoothly across the grazing, as the orbit with the old impacts (the penetrating
+!>   continuation), so Newton may step to either side; the points kept lie on the side where
+!>   the gap is positive, as real orbits. Its row by central differences.
+!> The orbit rows of Newton's matrix are exact, [J - I, P_mu1, P_mu2]; the residual is exact,
+!> only the test's row is approximate.
 module chain_curve_system
     use chain_kinds, only: wp
-    use chain_error, only: error_t
+    use chain_error, only: error_t, set_error, fmt_int
     use chain_model, only: model_t, set_model_parameter
-    use chain_orbit, only: orbit_pass_t, orbit_pass, pass_refusal
+    use chain_orbit, only: orbit_pass_t, orbit_pass, pass_refusal, pass_impacts, &
+                           orbit_gap_minimum
     use chain_parameter, only: map_parameter_derivative
     use chain_lapack, only: solve_linear
     implicit none
     private
     public :: curve_setting_t, curve_state_t, evaluate, border, null_vectors
+    public :: lift_grazing_bond, grazing_aim
+
+    !> The gap a grazing curve aims at (Newton stops within grazing_aim / 2 of it): just above
+    !> zero, so that the orbit kept has no new impact of a speed the engine resolves. The
+    !> parameters sit aim / |dg/dmu| from the grazing, far below 1e-10.
+    real(wp), parameter :: grazing_aim = 1.0e-12_wp
 
     !> What stays fixed along one curve.
     type :: curve_setting_t
@@ -21,8 +37,15 @@ module chain_curve_system
         real(wp) :: phase = 0
         integer :: cycles = 1
         character(len=:), allocatable :: parameter, parameter2
+        character(len=:), allocatable :: kind !! fold, period-doubling or grazing
         real(wp) :: shift = -1 !! the test matrix J + shift I: -1 fold, +1 period doubling
         real(wp), allocatable :: b(:), c(:) !! the bordering vectors (unit, near the null vectors)
+        integer :: grazing_bond = -1 !! grazing: the bond whose gap touches zero (-1: none)
+        !> grazing: the bonds lifted, the grazing bond and those whose gaps touch zero with it
+        !> (a mirror pair)
+        integer, allocatable :: lifted(:)
+        real(wp) :: lift = 0 !! grazing: added to the lifted bonds' spacings while Newton works
+        integer, allocatable :: bonds(:) !! grazing: the bonds of the orbit's impacts, in time order
     end type curve_setting_t
 
     !> The system at one y: the residual (P(z) - z, s), Newton's m + 1 rows, and the
@@ -53,10 +76,15 @@ contains
 
         m = size(y) - 2
         st%failure = ''
-        call pass_at(set, y, st%pass, model, st%failure, err)
+        if (set%kind == 'grazing') then
+            call gap_at(set, y, st%pass, model, st%s, st%failure, err)
+        else
+            call pass_at(set, y, st%pass, model, st%failure, err)
+            if (allocated(err) .or. len(st%failure) > 0) return
+            call border(st%pass%jacobian, set%shift, set%b, set%c, st%w, st%v, st%s, &
+                        st%failure)
+        end if
         if (allocated(err) .or. len(st%failure) > 0) return
-        call border(st%pass%jacobian, set%shift, set%b, set%c, st%w, st%v, st%s, st%failure)
-        if (len(st%failure) > 0) return
         st%residual = [st%pass%image - st%pass%z, st%s]
         st%ok = .true.
         if (.not. rows) return
@@ -66,7 +94,11 @@ contains
         call map_parameter_derivative(model, set%phase, set%cycles, y(1:m:2), y(2:m:2), &
                                       set%parameter2, st%pass%jacobian, p2, err)
         if (allocated(err)) return
-        call s_gradient(set, y, st%w, st%v, d_s, st%failure, err)
+        if (set%kind == 'grazing') then
+            call gap_gradient(set, y, d_s, st%failure, err)
+        else
+            call s_gradient(set, y, st%w, st%v, d_s, st%failure, err)
+        end if
         if (allocated(err) .or. len(st%failure) > 0) then
             st%ok = .false.
             return
@@ -96,11 +128,124 @@ contains
         model = set%model
         call set_model_parameter(model, set%parameter, y(m + 1))
         call set_model_parameter(model, set%parameter2, y(m + 2))
+        if (allocated(set%lifted)) model%spacing(set%lifted) = model%spacing(set%lifted) + set%lift
         call orbit_pass(model, set%phase, set%cycles, y(:m), pass, err)
         if (allocated(err)) return
         refusal = pass_refusal(pass)
         if (len(refusal) > 0) failure = refusal
     end subroutine pass_at
+
+    !> A grazing curve's setting from its start y: the bond of the smallest gap minimum and
+    !> those whose minima equal it to 1e-9 (a mirror pair grazes as one), none with an impact of
+    !> its own on the orbit; their lift (four times the largest a gap can swing by, so that
+    !> none closes) and the orbit's impacts, which the curve keeps.
+    subroutine lift_grazing_bond(set, y, err)
+        type(curve_setting_t), intent(inout) :: set
+        real(wp), intent(in) :: y(:)
+        type(error_t), allocatable, intent(out) :: err
+        type(orbit_pass_t) :: pass
+        type(model_t) :: model
+        character(len=:), allocatable :: failure
+        real(wp) :: gap, time, other
+        integer :: m, k, j, bond
+
+        m = size(y) - 2
+        failure = ''
+        set%grazing_bond = -1
+        if (allocated(set%lifted)) deallocate (set%lifted)
+        call pass_at(set, y, pass, model, failure, err)
+        if (allocated(err)) return
+        if (len(failure) > 0) then
+            call set_error(err, "grazing curve: the start cannot be passed: "//failure)
+            return
+        end if
+        call orbit_gap_minimum(model, set%phase, set%cycles, y(1:m:2), y(2:m:2), gap, k, &
+                               time, err)
+        if (allocated(err)) return
+        if (k < 0) then
+            call set_error(err, "grazing curve: no gap of the start has a local minimum")
+            return
+        end if
+        set%lifted = [k]
+        do j = 0, model%n
+            if (j == k) cycle
+            call orbit_gap_minimum(model, set%phase, set%cycles, y(1:m:2), y(2:m:2), other, &
+                                   bond, time, err, only=j)
+            if (allocated(err)) return
+            if (abs(other - gap) <= 1.0e-9_wp*(1 + model%spacing(k))) set%lifted = [set%lifted, j]
+        end do
+        if (any([(any(pass_impacts(pass) == set%lifted(j)), j=1, size(set%lifted))])) then
+            call set_error(err, "grazing curve: a grazing bond has impacts of its own on the "// &
+                           "orbit (not supported)")
+            return
+        end if
+        set%bonds = pass_impacts(pass)
+        set%grazing_bond = k
+        set%lift = 4*(1 + model%spacing(k) + maxval(abs(y(1:m:2))) + &
+                      maxval(abs(y(2:m:2)))/model%omega)
+    end subroutine lift_grazing_bond
+
+    !> The grazing test at y: the pass with the bond lifted (refused when its impacts are not
+    !> the curve's: another bond grazed, or the lifted one closed) and the smallest minimum of
+    !> the bond's gap over the orbit, less grazing_aim.
+    subroutine gap_at(set, y, pass, model, gap, failure, err)
+        type(curve_setting_t), intent(in) :: set
+        real(wp), intent(in) :: y(:)
+        type(orbit_pass_t), intent(out) :: pass
+        type(model_t), intent(out) :: model
+        real(wp), intent(out) :: gap
+        character(len=:), allocatable, intent(inout) :: failure
+        type(error_t), allocatable, intent(out) :: err
+        real(wp) :: time
+        integer :: m, bond
+
+        gap = huge(1.0_wp)
+        call pass_at(set, y, pass, model, failure, err)
+        if (allocated(err) .or. len(failure) > 0) return
+        if (.not. same_bonds(pass_impacts(pass), set%bonds)) then
+            failure = "the orbit's impacts changed (another bond grazed)"
+            return
+        end if
+        m = size(y) - 2
+        call orbit_gap_minimum(model, set%phase, set%cycles, y(1:m:2), y(2:m:2), gap, bond, &
+                               time, err, only=set%grazing_bond)
+        gap = gap - set%lift - grazing_aim
+    end subroutine gap_at
+
+    pure logical function same_bonds(a, b)
+        integer, intent(in) :: a(:), b(:)
+
+        same_bonds = size(a) == size(b)
+        if (same_bonds) same_bonds = all(a == b)
+    end function same_bonds
+
+    !> The grazing test's row by central differences (a relative step 1e-6: the gap minimum is
+    !> smooth in y, its error of order step**2).
+    subroutine gap_gradient(set, y, d_g, failure, err)
+        type(curve_setting_t), intent(in) :: set
+        real(wp), intent(in) :: y(:)
+        real(wp), allocatable, intent(out) :: d_g(:)
+        character(len=:), allocatable, intent(inout) :: failure
+        type(error_t), allocatable, intent(out) :: err
+        real(wp), parameter :: relative = 1.0e-6_wp
+        type(orbit_pass_t) :: pass
+        type(model_t) :: model
+        real(wp), allocatable :: e(:)
+        real(wp) :: h, plus, minus
+        integer :: k
+
+        allocate (d_g(size(y)), e(size(y)))
+        do k = 1, size(y)
+            h = relative*(1 + abs(y(k)))
+            e = 0
+            e(k) = h
+            call gap_at(set, y + e, pass, model, plus, failure, err)
+            if (allocated(err) .or. len(failure) > 0) return
+            call gap_at(set, y - e, pass, model, minus, failure, err)
+            if (allocated(err) .or. len(failure) > 0) return
+            d_g(k) = (plus - minus)/(2*h)
+        end do
+    end subroutine gap_gradient
 
     !> s_y = -v^T J_y w, J_y by central differences of exact Jacobians (a relative step 1e-6:
     !> the Jacobians are exact to rounding, the difference's error is of order step**2).

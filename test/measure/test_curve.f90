@@ -14,6 +14,7 @@ module test_curve
     use chain_flow, only: make_flow
     use test_chains, only: fig10_model, model_of
     use test_branch, only: settle
+    use test_curve_graze, only: grazing_curve, impacting_grazing_curve
     use testing, only: tally_t, check, check_close
     implicit none
     private
@@ -26,6 +27,8 @@ contains
 
         call fold_curve(t)
         call doubling_curve(t)
+        call grazing_curve(t)
+        call impacting_grazing_curve(t)
         call unknown_kind(t)
     end subroutine run_curve_tests
 
