@@ -390,6 +390,34 @@ def test_fold_curve_file(impactchain_exe, tmp_path):
         assert np.abs(m - 1).min(axis=1).max() < 1e-6
 
 
+GRAZING = """&chain n = 8, amplitude = 1.0, omega = 1.9, damping = 0.05, restitution = 0.5,
+       spacing = 1.0, boundary = 'fixed' /
+&initial kind = 'rest' /
+&run transient = 5 /
+&continuation parameter = 'amplitude', stop = 3.0, step = 0.1, max_points = 20,
+       follow = 'grazing', parameter2 = 'omega', stop2 = 1.2, step2 = -0.25 /
+&output file = 'grazing.h5' /
+"""
+
+
+def test_grazing_curve_file(impactchain_exe, tmp_path):
+    """Figure 10's grazing from rest (namelists/fig10_free.nml) followed in (A, w)
+    (docs/model.md 12.6): /curve starts at the located grazing and lies on the closed form
+    A = a sqrt((1 - w**2)**2 + (2 b w)**2) at every point, the forced response touching
+    both walls."""
+    run_namelist(impactchain_exe, GRAZING, tmp_path)
+    with h5py.File(tmp_path / "grazing.h5") as f:
+        cont, curve = f["continuation"], f["curve"]
+        kinds = list(cont["special_kind"][:].astype(str))
+        grazing = cont["special_value"][kinds.index("grazing")]
+        follow = curve.attrs["follow"]
+        assert (follow.decode() if isinstance(follow, bytes) else follow) == "grazing"
+        values, values2 = curve["values"][:], curve["values2"][:]
+        assert abs(values[0] - grazing) < 1e-10 and values2[0] == 1.9
+        assert len(values) >= 3 and np.all(np.diff(values2) < 0)
+        assert np.abs(values - np.hypot(1 - values2**2, 2 * 0.05 * values2)).max() < 1e-10
+
+
 def test_no_point_to_follow_is_said(impactchain_exe, tmp_path):
     """A branch without a fold: /curve has no points and says why; the run succeeds."""
     text = (CHAIN + "&continuation parameter = 'amplitude', stop = 1.2, step = 0.05, "

@@ -86,3 +86,16 @@ def test_io_reads_the_curve(cli: Path, tmp_path: Path) -> None:  # noqa: F811
     assert result.returncode == 0, result.stderr
     with pytest.raises(io.SchemaError, match="no &continuation follow"):
         io.read_curve(tmp_path / "run.h5")
+
+
+def test_grazing_curve_is_the_closed_form() -> None:
+    """Figure 10's grazing of its forced response, followed in w from Python: every point on
+    A = a sqrt((1 - w**2)**2 + (2 b w)**2) (docs/model.md 12.6)."""
+    np = pytest.importorskip("numpy")
+    tree = api.curve(**FIG10, amplitude=1.0, parameter="amplitude", stop=3.0, step=0.1,
+                     max_points=20, follow="grazing", parameter2="omega", stop2=1.2,
+                     step2=-0.25)
+    curve = tree["curve"]
+    assert curve.attrs["follow"] == "grazing" and curve.sizes["curve_point"] >= 3
+    a, w = curve["values"].values, curve["values2"].values
+    assert np.abs(a - np.hypot(1 - w**2, 2 * 0.05 * w)).max() < 1e-10
