@@ -8,10 +8,10 @@ module chain_curve
     use chain_kinds, only: wp
     use chain_error, only: error_t, set_error, fmt_int, fmt_real
     use chain_model, only: model_t, model_parameter, set_model_parameter
-    use chain_orbit, only: orbit_t, orbit_options_t, describe_orbit, interleave
+    use chain_orbit, only: orbit_t, orbit_options_t, describe_orbit, interleave, pass_impacts
     use chain_lapack, only: solve_linear
     use chain_curve_system, only: curve_setting_t, curve_state_t, evaluate, null_vectors, &
-                                  lift_grazing_bond, grazing_aim
+                                  lift_grazing_bond, grazing_aim, same_bonds
     implicit none
     private
     public :: curve_options_t, curve_t, follow_curve, curve_kinds
@@ -118,6 +118,7 @@ contains
         type(curve_t), intent(inout) :: curve
         type(error_t), allocatable, intent(out) :: err
         real(wp), allocatable :: next(:), fresh(:)
+        integer, allocatable :: bonds(:)
         character(len=:), allocatable :: failure
         real(wp) :: h
         integer :: m, halvings
@@ -126,14 +127,20 @@ contains
         curve%end_reason = 'max_points'
         do while (curve%n_points < opt%max_points)
             h = abs(opt%step2)
+            bonds = pass_impacts(st%pass)
             do halvings = 0, 4
                 call newton(set, y + h*tangent, tangent, next, st, failure, err)
                 if (allocated(err)) return
+                ! (a curve keeps its orbit's impacts: another sequence is another family's)
+                if (len(failure) == 0) then
+                    if (.not. same_bonds(pass_impacts(st%pass), bonds)) &
+                        failure = "the orbit's impacts changed"
+                end if
                 if (len(failure) == 0) exit
                 h = h/2
             end do
             if (len(failure) > 0) then
-                curve%end_reason = 'newton: '//failure
+                curve%end_reason = end_reason(set, curve, failure)
                 return
             end if
             if ((next(m + 2) - opt%stop2)*(y(m + 2) - opt%stop2) <= 0) then
@@ -155,6 +162,42 @@ contains
             if (allocated(err)) return
         end do
     end subroutine walk
+
+    !> Why the curve ends where no step from its last point succeeds: a grazing when the
+    !> smallest impact speed or smallest gap of the last orbit is below 1/20 of its largest
+    !> on the curve and still falling (where it vanishes, by the line through the last two
+    !> orbits, in the reason), else Newton's failure. (Newton gives out before the speed
+    !> reaches zero: the saltation matrices grow like 1/speed.)
+    function end_reason(set, curve, failure) result(reason)
+        type(curve_setting_t), intent(in) :: set
+        type(curve_t), intent(in) :: curve
+        character(len=*), intent(in) :: failure
+        character(len=:), allocatable :: reason
+        character(len=*), parameter :: what(2) = [character(len=27) :: &
+                                                  "an impact's speed vanishes", "a gap closes"]
+        real(wp) :: before(2), last(2), largest(2), t
+        integer :: k, j
+
+        reason = 'newton: '//failure
+        k = curve%n_points
+        if (k < 2) return
+        before = [curve%orbits(k - 1)%min_impact_speed, curve%orbits(k - 1)%min_gap]
+        last = [curve%orbits(k)%min_impact_speed, curve%orbits(k)%min_gap]
+        largest = [maxval(curve%orbits(:k)%min_impact_speed, &
+                          mask=curve%orbits(:k)%min_impact_speed < huge(1.0_wp)), &
+                   maxval(curve%orbits(:k)%min_gap, mask=curve%orbits(:k)%min_gap < huge(1.0_wp))]
+        do j = 1, 2
+            if (.not. (last(j) < before(j) .and. last(j) < largest(j)/20)) cycle
+            ! (the zero of the line through the two, as a fraction t of their distance past k)
+            t = last(j)/(before(j) - last(j))
+            reason = 'grazing: '//trim(what(j))//' near '//set%parameter//' = '// &
+                     fmt_real(curve%values(k) + t*(curve%values(k) - curve%values(k - 1)))// &
+                     ', '//set%parameter2//' = '// &
+                     fmt_real(curve%values2(k) + t*(curve%values2(k) - curve%values2(k - 1)))// &
+                     ' (extrapolated; then '//failure//')'
+            return
+        end do
+    end function end_reason
 
     !> Newton on (P(z) - z, s, anchor . (y - guess)) = 0 from the guess.
     subroutine newton(set, guess, anchor, y, st, failure, err)

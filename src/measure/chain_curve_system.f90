@@ -24,7 +24,7 @@ module chain_curve_system
     implicit none
     private
     public :: curve_setting_t, curve_state_t, evaluate, border, null_vectors
-    public :: lift_grazing_bond, grazing_aim
+    public :: lift_grazing_bond, grazing_aim, same_bonds
 
     !> The gap a grazing curve aims at (Newton stops within grazing_aim / 2 of it): just above
     !> zero, so that the orbit kept has no new impact of a speed the engine resolves. The
@@ -212,6 +212,7 @@ contains
         gap = gap - set%lift - grazing_aim
     end subroutine gap_at
 
+    !> Are two sequences of impact bonds the same?
     pure logical function same_bonds(a, b)
         integer, intent(in) :: a(:), b(:)
 

@@ -29,6 +29,7 @@ contains
         call doubling_curve(t)
         call grazing_curve(t)
         call impacting_grazing_curve(t)
+        call fold_curve_grazes(t)
         call unknown_kind(t)
     end subroutine run_curve_tests
 
@@ -91,6 +92,44 @@ contains
         call compare_with_branch(t, curve, 2)
         call compare_with_branch(t, curve, curve%n_points)
     end subroutine fold_curve
+
+    !> Figure 10's fold followed up in w: the curve ends where an impact's speed on its orbit
+    !> vanishes (a grazing), named so, its last orbit's speed small and the extrapolated
+    !> point just past it.
+    subroutine fold_curve_grazes(t)
+        type(tally_t), intent(inout) :: t
+        type(branches_t) :: fold
+        type(curve_t) :: curve
+        type(curve_options_t) :: opt
+        type(error_t), allocatable :: err
+        integer :: k
+
+        call fold_at(1.9_wp, fold)
+        if (fold%n_specials < 1) return
+        k = fold%specials(1)%point
+        opt%follow = 'fold'
+        opt%parameter = 'amplitude'
+        opt%parameter2 = 'omega'
+        opt%stop2 = 2.6_wp
+        opt%step2 = 0.05_wp
+        opt%max_points = 100
+        call follow_curve(fig10_model(fold%points(k)%value), 0.0_wp, 1, &
+                          fold%points(k)%orbit%x, fold%points(k)%orbit%v, &
+                          fold%points(k)%value, opt, curve, err)
+        call check(t, .not. allocated(err), 'fold curve to a grazing: followed')
+        if (allocated(err)) return
+        k = curve%n_points
+        print '(a,i0,a)', '    fold curve up in w: ', k, ' points, '//curve%end_reason
+        write (*, '(a,f13.9,a,f13.9,a,es9.2)') '    last point A = ', curve%values(k), &
+            ', w = ', curve%values2(k), ', smallest impact speed ', &
+            curve%orbits(k)%min_impact_speed
+        call check(t, index(curve%end_reason, "grazing: an impact's speed vanishes near "// &
+                            "amplitude = ") == 1, &
+                   "fold curve to a grazing: the end named (an impact's speed vanishes)")
+        call check(t, curve%orbits(k)%min_impact_speed < 0.05_wp .and. &
+                   all(curve%orbits(k)%multipliers_re /= 0), &
+                   'fold curve to a grazing: the last orbit impacts slowly')
+    end subroutine fold_curve_grazes
 
     !> The impact oscillator's first period doubling from A = 8 down, followed in (A, w).
     subroutine doubling_curve(t)
