@@ -122,13 +122,18 @@ contains
         character(len=:), allocatable, intent(inout) :: failure
         type(error_t), allocatable, intent(out) :: err
         character(len=:), allocatable :: refusal
+        integer, allocatable :: at(:)
         integer :: m
 
         m = size(y) - 2
         model = set%model
         call set_model_parameter(model, set%parameter, y(m + 1))
         call set_model_parameter(model, set%parameter2, y(m + 2))
-        if (allocated(set%lifted)) model%spacing(set%lifted) = model%spacing(set%lifted) + set%lift
+        if (allocated(set%lifted)) then
+            ! (bond k's spacing, whatever the array's lower bound)
+            at = lbound(model%spacing, 1) + set%lifted
+            model%spacing(at) = model%spacing(at) + set%lift
+        end if
         call orbit_pass(model, set%phase, set%cycles, y(:m), pass, err)
         if (allocated(err)) return
         refusal = pass_refusal(pass)
@@ -146,7 +151,7 @@ contains
         type(orbit_pass_t) :: pass
         type(model_t) :: model
         character(len=:), allocatable :: failure
-        real(wp) :: gap, time, other
+        real(wp) :: gap, time, other, spacing
         integer :: m, k, j, bond
 
         m = size(y) - 2
@@ -166,13 +171,14 @@ contains
             call set_error(err, "grazing curve: no gap of the start has a local minimum")
             return
         end if
+        spacing = model%spacing(lbound(model%spacing, 1) + k)
         set%lifted = [k]
         do j = 0, model%n
             if (j == k) cycle
             call orbit_gap_minimum(model, set%phase, set%cycles, y(1:m:2), y(2:m:2), other, &
                                    bond, time, err, only=j)
             if (allocated(err)) return
-            if (abs(other - gap) <= 1.0e-9_wp*(1 + model%spacing(k))) set%lifted = [set%lifted, j]
+            if (abs(other - gap) <= 1.0e-9_wp*(1 + spacing)) set%lifted = [set%lifted, j]
         end do
         if (any([(any(pass_impacts(pass) == set%lifted(j)), j=1, size(set%lifted))])) then
             call set_error(err, "grazing curve: a grazing bond has impacts of its own on the "// &
@@ -181,7 +187,7 @@ contains
         end if
         set%bonds = pass_impacts(pass)
         set%grazing_bond = k
-        set%lift = 4*(1 + model%spacing(k) + maxval(abs(y(1:m:2))) + &
+        set%lift = 4*(1 + spacing + maxval(abs(y(1:m:2))) + &
                       maxval(abs(y(2:m:2)))/model%omega)
     end subroutine lift_grazing_bond
 
