@@ -56,25 +56,14 @@ contains
 
     subroutine fold_curve(t)
         type(tally_t), intent(inout) :: t
-        type(branches_t) :: fold
         type(curve_t) :: curve
-        type(curve_options_t) :: opt
         type(error_t), allocatable :: err
-        integer :: k, j
+        logical :: found
+        integer :: j
 
-        call fold_at(1.9_wp, fold)
-        call check(t, fold%n_specials >= 1, 'fold curve: a fold at w = 1.9')
-        if (fold%n_specials < 1) return
-        k = fold%specials(1)%point
-        opt%follow = 'fold'
-        opt%parameter = 'amplitude'
-        opt%parameter2 = 'omega'
-        opt%stop2 = 1.95_wp
-        opt%step2 = 0.01_wp
-        opt%max_points = 8
-        call follow_curve(fig10_model(fold%points(k)%value), 0.0_wp, 1, &
-                               fold%points(k)%orbit%x, fold%points(k)%orbit%v, &
-                               fold%points(k)%value, opt, curve, err)
+        call fold_curve_up(1.95_wp, 0.01_wp, 8, found, curve, err)
+        call check(t, found, 'fold curve: a fold at w = 1.9')
+        if (.not. found) return
         call check(t, .not. allocated(err), 'fold curve: followed')
         if (allocated(err)) then
             print '(a)', '    '//err%message
@@ -98,24 +87,13 @@ contains
     !> point just past it.
     subroutine fold_curve_grazes(t)
         type(tally_t), intent(inout) :: t
-        type(branches_t) :: fold
         type(curve_t) :: curve
-        type(curve_options_t) :: opt
         type(error_t), allocatable :: err
+        logical :: found
         integer :: k
 
-        call fold_at(1.9_wp, fold)
-        if (fold%n_specials < 1) return
-        k = fold%specials(1)%point
-        opt%follow = 'fold'
-        opt%parameter = 'amplitude'
-        opt%parameter2 = 'omega'
-        opt%stop2 = 2.6_wp
-        opt%step2 = 0.05_wp
-        opt%max_points = 100
-        call follow_curve(fig10_model(fold%points(k)%value), 0.0_wp, 1, &
-                          fold%points(k)%orbit%x, fold%points(k)%orbit%v, &
-                          fold%points(k)%value, opt, curve, err)
+        call fold_curve_up(2.6_wp, 0.05_wp, 100, found, curve, err)
+        if (.not. found) return
         call check(t, .not. allocated(err), 'fold curve to a grazing: followed')
         if (allocated(err)) return
         k = curve%n_points
@@ -130,6 +108,33 @@ contains
                    all(curve%orbits(k)%multipliers_re /= 0), &
                    'fold curve to a grazing: the last orbit impacts slowly')
     end subroutine fold_curve_grazes
+
+    !> Figure 10's fold at w = 1.9 (found: located by fold_at) followed in (A, w) up to
+    !> w = stop2 with steps step2, at most max_points points.
+    subroutine fold_curve_up(stop2, step2, max_points, found, curve, err)
+        real(wp), intent(in) :: stop2, step2
+        integer, intent(in) :: max_points
+        logical, intent(out) :: found
+        type(curve_t), intent(out) :: curve
+        type(error_t), allocatable, intent(out) :: err
+        type(branches_t) :: fold
+        type(curve_options_t) :: opt
+        integer :: k
+
+        call fold_at(1.9_wp, fold)
+        found = fold%n_specials >= 1
+        if (.not. found) return
+        k = fold%specials(1)%point
+        opt%follow = 'fold'
+        opt%parameter = 'amplitude'
+        opt%parameter2 = 'omega'
+        opt%stop2 = stop2
+        opt%step2 = step2
+        opt%max_points = max_points
+        call follow_curve(fig10_model(fold%points(k)%value), 0.0_wp, 1, &
+                          fold%points(k)%orbit%x, fold%points(k)%orbit%v, &
+                          fold%points(k)%value, opt, curve, err)
+    end subroutine fold_curve_up
 
     !> The impact oscillator's first period doubling from A = 8 down, followed in (A, w).
     subroutine doubling_curve(t)
