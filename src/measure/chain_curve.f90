@@ -12,6 +12,7 @@ module chain_curve
     use chain_lapack, only: solve_linear
     use chain_curve_system, only: curve_setting_t, curve_state_t, evaluate, null_vectors, &
                                   lift_grazing_bond, grazing_aim, same_bonds
+    use chain_curve_meet, only: meet_grazing
     implicit none
     private
     public :: curve_options_t, curve_t, follow_curve, curve_kinds
@@ -38,7 +39,9 @@ module chain_curve
         real(wp), allocatable :: values(:), values2(:) !! (point)
         type(orbit_t), allocatable :: orbits(:) !! the orbit and its multipliers at each point
         integer :: n_codim2 = 0
-        character(len=9), allocatable :: codim2_kind(:) !! 'fold-flip'
+        !> 'fold-flip' (on a fold or doubling curve, not located), 'fold-grazing' or
+        !> 'doubling-grazing' (on a grazing curve, located: a point of the curve)
+        character(len=16), allocatable :: codim2_kind(:)
         integer, allocatable :: codim2_index(:)  !! the point after the sign change
         character(len=:), allocatable :: end_reason
     end type curve_t
@@ -117,7 +120,7 @@ contains
         type(curve_state_t), intent(inout) :: st
         type(curve_t), intent(inout) :: curve
         type(error_t), allocatable, intent(out) :: err
-        real(wp), allocatable :: next(:), fresh(:)
+        real(wp), allocatable :: next(:), fresh(:), previous(:)
         integer, allocatable :: bonds(:)
         character(len=:), allocatable :: failure
         real(wp) :: h
@@ -147,6 +150,7 @@ contains
                 curve%end_reason = 'bound'
                 return
             end if
+            previous = y
             y = next
             if (set%kind /= 'grazing') then
                 set%b = st%v/norm2(st%v)
@@ -160,8 +164,73 @@ contains
             end if
             call keep(set, y, st, curve, err)
             if (allocated(err)) return
+            if (set%kind == 'grazing') call meetings(set, opt, previous, y, curve, err)
+            if (allocated(err)) return
         end do
     end subroutine walk
+
+    !> On a grazing curve, between its last two points (at `previous` and y): where the sign of
+    !> det(J - I) or det(J + I) changes, a fold or period-doubling curve meets it; the meeting
+    !> is located (chain_curve_meet), confirmed by its orbit (a multiplier +1 or -1 to 1e-8, its
+    !> gap within 1e-10 of zero) and stored as a point of the curve before the last one.
+    subroutine meetings(set, opt, previous, y, curve, err)
+        type(curve_setting_t), intent(in) :: set
+        type(curve_options_t), intent(in) :: opt
+        real(wp), intent(in) :: previous(:), y(:)
+        type(curve_t), intent(inout) :: curve
+        type(error_t), allocatable, intent(out) :: err
+        character(len=*), parameter :: kinds(2) = [character(len=16) :: 'fold-grazing', &
+                                                   'doubling-grazing']
+        real(wp), parameter :: shifts(2) = [-1.0_wp, 1.0_wp] !! J + shift I singular
+        type(curve_setting_t) :: other
+        type(curve_state_t) :: st
+        type(orbit_t) :: last
+        real(wp), allocatable :: meeting(:)
+        real(wp) :: last_values(2)
+        logical :: met
+        integer :: k, j
+
+        k = curve%n_points
+        do j = 1, 2
+            if (k < 2 .or. k >= opt%max_points) return
+            if (flip_sign(curve%orbits(k - 1), -shifts(j)) == &
+                flip_sign(curve%orbits(k), -shifts(j))) cycle
+            other = set
+            other%kind = merge('fold           ', 'period-doubling', j == 1)
+            other%shift = shifts(j)
+            other = set_with_nulls(other, y)
+            call meet_grazing(other, y, 1.5_wp*norm2(y - previous), tolerance, meeting, st, &
+                              met, err)
+            if (allocated(err)) return
+            if (.not. met) cycle
+            ! the meeting goes before the last point
+            last = curve%orbits(k)
+            last_values = [curve%values(k), curve%values2(k)]
+            curve%n_points = k - 1
+            curve%orbits(k) = orbit_t()
+            call keep(set, meeting, st, curve, err)
+            if (allocated(err)) return
+            curve%orbits(k + 1) = last
+            curve%values(k + 1) = last_values(1)
+            curve%values2(k + 1) = last_values(2)
+            curve%n_points = k + 1
+            if (distance_to(curve%orbits(k), -shifts(j)) <= 1.0e-8_wp .and. &
+                abs(curve%orbits(k)%min_gap) <= 1.0e-10_wp) then
+                curve%n_codim2 = curve%n_codim2 + 1
+                curve%codim2_kind(curve%n_codim2) = kinds(j)
+                curve%codim2_index(curve%n_codim2) = k
+            end if
+            k = k + 1
+        end do
+    end subroutine meetings
+
+    !> The distance of the multiplier nearest `target` from it.
+    pure real(wp) function distance_to(orbit, target)
+        type(orbit_t), intent(in) :: orbit
+        real(wp), intent(in) :: target
+
+        distance_to = minval(abs(cmplx(orbit%multipliers_re - target, orbit%multipliers_im, wp)))
+    end function distance_to
 
     !> Why the curve ends where no step from its last point succeeds: a grazing when the
     !> smallest impact speed or smallest gap of the last orbit is below 1/20 of its largest

@@ -24,7 +24,7 @@ module chain_curve_system
     implicit none
     private
     public :: curve_setting_t, curve_state_t, evaluate, border, null_vectors
-    public :: lift_grazing_bond, grazing_aim, same_bonds
+    public :: lift_grazing_bond, grazing_aim, same_bonds, gap_and_row
 
     !> The gap a grazing curve aims at (Newton stops within grazing_aim / 2 of it): just above
     !> zero, so that the orbit kept has no new impact of a speed the engine resolves. The
@@ -217,6 +217,23 @@ contains
                                time, err, only=set%grazing_bond)
         gap = gap - set%lift - grazing_aim
     end subroutine gap_at
+
+    !> The grazing test at y and its row (as on a grazing curve), for a setting of any kind
+    !> whose grazing bond is lifted (lift_grazing_bond).
+    subroutine gap_and_row(set, y, gap, row, failure, err)
+        type(curve_setting_t), intent(in) :: set
+        real(wp), intent(in) :: y(:)
+        real(wp), intent(out) :: gap
+        real(wp), allocatable, intent(out) :: row(:)
+        character(len=:), allocatable, intent(inout) :: failure
+        type(error_t), allocatable, intent(out) :: err
+        type(orbit_pass_t) :: pass
+        type(model_t) :: model
+
+        call gap_at(set, y, pass, model, gap, failure, err)
+        if (allocated(err) .or. len(failure) > 0) return
+        call gap_gradient(set, y, row, failure, err)
+    end subroutine gap_and_row
 
     !> Are two sequences of impact bonds the same?
     pure logical function same_bonds(a, b)

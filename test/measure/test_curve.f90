@@ -14,7 +14,7 @@ module test_curve
     use chain_flow, only: make_flow
     use test_chains, only: fig10_model, model_of
     use test_branch, only: settle
-    use test_curve_graze, only: grazing_curve, impacting_grazing_curve
+    use test_curve_graze, only: grazing_curve, impacting_grazing_curve, fold_meets_grazing
     use testing, only: tally_t, check, check_close
     implicit none
     private
@@ -29,6 +29,7 @@ contains
         call doubling_curve(t)
         call grazing_curve(t)
         call impacting_grazing_curve(t)
+        call fold_meets_grazing(t)
         call fold_curve_grazes(t)
         call unknown_kind(t)
     end subroutine run_curve_tests

@@ -5,7 +5,10 @@
 !> the resonance; every point's orbit is the forced response there and its smallest gap 0.
 !> The grazing of an orbit with impacts: figure 10's family with the two wall impacts, from
 !> rest upwards, grazes again (a gap of the next bonds); its curve passes through the grazings
-!> that one-parameter runs locate at two of its points' w.
+!> that one-parameter runs locate at two of its points' w. The same chain with its left wall
+!> farther (a = 1.05: no mirror symmetry, so no multiplier is doubled): the grazing curve of
+!> its one-impact family meets a fold curve, located on it where its orbit has a multiplier
+!> +1 and a gap 0, and the one-parameter run from rest at that w grazes there too.
 module test_curve_graze
     use chain_kinds, only: wp
     use chain_error, only: error_t
@@ -17,7 +20,7 @@ module test_curve_graze
     use testing, only: tally_t, check, check_close
     implicit none
     private
-    public :: grazing_curve, impacting_grazing_curve
+    public :: grazing_curve, impacting_grazing_curve, fold_meets_grazing
 
 contains
 
@@ -123,12 +126,76 @@ contains
         end do
     end subroutine impacting_grazing_curve
 
-    !> Figure 10's chain at frequency w followed from rest upwards in A; k the point of its
-    !> second grazing (0: none).
-    subroutine second_grazing(omega, res, k)
+    !> The asymmetric chain's second grazing at w = 1.9 followed up in w: one fold-grazing
+    !> point, confirmed, and found again by a one-parameter run at its w.
+    subroutine fold_meets_grazing(t)
+        type(tally_t), intent(inout) :: t
+        type(branches_t) :: res
+        type(curve_options_t) :: opt
+        type(curve_t) :: curve
+        type(error_t), allocatable :: err
+        real(wp) :: unit_distance
+        integer :: k, j
+
+        call second_grazing(1.9_wp, res, k, 1.05_wp)
+        call check(t, k > 0, 'fold meets grazing: a second grazing at w = 1.9')
+        if (k == 0) return
+        opt%follow = 'grazing'
+        opt%parameter = 'amplitude'
+        opt%parameter2 = 'omega'
+        opt%stop2 = 2.0_wp
+        opt%step2 = 0.05_wp
+        opt%max_points = 14
+        call follow_curve(asymmetric(res%points(k)%value), 0.0_wp, 1, res%points(k)%orbit%x, &
+                          res%points(k)%orbit%v, res%points(k)%value, opt, curve, err)
+        call check(t, .not. allocated(err), 'fold meets grazing: followed')
+        if (allocated(err)) return
+        print '(a,i0,a,i0,a)', '    grazing curve of the asymmetric chain: ', curve%n_points, &
+            ' points, '//curve%end_reason//', ', curve%n_codim2, ' codim-2 points'
+        call check(t, curve%n_codim2 == 1, 'fold meets grazing: one codim-2 point')
+        if (curve%n_codim2 /= 1) return
+        j = curve%codim2_index(1)
+        unit_distance = minval(abs(cmplx(curve%orbits(j)%multipliers_re - 1, &
+                                         curve%orbits(j)%multipliers_im, wp)))
+        write (*, '(a,a,a,f15.11,a,f15.11,a,es9.2,a,es9.2)') '    ', &
+            trim(curve%codim2_kind(1)), ' at A = ', curve%values(j), ', w = ', &
+            curve%values2(j), ': |multiplier - 1| = ', unit_distance, ', gap ', &
+            curve%orbits(j)%min_gap
+        call check(t, curve%codim2_kind(1) == 'fold-grazing', 'fold meets grazing: its kind')
+        call check_close(t, unit_distance, 0.0_wp, 'fold meets grazing: a multiplier +1', &
+                         1.0e-8_wp)
+        call check_close(t, curve%orbits(j)%min_gap, 0.0_wp, 'fold meets grazing: gap 0', &
+                         1.0e-10_wp)
+        call check(t, (curve%values2(j) - curve%values2(j - 1))* &
+                   (curve%values2(j + 1) - curve%values2(j)) > 0, &
+                   'fold meets grazing: between its neighbours on the curve')
+        call second_grazing(curve%values2(j), res, k, 1.05_wp)
+        call check(t, k > 0, 'fold meets grazing: a one-parameter grazing at its w')
+        if (k == 0) return
+        write (*, '(a,es9.2,a,es9.2)') '    one-parameter run there: |A - curve| = ', &
+            abs(res%points(k)%value - curve%values(j)), ', |multiplier - 1| = ', &
+            minval(abs(cmplx(res%points(k)%orbit%multipliers_re - 1, &
+                             res%points(k)%orbit%multipliers_im, wp)))
+        call check_close(t, res%points(k)%value, curve%values(j), &
+                         'fold meets grazing: the one-parameter grazing there', 1.0e-9_wp)
+    end subroutine fold_meets_grazing
+
+    !> Figure 10's chain with its left wall at 1.05.
+    function asymmetric(amplitude) result(model)
+        real(wp), intent(in) :: amplitude
+        type(model_t) :: model
+
+        model = fig10_model(amplitude)
+        model%spacing(lbound(model%spacing, 1)) = 1.05_wp
+    end function asymmetric
+
+    !> Figure 10's chain at frequency w (its left wall at `left`, 1 when absent) followed from
+    !> rest upwards in A; k the point of its second grazing (0: none).
+    subroutine second_grazing(omega, res, k, left)
         real(wp), intent(in) :: omega
         type(branches_t), intent(out) :: res
         integer, intent(out) :: k
+        real(wp), intent(in), optional :: left
         type(branch_options_t) :: opt
         type(model_t) :: model
         type(error_t), allocatable :: err
@@ -136,6 +203,7 @@ contains
 
         k = 0
         model = fig10_model(1.0_wp)
+        if (present(left)) model%spacing(lbound(model%spacing, 1)) = left
         model%omega = omega
         opt%parameter = 'amplitude'
         opt%stop = 3
