@@ -230,13 +230,20 @@ FIGURES := $(foreach f,fig1a fig1b fig1c fig1d fig2a fig2b fig2c fig2d fig2e fig
            figures/fig7.png figures/fig8.png figures/fig10.png figures/fig11.png \
            figures/fig12_damping.png figures/fig12_restitution.png figures/fig13.png \
            figures/fig10_branches.png figures/fig1c_clv_space_time.png \
-           figures/fig1c_clv_ipr.png figures/fig1c_clv_angles.png $(CENSUS_FIGURES)
+           figures/fig1c_clv_ipr.png figures/fig1c_clv_angles.png $(CENSUS_FIGURES) \
+           $(CHART_FIGURES)
 # Attractor censuses at the paper's disputed figures (README, Basin fractions): their inputs
 # live in gallery/census/, not namelists/, because test/python/test_recipes.py reruns every
 # recipe in namelists/ in CI and these take minutes (about 750 CPU seconds, all six).
 CENSUS := gallery/census
 CENSUS_FIGURES := $(foreach f,fig1a fig1b fig1d fig2 fig3,figures/census_$(f).png) \
                   figures/census_fig3_plane.png
+# Two-parameter charts (docs/gallery.md, Figure 10's chain in (A, w)): their inputs live in
+# gallery/charts/ for the same reason (the map's sweep takes about 35 CPU seconds).
+CHARTS := gallery/charts
+CHART_FIGURES := figures/chart_fig10.png
+CHART_FIG10_CURVES := $(foreach f,grazing_down grazing_up fold_down fold_up,\
+                        $(RUNS)/chart_fig10_$(f).h5)
 
 .PHONY: figures figure-files census-figures
 .SECONDARY:
@@ -262,6 +269,14 @@ $(RUNS)/census_%.h5: $(CENSUS)/census_%.nml
 	@mkdir -p $(@D)
 	echo "impactchain: running $<"
 	$(SIM) $<
+
+$(RUNS)/chart_%.h5: $(CHARTS)/chart_%.nml
+	@mkdir -p $(@D)
+	echo "impactchain: running $<"
+	$(SIM) $<
+
+figures/chart_fig10.png: $(CHART_FIG10_CURVES) $(RUNS)/chart_fig10_map.h5
+	$(POST) chart $(CHART_FIG10_CURVES) --over $(RUNS)/chart_fig10_map.h5 -o $@ $(GALLERY)
 
 figures/census_fig3_plane.png: $(RUNS)/census_fig3_plane.h5
 	$(POST) basin-plane $< -o $@ $(GALLERY)

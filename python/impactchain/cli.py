@@ -189,6 +189,15 @@ def _branches_options(parser: argparse.ArgumentParser) -> None:
     _site_option(parser)
 
 
+def _chart_options(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--over", metavar="SWEEP.h5",
+                        help="a sweep over the curves' two parameters, drawn underneath as a "
+                             "map")
+    parser.add_argument("--quantity", choices=figures.QUANTITIES, default="period",
+                        help="what the map shows: the chain's period (default) or impacts per "
+                             "drive cycle")
+
+
 def _plane_options(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--point", type=_non_negative_int, default=0, metavar="P",
                         help="the point (0-based) of a census along a swept parameter "
@@ -256,6 +265,12 @@ def _branches(runs: list[Run], args: argparse.Namespace) -> Figure:
     return figures.branches(runs, over=over, site=args.site)
 
 
+def _chart(runs: list[Run], args: argparse.Namespace) -> Figure:
+    """Curves in two parameters, over the two-parameter sweep of --over if given."""
+    over = None if args.over is None else _read(args.over, ("sweep",), (), "chart --over")
+    return figures.chart(runs, over=over, quantity=args.quantity)
+
+
 COMMANDS: dict[str, Command] = {
     c.name: c
     for c in (
@@ -298,6 +313,10 @@ COMMANDS: dict[str, Command] = {
                 "continued periodic orbits against the parameter, stable and unstable, "
                 "with their special points (continuation file)",
                 ("continuation",), (), True, _branches_options, _branches),
+        Command("chart",
+                "fold, period-doubling and grazing curves in the plane of their two "
+                "parameters, over a two-parameter sweep (curve files, &continuation follow)",
+                ("curve",), (), True, _chart_options, _chart),
         Command("multipliers",
                 "largest Floquet multiplier of the continued orbits against the parameter "
                 "(continuation file)",
@@ -466,6 +485,8 @@ def _all_figures(run: Run, args: argparse.Namespace) -> Iterator[tuple[str, Figu
     if run.continuation is not None and run.continuation.n_points:
         yield "branches", figures.branches(run)
         yield "multipliers", figures.multipliers(run)
+    if run.curve is not None and run.curve.values.size:
+        yield "chart", figures.chart(run)
     if run.census is not None and run.census.n_attractors:
         yield "basin-fractions", figures.basin_fractions(run)
         if run.census.plane is not None:

@@ -34,7 +34,8 @@ The figures by topic, one module each: :mod:`~impactchain.figures.timeseries`
 :mod:`~impactchain.figures.sweeps` (bifurcation, Lyapunov exponents, Kaplan-Yorke dimension),
 :mod:`~impactchain.figures.spectra` (spectrum, finite-time exponents),
 :mod:`~impactchain.figures.clv` (covariant vectors), :mod:`~impactchain.figures.orbits`
-(continued orbits and their branches) and :mod:`~impactchain.figures.census` (attractor
+(continued orbits and their branches), :mod:`~impactchain.figures.charts` (curves in two
+parameters over a two-parameter sweep) and :mod:`~impactchain.figures.census` (attractor
 censuses). ``_style`` holds what they share (colours, labels, titles), ``_canvas`` where they
 draw and how a figure is saved, ``_data`` what they take. Every public name is reachable as
 ``impactchain.figures.NAME``; ``__all__`` lists the figures, their error and how to save them.
@@ -47,6 +48,8 @@ from impactchain.figures._style import (BAND_ALPHA, LEFT_COLOUR, OVERLAY_COLOURS
                                         TIME_LABEL_UNIT, WALL_STYLE, FigureError)
 from impactchain.figures.census import (ATTRACTOR_COLOURS, MIRROR_BLEND, SAMPLE_ALPHA,
                                         basin_fractions, basin_plane, ensemble_spectra)
+from impactchain.figures.charts import (APERIODIC_COLOUR, CODIM2_STYLE, IMPACTS_CAP, QUANTITIES,
+                                        chain_period, chart, map_grid)
 from impactchain.figures.clv import (CLV_CMAP, IMPACT_COLOUR, NEAR_TANGENCY, clv_angles, clv_ipr,
                                      clv_space_time)
 from impactchain.figures.orbits import (BRANCH_COLOURS, LOG_SPAN, OVER_COLOUR, SPECIAL_STYLES,
@@ -65,6 +68,8 @@ __all__ = [
     "spectrum", "finite_time", "clv_space_time", "clv_ipr", "clv_angles",
     # orbits and branches
     "branches", "multipliers",
+    # curves in two parameters
+    "chart",
     # censuses
     "basin_fractions", "basin_plane", "ensemble_spectra",
     # errors and saving with provenance
