@@ -1,6 +1,7 @@
 """Runs made in memory: the :class:`impactchain.results.Run` of results of
 :mod:`impactchain.api` (:func:`run_from_api`, :func:`run_from_sweep`,
-:func:`run_from_continuation`) and of xarray trees of a file (:func:`run_from_tree`), as if
+:func:`run_from_continuation`, :func:`run_from_curve`) and of xarray trees of a file
+(:func:`run_from_tree`), as if
 read from the command line's file, so that every figure draws them.
 """
 
@@ -17,11 +18,12 @@ import numpy as np
 
 from impactchain._hdf5 import _flat_points, _frozen, _point_values
 from impactchain.namelist import equivalent_namelist
-from impactchain.results import (FILE_UNITS, SCHEMA_VERSION, Continuation, Events, FinalState,
-                                 Lyapunov, Params, Run, State, Stats, Strobe, Sweep)
+from impactchain.results import (FILE_UNITS, SCHEMA_VERSION, Continuation, Curve, Events,
+                                 FinalState, Lyapunov, Params, Run, State, Stats, Strobe, Sweep)
 
 __all__ = ["IN_MEMORY", "run_from_api", "run_from_sweep", "is_sweep_dataset",
-           "run_from_continuation", "is_continuation_dataset", "run_from_tree", "is_tree"]
+           "run_from_continuation", "is_continuation_dataset", "run_from_curve", "is_curve_tree",
+           "run_from_tree", "is_tree"]
 
 
 IN_MEMORY = "(in memory, impactchain.api)"
@@ -201,6 +203,30 @@ def run_from_continuation(ds: Any) -> Run:
     return Run(path=IN_MEMORY, schema_version=SCHEMA_VERSION, code_version="",
                input_namelist="", complete=True, params=params, units=FILE_UNITS,
                continuation=cont)
+
+
+def is_curve_tree(data: Any) -> bool:
+    """Is ``data`` an :func:`impactchain.api.curve` result (an xarray tree of /continuation and
+    /curve without a file's attributes), or a group of one?"""
+    return (is_tree(data) and "curve" in data.root.children
+            and "schema_version" not in data.root.attrs)
+
+
+def run_from_curve(tree: Any) -> Run:
+    """A :class:`Run` holding the continuation and the curve of :func:`impactchain.api.curve`
+    (an xarray tree, or a group of one), for the figures: ``Run.params`` as
+    :func:`run_from_continuation` gives them."""
+    if not is_curve_tree(tree):
+        raise TypeError(f"{type(tree).__name__} is not a curve of impactchain.api.curve")
+    root = tree.root
+    ds = root["curve"].to_dataset()
+    fields = {name: _frozen(np.asarray(ds[name].values)) for name in Curve.__annotations__
+              if name in ds}
+    fields["codim2_kind"] = _frozen(np.asarray([str(k) for k in ds["codim2_kind"].values]))
+    curve = Curve(**{key: str(ds.attrs[key]) for key in ("follow", "parameter", "parameter2",
+                                                         "end_reason")}, **fields)
+    run = run_from_continuation(root["continuation"].to_dataset())
+    return dataclasses.replace(run, curve=curve)
 
 
 def is_tree(data: Any) -> bool:

@@ -13,8 +13,9 @@ import numpy as np
 
 from impactchain.analysis import panel_ranges
 from impactchain.figures._style import _SYMBOLS, FigureError
-from impactchain.inmemory import (is_continuation_dataset, is_sweep_dataset, is_tree,
-                                  run_from_continuation, run_from_sweep, run_from_tree)
+from impactchain.inmemory import (is_continuation_dataset, is_curve_tree, is_sweep_dataset,
+                                  is_tree, run_from_continuation, run_from_curve, run_from_sweep,
+                                  run_from_tree)
 from impactchain.io import read_run
 from impactchain.results import Run, Strobe, Sweep
 
@@ -29,18 +30,21 @@ class SupportsRun(Protocol):
 RunLike = Union[Run, str, "os.PathLike[str]", SupportsRun, Any]
 """What the figure functions take for one run: a :class:`Run`, a path to a file, an
 :mod:`impactchain.api` result, an xarray tree of a file (``xarray.open_datatree(path)``, an
-api result's ``to_xarray()``) or the Dataset of ``api.sweep`` or ``api.continuation``."""
+api result's ``to_xarray()``), the Dataset of ``api.sweep`` or ``api.continuation``, or the
+tree of ``api.curve``."""
 
 
 def as_run(data: RunLike, require: Iterable[str] = (), purpose: str | None = None) -> Run:
     """The :class:`Run` of ``data``: a Run, a file path (read with ``require``, see
     :func:`impactchain.io.read_run`), an object with ``to_run()`` (``impactchain.api``
-    results), an xarray tree of a file or the Dataset of :func:`impactchain.api.sweep` or
-    :func:`impactchain.api.continuation`."""
+    results), an xarray tree of a file, the Dataset of :func:`impactchain.api.sweep` or
+    :func:`impactchain.api.continuation`, or the tree of :func:`impactchain.api.curve`."""
     if isinstance(data, Run):
         return data
     if isinstance(data, (str, os.PathLike)):
         return read_run(data, require=require, purpose=purpose)
+    if is_curve_tree(data):
+        return run_from_curve(data)
     if is_tree(data):
         return run_from_tree(data, require, purpose)
     if is_sweep_dataset(data):

@@ -128,10 +128,13 @@ def _curve(run: Run) -> Curve:
 
 
 def _check_chain(run: Run, first: Run) -> None:
-    """The same chain: n, ends, and every model parameter both files know (a parameter
-    swept or followed is NaN in a file's /params, and left out)."""
+    """The same chain: n, and the ends, damping and restitution where both runs know them
+    (a swept parameter is NaN in a file's /params; an api result's continuation knows
+    neither its ends nor its parameters)."""
     p, q = run.params, first.params
-    differ = [name for name in ("n", "boundary") if getattr(p, name) != getattr(q, name)]
+    differ = [f"n ({p.n}, not {q.n})"] if p.n != q.n else []
+    if p.boundary and q.boundary and p.boundary != q.boundary:
+        differ.append(f"ends ({p.boundary}, not {q.boundary})")
     differ += [f"{name} ({getattr(p, name):g}, not {getattr(q, name):g})"
                for name in ("damping", "restitution")
                if not _same(getattr(p, name), getattr(q, name))]
