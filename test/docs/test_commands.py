@@ -35,7 +35,15 @@ SETUP = {
                        "impactchain --quiet -o sweep.h5 --set sweep.start=3.0 --set sweep.stop=2.5 "
                        "--set sweep.step=-0.1 --set run.transient=20 --set run.cycles=40 "
                        "--set lyapunov.enabled=.true. \"$ROOT/namelists/fig10.nml\" && "
-                       "impactchain --quiet -o cont.h5 \"$ROOT/namelists/fig10_free.nml\"",
+                       "impactchain --quiet -o cont.h5 \"$ROOT/namelists/fig10_free.nml\" && "
+                       "impactchain --quiet -o fold.h5 --set continuation.max_points=8 "
+                       "\"$ROOT/gallery/charts/chart_fig10_fold_up.nml\" && "
+                       "impactchain --quiet -o grazing.h5 --set continuation.max_points=10 "
+                       "\"$ROOT/gallery/charts/chart_fig10_grazing_down.nml\" && "
+                       "impactchain --quiet -o map.h5 --set sweep.start=3.0 --set sweep.stop=2.6 "
+                       "--set sweep.step=-0.2 --set sweep.start2=1.88 --set sweep.stop2=1.92 "
+                       "--set sweep.step2=0.02 --set run.transient=5 --set run.cycles=6 "
+                       "\"$ROOT/gallery/charts/chart_fig10_map.nml\"",
     "docs/running.md": WITHOUT_OUTPUT + " > input.nml",
     "docs/orbits.md": "mkdir -p figures/runs && impactchain --quiet -o figures/runs/fig10.h5 "
                       "--set sweep.start=3.5 --set sweep.step=-0.05 --set run.transient=100 "
