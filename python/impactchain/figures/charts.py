@@ -64,18 +64,17 @@ def chart(curves: RunLike | Sequence[RunLike], over: RunLike | None = None,
         _check_chain(other, first)
     fig, ax = _one_axes(ax, 8.0, 5.5, "chart")
     shown = list(runs)
-    if over is not None:
+    if over is None:
+        extent = (*_padded(np.concatenate([c.values for c in found])),
+                  *_padded(np.concatenate([c.values2 for c in found])))
+    else:
         map_run = as_run(over, ("sweep",), "chart --over")
         _check_chain(map_run, first)
         extent = _draw_map(ax, map_run, _sweep(map_run), curve0, quantity)
         shown.append(map_run)
     handles = _draw_curves(ax, found)
-    if over is None:
-        ax.set_xlim(*_padded(np.concatenate([c.values for c in found])))
-        ax.set_ylim(*_padded(np.concatenate([c.values2 for c in found])))
-    else:
-        ax.set_xlim(*extent[:2])
-        ax.set_ylim(*extent[2:])
+    ax.set_xlim(*extent[:2])
+    ax.set_ylim(*extent[2:])
     ax.legend(handles=handles, loc="best", fontsize="small", framealpha=0.9)
     ax.set_xlabel(_parameter_label(curve0.parameter))
     ax.set_ylabel(_parameter_label(curve0.parameter2))

@@ -93,3 +93,13 @@ def test_wrong_map_or_quantity_is_refused(curves: list[Any], sweep: Any) -> None
                          "stop2": 0.06, "step2": 0.01})
     with pytest.raises(figures.FigureError, match="damping"):
         figures.chart(curves, over=other)
+
+
+def test_without_a_map_the_limits_hold_every_point(curves: list[Any]) -> None:
+    ax = figures.chart(curves).axes[0]
+    assert not ax.images
+    (x0, x1), (y0, y1) = ax.get_xlim(), ax.get_ylim()
+    for tree in curves:
+        curve = tree["curve"]
+        assert x0 < curve["values"].min() and curve["values"].max() < x1
+        assert y0 < curve["values2"].min() and curve["values2"].max() < y1
