@@ -39,7 +39,8 @@ def chart(curves: RunLike | Sequence[RunLike], over: RunLike | None = None,
     """Fold, period-doubling and grazing curves (``/curve``) as lines in the plane of their
     two parameters, each in its kind's colour (:data:`orbits.SPECIAL_STYLES`), its start (the
     one-parameter run's special point) marked with the kind's marker on a dotted line at
-    its value of the second parameter, and codimension-two points as stars.
+    its value of the second parameter, and codimension-two points (those within the axes)
+    as stars.
 
     ``curves``: one curve file (or :func:`impactchain.api.curve` tree) or several of the same
     chain and the same two parameters. ``over``: a two-parameter sweep (``&sweep`` with
@@ -72,7 +73,7 @@ def chart(curves: RunLike | Sequence[RunLike], over: RunLike | None = None,
         _check_chain(map_run, first)
         extent = _draw_map(ax, map_run, _sweep(map_run), curve0, quantity)
         shown.append(map_run)
-    handles = _draw_curves(ax, found)
+    handles = _draw_curves(ax, found, extent)
     ax.set_xlim(*extent[:2])
     ax.set_ylim(*extent[2:])
     ax.legend(handles=handles, loc="best", fontsize="small", framealpha=0.9)
@@ -180,9 +181,12 @@ def _cell_edges(values: np.ndarray) -> tuple[float, float]:
     return low - half, high + half
 
 
-def _draw_curves(ax: Axes, curves: Sequence[Curve]) -> list[Line2D]:
+def _draw_curves(ax: Axes, curves: Sequence[Curve],
+                 extent: tuple[float, float, float, float]) -> list[Line2D]:
     """Each curve a line in its kind's colour, its start marked on a dotted line at its
-    second parameter's value; codimension-two points starred. The legend's handles."""
+    second parameter's value; codimension-two points within ``extent`` starred. The
+    legend's handles."""
+    x0, x1, y0, y1 = extent
     handles: dict[str, Line2D] = {}
     for curve in curves:
         label, marker, colour = SPECIAL_STYLES[curve.follow]
@@ -196,6 +200,8 @@ def _draw_curves(ax: Axes, curves: Sequence[Curve]) -> list[Line2D]:
                                                 marker=marker, markeredgecolor="k",
                                                 markeredgewidth=0.5, label=f"{label} curve"))
         for i, kind in zip(curve.codim2_index, curve.codim2_kind):
+            if not (x0 <= curve.values[i] <= x1 and y0 <= curve.values2[i] <= y1):
+                continue
             ax.scatter(curve.values[i], curve.values2[i], gid=f"codim2-{kind}", **CODIM2_STYLE)
             handles.setdefault(f"codim2 {kind}", Line2D(
                 [], [], linestyle="none", marker="*", markersize=10, color="gold",
