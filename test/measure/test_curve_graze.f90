@@ -30,14 +30,16 @@ contains
         type(tally_t), intent(inout) :: t
         type(model_t) :: model
         type(curve_options_t) :: opt
-        type(curve_t) :: curve
+        type(curve_t) :: curve, again
         type(error_t), allocatable :: err
-        real(wp) :: a_start, xp, vp, worst_a, worst_orbit, worst_gap
+        real(wp) :: a_start, xp, vp, xp0, vp0, worst_a, worst_orbit, worst_gap
         integer :: j
 
         model = fig10_model(1.0_wp)
         a_start = 0.999_wp*closed_form(model, model%omega)
         call forced_response(make_flow(model%damping, a_start, model%omega), 0.0_wp, xp, vp)
+        xp0 = xp
+        vp0 = vp
         model = fig10_model(a_start)
         opt%follow = 'grazing'
         opt%parameter = 'amplitude'
@@ -78,7 +80,27 @@ contains
                          1.0e-10_wp)
         call check(t, all(curve%orbits(:curve%n_points)%impacts == 0), &
                    'grazing curve: no impact at any point')
+        ! the same points from spacings stored 1-based, as the command line stores them
+        opt%max_points = 3
+        call follow_curve(one_based(model), 0.0_wp, 1, spread(xp0, 1, model%n), &
+                          spread(vp0, 1, model%n), a_start, opt, again, err)
+        call check(t, .not. allocated(err) .and. again%n_points == 3, &
+                   'grazing curve: followed from 1-based spacings')
+        if (allocated(err) .or. again%n_points /= 3) return
+        call check(t, all(again%values(:3) == curve%values(:3)) .and. &
+                   all(again%values2(:3) == curve%values2(:3)), &
+                   "grazing curve: the same points whatever the spacings' lower bound")
     end subroutine grazing_curve
+
+    !> The model with its spacings stored 1-based (bond k's rest gap spacing(k + 1)).
+    pure function one_based(model) result(shifted)
+        type(model_t), intent(in) :: model
+        type(model_t) :: shifted
+
+        shifted = model
+        deallocate (shifted%spacing)
+        allocate (shifted%spacing(model%n + 1), source=model%spacing)
+    end function one_based
 
     !> From figure 10's second grazing at w = 1.9 (its two-impact family's), the curve up in w.
     subroutine impacting_grazing_curve(t)
