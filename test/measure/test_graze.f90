@@ -9,7 +9,7 @@ module test_graze
     use chain_error, only: error_t
     use chain_flow, only: flow_t, make_flow, forced_response
     use chain_model, only: model_t
-    use chain_orbit, only: orbit_pass_t, orbit_pass, interleave
+    use chain_orbit, only: orbit_t, orbit_pass_t, orbit_pass, interleave, find_orbit
     use chain_branch, only: branch_options_t, branches_t, follow_branches
     use test_chains, only: fig10_model
     use testing, only: tally_t, check, check_close
@@ -29,7 +29,7 @@ contains
         opt%parameter = 'amplitude'
         opt%stop = 3
         opt%step = 0.1_wp
-        opt%max_points = 60
+        opt%max_points = 200
         call follow_branches(fig10_model(1.0_wp), 0.0_wp, 1, [(0.0_wp, j=1, 8)], &
                              [(0.0_wp, j=1, 8)], opt, res, err)
         call check(t, .not. allocated(err), 'through a grazing: followed')
@@ -46,6 +46,7 @@ contains
                                              res%points(1)%orbit%residuals), &
                                          'through a grazing: the start is the first point')
         call grazing_located(t, res)
+        call gap_grazing_with_impacts(t, res)
     end subroutine run_graze_tests
 
     !> The grazing: one special point at the closed form, the forced response before it, its
@@ -136,5 +137,99 @@ contains
         write (*, '(a,es9.2)') '    first three points past it: |P(z) - z| <= ', worst
         call check_close(t, worst, 0.0_wp, 'through a grazing: fixed points past it', 1.0e-10_wp)
     end subroutine impacting_side
+
+    !> The second grazing of the branch: the two-impact family's gap minimum touches zero at
+    !> A = 2.4755439 (an orbit that already impacts). Located to 1e-10 against the boundary of
+    !> that family found independently (bisection in A on Newton orbits at fixed A: converged,
+    !> two impacts, no negative gap), stored once; past it the impacts change by the mirror
+    !> pair, the orbits are fixed points of the map, and they tend to the grazing orbit.
+    subroutine gap_grazing_with_impacts(t, res)
+        type(tally_t), intent(inout) :: t
+        type(branches_t), intent(in) :: res
+        real(wp) :: boundary, worst, d(2), law
+        integer :: s, g, j
+
+        s = 0
+        do j = 1, res%n_specials
+            if (res%specials(j)%kind == 'grazing' .and. &
+                abs(res%specials(j)%value - 2.4755439_wp) < 1.0e-6_wp) s = j
+        end do
+        call check(t, s > 0, 'gap grazing with impacts: located near A = 2.4755439')
+        if (s == 0) return
+        g = res%specials(s)%point
+        boundary = family_boundary(res%points(g - 1)%orbit, res%points(g - 1)%value, &
+                                   res%specials(s)%value)
+        write (*, '(a,es22.14,a,es9.2,a,i0,a,i0)') '    gap grazing at ', &
+            res%specials(s)%value, ', |A - bisection| = ', &
+            abs(res%specials(s)%value - boundary), ', point ', g, ' of ', res%n_points
+        call check_close(t, res%specials(s)%value, boundary, &
+                         'gap grazing with impacts: at the family''s boundary to 1e-10', &
+                         1.0e-10_wp)
+        call check(t, count(abs(res%points(:res%n_points)%value - res%specials(s)%value) &
+                            < 1.0e-9_wp) == 1, 'gap grazing with impacts: its orbit stored once')
+        call check(t, res%n_points >= g + 3, 'gap grazing with impacts: points past it')
+        if (res%n_points < g + 3) return
+        write (*, '(a,i0,a,i0,a,i0)') '    impacts per cycle: ', &
+            res%points(g - 1)%orbit%impacts, ' before, ', res%points(g)%orbit%impacts, &
+            ' at it, ', res%points(g + 1)%orbit%impacts
+        call check(t, res%points(g)%orbit%impacts == 2 .and. &
+                   abs(res%points(g + 1)%orbit%impacts - 2) == 2, &
+                   'gap grazing with impacts: the impacts change by the mirror pair')
+        worst = 0
+        do j = g + 1, g + 3
+            worst = max(worst, map_residual(res%points(j)%orbit, res%points(j)%value))
+        end do
+        write (*, '(a,es9.2)') '    first three points past it: |P(z) - z| <= ', worst
+        call check_close(t, worst, 0.0_wp, 'gap grazing with impacts: fixed points past it', &
+                         1.0e-10_wp)
+        do j = 1, 2
+            d(j) = norm2([res%points(g + j)%orbit%x - res%points(g)%orbit%x, &
+                          res%points(g + j)%orbit%v - res%points(g)%orbit%v])
+        end do
+        law = log(d(2)/d(1))/log(abs(res%points(g + 2)%value - res%specials(s)%value)/ &
+                                 abs(res%points(g + 1)%value - res%specials(s)%value))
+        write (*, '(a,2es9.2,a,2es9.2,a,f6.3)') '    |z - z_g| = ', d, ' at |A - A_g| = ', &
+            abs(res%points(g + 1:g + 2)%value - res%specials(s)%value), ', exponent ', law
+    end subroutine gap_grazing_with_impacts
+
+    !> Where the family of `orbit` (at a, its impacts) ends towards a_g: bisection in A, each
+    !> trial Newton at fixed A from `orbit`.
+    function family_boundary(orbit, a, a_g) result(boundary)
+        type(orbit_t), intent(in) :: orbit
+        real(wp), intent(in) :: a, a_g
+        real(wp) :: boundary, inside, outside
+        type(orbit_t) :: trial
+        type(error_t), allocatable :: err
+        integer :: k
+
+        inside = a
+        outside = a_g + (a_g - a)
+        do k = 1, 80
+            boundary = (inside + outside)/2
+            call find_orbit(fig10_model(boundary), 0.0_wp, 1, orbit%x, orbit%v, trial, err)
+            if (allocated(err)) deallocate (err)
+            if (trial%converged .and. trial%impacts == orbit%impacts .and. &
+                trial%min_gap >= 0) then
+                inside = boundary
+            else
+                outside = boundary
+            end if
+            if (abs(outside - inside) < 1.0e-13_wp) exit
+        end do
+        boundary = (inside + outside)/2
+    end function family_boundary
+
+    !> |P(z) - z| of an orbit at the amplitude a.
+    real(wp) function map_residual(orbit, a) result(r)
+        type(orbit_t), intent(in) :: orbit
+        real(wp), intent(in) :: a
+        type(orbit_pass_t) :: pass
+        type(error_t), allocatable :: err
+
+        r = huge(1.0_wp)
+        call orbit_pass(fig10_model(a), 0.0_wp, 1, interleave(orbit%x, orbit%v), pass, err)
+        if (allocated(err)) return
+        r = maxval(abs(pass%image - pass%z))
+    end function map_residual
 
 end module test_graze
