@@ -119,8 +119,11 @@ contains
     !> other side, with other impacts than `g`; `found` gets its tangent, oriented away from
     !> the grazing; ok = .false. when Newton finds none. Where a gap touched zero, Newton
     !> starts from the first-order orbit with the new impact of speed v_new (new_impact_orbit:
-    !> its kick carried by the orbit's flow and impacts); where an impact's speed vanished,
-    !> from g's state at mu_g + delta, then mu_g - delta (the side ahead first).
+    !> its kick carried by the orbit's flow and impacts), then sqrt(10) and 10 times v_new:
+    !> that orbit's free gap minimum is right only to first order, its depth V**2/(2 g'') to
+    !> second, and where the orbit already impacts (its map curved) Newton needs V larger
+    !> than its second-order error. Where an impact's speed vanished, from g's state at
+    !> mu_g + delta, then mu_g - delta (the side ahead first).
     subroutine pass_grazing(set, g, before, mu_g, symmetric, delta, v_new, found, ok, err)
         type(setting_t), intent(in) :: set
         type(cursor_t), intent(in) :: g, before
@@ -131,14 +134,18 @@ contains
         type(error_t), allocatable, intent(out) :: err
         real(wp), allocatable :: z(:)
         real(wp) :: ahead, mu
-        integer :: m, side
+        integer :: m, side, try
 
         ok = .false.
         m = size(g%y) - 1
         if (g%orbit%min_gap < g%orbit%min_impact_speed) then
-            call new_impact_orbit(set, g, before, mu_g, symmetric, v_new, z, mu, ok, err)
-            if (ok .and. .not. allocated(err)) call newton_other_side(set, g, z, mu, sign(1.0_wp, mu - mu_g), found, ok, &
-                                           err)
+            do try = 0, 2
+                call new_impact_orbit(set, g, before, mu_g, symmetric, v_new*sqrt(10.0_wp)**try, &
+                                      z, mu, ok, err)
+                if (ok) call newton_other_side(set, g, z, mu, sign(1.0_wp, mu - mu_g), found, &
+                                               ok, err)
+                if (ok .or. allocated(err)) return
+            end do
             return
         end if
         ahead = sign(1.0_wp, mu_g - before%y(m + 1))
@@ -282,8 +289,8 @@ contains
         kick = 0
         gap_row = 0
         call add_kick(set, model, g, k, t_star, kick, gap_row, ok, err)
-        if (pair .and. ok) call add_kick(set, model, g, n - k, modulo(t_star + period/2, &
-                                                                      period), kick, gap_row, ok, err)
+        if (pair .and. ok) call add_kick(set, model, g, n - k, modulo(t_star + period/2, period), &
+                                         kick, gap_row, ok, err)
         if (.not. ok) return
         ok = .false.
         a = -g%jacobian

@@ -96,7 +96,8 @@ contains
     end subroutine grazing_located
 
     !> Past the grazing at point g: the impacts per cycle go up by the mirror pair (walls 0 and
-    !> n graze together), every point impacts, and the first three are fixed points of the map.
+    !> n graze together), every point up to the next grazing has those two, and the first
+    !> three are fixed points of the map.
     subroutine impacting_side(t, res, g, grazing)
         type(tally_t), intent(inout) :: t
         type(branches_t), intent(in) :: res
@@ -106,13 +107,19 @@ contains
         type(orbit_pass_t) :: pass
         type(error_t), allocatable :: err
         real(wp) :: worst
-        integer :: j
+        integer :: j, last
 
+        ! (the two-impact family reaches up to the branch's next grazing)
+        last = res%n_points
+        do j = 1, res%n_specials
+            if (res%specials(j)%kind == 'grazing' .and. res%specials(j)%point > g) &
+                last = min(last, res%specials(j)%point)
+        end do
         write (*, '(a,i0,a,i0,a,es9.2)') '    impacts per cycle: ', res%points(g)%orbit%impacts, &
             ' at the grazing, ', res%points(g + 1)%orbit%impacts, ' past it, at A - A_g = ', &
             res%points(g + 1)%value - grazing
         call check(t, res%points(g)%orbit%impacts == 0 .and. &
-                   all(res%points(g + 1:res%n_points)%orbit%impacts == 2), &
+                   all(res%points(g + 1:last)%orbit%impacts == 2), &
                    'through a grazing: two impacts per cycle past it (the mirror pair)')
         ! (the impacting family turns back at the grazing: its orbits lie below it)
         call check(t, abs(res%points(g + 1)%value - grazing) < 1.0e-3_wp .and. &
