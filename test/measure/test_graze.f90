@@ -148,12 +148,13 @@ contains
     !> The second grazing of the branch: the two-impact family's gap minimum touches zero at
     !> A = 2.4755439 (an orbit that already impacts). Located to 1e-10 against the boundary of
     !> that family found independently (bisection in A on Newton orbits at fixed A: converged,
-    !> two impacts, no negative gap), stored once; past it the impacts change by the mirror
-    !> pair, the orbits are fixed points of the map, and they tend to the grazing orbit.
+    !> two impacts, no negative gap), stored once; past it, to the branch's end, the impacts
+    !> go up by the mirror pair, the first orbits are fixed points of the map, and the orbits
+    !> on both sides tend to the grazing orbit (gap_grazing_sides).
     subroutine gap_grazing_with_impacts(t, res)
         type(tally_t), intent(inout) :: t
         type(branches_t), intent(in) :: res
-        real(wp) :: boundary, worst, d(2), law
+        real(wp) :: boundary, worst
         integer :: s, g, j
 
         s = 0
@@ -176,12 +177,13 @@ contains
                             < 1.0e-9_wp) == 1, 'gap grazing with impacts: its orbit stored once')
         call check(t, res%n_points >= g + 3, 'gap grazing with impacts: points past it')
         if (res%n_points < g + 3) return
-        write (*, '(a,i0,a,i0,a,i0)') '    impacts per cycle: ', &
+        write (*, '(a,i0,a,i0,a,i0,a,i0)') '    impacts per cycle: ', &
             res%points(g - 1)%orbit%impacts, ' before, ', res%points(g)%orbit%impacts, &
-            ' at it, ', res%points(g + 1)%orbit%impacts
-        call check(t, res%points(g)%orbit%impacts == 2 .and. &
-                   abs(res%points(g + 1)%orbit%impacts - 2) == 2, &
-                   'gap grazing with impacts: the impacts change by the mirror pair')
+            ' at it, ', res%points(g + 1)%orbit%impacts, ' past it, to point ', res%n_points
+        call check(t, res%points(g - 1)%orbit%impacts == 2 .and. &
+                   res%points(g)%orbit%impacts == 2 .and. &
+                   all(res%points(g + 1:res%n_points)%orbit%impacts == 4), &
+                   'gap grazing with impacts: the impacts go up by the mirror pair')
         worst = 0
         do j = g + 1, g + 3
             worst = max(worst, map_residual(res%points(j)%orbit, res%points(j)%value))
@@ -189,15 +191,54 @@ contains
         write (*, '(a,es9.2)') '    first three points past it: |P(z) - z| <= ', worst
         call check_close(t, worst, 0.0_wp, 'gap grazing with impacts: fixed points past it', &
                          1.0e-10_wp)
-        do j = 1, 2
-            d(j) = norm2([res%points(g + j)%orbit%x - res%points(g)%orbit%x, &
-                          res%points(g + j)%orbit%v - res%points(g)%orbit%v])
-        end do
-        law = log(d(2)/d(1))/log(abs(res%points(g + 2)%value - res%specials(s)%value)/ &
-                                 abs(res%points(g + 1)%value - res%specials(s)%value))
-        write (*, '(a,2es9.2,a,2es9.2,a,f6.3)') '    |z - z_g| = ', d, ' at |A - A_g| = ', &
-            abs(res%points(g + 1:g + 2)%value - res%specials(s)%value), ', exponent ', law
+        call gap_grazing_sides(t, res, g)
     end subroutine gap_grazing_with_impacts
+
+    !> Both sides of the gap grazing at point g tend to its orbit: |z - z_g| ~ |A - A_g|^p, p
+    !> measured from the two nearest points on each side (1 on both: the two-impact family is
+    !> smooth up to it, and past it the new impacts' speed u ~ A_g - A moves the orbit by
+    !> O(u)). The largest multiplier is continuous at the grazing from the old side and grows
+    !> like 1/u past it: |multiplier| u alike at the first two points past it.
+    subroutine gap_grazing_sides(t, res, g)
+        type(tally_t), intent(inout) :: t
+        type(branches_t), intent(in) :: res
+        integer, intent(in) :: g
+        real(wp) :: law(2), mult(-2:2), grow(2)
+        integer :: j, side
+
+        do side = 1, 2
+            law(side) = exponent_of(res, g, 2*side - 3)
+        end do
+        write (*, '(a,2f7.3)') '    |z - z_g| ~ |A - A_g|^p, p before and past it: ', law
+        call check(t, all(abs(law - 1) < 0.2_wp), &
+                   'gap grazing with impacts: both sides tend to its orbit like |A - A_g|')
+        do j = -2, 2
+            mult(j) = maxval(hypot(res%points(g + j)%orbit%multipliers_re, &
+                                   res%points(g + j)%orbit%multipliers_im))
+        end do
+        grow = mult(1:2)*res%points(g + 1:g + 2)%orbit%min_impact_speed
+        write (*, '(a,5es10.3,a,2f7.4)') '    largest |multiplier| at points g-2..g+2: ', mult, &
+            ', times the new speed past it: ', grow
+        call check(t, abs(mult(-1) - mult(0)) < 0.1_wp*mult(0) .and. &
+                   abs(grow(2)/grow(1) - 1) < 0.1_wp, &
+                   'gap grazing with impacts: multipliers continuous before, like 1/u past it')
+    end subroutine gap_grazing_sides
+
+    !> p in |z - z_g| ~ |A - A_g|^p from the points g + dir and g + 2 dir (dir = +-1).
+    real(wp) function exponent_of(res, g, dir) result(p)
+        type(branches_t), intent(in) :: res
+        integer, intent(in) :: g, dir
+        real(wp) :: d(2), da(2)
+        integer :: j
+
+        do j = 1, 2
+            associate (here => res%points(g + j*dir), graze => res%points(g))
+                d(j) = norm2([here%orbit%x - graze%orbit%x, here%orbit%v - graze%orbit%v])
+                da(j) = abs(here%value - graze%value)
+            end associate
+        end do
+        p = log(d(2)/d(1))/log(da(2)/da(1))
+    end function exponent_of
 
     !> Where the family of `orbit` (at a, its impacts) ends towards a_g: bisection in A, each
     !> trial Newton at fixed A from `orbit`.
