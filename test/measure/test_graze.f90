@@ -3,12 +3,14 @@
 !> the closed form A = a sqrt((1 - w**2)**2 + (2 b w)**2), located to 1e-10 and stored once;
 !> the branch goes on onto the impacting orbits (the mirror pair of wall bonds grazes
 !> together: two impacts more per cycle; that family turns back at the grazing, its orbits
-!> lie below it), whose first points are fixed points of the map.
+!> lie below it), whose first points are fixed points of the map. That family ends at its own
+!> gap grazing (bonds 1 and 7), and the branch goes on through it with four impacts per cycle
+!> to an impact at the section.
 module test_graze
     use chain_kinds, only: wp
     use chain_error, only: error_t
     use chain_flow, only: flow_t, make_flow, forced_response
-    use chain_model, only: model_t
+    use chain_model, only: model_t, bond_gaps
     use chain_orbit, only: orbit_t, orbit_pass_t, orbit_pass, interleave, find_orbit
     use chain_branch, only: branch_options_t, branches_t, follow_branches
     use test_chains, only: fig10_model
@@ -186,13 +188,53 @@ contains
                    'gap grazing with impacts: the impacts go up by the mirror pair')
         worst = 0
         do j = g + 1, g + 3
-            worst = max(worst, map_residual(res%points(j)%orbit, res%points(j)%value))
+            worst = max(worst, map_residual(res%points(j)%orbit%x, res%points(j)%orbit%v, &
+                                            res%points(j)%value))
         end do
         write (*, '(a,es9.2)') '    first three points past it: |P(z) - z| <= ', worst
         call check_close(t, worst, 0.0_wp, 'gap grazing with impacts: fixed points past it', &
                          1.0e-10_wp)
         call gap_grazing_sides(t, res, g)
+        call section_end(t, res)
     end subroutine gap_grazing_with_impacts
+
+    !> The branch ends where an impact of its orbit reaches the section: a gap of the last
+    !> orbit's section state z is zero there, and z with that impact applied (the section's
+    !> other side, where figure 10's six-impact branch ends) returns to z in one period.
+    subroutine section_end(t, res)
+        type(tally_t), intent(inout) :: t
+        type(branches_t), intent(in) :: res
+        type(model_t) :: model
+        type(orbit_pass_t) :: pass
+        type(error_t), allocatable :: err
+        real(wp), allocatable :: gaps(:), v(:)
+        real(wp) :: u, back
+        integer :: k
+
+        associate (last => res%points(res%n_points))
+            model = fig10_model(last%value)
+            ! (gaps(1:n + 1): bonds 0..n)
+            gaps = bond_gaps(model%spacing, model%walls, last%orbit%x)
+            k = minloc(abs(gaps), 1) - 1
+            call check(t, res%end_kind == 'section' .and. abs(gaps(k + 1)) < 1.0e-8_wp .and. &
+                       k >= 1 .and. k < model%n, &
+                       'gap grazing with impacts: the branch ends at an impact at the section')
+            if (k < 1 .or. k >= model%n) return
+            v = last%orbit%v
+            u = v(k) - v(k + 1)
+            v(k:k + 1) = v(k:k + 1) + [-1.0_wp, 1.0_wp]*(1 + model%restitution)*u/2
+            call orbit_pass(model, 0.0_wp, 1, interleave(last%orbit%x, v), pass, err)
+            back = huge(1.0_wp)
+            if (.not. allocated(err)) back = maxval(abs(pass%image - &
+                                                        interleave(last%orbit%x, last%orbit%v)))
+            write (*, '(a,f13.10,a,i0,a,es9.2,a,es9.2)') '    ends at A = ', last%value, &
+                ': bond ', k, ' gap ', gaps(k + 1), ', after its impact back in a period to ', &
+                back
+            call check_close(t, back, 0.0_wp, &
+                             'gap grazing with impacts: the section''s other side, one orbit', &
+                             1.0e-8_wp)
+        end associate
+    end subroutine section_end
 
     !> Both sides of the gap grazing at point g tend to its orbit: |z - z_g| ~ |A - A_g|^p, p
     !> measured from the two nearest points on each side (1 on both: the two-impact family is
@@ -267,15 +309,14 @@ contains
         boundary = (inside + outside)/2
     end function family_boundary
 
-    !> |P(z) - z| of an orbit at the amplitude a.
-    real(wp) function map_residual(orbit, a) result(r)
-        type(orbit_t), intent(in) :: orbit
-        real(wp), intent(in) :: a
+    !> |P(z) - z| of the section state (x, v) at the amplitude a.
+    real(wp) function map_residual(x, v, a) result(r)
+        real(wp), intent(in) :: x(:), v(:), a
         type(orbit_pass_t) :: pass
         type(error_t), allocatable :: err
 
         r = huge(1.0_wp)
-        call orbit_pass(fig10_model(a), 0.0_wp, 1, interleave(orbit%x, orbit%v), pass, err)
+        call orbit_pass(fig10_model(a), 0.0_wp, 1, interleave(x, v), pass, err)
         if (allocated(err)) return
         r = maxval(abs(pass%image - pass%z))
     end function map_residual
