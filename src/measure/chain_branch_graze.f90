@@ -120,10 +120,11 @@ contains
     !> the grazing; ok = .false. when Newton finds none. Where a gap touched zero, Newton
     !> starts from the first-order orbit with the new impact of speed v_new (new_impact_orbit:
     !> its kick carried by the orbit's flow and impacts), then sqrt(10) and 10 times v_new:
-    !> that orbit's free gap minimum is right only to first order, its depth V**2/(2 g'') to
-    !> second, and where the orbit already impacts (its map curved) Newton needs V larger
-    !> than its second-order error. Where an impact's speed vanished, from g's state at
-    !> mu_g + delta, then mu_g - delta (the side ahead first).
+    !> its free gap minimum is zero only to first order in V, the new impact's depth is
+    !> V**2/(2 g''), and an iterate that misses the impact lacks its 1/V in the Jacobian
+    !> (figure 10's two-impact family at its gap grazing needs 3.2e-3). Where an impact's
+    !> speed vanished, from g's state at mu_g + delta, then mu_g - delta (the side ahead
+    !> first).
     subroutine pass_grazing(set, g, before, mu_g, symmetric, delta, v_new, found, ok, err)
         type(setting_t), intent(in) :: set
         type(cursor_t), intent(in) :: g, before
