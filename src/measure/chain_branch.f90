@@ -373,7 +373,7 @@ contains
 
     !> At a grazing just stored (`kind`, the orbit `located` at `value`, `here` the point before
     !> it): the first orbit of the family on the other side (chain_branch_graze), with a new
-    !> impact of speed 1e-3 or at 1e-4 |step| from the grazing, stored, becomes `here`
+    !> impact of speed 1e-3 (up to 1e-2) or at 1e-4 |step| from the grazing, stored, becomes `here`
     !> (`passed`); the step starts at its distance from the grazing. Where an impact's speed
     !> vanished, the grazing is stored again as located from the other side, and that first
     !> orbit found again from there (the impacting side's value is only as good as Newton

@@ -17,9 +17,12 @@
 !> speed there is V1 ~ sqrt(distance); the arclength steps start at V1's scale and grow as
 !> Newton allows, so near the grazing the step is a step in V.
 module chain_branch_graze
-    use chain_kinds, only: wp, two_pi
+    use chain_kinds, only: wp, i8, two_pi
     use chain_error, only: error_t
-    use chain_flow, only: flow_t, make_flow, propagator
+    use chain_engine, only: chain_t, chain_set_tangent, chain_tangent_frame, chain_time, &
+                            chain_cycle, chain_period
+    use chain_event_log, only: event_log_t, event_log_init
+    use chain_section, only: chain_at_section, advance_to_point
     use chain_model, only: model_t, set_model_parameter
     use chain_lapack, only: solve_linear
     use chain_orbit, only: orbit_t, find_orbit
@@ -114,10 +117,14 @@ contains
     !> From the grazing orbit `g` at the parameter value mu_g (its tangent that of the old
     !> branch; `before` the branch's point before it), the first orbit of the family on the
     !> other side, with other impacts than `g`; `found` gets its tangent, oriented away from
-    !> the grazing; ok = .false. when Newton finds none. Where a gap of an orbit without
-    !> impacts touched zero, Newton starts from the first-order orbit with the new impact of
-    !> speed v_new (new_impact_orbit: its kick carried by the free flow); else from g's state
-    !> at mu_g + delta, then mu_g - delta (the side ahead first).
+    !> the grazing; ok = .false. when Newton finds none. Where a gap touched zero, Newton
+    !> starts from the first-order orbit with the new impact of speed v_new (new_impact_orbit:
+    !> its kick carried by the orbit's flow and impacts), then sqrt(10) and 10 times v_new:
+    !> its free gap minimum is zero only to first order in V, the new impact's depth is
+    !> V**2/(2 g''), and an iterate that misses the impact lacks its 1/V in the Jacobian
+    !> (figure 10's two-impact family at its gap grazing needs 3.2e-3). Where an impact's
+    !> speed vanished, from g's state at mu_g + delta, then mu_g - delta (the side ahead
+    !> first).
     subroutine pass_grazing(set, g, before, mu_g, symmetric, delta, v_new, found, ok, err)
         type(setting_t), intent(in) :: set
         type(cursor_t), intent(in) :: g, before
@@ -128,14 +135,18 @@ contains
         type(error_t), allocatable, intent(out) :: err
         real(wp), allocatable :: z(:)
         real(wp) :: ahead, mu
-        integer :: m, side
+        integer :: m, side, try
 
         ok = .false.
         m = size(g%y) - 1
-        if (g%orbit%min_gap < g%orbit%min_impact_speed .and. g%orbit%impacts == 0) then
-            call new_impact_orbit(set, g, before, mu_g, symmetric, v_new, z, mu, ok)
-            if (ok) call newton_other_side(set, g, z, mu, sign(1.0_wp, mu - mu_g), found, ok, &
-                                           err)
+        if (g%orbit%min_gap < g%orbit%min_impact_speed) then
+            do try = 0, 2
+                call new_impact_orbit(set, g, before, mu_g, symmetric, v_new*sqrt(10.0_wp)**try, &
+                                      z, mu, ok, err)
+                if (ok) call newton_other_side(set, g, z, mu, sign(1.0_wp, mu - mu_g), found, &
+                                               ok, err)
+                if (ok .or. allocated(err)) return
+            end do
             return
         end if
         ahead = sign(1.0_wp, mu_g - before%y(m + 1))
@@ -246,11 +257,12 @@ contains
 
     !> The impacting orbit near a grazing where a gap touches zero, to first order in the new
     !> impact's speed V (Nordmark's discontinuity map): the impact kicks the velocities of its
-    !> bond at the grazing time t*, the kick carried to the section by the free flow, and the
-    !> orbit moves by V w, (I - J) w = that kick; the parameter moves so that the gap minimum
-    !> stays zero to first order: mu - mu_g = a V, a = -(dg/dz . w)/(dg/dmu along the branch).
-    !> A mirror-symmetric orbit's mirror bond is kicked half a period later (both graze).
-    subroutine new_impact_orbit(set, g, before, mu_g, symmetric, v_new, z, mu, ok)
+    !> bond at the grazing time t*, the kick carried to the section by the flow (with the
+    !> orbit's own impacts after t*), and the orbit moves by V w, (I - J) w = that kick; the
+    !> parameter moves so that the gap minimum stays zero to first order: mu - mu_g = a V,
+    !> a = -(dg/dz . w)/(dg/dmu along the branch). A mirror-symmetric orbit's mirror bond is
+    !> kicked half a period later (both graze).
+    subroutine new_impact_orbit(set, g, before, mu_g, symmetric, v_new, z, mu, ok, err)
         type(setting_t), intent(in) :: set
         type(cursor_t), intent(in) :: g, before
         real(wp), intent(in) :: mu_g, v_new
@@ -258,27 +270,30 @@ contains
         real(wp), allocatable, intent(out) :: z(:)
         real(wp), intent(out) :: mu
         logical, intent(out) :: ok
+        type(error_t), allocatable, intent(out) :: err
         type(model_t) :: model
-        type(flow_t) :: flow
         real(wp), allocatable :: kick(:), gap_row(:), a(:, :), b(:, :)
         real(wp) :: period, t_star, slope, rate
-        integer :: m, n, i, info
+        integer :: m, n, i, info, k
+        logical :: pair
 
         ok = .false.
         m = size(g%y) - 1
         n = m/2
         model = set%model
         call set_model_parameter(model, set%opt%parameter, g%y(m + 1))
-        flow = make_flow(model%damping, model%amplitude, model%omega)
         period = set%cycles*two_pi/model%omega
         t_star = g%orbit%min_gap_time
+        k = g%orbit%min_gap_bond
+        pair = symmetric .and. k /= n - k
         allocate (kick(m), gap_row(m))
         kick = 0
         gap_row = 0
-        call add_kick(flow, model, g%orbit%min_gap_bond, t_star, period, kick, gap_row)
-        if (symmetric .and. g%orbit%min_gap_bond /= n - g%orbit%min_gap_bond) &
-            call add_kick(flow, model, n - g%orbit%min_gap_bond, &
-                          modulo(t_star + period/2, period), period, kick, gap_row)
+        call add_kick(set, model, g, k, t_star, kick, gap_row, ok, err)
+        if (pair .and. ok) call add_kick(set, model, g, n - k, modulo(t_star + period/2, period), &
+                                         kick, gap_row, ok, err)
+        if (.not. ok) return
+        ok = .false.
         a = -g%jacobian
         do i = 1, m
             a(i, i) = a(i, i) + 1
@@ -290,30 +305,50 @@ contains
         if (.not. (abs(slope) > 0 .and. abs(slope) < huge(1.0_wp))) return
         ! the gap at its minimum moves by gap_row . w per unit V (both bonds alike)
         rate = dot_product(gap_row, b(:, 1))
-        if (symmetric .and. g%orbit%min_gap_bond /= n - g%orbit%min_gap_bond) rate = rate/2
+        if (pair) rate = rate/2
         mu = mu_g - v_new*rate/slope
         z = g%y(:m) + v_new*b(:, 1) + (mu - g%y(m + 1))*g%tangent(:m)/g%tangent(m + 1)
         ok = mu >= set%low .and. mu <= set%high .and. abs(g%tangent(m + 1)) > 0
     end subroutine new_impact_orbit
 
-    !> An impact of unit approach speed on bond k at time t (of the period from the
-    !> section): its velocity jumps ((1 + r) to a wall oscillator, (1 + r)/2 each to a pair)
-    !> carried to the section's end, added to `kick`; and the gap of bond k at t as a row
-    !> acting on the section's state, added to `gap_row`.
-    pure subroutine add_kick(flow, model, k, t, period, kick, gap_row)
-        type(flow_t), intent(in) :: flow
+    !> An impact of unit approach speed on bond k at time t since the section of g's orbit:
+    !> its velocity jump ((1 + r) to a wall oscillator, (1 + r)/2 each to a pair) carried to
+    !> the period's end, J A^-1 jump with A the Jacobian from the section to t (the orbit's
+    !> impacts before t included), added to `kick`; the bond's gap at t as a row on the
+    !> section's state (its rows of A), added to `gap_row`. ok: A is regular.
+    subroutine add_kick(set, model, g, k, t, kick, gap_row, ok, err)
+        type(setting_t), intent(in) :: set
         type(model_t), intent(in) :: model
+        type(cursor_t), intent(in) :: g
         integer, intent(in) :: k
-        real(wp), intent(in) :: t, period
+        real(wp), intent(in) :: t
         real(wp), intent(inout) :: kick(:), gap_row(:)
-        real(wp) :: after(2, 2), upto(2, 2), jump
-        integer :: n, j, i
-        integer :: who(2)
-        real(wp) :: side(2)
+        logical, intent(out) :: ok
+        type(error_t), allocatable, intent(out) :: err
+        type(chain_t) :: chain
+        type(event_log_t) :: log
+        real(wp), allocatable :: a(:, :), b(:, :)
+        real(wp) :: s, jump, side(2)
+        integer :: m, n, j, i, info, who(2)
 
-        n = size(kick)/2
-        after = propagator(flow, period - t)
-        upto = propagator(flow, t)
+        ok = .false.
+        m = size(kick)
+        n = m/2
+        call chain_at_section(model, set%phase, g%orbit%x, g%orbit%v, chain, err)
+        if (allocated(err)) return
+        allocate (a(m, m), b(m, 1))
+        a = 0
+        do i = 1, m
+            a(i, i) = 1
+        end do
+        call chain_set_tangent(chain, a)
+        call event_log_init(log, .false., 0)
+        s = chain_time(chain) + t
+        call advance_to_point(chain, chain_cycle(chain) + int(s/chain_period(chain), i8), &
+                              modulo(s, chain_period(chain)), log, err)
+        if (allocated(err)) return
+        a = chain_tangent_frame(chain)
+        b = 0
         who = [k, k + 1]
         side = [-1.0_wp, 1.0_wp]
         jump = (1 + model%restitution)/2
@@ -321,9 +356,13 @@ contains
         do j = 1, 2
             i = who(j)
             if (i < 1 .or. i > n) cycle
-            kick(2*i - 1:2*i) = kick(2*i - 1:2*i) + side(j)*jump*after(:, 2)
-            gap_row(2*i - 1:2*i) = gap_row(2*i - 1:2*i) + side(j)*upto(1, :)
+            b(2*i, 1) = side(j)*jump
+            gap_row = gap_row + side(j)*a(2*i - 1, :)
         end do
+        call solve_linear(a, b, info)
+        if (info /= 0) return
+        kick = kick + matmul(g%jacobian, b(:, 1))
+        ok = .true.
     end subroutine add_kick
 
 end module chain_branch_graze

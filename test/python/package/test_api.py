@@ -804,9 +804,10 @@ def test_extension_needs_no_executable_stack() -> None:
 FIG10 = dict(n=8, omega=1.9, damping=0.05, restitution=0.5, transient=5)
 CONTINUATIONS: dict[str, tuple[float, dict[str, Any], list[str], float]] = {
     # A = 1 upwards: the forced response, no impacts, until the walls are grazed, and on
-    # through the grazing onto the orbits with two wall impacts, to their own grazing
-    "grazing": (1.0, dict(parameter="amplitude", stop=3.5, step=0.1), ["grazing", "grazing"],
-                2.616906570743),
+    # through the grazing onto the orbits with two wall impacts, through their own grazing
+    # onto four impacts, to an impact at the section
+    "grazing": (1.0, dict(parameter="amplitude", stop=3.5, step=0.1),
+                ["grazing", "grazing", "section"], 2.616906570743),
     # A = 3 downwards on the impacting branch: it folds back near A = 2.885
     "fold": (3.0, dict(parameter="amplitude", stop=2.0, step=-0.05), ["fold"], 2.8851913052),
 }
