@@ -309,6 +309,7 @@ contains
                                         mult_im, stable, symmetric, min_gap, min_impact_speed, &
                                         impacts, residual, iterations, special_index, &
                                         special_kind, special_value, end_reason, end_kind, &
+                                        parent, origin_point, origin_kind, &
                                         start_x, start_v, start_jac, &
                                         start_mult_re, start_mult_im, start_residuals, &
                                         start_bonds, start_min_gap, start_min_impact_speed, &
@@ -318,6 +319,7 @@ contains
         integer(c_int), intent(out) :: periods(:), branch(:), stable(:), symmetric(:)
         integer(c_int), intent(out) :: impacts(:), end_kind(:)
         integer(c_int), intent(out) :: iterations(:), special_index(:), special_kind(:, :)
+        integer(c_int), intent(out) :: parent(:), origin_point(:), origin_kind(:, :)
         real(c_double), intent(out) :: mult_re(:, :), mult_im(:, :), min_gap(:)
         real(c_double), intent(out) :: min_impact_speed(:), residual(:), special_value(:)
         integer(c_int), intent(out) :: end_reason(:), start_reason(:), start_bonds(:)
@@ -346,6 +348,7 @@ contains
         special_index = 0
         special_kind = 0
         special_value = 0
+        call put_origins(parent, origin_point, origin_kind)
         end_reason = 0
         end_kind = 0
         start_reason = 0
@@ -381,6 +384,7 @@ contains
             call put_text(trim(table%special_kind(j)), special_kind(:, j))
         end do
         special_value(:ns) = table%special_value
+        call put_origins(parent, origin_point, origin_kind, table)
         call put_text(res%end_reason, end_reason)
         call put_text(res%end_kind, end_kind)
 
@@ -399,6 +403,26 @@ contains
             call put_text(o%reason, start_reason)
         end associate
     end subroutine put_continuation_results
+
+    !> Where each branch began (continuation_table's parent, origin_point and origin_kind, the
+    !> kind's name as bytes, then zeros), or all zero without `table`; the caller checked the
+    !> capacity.
+    subroutine put_origins(parent, origin_point, origin_kind, table)
+        integer(c_int), intent(out) :: parent(:), origin_point(:), origin_kind(:, :)
+        type(continuation_table_t), intent(in), optional :: table
+        integer :: nb, j
+
+        parent = 0
+        origin_point = 0
+        origin_kind = 0
+        if (.not. present(table)) return
+        nb = size(table%parent)
+        parent(:nb) = table%parent
+        origin_point(:nb) = table%origin_point
+        do j = 1, nb
+            call put_text(trim(table%origin_kind(j)), origin_kind(:, j))
+        end do
+    end subroutine put_origins
 
     !> /curve's arrays (curve_table) and its end_reason into the caller's, sizes = (points,
     !> codim-2 points, length of end_reason); status_capacity when one does not fit (only

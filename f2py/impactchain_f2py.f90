@@ -350,9 +350,10 @@ end subroutine ic_sweep
 !> the guess (start_*, converged or not). `parameter` is a lower-case name as byte values.
 !>
 !> Sizes: sizes = (points, special points, longest period, length of end_reason, start
-!> converged 0/1, start residuals (iterations + 1), start impacts, length of start_reason).
-!> The caller gives nf = n and capacities: npcap points, nlong crossings per period, nscap
-!> special points, ntext bytes of each text, nrcap residuals, nbcap impacts (each >= 1: f2py
+!> converged 0/1, start residuals (iterations + 1), start impacts, length of start_reason, of
+!> end_kind, branches). The caller gives nf = n and capacities: npcap points, nlong crossings
+!> per period, nscap special points, ntext bytes of each text, nrcap residuals, nbcap impacts,
+!> nocap branches (each >= 1: f2py
 !> refuses a size 0 for strobe_x). When a capacity is too small, status = 3 and only sizes is
 !> set: the caller calls again with room for them (the run repeats itself exactly). A dry run
 !> validates and returns.
@@ -360,7 +361,8 @@ end subroutine ic_sweep
 !> Per point (of npcap, the first sizes(1) set): values, x, v, strobe_x (NaN beyond the point's
 !> period), periods, branch, mult_re, mult_im, stable (0/1), min_gap and min_impact_speed
 !> (+inf: none), impacts, residual, iterations; per special point: special_index (0-based),
-!> special_kind (the kind's name as bytes, then zeros), special_value. Newton's start: x, v,
+!> special_kind (the kind's name as bytes, then zeros), special_value; per branch: parent,
+!> origin_point (0-based) and origin_kind (as special_kind). Newton's start: x, v,
 !> the Jacobian (2n x 2n), the multipliers (when converged), residuals, the bonds of the
 !> impacts of one period in time order, the grazing monitors (+inf: none) and the reason it
 !> failed ('' when converged).
@@ -368,12 +370,11 @@ subroutine ic_continuation(n, nsp, spacing, damping, restitution, amplitude, ome
                            boundary, explicit, nx0, x0, nv0, v0, transient, phase, stick_speed, &
                            npar, parameter, stop, step, period, max_points, doublings, nov, &
                            overrides, dry_run, nf, npcap, nlong, nscap, ntext, nrcap, nbcap, &
-                           sizes, values, x, v, &
-                           strobe_x, periods, branch, mult_re, mult_im, stable, symmetric, &
-                           min_gap, min_impact_speed, impacts, residual, iterations, &
-                           special_index, special_kind, special_value, end_reason, end_kind, &
-                           start_x, start_v, &
-                           start_jac, start_mult_re, start_mult_im, start_residuals, &
+                           nocap, sizes, values, x, v, strobe_x, periods, branch, mult_re, &
+                           mult_im, stable, symmetric, min_gap, min_impact_speed, impacts, &
+                           residual, iterations, special_index, special_kind, special_value, &
+                           end_reason, end_kind, parent, origin_point, origin_kind, start_x, &
+                           start_v, start_jac, start_mult_re, start_mult_im, start_residuals, &
                            start_bonds, start_min_gap, start_min_impact_speed, start_reason, &
                            control, status, msg_len, message)
     use, intrinsic :: iso_c_binding, only: c_int, c_int64_t, c_double
@@ -391,8 +392,8 @@ subroutine ic_continuation(n, nsp, spacing, damping, restitution, amplitude, ome
     integer(c_int64_t), intent(in) :: transient
     real(c_double), intent(in) :: spacing(nsp), damping, restitution, amplitude, omega
     real(c_double), intent(in) :: x0(nx0), v0(nv0), phase, stick_speed, stop, step
-    integer(c_int), intent(in) :: boundary(nb), parameter(npar)
-    integer(c_int), intent(out) :: sizes(9)
+    integer(c_int), intent(in) :: boundary(nb), parameter(npar), nocap
+    integer(c_int), intent(out) :: sizes(10)
     real(c_double), intent(out) :: values(npcap), x(nf, npcap), v(nf, npcap)
     real(c_double), intent(inout) :: strobe_x(nf, nlong, npcap) ! caller-allocated
     integer(c_int), intent(out) :: periods(npcap), branch(npcap), stable(npcap), symmetric(npcap)
@@ -401,6 +402,7 @@ subroutine ic_continuation(n, nsp, spacing, damping, restitution, amplitude, ome
     real(c_double), intent(out) :: min_gap(npcap), min_impact_speed(npcap), residual(npcap)
     integer(c_int), intent(out) :: special_index(nscap), special_kind(16, nscap)
     real(c_double), intent(out) :: special_value(nscap)
+    integer(c_int), intent(out) :: parent(nocap), origin_point(nocap), origin_kind(16, nocap)
     integer(c_int), intent(out) :: end_reason(ntext), end_kind(ntext), start_reason(ntext)
     real(c_double), intent(out) :: start_x(nf), start_v(nf), start_jac(2*nf, 2*nf)
     real(c_double), intent(out) :: start_mult_re(2*nf), start_mult_im(2*nf)
@@ -420,10 +422,10 @@ subroutine ic_continuation(n, nsp, spacing, damping, restitution, amplitude, ome
     call put_continuation_results(values, x, v, strobe_x, periods, branch, mult_re, mult_im, &
                                   stable, symmetric, min_gap, min_impact_speed, impacts, &
                                   residual, iterations, special_index, special_kind, &
-                                  special_value, end_reason, end_kind, start_x, start_v, &
-                                  start_jac, start_mult_re, start_mult_im, start_residuals, &
-                                  start_bonds, start_min_gap, start_min_impact_speed, &
-                                  start_reason)
+                                  special_value, end_reason, end_kind, parent, origin_point, &
+                                  origin_kind, start_x, start_v, start_jac, start_mult_re, &
+                                  start_mult_im, start_residuals, start_bonds, start_min_gap, &
+                                  start_min_impact_speed, start_reason)
     call make_config(cfg, int(n), spacing, damping, restitution, amplitude, omega, boundary, &
                      explicit /= 0, x0, v0, int(transient, i8), 1_i8, phase, stick_speed, &
                      4096.0_c_double, .false., .false., 0, 1, .false., 1, err, &
@@ -448,9 +450,9 @@ subroutine ic_continuation(n, nsp, spacing, damping, restitution, amplitude, ome
     bonds = impact_bonds(res%start)
     sizes = [res%n_points, res%n_specials, table%longest, len(res%end_reason), &
              merge(1, 0, res%start%converged), size(res%start%residuals), size(bonds), &
-             len(res%start%reason), len(res%end_kind)]
-    if (any(sizes([1, 2, 3, 4, 6, 7, 8, 9]) > [npcap, nscap, nlong, ntext, nrcap, nbcap, &
-                                                ntext, ntext])) then
+             len(res%start%reason), len(res%end_kind), res%n_branches]
+    if (any(sizes([1, 2, 3, 4, 6, 7, 8, 9, 10]) > [npcap, nscap, nlong, ntext, nrcap, nbcap, &
+                                                    ntext, ntext, nocap])) then
         call put_message("python layer: more results than the capacities", status_capacity, &
                          status, msg_len, message)
         return
@@ -459,10 +461,10 @@ subroutine ic_continuation(n, nsp, spacing, damping, restitution, amplitude, ome
     call put_continuation_results(values, x, v, strobe_x, periods, branch, mult_re, mult_im, &
                                   stable, symmetric, min_gap, min_impact_speed, impacts, &
                                   residual, iterations, special_index, special_kind, &
-                                  special_value, end_reason, end_kind, start_x, start_v, &
-                                  start_jac, start_mult_re, start_mult_im, start_residuals, &
-                                  start_bonds, start_min_gap, start_min_impact_speed, &
-                                  start_reason, res, table, bonds)
+                                  special_value, end_reason, end_kind, parent, origin_point, &
+                                  origin_kind, start_x, start_v, start_jac, start_mult_re, &
+                                  start_mult_im, start_residuals, start_bonds, start_min_gap, &
+                                  start_min_impact_speed, start_reason, res, table, bonds)
 end subroutine ic_continuation
 
 !> A continuation's curve in two parameters, in memory: ic_continuation's inputs with

@@ -55,8 +55,8 @@ SWEEP_OUTPUTS = (
 CONTINUATION_OUTPUTS = (
     "sizes", "values", "x", "v", "periods", "branch", "mult_re", "mult_im", "stable",
     "symmetric", "min_gap", "min_impact_speed", "impacts", "residual", "iterations",
-    "special_index", "special_kind", "special_value", "end_reason", "end_kind", "start_x",
-    "start_v", "start_jac",
+    "special_index", "special_kind", "special_value", "end_reason", "end_kind", "parent",
+    "origin_point", "origin_kind", "start_x", "start_v", "start_jac",
     "start_mult_re", "start_mult_im", "start_residuals", "start_bonds", "start_min_gap",
     "start_min_impact_speed", "start_reason", "status", "msg_len", "message",
 )

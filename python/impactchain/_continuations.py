@@ -28,9 +28,10 @@ from impactchain._runs import PeriodicOrbit
 from impactchain.schema import SCHEMA_DEFAULT, with_schema_defaults
 
 #: ic_continuation's sizes: points, special points, longest period, length of end_reason,
-#: start converged, start residuals, start impacts, length of start_reason, of end_kind
+#: start converged, start residuals, start impacts, length of start_reason, of end_kind,
+#: branches
 _CONTINUATION_SIZES = ("npcap", "nscap", "nlong", "ntext", None, "nrcap", "nbcap", "ntext",
-                       "ntext")
+                       "ntext", "nocap")
 _FIRST_CONTINUATION_BYTES = 64 << 20  # memory of the first guess of a continuation's points
 
 
@@ -71,13 +72,16 @@ def continuation(
         An :class:`xarray.Dataset`, identical to the CLI file's ``/continuation`` group
         (``xarray.open_dataset(path, engine="h5netcdf", group="continuation")``) for the
         same input: dimensions ``point`` (the orbits, branch after branch), ``oscillator``,
-        ``multiplier``, ``iterate`` (section crossings of the longest period), ``special``;
+        ``multiplier``, ``iterate`` (section crossings of the longest period), ``special``,
+        ``branch_index``;
         variables ``values`` (the parameter), ``x``, ``v``, ``strobe_x`` (NaN beyond a
         point's period), ``period``, ``branch``, ``multipliers_re``, ``multipliers_im``,
         ``stable``, ``symmetric`` (its own mirror image half a drive period later),
         ``min_gap``, ``min_impact_speed`` (inf: none), ``impacts_per_period``,
         ``residual``, ``iterations``, ``special_index`` (0-based point), ``special_kind``,
-        ``special_value``; attributes ``parameter``, ``phase``, ``start``, ``stop``,
+        ``special_value``, per branch ``parent`` (-1: none), ``origin_point`` (0-based, the
+        parent's special point it began at; -1: none) and ``origin_kind`` ('': none);
+        attributes ``parameter``, ``phase``, ``start``, ``stop``,
         ``step``, ``end_reason``, ``end_kind``. A failure of Newton at the start is a
         result: no point, and ``end_reason`` says why.
 
@@ -178,14 +182,14 @@ def _continue(args: dict[str, Any], progress: bool) -> dict[str, Any]:
     kernels = _extension()
     no_control = np.zeros(4, dtype=np.int64)
     out = dict(zip(CONTINUATION_OUTPUTS, kernels.ic_continuation(
-        **args, dry_run=1, nscap=1, ntext=1, nrcap=1, nbcap=1,
+        **args, dry_run=1, nscap=1, ntext=1, nrcap=1, nbcap=1, nocap=1,
         strobe_x=np.empty((1, 1, 1), order="F"), control=no_control), strict=True))
     _raise_for(out["status"], out["msg_len"], out["message"])
     room = _first_room(args)
     for _ in range(2):
         strobe = np.empty((args["n"], room["nlong"], room["npcap"]), order="F")
         call = dict(args, dry_run=0, strobe_x=strobe,
-                    **{k: room[k] for k in ("nscap", "ntext", "nrcap", "nbcap")})
+                    **{k: room[k] for k in ("nscap", "ntext", "nrcap", "nbcap", "nocap")})
         result = _watched(kernels.ic_continuation, call, progress, _CONTINUATION_STAGES)
         out = dict(zip(CONTINUATION_OUTPUTS, result, strict=True), strobe_x=strobe)
         if out["status"] != _STATUS_CAPACITY:
@@ -194,12 +198,13 @@ def _continue(args: dict[str, Any], progress: bool) -> dict[str, Any]:
             if key is not None:
                 room[key] = max(room[key], int(size))
     _raise_for(out["status"], out["msg_len"], out["message"])
-    points, specials, longest, reason, _, residuals, impacts, start_reason, kind = (
+    points, specials, longest, reason, _, residuals, impacts, start_reason, kind, branches = (
         int(i) for i in out["sizes"])
     cut = {"strobe_x": (slice(None), slice(longest), slice(points)),
            "x": (slice(None), slice(points)), "v": (slice(None), slice(points)),
            "mult_re": (slice(None), slice(points)), "mult_im": (slice(None), slice(points)),
            "special_kind": (slice(None), slice(specials)),
+           "origin_kind": (slice(None), slice(branches)),
            "end_reason": slice(reason), "end_kind": slice(kind),
            "start_reason": slice(start_reason),
            "start_residuals": slice(residuals), "start_bonds": slice(impacts)}
@@ -208,19 +213,21 @@ def _continue(args: dict[str, Any], progress: bool) -> dict[str, Any]:
         cut[key] = slice(points)
     for key in ("special_index", "special_value"):
         cut[key] = slice(specials)
+    for key in ("parent", "origin_point"):
+        cut[key] = slice(branches)
     return {key: value[cut[key]] if key in cut else value for key, value in out.items()}
 
 
 def _first_room(args: dict[str, Any]) -> dict[str, int]:
     """ic_continuation's capacities for a first call: every crossing of the longest period
-    the branches can have, the points of max_points per branch and a few special points
-    (within about 64 MB), and ample room for texts, Newton's residuals and impacts."""
+    the branches can have, the points of max_points per branch and a few special points and
+    branches (within about 64 MB), and ample room for texts, Newton's residuals and impacts."""
     n, period = args["n"], args["period"]
     nlong = period * 2 ** args["doublings"]
     per_point = 8 * (n * nlong + 6 * n + 8)
     return dict(npcap=min(args["max_points"] * (1 + args["doublings"]) + 16,
                           max(16, _FIRST_CONTINUATION_BYTES // per_point)),
-                nlong=nlong, nscap=64, ntext=4096, nrcap=64,
+                nlong=nlong, nscap=64, nocap=64, ntext=4096, nrcap=64,
                 nbcap=min(max(1024, 16 * (n + 1) * period), 1 << 20))
 
 
@@ -240,14 +247,19 @@ def _continuation_dataset(xr: Any, out: dict[str, Any], cfg: dict[str, Any],
     def index(name: str, first: int, count: int) -> tuple[Any, ...]:
         return described(name, np.arange(first, first + count, dtype=np.int32))
 
-    kinds = [bytes(np.asarray(k).astype(np.uint8)).split(b"\0")[0].decode()
-             for k in np.asarray(out["special_kind"]).T]
+    def names(byte_columns: Any) -> list[str]:
+        return [bytes(np.asarray(k).astype(np.uint8)).split(b"\0")[0].decode()
+                for k in np.asarray(byte_columns).T]
+
+    kinds = names(out["special_kind"])
+    origin_kinds = names(out["origin_kind"])
     coords = {
         "point": index("point", 0, points),
         "oscillator": index("oscillator", 1, n),
         "multiplier": index("multiplier", 1, 2 * n),
         "iterate": index("iterate", 1, out["strobe_x"].shape[1]),
         "special": index("special", 0, len(kinds)),
+        "branch_index": index("branch_index", 0, len(origin_kinds)),
     }
     data = {
         "values": described("values", out["values"]),
@@ -268,6 +280,9 @@ def _continuation_dataset(xr: Any, out: dict[str, Any], cfg: dict[str, Any],
         "special_index": described("special_index", out["special_index"]),
         "special_kind": described("special_kind", np.array(kinds, dtype=str)),
         "special_value": described("special_value", out["special_value"]),
+        "parent": described("parent", out["parent"]),
+        "origin_point": described("origin_point", out["origin_point"]),
+        "origin_kind": described("origin_kind", np.array(origin_kinds, dtype=str)),
     }
     spacing = np.asarray(cfg["spacing"])
     start = float(spacing[0]) if parameter == "spacing" else cfg[parameter]

@@ -184,6 +184,7 @@ def _read_continuation(g: h5py.Group, path: str, n: int) -> Continuation:
     if unknown:
         raise SchemaError(f"{path}: {g.name}/special_kind holds {', '.join(map(repr, unknown))}"
                           f" (known: {', '.join(SPECIAL_KINDS)})")
+    origins = _read_origins(g, path, p) if _has(g, "parent") else {}
     return Continuation(
         parameter=_str(_attr(g, path, "parameter")),
         phase=_float(_attr(g, path, "phase"), path, f"{g.name}/phase"),
@@ -205,7 +206,28 @@ def _read_continuation(g: h5py.Group, path: str, n: int) -> Continuation:
         special_index=special_index,
         special_kind=special_kind,
         special_value=_dataset(g, path, "special_value", (s,), float),
+        **origins,
     )
+
+
+def _read_origins(g: h5py.Group, path: str, p: int) -> dict[str, np.ndarray]:
+    """Where each branch began (``parent``, ``origin_point``, ``origin_kind``, written since
+    they were added to the schema): an earlier branch or -1, a point or -1, a special kind or
+    ''."""
+    parent = _dataset(g, path, "parent", (None,), int)
+    b = parent.shape[0]
+    if b and ((parent < -1).any() or (parent >= np.arange(b)).any()):
+        raise SchemaError(f"{path}: {g.name}/parent holds a branch that is not an earlier one "
+                          f"or -1 (found {parent.tolist()})")
+    origin_point = _dataset(g, path, "origin_point", (b,), int)
+    if b and (origin_point.min() < -1 or origin_point.max() >= p):
+        raise SchemaError(f"{path}: {g.name}/origin_point holds values outside -1..{p - 1}")
+    origin_kind = _strings(g, path, "origin_kind", (b,))
+    unknown = sorted({str(kind) for kind in origin_kind} - set(SPECIAL_KINDS) - {""})
+    if unknown:
+        raise SchemaError(f"{path}: {g.name}/origin_kind holds {', '.join(map(repr, unknown))}"
+                          f" (known: {', '.join(SPECIAL_KINDS)} or '')")
+    return dict(parent=parent, origin_point=origin_point, origin_kind=origin_kind)
 
 
 def _read_curve(g: h5py.Group, path: str, n: int) -> Curve:

@@ -192,7 +192,9 @@ def run_from_continuation(ds: Any) -> Run:
     fields = {name: _frozen(np.asarray(ds[name].values)) for name in Continuation.__annotations__
               if name in ds}
     fields["stable"] = _frozen(fields["stable"] == 1)
-    fields["special_kind"] = _frozen(np.asarray([str(k) for k in ds["special_kind"].values]))
+    for name in ("special_kind", "origin_kind"):
+        if name in ds:
+            fields[name] = _frozen(np.asarray([str(k) for k in ds[name].values]))
     cont = Continuation(parameter=str(ds.attrs["parameter"]), phase=float(ds.attrs["phase"]),
                         end_reason=str(ds.attrs["end_reason"]), **fields)
     n = int(ds.sizes["oscillator"])

@@ -218,7 +218,10 @@ class Continuation:
 
     Point ``i`` is a period-``period[i]`` orbit of the stroboscopic map at ``parameter =
     values[i]``, on branch ``branch[i]`` (0: the first; 1, 2, ...: branches switched to at
-    period doublings). Special points (folds, period doublings, Neimark-Sacker points,
+    period doublings and branch points). Branch ``b`` began on branch ``parent[b]`` at its
+    point ``origin_point[b]``, a special point of kind ``origin_kind[b]``, whose orbit is
+    ``b``'s first point (branch 0: -1, -1, ''; None in files written before these datasets).
+    Special points (folds, period doublings, Neimark-Sacker points,
     grazings) are stored as points too: ``values[special_index[j]] == special_value[j]``,
     except at a grazing where an impact's speed vanishes (``special_value`` is then where the
     speed extrapolates to zero, a little past the last orbit Newton converged on).
@@ -244,6 +247,9 @@ class Continuation:
     special_index: np.ndarray  # (S,) 0-based index of the special point into the points
     special_kind: np.ndarray  # (S,) str, one of SPECIAL_KINDS
     special_value: np.ndarray  # (S,) the parameter at the special point
+    parent: np.ndarray | None = None  # (B,) the branch each branch began on, -1: none
+    origin_point: np.ndarray | None = None  # (B,) 0-based point it began at, -1: none
+    origin_kind: np.ndarray | None = None  # (B,) str, that point's special kind, '': none
 
     @property
     def n_points(self) -> int:

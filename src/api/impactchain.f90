@@ -30,7 +30,7 @@ module impactchain
     use chain_orbit, only: orbit_t, orbit_options_t, find_orbit, orbit_gap_minimum, impact_bonds
     use chain_curve, only: curve_options_t, curve_t, follow_curve
     use chain_branch, only: branch_options_t, branch_point_t, special_point_t, branches_t, &
-                            follow_branches
+                            branch_origin_t, follow_branches
     use chain_branch_file, only: run_continuation, continuation_to_file
     use chain_sim, only: simulate_to_file, start_chain, initial_state, restart_chain, &
                          chain_on_section
@@ -54,7 +54,7 @@ module impactchain
     public :: stage_transient, stage_records, stage_points, stage_samples, stage_events
     public :: stage_backward, stage_name, orbit_t, orbit_options_t, find_orbit
     public :: orbit_gap_minimum, impact_bonds, branch_options_t, branch_point_t
-    public :: special_point_t, branches_t, follow_branches, run_continuation
+    public :: special_point_t, branch_origin_t, branches_t, follow_branches, run_continuation
     public :: curve_options_t, curve_t, follow_curve
     public :: continuation_to_file, run_sweep, sweep_summary_t, census_to_file
     public :: census_result_t, attractor_t, kind_names, code_version, provenance

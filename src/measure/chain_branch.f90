@@ -24,15 +24,17 @@ module chain_branch
     use chain_orbit, only: orbit_t, find_orbit
     use chain_monitor, only: monitor_t, stage_points
     use chain_branch_points, only: branch_options_t, branch_point_t, special_point_t, &
-                                   branches_t, special_kinds, end_kinds, cursor_t, setting_t, &
-                                   cursor_from_orbit, store, add_reason
+                                   branch_origin_t, branches_t, special_kinds, end_kinds, &
+                                   cursor_t, setting_t, cursor_from_orbit, store, add_branch, &
+                                   add_reason
     use chain_branch_corrector, only: correct, tangent_at
     use chain_branch_special, only: locate_specials, locate_nonsmooth, nonsmooth_reason
     use chain_branch_switch, only: real_eigenvector, branch_point_starts
     use chain_branch_graze, only: pass_grazing, grazing_from_gap, orbit_at
     implicit none
     private
-    public :: branch_options_t, branch_point_t, special_point_t, branches_t, follow_branches
+    public :: branch_options_t, branch_point_t, special_point_t, branch_origin_t, branches_t
+    public :: follow_branches
     public :: special_kinds, end_kinds
 
 contains
@@ -59,6 +61,7 @@ contains
         allocate (res%points(16), res%specials(4))
         res%end_reason = ''
         res%end_kind = ''
+        call add_branch(res)
         set%model = model
         set%phase = phase
         set%cycles = cycles
@@ -112,12 +115,10 @@ contains
                 set%branch = size(level)
                 if (kind == 'period-doubling') then
                     level = [level, depth]
-                    call switch_at_doubling(set, res, res%specials(s)%point, stopped, err, &
-                                            monitor)
+                    call switch_at_doubling(set, res, s, stopped, err, monitor)
                 else
                     level = [level, depth, depth]
-                    call switch_at_branch_point(set, res, res%specials(s)%point, stopped, err, &
-                                                monitor)
+                    call switch_at_branch_point(set, res, s, stopped, err, monitor)
                 end if
                 res%stopped = stopped
                 if (allocated(err) .or. stopped) return
@@ -199,13 +200,13 @@ contains
         call walk(set, here, res, .false., stopped, err, monitor)
     end subroutine follow_one
 
-    !> Switch at the period doubling at point `index` onto the period-2p branch: at the
-    !> doubling the 2p branch crosses the p branch (doubled) with the tangent (e, 0), e the
-    !> eigenvector of J for the multiplier -1.
-    subroutine switch_at_doubling(set, res, index, stopped, err, monitor)
+    !> Switch at the period doubling `special` (index into the special points) onto the
+    !> period-2p branch, set%branch: at the doubling the 2p branch crosses the p branch
+    !> (doubled) with the tangent (e, 0), e the eigenvector of J for the multiplier -1.
+    subroutine switch_at_doubling(set, res, special, stopped, err, monitor)
         type(setting_t), intent(in) :: set
         type(branches_t), intent(inout) :: res
-        integer, intent(in) :: index
+        integer, intent(in) :: special
         logical, intent(out) :: stopped
         type(error_t), allocatable, intent(out) :: err
         class(monitor_t), intent(inout), optional :: monitor
@@ -214,8 +215,11 @@ contains
         type(orbit_t) :: orbit
         real(wp) :: mu
         real(wp), allocatable :: e(:)
+        integer :: index
 
         stopped = .false.
+        index = res%specials(special)%point
+        call add_branch(res, special)
         doubled = set
         doubled%cycles = 2*res%points(index)%orbit%cycles
         mu = res%points(index)%value
@@ -238,21 +242,22 @@ contains
         call walk(doubled, here, res, .true., stopped, err, monitor)
     end subroutine switch_at_doubling
 
-    !> Switch at the branch point at point `index` onto the two branches that cross there
-    !> (chain_branch_switch), numbered set%branch and set%branch + 1, each followed from the
-    !> branch point's orbit.
-    subroutine switch_at_branch_point(set, res, index, stopped, err, monitor)
+    !> Switch at the branch point `special` (index into the special points) onto the two
+    !> branches that cross there (chain_branch_switch), numbered set%branch and
+    !> set%branch + 1, each followed from the branch point's orbit.
+    subroutine switch_at_branch_point(set, res, special, stopped, err, monitor)
         type(setting_t), intent(in) :: set
         type(branches_t), intent(inout) :: res
-        integer, intent(in) :: index
+        integer, intent(in) :: special
         logical, intent(out) :: stopped
         type(error_t), allocatable, intent(out) :: err
         class(monitor_t), intent(inout), optional :: monitor
         type(setting_t) :: crossing
         type(cursor_t) :: starts(2)
-        integer :: side
+        integer :: side, index
 
         stopped = .false.
+        index = res%specials(special)%point
         crossing = set
         crossing%cycles = res%points(index)%orbit%cycles
         call set_model_parameter(crossing%model, set%opt%parameter, res%points(index)%value)
@@ -260,6 +265,7 @@ contains
         if (allocated(err)) return
         do side = 1, 2
             crossing%branch = set%branch + side - 1
+            call add_branch(res, special)
             call walk(crossing, starts(side), res, .true., stopped, err, monitor)
             if (allocated(err) .or. stopped) return
         end do

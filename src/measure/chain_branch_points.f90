@@ -1,5 +1,6 @@
 !> What a branch is made of (docs/model.md section 12): the options of a continuation, its
-!> result (the points of every branch, the special points, why each branch ended), the cursor
+!> result (the points of every branch, the special points, where each branch began and why it
+!> ended), the cursor
 !> the continuation moves along a branch (a point, its unit tangent and the test quantities of
 !> its multipliers), the fixed setting of one branch, and how a cursor's orbit is stored as a
 !> point. Following the branches: chain_branch; the corrector: chain_branch_corrector; special
@@ -15,10 +16,10 @@ module chain_branch_points
     use chain_orbit, only: orbit_t, orbit_options_t, orbit_pass_t, describe_orbit, interleave
     implicit none
     private
-    public :: branch_options_t, branch_point_t, special_point_t, branches_t, special_kinds
-    public :: end_kinds
+    public :: branch_options_t, branch_point_t, special_point_t, branch_origin_t, branches_t
+    public :: special_kinds, end_kinds
     public :: cursor_t, setting_t, cursor_from_orbit, cursor_from_pass, impacts_per_bond
-    public :: store, add_special, add_reason, mirror_image
+    public :: store, add_special, add_branch, add_reason, mirror_image
 
     !> The kinds of special point, as stored.
     character(len=*), parameter :: special_kinds(7) = &
@@ -66,13 +67,23 @@ module chain_branch_points
         real(wp) :: value = 0
     end type special_point_t
 
-    !> Everything followed: the points of every branch in order, the special points, and why
-    !> each branch ended.
+    !> Where a branch began (docs/model.md 12.4): the special point of its parent branch it
+    !> was switched to at (its own first point is that orbit). The first branch has none.
+    type :: branch_origin_t
+        integer :: parent = -1 !! the parent branch (-1: none)
+        integer :: point = 0   !! index into the points of the parent's special point (0: none)
+        character(len=:), allocatable :: kind !! that point's kind, one of special_kinds ('': none)
+    end type branch_origin_t
+
+    !> Everything followed: the points of every branch in order, the special points, where
+    !> each branch began and why each ended.
     type :: branches_t
         integer :: n_points = 0
         type(branch_point_t), allocatable :: points(:)
         integer :: n_specials = 0
         type(special_point_t), allocatable :: specials(:)
+        integer :: n_branches = 0
+        type(branch_origin_t), allocatable :: origins(:) !! of branch 0, 1, ... in this order
         character(len=:), allocatable :: end_reason !! of every branch, one line each
         character(len=:), allocatable :: end_kind   !! of every branch, one of end_kinds a line
         logical :: stopped = .false. !! the monitor stopped the work: the result is partial
@@ -293,6 +304,30 @@ contains
         res%n_specials = res%n_specials + 1
         res%specials(res%n_specials) = special_point_t(point, kind, value)
     end subroutine add_special
+
+    !> Branch res%n_branches (0, 1, ...) begins: switched to at special point `special` (index
+    !> into the special points) of its parent branch, or the first branch (none given).
+    subroutine add_branch(res, special)
+        type(branches_t), intent(inout) :: res
+        integer, intent(in), optional :: special
+        type(branch_origin_t), allocatable :: grown(:)
+        type(branch_origin_t) :: origin
+
+        origin%kind = ''
+        if (present(special)) then
+            origin%point = res%specials(special)%point
+            origin%parent = res%points(origin%point)%branch
+            origin%kind = res%specials(special)%kind
+        end if
+        if (.not. allocated(res%origins)) allocate (res%origins(4))
+        if (res%n_branches == size(res%origins)) then
+            allocate (grown(2*size(res%origins)))
+            grown(:res%n_branches) = res%origins
+            call move_alloc(grown, res%origins)
+        end if
+        res%n_branches = res%n_branches + 1
+        res%origins(res%n_branches) = origin
+    end subroutine add_branch
 
     !> A branch ended: its kind (one of end_kinds) and the line that says why.
     subroutine add_reason(res, kind, line)

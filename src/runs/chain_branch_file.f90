@@ -26,7 +26,7 @@ module chain_branch_file
     public :: continuation_table, finite_or_inf
 
     !> /continuation's datasets (continuation_table): arrays of the file's shapes in Fortran
-    !> order, n oscillators, np points, ns special points.
+    !> order, n oscillators, np points, ns special points, nb branches.
     type :: continuation_table_t
         integer :: longest = 1 !! the longest period: the size of strobe_x's iterate axis
         real(wp), allocatable :: values(:)                !! (np) the continued parameter
@@ -43,6 +43,9 @@ module chain_branch_file
         integer, allocatable :: special_index(:)          !! (ns) the point, 0-based
         character(len=len(special_kinds)), allocatable :: special_kind(:) !! (ns)
         real(wp), allocatable :: special_value(:)         !! (ns) the parameter there
+        integer, allocatable :: parent(:)                 !! (nb) -1: none (branch 0)
+        integer, allocatable :: origin_point(:)           !! (nb) 0-based, -1: none
+        character(len=len(special_kinds)), allocatable :: origin_kind(:) !! (nb) '': none
     end type continuation_table_t
 
 contains
@@ -133,7 +136,8 @@ contains
     !> holds them: per point (in the order found, branch after branch) the parameter, the
     !> orbit's state and section crossings (NaN beyond its period), period, branch, multipliers,
     !> stability (1 or 0), grazing monitors (+inf: none), impacts and Newton's last residual
-    !> and iterations; per special point its point (0-based), kind and parameter.
+    !> and iterations; per special point its point (0-based), kind and parameter; per branch
+    !> its parent branch, the parent's point (0-based) where it began and that point's kind.
     pure subroutine continuation_table(n, res, table)
         integer, intent(in) :: n
         type(branches_t), intent(in) :: res
@@ -177,6 +181,14 @@ contains
             end do
             table%special_value = specials%value
         end associate
+        associate (origins => res%origins(:res%n_branches))
+            table%parent = origins%parent
+            table%origin_point = origins%point - 1
+            allocate (table%origin_kind(res%n_branches))
+            do j = 1, res%n_branches
+                table%origin_kind(j) = origins(j)%kind
+            end do
+        end associate
     end subroutine continuation_table
 
     !> The run's header (without the continued parameter, which /params cannot hold as one
@@ -214,6 +226,7 @@ contains
             call index_coordinate(f, 'continuation/multiplier', 1, 2*n, err)
             call index_coordinate(f, 'continuation/iterate', 1, t%longest, err)
             call index_coordinate(f, 'continuation/special', 0, ns, err)
+            call index_coordinate(f, 'continuation/branch_index', 0, size(t%parent), err)
             if (allocated(err)) return
             call h5_write(f, 'continuation/values', t%values, err)
             call h5_write(f, 'continuation/x', t%x, err)
@@ -233,6 +246,9 @@ contains
             call h5_write(f, 'continuation/special_index', t%special_index, err)
             call h5_write_strings(f, 'continuation/special_kind', t%special_kind, err)
             call h5_write(f, 'continuation/special_value', t%special_value, err)
+            call h5_write(f, 'continuation/parent', t%parent, err)
+            call h5_write(f, 'continuation/origin_point', t%origin_point, err)
+            call h5_write_strings(f, 'continuation/origin_kind', t%origin_kind, err)
         end associate
         if (allocated(err)) return
         call describe_group(out%file, 'continuation', err, parameter=cfg%cont_parameter)

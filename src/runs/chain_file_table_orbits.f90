@@ -38,6 +38,8 @@ contains
                  '', 'section crossing of the period', 'always')
         call add(t, 'continuation', '/continuation/special', 'dataset', 'special', 'int32', '1', &
                  '', 'special point index', 'always')
+        call add(t, 'continuation', '/continuation/branch_index', 'dataset', 'branch_index', &
+                 'int32', '1', '', 'branch index (the values of branch)', 'always')
         call add(t, 'continuation', '/continuation/values', 'dataset', 'point', 'float64', '1', &
                  '{parameter}', '{parameter} (the continued parameter) at the point', 'always')
         call add(t, 'continuation', '/continuation/x', 'dataset', 'point oscillator', 'float64', &
@@ -86,6 +88,14 @@ contains
                  'section or branch-point', 'always')
         call add(t, 'continuation', '/continuation/special_value', 'dataset', 'special', &
                  'float64', '1', '{parameter}', '{parameter} at the special point', 'always')
+        call add(t, 'continuation', '/continuation/parent', 'dataset', 'branch_index', 'int32', &
+                 '1', '', 'the branch it was switched from (-1: none, branch 0)', 'always')
+        call add(t, 'continuation', '/continuation/origin_point', 'dataset', 'branch_index', &
+                 'int32', '1', '', 'the point (0-based index) of its parent where it began, '// &
+                 'a special point whose orbit is its first point (-1: none)', 'always')
+        call add(t, 'continuation', '/continuation/origin_kind', 'dataset', 'branch_index', &
+                 'string', '1', '', 'the kind of that special point: period-doubling or '// &
+                 'branch-point ('''': none)', 'always')
     end subroutine entries_continuation
 
     !> /curve: a continuation's fold or period-doubling curve in two parameters (&continuation

@@ -5,7 +5,8 @@
 !> own doubling, the product of its multipliers); one branch from two starts, its special
 !> points located at the same parameter. Newton's result from the guess is kept, converged
 !> (the first point) or not (no point, the reason said). A branch that meets a simultaneous
-!> impact ends there, named a corner, its points kept.
+!> impact ends there, named a corner, its points kept. Each branch says where it began: on
+!> its parent's special point, whose orbit is its first point.
 !> A continuation run tells its monitor the transient's cycles, then its points, and stops
 !> when asked.
 module test_branch
@@ -26,7 +27,7 @@ module test_branch
     use testing, only: tally_t, check, check_close
     implicit none
     private
-    public :: run_branch_tests, chain12_orbit, settle
+    public :: run_branch_tests, chain12_orbit, settle, check_origins
 
     !> Records what it is told and asks to stop at a given count of one stage.
     type, extends(monitor_t) :: counting_monitor_t
@@ -227,6 +228,13 @@ contains
             end associate
         end do
         doubling = res%specials(1)%point
+        call check_origins(t, res, 'impact oscillator')
+        call check(t, res%n_branches == 2, 'impact oscillator: two branches')
+        if (res%n_branches == 2) call check(t, res%origins(2)%parent == 0 .and. &
+                                            res%origins(2)%point == doubling .and. &
+                                            res%origins(2)%kind == 'period-doubling', &
+                                            'impact oscillator: branch 1 began at branch 0''s '// &
+                                            'doubling')
         call sweep_across(t, model, res%points(doubling)%value, res%points(doubling)%orbit)
         ! the product of the multipliers on the period-2 branch
         do j = 1, res%n_points
@@ -351,7 +359,58 @@ contains
                    index(res%end_reason, res%start%reason) > 0 .and. &
                    size(res%start%residuals) == res%start%iterations + 1, &
                    'failed start: the reason kept and said: '//res%end_reason)
+        call check_origins(t, res, 'failed start')
     end subroutine failed_start
+
+    !> Where each branch of `res` began: one origin per branch (per line of end_reason);
+    !> branch 0 has none (parent -1, no point, no kind); branch b > 0 began on an earlier
+    !> branch at a point located there as a special point of the origin's kind (a period
+    !> doubling or a branch point), whose parameter and state are b's first point's (the
+    !> doubled orbit: Newton's, from that state, to 1e-10).
+    subroutine check_origins(t, res, label)
+        type(tally_t), intent(inout) :: t
+        type(branches_t), intent(in) :: res
+        character(len=*), intent(in) :: label
+        integer :: b, j, first
+        logical :: special
+
+        call check(t, res%n_branches == 1 + count([(res%end_reason(j:j) == new_line('a'), &
+                                                    j=1, len(res%end_reason))]), &
+                   label//': one origin per branch, one line of end_reason per branch')
+        associate (r => res%origins(1))
+            call check(t, r%parent == -1 .and. r%point == 0 .and. r%kind == '', &
+                       label//': branch 0 began at no branch''s point')
+        end associate
+        do b = 1, res%n_branches - 1
+            associate (r => res%origins(b + 1))
+                call check(t, r%parent >= 0 .and. r%parent < b .and. r%point >= 1 .and. &
+                           r%point <= res%n_points, label//': each branch began at a point '// &
+                           'of an earlier branch')
+                if (.not. (r%point >= 1 .and. r%point <= res%n_points)) cycle
+                special = .false.
+                do j = 1, res%n_specials
+                    if (res%specials(j)%point == r%point .and. res%specials(j)%kind == r%kind) &
+                        special = .true.
+                end do
+                call check(t, res%points(r%point)%branch == r%parent .and. special .and. &
+                           (r%kind == 'period-doubling' .or. r%kind == 'branch-point'), &
+                           label//': its origin is its parent''s special point of its kind')
+                first = findloc(res%points(:res%n_points)%branch, b, 1)
+                if (first == 0) cycle
+                associate (o => res%points(r%point), f => res%points(first))
+                    write (*, '(a,i0,a,es9.2)') '    '//label//': branch ', b, &
+                        ' starts off its origin''s state by ', &
+                        max(maxval(abs(f%orbit%x - o%orbit%x)), maxval(abs(f%orbit%v - o%orbit%v)))
+                    call check(t, f%value == o%value, label//': its first point is at its '// &
+                               'origin''s parameter')
+                    call check_close(t, max(maxval(abs(f%orbit%x - o%orbit%x)), &
+                                            maxval(abs(f%orbit%v - o%orbit%v))), 0.0_wp, &
+                                     label//': its first point is its origin''s orbit', &
+                                     1.0e-10_wp)
+                end associate
+            end associate
+        end do
+    end subroutine check_origins
 
     !> A chain of 12 (b = 0.02, K = 0.85, w = 2.3, a = 1, walls) at A = 5 and its unstable
     !> 22-impact period-1 orbit, by Newton from rest after 500 cycles.

@@ -2,8 +2,9 @@
 !> the mirror-symmetric 22-impact branch of the chain of 12 the branch point has a multiplier
 !> +1; the two branches switched to there are labelled not symmetric (their parent is), and
 !> are each other's mirror images: the mirror of a point of one is, by Newton at the same
-!> parameter, the orbit of the other there. And a fold is no branch point: on figure 10's
-!> chain made asymmetric (a(0) = 1.05), a single multiplier crosses +1 at its fold.
+!> parameter, the orbit of the other there; each says it began at that branch point. And a
+!> fold is no branch point: on figure 10's chain made asymmetric (a(0) = 1.05), a single
+!> multiplier crosses +1 at its fold.
 module test_branch_switch
     use chain_kinds, only: wp, i8
     use chain_error, only: error_t
@@ -11,7 +12,7 @@ module test_branch_switch
     use chain_orbit, only: orbit_t, find_orbit
     use chain_branch, only: branch_options_t, branches_t, follow_branches
     use chain_branch_points, only: mirror_image
-    use test_branch, only: chain12_orbit, settle
+    use test_branch, only: chain12_orbit, settle, check_origins
     use test_chains, only: fig10_model
     use testing, only: tally_t, check, check_close
     implicit none
@@ -110,6 +111,14 @@ contains
         end do
         call check(t, p > 0, 'switching: the branch point found')
         if (p == 0) return
+        call check_origins(t, res, 'switching')
+        call check(t, res%n_branches == 3, 'switching: three branches')
+        if (res%n_branches == 3) call check(t, all(res%origins(2:3)%parent == 0) .and. &
+                                            all(res%origins(2:3)%point == p) .and. &
+                                            res%origins(2)%kind == 'branch-point' .and. &
+                                            res%origins(3)%kind == 'branch-point', &
+                                            'switching: branches 1 and 2 began at branch 0''s '// &
+                                            'branch point')
         associate (o => res%points(p)%orbit)
             write (*, '(a,f15.11,a,es9.2)') '    branch point at A = ', res%points(p)%value, &
                 ', |multiplier - 1| = ', minval(abs(cmplx(o%multipliers_re - 1, &

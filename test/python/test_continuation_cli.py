@@ -1,6 +1,7 @@
 """The command line's continuation runs (`&continuation`): bad input named with its key and the
 allowed range, exit 1 and no file; a Newton failure written as a result; the /continuation
-group's layout; an existing output never overwritten; what Newton alone found, told."""
+group's layout; where each branch began; an existing output never overwritten; what Newton
+alone found, told."""
 from __future__ import annotations
 
 import re
@@ -10,6 +11,7 @@ import numpy as np
 import pytest
 import xarray as xr
 
+from impactchain.io import SchemaError, read_run
 from simulator import impactchain_exe, run_namelist  # noqa: F401 (fixture)
 
 CHAIN = ("&chain n = 8, spacing = 1.0, damping = 0.05, restitution = 0.5, amplitude = 1.0, "
@@ -345,6 +347,9 @@ def test_switching_at_the_branch_point(impactchain_exe, tmp_path):
         for first in (one[0], two[0]):
             assert g["values"][first] == g["values"][bp]
             assert (g["x"][first] == g["x"][bp]).all() and (g["v"][first] == g["v"][bp]).all()
+        assert g["parent"][:].tolist() == [-1, 0, 0]
+        assert g["origin_point"][:].tolist() == [-1, bp, bp]
+        assert [k.decode() for k in g["origin_kind"][:]] == ["", "branch-point", "branch-point"]
         assert (g["symmetric"][:bp + 1] == 1).all()
         assert (g["symmetric"][one[1:]] == 0).all() and (g["symmetric"][two[1:]] == 0).all()
         rho = g["multipliers_re"][:] + 1j * g["multipliers_im"][:]
@@ -366,6 +371,43 @@ FOLD = """&chain n = 8, amplitude = 3.0, omega = 1.9, damping = 0.05, restitutio
        follow = 'fold', parameter2 = 'omega', stop2 = 1.95, step2 = 0.01 /
 &output file = 'curve.h5' /
 """
+
+
+# a single impact oscillator whose period-1 orbit doubles on the way down from A = 8 (the
+# suite `branch`'s), with the period-2 branch switched to there
+OSCILLATOR = ("&chain n = 1, spacing = 0.5, 100.0, damping = 0.05, restitution = 0.8, "
+              "amplitude = 8.0, omega = 2.5, boundary = 'fixed' /\n&initial kind = 'rest' /\n"
+              "&run transient = 1000 /\n&continuation parameter = 'amplitude', stop = 4.5, "
+              "step = -0.05, doublings = 1 /\n&output file = 'pd.h5' /\n")
+
+
+def test_doubled_branch_says_where_it_began(impactchain_exe, tmp_path):
+    """With doublings = 1, branch 1 began on branch 0 at its period doubling, whose orbit
+    (parameter, state) is branch 1's first point; branch 0 began nowhere (-1, -1, ''). xarray
+    sees the three on the dimension branch_index, impactchain.io reads them, and refuses a
+    parent that is not an earlier branch."""
+    run_namelist(impactchain_exe, OSCILLATOR, tmp_path)
+    with xr.open_dataset(tmp_path / "pd.h5", engine="h5netcdf", group="continuation") as ds:
+        assert ds.parent.dims == ds.origin_point.dims == ds.origin_kind.dims == ("branch_index",)
+        assert ds.branch_index.values.tolist() == [0, 1]
+        assert ds.parent.values.tolist() == [-1, 0]
+        assert list(ds.origin_kind.values) == ["", "period-doubling"]
+        kinds = list(ds.special_kind.values)
+        pd = int(ds.special_index[kinds.index("period-doubling")])
+        assert ds.origin_point.values.tolist() == [-1, pd]
+        assert int(ds.branch[pd]) == 0 and int(ds.period[pd]) == 1
+        first = int(np.flatnonzero(ds.branch.values == 1)[0])
+        assert int(ds.period[first]) == 2
+        assert float(ds["values"][first]) == float(ds["values"][pd])
+        for name in ("x", "v"):
+            assert np.abs(ds[name][first] - ds[name][pd]).max() <= 1e-10
+    cont = read_run(tmp_path / "pd.h5").continuation
+    assert cont.parent.tolist() == [-1, 0] and cont.origin_point.tolist() == [-1, pd]
+    assert cont.origin_kind.tolist() == ["", "period-doubling"]
+    with h5py.File(tmp_path / "pd.h5", "r+") as f:
+        f["continuation/parent"][1] = 1
+    with pytest.raises(SchemaError, match="parent holds a branch that is not an earlier one"):
+        read_run(tmp_path / "pd.h5")
 
 
 def test_fold_curve_file(impactchain_exe, tmp_path):

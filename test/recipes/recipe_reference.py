@@ -375,7 +375,8 @@ def continuation_quantities(f, keys, take):
             take(key, "regular")
         elif name in ("branch", "impacts_per_period", "period", "special_kind",
                       "special_index", "iterate", "oscillator", "multiplier", "point",
-                      "special") or "@" in key:
+                      "special", "branch_index", "parent", "origin_point", "origin_kind") or \
+                "@" in key:
             take(key, "exact")
     speed = f["/continuation/min_impact_speed"][()]
     multipliers = f["/continuation/multipliers_re"][()] + \

@@ -872,6 +872,8 @@ def test_continuation_takes_the_other_continuation_keys(cli: Path, tmp_path: Pat
     assert_same_bits(ds, _file_group(xr, tmp_path / "run.h5"))
     assert sorted(set(ds.branch.values.tolist())) == [0, 1, 2]
     assert "branch-point" in list(ds.special_kind.values)
+    assert ds.parent.values.tolist() == [-1, 0, 0] and ds.parent.dims == ("branch_index",)
+    assert list(ds.origin_kind.values) == ["", "branch-point", "branch-point"]
 
 
 def test_continuation_capacity_retry_is_invisible(monkeypatch: pytest.MonkeyPatch) -> None:
@@ -881,7 +883,7 @@ def test_continuation_capacity_retry_is_invisible(monkeypatch: pytest.MonkeyPatc
     amplitude, group, _, _ = CONTINUATIONS["fold"]
     ample = api.continuation(**FIG10, amplitude=amplitude, **group)
     monkeypatch.setattr(_continuations, "_first_room", lambda args: dict(
-        npcap=1, nlong=1, nscap=1, ntext=1, nrcap=1, nbcap=1))
+        npcap=1, nlong=1, nscap=1, ntext=1, nrcap=1, nbcap=1, nocap=1))
     xr.testing.assert_identical(api.continuation(**FIG10, amplitude=amplitude, **group), ample)
 
 
