@@ -8,7 +8,8 @@ module chain_curve
     use chain_kinds, only: wp
     use chain_error, only: error_t, set_error, fmt_int, fmt_real
     use chain_model, only: model_t, model_parameter, set_model_parameter
-    use chain_orbit, only: orbit_t, orbit_options_t, describe_orbit, interleave, pass_impacts
+    use chain_orbit, only: orbit_t, orbit_options_t, describe_orbit, interleave, pass_impacts, &
+                           multiplier_distance
     use chain_lapack, only: solve_linear
     use chain_curve_system, only: curve_setting_t, curve_state_t, evaluate, null_vectors, &
                                   lift_grazing_bond, grazing_aim, same_bonds
@@ -214,7 +215,7 @@ contains
             curve%values(k + 1) = last_values(1)
             curve%values2(k + 1) = last_values(2)
             curve%n_points = k + 1
-            if (distance_to(curve%orbits(k), -shifts(j)) <= 1.0e-8_wp .and. &
+            if (multiplier_distance(curve%orbits(k), -shifts(j)) <= 1.0e-8_wp .and. &
                 abs(curve%orbits(k)%min_gap) <= 1.0e-10_wp) then
                 curve%n_codim2 = curve%n_codim2 + 1
                 curve%codim2_kind(curve%n_codim2) = kinds(j)
@@ -223,14 +224,6 @@ contains
             k = k + 1
         end do
     end subroutine meetings
-
-    !> The distance of the multiplier nearest `target` from it.
-    pure real(wp) function distance_to(orbit, target)
-        type(orbit_t), intent(in) :: orbit
-        real(wp), intent(in) :: target
-
-        distance_to = minval(abs(cmplx(orbit%multipliers_re - target, orbit%multipliers_im, wp)))
-    end function distance_to
 
     !> Why the curve ends where no step from its last point succeeds: a grazing when the
     !> smallest impact speed or smallest gap of the last orbit is below 1/20 of its largest

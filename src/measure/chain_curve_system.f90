@@ -16,7 +16,7 @@
 module chain_curve_system
     use chain_kinds, only: wp
     use chain_error, only: error_t, set_error, fmt_int
-    use chain_model, only: model_t, set_model_parameter
+    use chain_model, only: model_t, set_model_parameter, bond_gaps
     use chain_orbit, only: orbit_pass_t, orbit_pass, pass_refusal, pass_impacts, &
                            orbit_gap_minimum
     use chain_parameter, only: map_parameter_derivative
@@ -122,23 +122,30 @@ contains
         character(len=:), allocatable, intent(inout) :: failure
         type(error_t), allocatable, intent(out) :: err
         character(len=:), allocatable :: refusal
-        integer, allocatable :: at(:)
-        integer :: m
 
-        m = size(y) - 2
+        model = lifted_model(set, y)
+        call orbit_pass(model, set%phase, set%cycles, y(:size(y) - 2), pass, err)
+        if (allocated(err)) return
+        refusal = pass_refusal(pass)
+        if (len(refusal) > 0) failure = refusal
+    end subroutine pass_at
+
+    !> The model at y's two parameters, the lifted bonds' spacings raised by the lift.
+    function lifted_model(set, y) result(model)
+        type(curve_setting_t), intent(in) :: set
+        real(wp), intent(in) :: y(:)
+        type(model_t) :: model
+        integer, allocatable :: at(:)
+
         model = set%model
-        call set_model_parameter(model, set%parameter, y(m + 1))
-        call set_model_parameter(model, set%parameter2, y(m + 2))
+        call set_model_parameter(model, set%parameter, y(size(y) - 1))
+        call set_model_parameter(model, set%parameter2, y(size(y)))
         if (allocated(set%lifted)) then
             ! (bond k's spacing, whatever the array's lower bound)
             at = lbound(model%spacing, 1) + set%lifted
             model%spacing(at) = model%spacing(at) + set%lift
         end if
-        call orbit_pass(model, set%phase, set%cycles, y(:m), pass, err)
-        if (allocated(err)) return
-        refusal = pass_refusal(pass)
-        if (len(refusal) > 0) failure = refusal
-    end subroutine pass_at
+    end function lifted_model
 
     !> A grazing curve's setting from its start y: the bond of the smallest gap minimum and
     !> those whose minima equal it to 1e-9 (a mirror pair grazes as one), none with an impact of
@@ -191,9 +198,7 @@ contains
                       maxval(abs(y(2:m:2)))/model%omega)
     end subroutine lift_grazing_bond
 
-    !> The grazing test at y: the pass with the bond lifted (refused when its impacts are not
-    !> the curve's: another bond grazed, or the lifted one closed) and the smallest minimum of
-    !> the bond's gap over the orbit, less grazing_aim.
+    !> The grazing test at y with the pass there (pass_at, for Newton's orbit rows).
     subroutine gap_at(set, y, pass, model, gap, failure, err)
         type(curve_setting_t), intent(in) :: set
         real(wp), intent(in) :: y(:)
@@ -202,21 +207,44 @@ contains
         real(wp), intent(out) :: gap
         character(len=:), allocatable, intent(inout) :: failure
         type(error_t), allocatable, intent(out) :: err
-        real(wp) :: time
-        integer :: m, bond
 
         gap = huge(1.0_wp)
         call pass_at(set, y, pass, model, failure, err)
         if (allocated(err) .or. len(failure) > 0) return
-        if (.not. same_bonds(pass_impacts(pass), set%bonds)) then
+        call gap_of(set, y, gap, failure, err)
+    end subroutine gap_at
+
+    !> The grazing test at y: the smallest minimum of the lifted bond's gap over the orbit,
+    !> less grazing_aim; refused when the orbit's impacts are not the curve's (another bond
+    !> grazed, or the lifted one closed) or a gap is negative. One run of the chain, without
+    !> the Jacobian a pass carries.
+    subroutine gap_of(set, y, gap, failure, err)
+        type(curve_setting_t), intent(in) :: set
+        real(wp), intent(in) :: y(:)
+        real(wp), intent(out) :: gap
+        character(len=:), allocatable, intent(inout) :: failure
+        type(error_t), allocatable, intent(out) :: err
+        type(model_t) :: model
+        integer, allocatable :: impacts(:)
+        real(wp) :: time
+        integer :: m, bond
+
+        gap = huge(1.0_wp)
+        m = size(y) - 2
+        model = lifted_model(set, y)
+        if (any(bond_gaps(model%spacing, model%walls, y(1:m:2)) < 0)) then
+            failure = "a negative gap"
+            return
+        end if
+        call orbit_gap_minimum(model, set%phase, set%cycles, y(1:m:2), y(2:m:2), gap, bond, &
+                               time, err, only=set%grazing_bond, impacts=impacts)
+        if (allocated(err)) return
+        if (.not. same_bonds(impacts, set%bonds)) then
             failure = "the orbit's impacts changed (another bond grazed)"
             return
         end if
-        m = size(y) - 2
-        call orbit_gap_minimum(model, set%phase, set%cycles, y(1:m:2), y(2:m:2), gap, bond, &
-                               time, err, only=set%grazing_bond)
         gap = gap - set%lift - grazing_aim
-    end subroutine gap_at
+    end subroutine gap_of
 
     !> The grazing test at y and its row (as on a grazing curve), for a setting of any kind
     !> whose grazing bond is lifted (lift_grazing_bond).
@@ -227,10 +255,8 @@ contains
         real(wp), allocatable, intent(out) :: row(:)
         character(len=:), allocatable, intent(inout) :: failure
         type(error_t), allocatable, intent(out) :: err
-        type(orbit_pass_t) :: pass
-        type(model_t) :: model
 
-        call gap_at(set, y, pass, model, gap, failure, err)
+        call gap_of(set, y, gap, failure, err)
         if (allocated(err) .or. len(failure) > 0) return
         call gap_gradient(set, y, row, failure, err)
     end subroutine gap_and_row
@@ -252,8 +278,6 @@ contains
         character(len=:), allocatable, intent(inout) :: failure
         type(error_t), allocatable, intent(out) :: err
         real(wp), parameter :: relative = 1.0e-6_wp
-        type(orbit_pass_t) :: pass
-        type(model_t) :: model
         real(wp), allocatable :: e(:)
         real(wp) :: h, plus, minus
         integer :: k
@@ -263,9 +287,9 @@ contains
             h = relative*(1 + abs(y(k)))
             e = 0
             e(k) = h
-            call gap_at(set, y + e, pass, model, plus, failure, err)
+            call gap_of(set, y + e, plus, failure, err)
             if (allocated(err) .or. len(failure) > 0) return
-            call gap_at(set, y - e, pass, model, minus, failure, err)
+            call gap_of(set, y - e, minus, failure, err)
             if (allocated(err) .or. len(failure) > 0) return
             d_g(k) = (plus - minus)/(2*h)
         end do

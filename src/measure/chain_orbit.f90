@@ -25,6 +25,7 @@ module chain_orbit
     implicit none
     private
     public :: orbit_t, orbit_options_t, find_orbit, orbit_gap_minimum, interleave
+    public :: multiplier_distance
     public :: orbit_pass_t, orbit_pass, pass_refusal, describe_orbit, impact_bonds, pass_impacts
 
     !> How Newton is run.
@@ -281,6 +282,15 @@ contains
         bonds = pack(orbit%event_bond, counts_as_impact(orbit%event_kind, orbit%event_speed))
     end function impact_bonds
 
+    !> The distance from `target` of the orbit's multiplier nearest to it.
+    pure real(wp) function multiplier_distance(orbit, target)
+        type(orbit_t), intent(in) :: orbit
+        real(wp), intent(in) :: target
+
+        multiplier_distance = minval(abs(cmplx(orbit%multipliers_re - target, &
+                                               orbit%multipliers_im, wp)))
+    end function multiplier_distance
+
     !> The bonds of a pass's impacts in time order (what counts as one as in impact_bonds).
     pure function pass_impacts(pass) result(bonds)
         type(orbit_pass_t), intent(in) :: pass
@@ -306,8 +316,9 @@ contains
     !> start, so that a minimum at the section is seen. The chain must not rest on a wall
     !> (unsupported: the gaps would not be those of interval_minima). With `only`, bond `only`
     !> alone is looked at (a grazing curve follows one bond: the smallest of two equal gaps,
-    !> a mirror pair's, has no derivative).
-    subroutine orbit_gap_minimum(model, phase, cycles, x, v, gap, bond, time, err, only)
+    !> a mirror pair's, has no derivative). `impacts`: the bonds of the impacts on the way, in
+    !> time order (as pass_impacts has them).
+    subroutine orbit_gap_minimum(model, phase, cycles, x, v, gap, bond, time, err, only, impacts)
         type(model_t), intent(in) :: model
         real(wp), intent(in) :: phase
         integer, intent(in) :: cycles
@@ -316,6 +327,7 @@ contains
         integer, intent(out) :: bond
         type(error_t), allocatable, intent(out) :: err
         integer, intent(in), optional :: only
+        integer, allocatable, intent(out), optional :: impacts(:)
         type(chain_t) :: chain
         type(flow_t) :: flow
         type(event_log_t) :: log
@@ -330,6 +342,7 @@ contains
         bond = -1
         time = 0
         watched = .true.
+        if (present(impacts)) allocate (impacts(0))
         if (present(only)) watched = [(k == only, k=0, model%n)]
         flow = make_flow(model%damping, model%amplitude, model%omega)
         call chain_at_section(model, phase, x, v, chain, err)
@@ -362,6 +375,10 @@ contains
             do e = 1, log%count
                 if (log%kind(e) == event_impact .or. log%kind(e) == event_stick) &
                     own(log%site(e)) = .true.
+                if (present(impacts)) then
+                    if (counts_as_impact(log%kind(e), log%speed(e))) &
+                        impacts = [impacts, log%site(e)]
+                end if
             end do
             rate_before = gap_rates(model, vb)
             rate_after = gap_rates(model, va)

@@ -8,7 +8,7 @@ module test_curve
     use chain_kinds, only: wp, i8
     use chain_error, only: error_t
     use chain_model, only: model_t, set_model_parameter
-    use chain_orbit, only: orbit_t
+    use chain_orbit, only: orbit_t, multiplier_distance
     use chain_branch, only: branch_options_t, branches_t, follow_branches
     use chain_curve, only: curve_options_t, curve_t, follow_curve
     use chain_flow, only: make_flow
@@ -75,9 +75,9 @@ contains
         if (curve%n_points < 4) return
         do j = 1, curve%n_points
             write (*, '(a,f15.11,a,f15.11,a,es9.2)') '    A = ', curve%values(j), ', w = ', &
-                curve%values2(j), ', |multiplier - 1| = ', distance_to(curve%orbits(j), 1.0_wp)
+                curve%values2(j), ', |multiplier - 1| = ', multiplier_distance(curve%orbits(j), 1.0_wp)
         end do
-        call check_close(t, maxval([(distance_to(curve%orbits(j), 1.0_wp), j=1, curve%n_points)]), &
+        call check_close(t, maxval([(multiplier_distance(curve%orbits(j), 1.0_wp), j=1, curve%n_points)]), &
                          0.0_wp, 'fold curve: a multiplier +1 at every point', 1.0e-7_wp)
         call compare_with_branch(t, curve, 2)
         call compare_with_branch(t, curve, curve%n_points)
@@ -166,7 +166,7 @@ contains
         print '(a,i0,a)', '    doubling curve: ', curve%n_points, ' points, '//curve%end_reason
         call check(t, curve%n_points >= 4, 'doubling curve: at least four points')
         if (curve%n_points < 4) return
-        call check_close(t, maxval([(distance_to(curve%orbits(j), -1.0_wp), &
+        call check_close(t, maxval([(multiplier_distance(curve%orbits(j), -1.0_wp), &
                                      j=1, curve%n_points)]), 0.0_wp, &
                          'doubling curve: a multiplier -1 at every point', 1.0e-7_wp)
         do j = 2, curve%n_points, curve%n_points - 2
@@ -246,13 +246,5 @@ contains
         opt%step = -0.05_wp
         call follow_branches(model, 0.0_wp, 1, start%x, start%v, opt, res, err)
     end subroutine fold_at
-
-    !> The distance of the multiplier nearest `target` from it.
-    pure real(wp) function distance_to(orbit, target)
-        type(orbit_t), intent(in) :: orbit
-        real(wp), intent(in) :: target
-
-        distance_to = minval(abs(cmplx(orbit%multipliers_re - target, orbit%multipliers_im, wp)))
-    end function distance_to
 
 end module test_curve

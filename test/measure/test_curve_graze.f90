@@ -13,6 +13,7 @@ module test_curve_graze
     use chain_kinds, only: wp
     use chain_error, only: error_t
     use chain_model, only: model_t
+    use chain_orbit, only: multiplier_distance
     use chain_flow, only: flow_t, make_flow, forced_response
     use chain_curve, only: curve_options_t, curve_t, follow_curve
     use chain_branch, only: branch_options_t, branches_t, follow_branches
@@ -177,8 +178,7 @@ contains
         call check(t, curve%n_codim2 == 1, 'fold meets grazing: one codim-2 point')
         if (curve%n_codim2 /= 1) return
         j = curve%codim2_index(1)
-        unit_distance = minval(abs(cmplx(curve%orbits(j)%multipliers_re - 1, &
-                                         curve%orbits(j)%multipliers_im, wp)))
+        unit_distance = multiplier_distance(curve%orbits(j), 1.0_wp)
         write (*, '(a,a,a,f15.11,a,f15.11,a,es9.2,a,es9.2)') '    ', &
             trim(curve%codim2_kind(1)), ' at A = ', curve%values(j), ', w = ', &
             curve%values2(j), ': |multiplier - 1| = ', unit_distance, ', gap ', &
@@ -196,8 +196,7 @@ contains
         if (k == 0) return
         write (*, '(a,es9.2,a,es9.2)') '    one-parameter run there: |A - curve| = ', &
             abs(res%points(k)%value - curve%values(j)), ', |multiplier - 1| = ', &
-            minval(abs(cmplx(res%points(k)%orbit%multipliers_re - 1, &
-                             res%points(k)%orbit%multipliers_im, wp)))
+            multiplier_distance(res%points(k)%orbit, 1.0_wp)
         call check_close(t, res%points(k)%value, curve%values(j), &
                          'fold meets grazing: the one-parameter grazing there', 1.0e-9_wp)
     end subroutine fold_meets_grazing
