@@ -59,10 +59,11 @@ def continuation(
     ``stop``, first step ``step`` (its sign: the direction), at most ``max_points`` orbits per
     branch, and ``doublings`` levels of the period-doubled branches born at its period
     doublings (docs/model.md section 12). Folds, period doublings, Neimark-Sacker points,
-    branch points and grazings are located; a branch ends at a grazing, a corner (one
-    oscillator hit by both neighbours at once) or an impact at the section, at a bound of the
-    parameter, after ``max_points`` or when Newton fails, and says why (``end_reason``) and
-    which (``end_kind``). ``**keys`` (any key of the input table) as :func:`simulate`'s,
+    branch points, grazings and corners (one oscillator hit by both neighbours at once) are
+    located, and a branch goes on through them where an orbit on the other side is found; it
+    ends there when none is, at an impact at the section, at a bound of the parameter, after
+    ``max_points`` or when Newton fails, and says why (``end_reason``) and which
+    (``end_kind``). ``**keys`` (any key of the input table) as :func:`simulate`'s,
     and the ``&continuation`` keys not named here (``branch_points``: levels of switching
     onto the branches crossing at branch points).
     Ctrl-C stops the work at its next transient cycle or orbit (:class:`KeyboardInterrupt`);

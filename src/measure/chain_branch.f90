@@ -8,9 +8,10 @@
 !> the two branches crossing there (chain_branch_switch).
 !>
 !> The branch goes through a grazing onto the family with the changed impacts
-!> (chain_branch_graze). It stops at the bounds of the parameter (the interval from its start
-!> to `stop`), after `max_points` points, at a corner or an impact at the section, at a
-!> grazing with no orbit found on its other side, or when Newton fails at the smallest step;
+!> (chain_branch_graze) and through a corner onto the orbits with the impacts in another order
+!> (chain_branch_corner). It stops at the bounds of the parameter (the interval from its start
+!> to `stop`), after `max_points` points, at an impact at the section, at a grazing or corner
+!> with no orbit found on its other side, or when Newton fails at the smallest step;
 !> each is a result with its reason, not an error.
 !>
 !> Here the branches are followed: the first through the guess, step by step, to its end, and
@@ -31,6 +32,7 @@ module chain_branch
     use chain_branch_special, only: locate_specials, locate_nonsmooth, nonsmooth_reason
     use chain_branch_switch, only: real_eigenvector, branch_point_starts
     use chain_branch_graze, only: pass_grazing, grazing_from_gap, orbit_at
+    use chain_branch_corner, only: pass_corner
     implicit none
     private
     public :: branch_options_t, branch_point_t, special_point_t, branch_origin_t, branches_t
@@ -271,8 +273,8 @@ contains
         end do
     end subroutine switch_at_branch_point
 
-    !> Store `here` and step along the branch until it ends, through the grazings met on the
-    !> way (go_through). `switched`: the first step leaves a branch crossing, where the test
+    !> Store `here` and step along the branch until it ends, through the grazings and corners
+    !> met on the way (go_through). `switched`: the first step leaves a branch crossing, where the test
     !> functions are not compared.
     subroutine walk(set, here, res, switched, stopped, err, monitor)
         type(setting_t), intent(in) :: set
@@ -384,6 +386,8 @@ contains
     !> vanished, the grazing is stored again as located from the other side, and that first
     !> orbit found again from there (the impacting side's value is only as good as Newton
     !> with a Jacobian like 1/u, and would round differently with other BLAS kernels).
+    !> At a corner: the orbit with the impacts in another order at 1e-4 |step| past it
+    !> (chain_branch_corner); the step starts at its distance from the corner orbit.
     subroutine go_through(set, kind, located, value, res, here, h, passed, err)
         type(setting_t), intent(in) :: set
         character(len=*), intent(in) :: kind
@@ -396,12 +400,21 @@ contains
         type(error_t), allocatable, intent(out) :: err
         real(wp), parameter :: v_new = 1.0e-3_wp
         type(cursor_t) :: found, graze
-        real(wp) :: mu_g, delta
+        real(wp) :: mu_g, delta, distance
         logical :: better
 
         passed = .false.
-        if (kind /= 'grazing') return
         delta = 1.0e-4_wp*abs(set%opt%step)
+        if (kind == 'corner') then
+            call pass_corner(set, located, here, value, delta, found, distance, passed, err)
+            if (allocated(err) .or. .not. passed) return
+            call store(set, found, res, err)
+            if (allocated(err)) return
+            h = min(max(distance, delta), abs(set%opt%step))
+            here = found
+            return
+        end if
+        if (kind /= 'grazing') return
         call pass_grazing(set, located, here, value, res%points(res%n_points)%symmetric, &
                           delta, v_new, found, passed, err)
         if (allocated(err) .or. .not. passed) return

@@ -6,13 +6,14 @@ module chain_branch_corrector
     use chain_kinds, only: wp
     use chain_error, only: error_t, set_error, fmt_int, fmt_real
     use chain_model, only: model_t, set_model_parameter
-    use chain_orbit, only: orbit_pass_t, orbit_pass, pass_refusal
+    use chain_orbit, only: orbit_t, orbit_pass_t, orbit_pass, pass_refusal
     use chain_parameter, only: map_parameter_derivative
     use chain_lapack, only: solve_linear
-    use chain_branch_points, only: cursor_t, setting_t, cursor_from_pass, impacts_per_bond
+    use chain_branch_points, only: cursor_t, setting_t, cursor_from_pass, cursor_from_orbit, &
+                                   impacts_per_bond
     implicit none
     private
-    public :: correct, tangent_at
+    public :: correct, tangent_at, cursor_ahead
 
 contains
 
@@ -154,6 +155,26 @@ contains
         c%tangent = rhs(:, 1)/norm2(rhs(:, 1))
         if (dot_product(c%tangent, direction) < 0) c%tangent = -c%tangent
     end subroutine tangent_at
+
+    !> The cursor of an orbit found at mu, its tangent oriented to `ahead` in the parameter:
+    !> ok = .false. when it has none (the family is not continued from there).
+    subroutine cursor_ahead(set, orbit, mu, ahead, found, ok, err)
+        type(setting_t), intent(in) :: set
+        type(orbit_t), intent(in) :: orbit
+        real(wp), intent(in) :: mu, ahead
+        type(cursor_t), intent(out) :: found
+        logical, intent(out) :: ok
+        type(error_t), allocatable, intent(out) :: err
+        real(wp), allocatable :: direction(:)
+
+        call cursor_from_orbit(set, mu, orbit, found)
+        allocate (direction(size(found%y)))
+        direction = 0
+        direction(size(found%y)) = ahead
+        call tangent_at(set, found, direction, err)
+        ok = .not. allocated(err)
+        if (allocated(err)) deallocate (err)
+    end subroutine cursor_ahead
 
     !> Values a parameter can physically take (validated like the input).
     pure logical function parameter_allowed(name, value)

@@ -27,7 +27,7 @@ module chain_branch_graze
     use chain_lapack, only: solve_linear
     use chain_orbit, only: orbit_t, find_orbit
     use chain_branch_points, only: cursor_t, setting_t, cursor_from_orbit
-    use chain_branch_corrector, only: correct, tangent_at
+    use chain_branch_corrector, only: correct, cursor_ahead
     implicit none
     private
     public :: refine_grazing, pass_grazing, grazing_from_gap, orbit_at
@@ -233,7 +233,6 @@ contains
         type(error_t), allocatable, intent(out) :: err
         type(model_t) :: model
         type(orbit_t) :: orbit
-        real(wp), allocatable :: direction(:)
 
         ok = .false.
         model = set%model
@@ -243,16 +242,7 @@ contains
         if (allocated(err) .or. .not. orbit%converged) return
         call cursor_from_orbit(set, mu, orbit, found)
         if (all(found%impacts == g%impacts)) return
-        allocate (direction(size(z) + 1))
-        direction = 0
-        direction(size(z) + 1) = ahead
-        call tangent_at(set, found, direction, err)
-        ! (no tangent there: the family is not continued)
-        if (allocated(err)) then
-            deallocate (err)
-            return
-        end if
-        ok = .true.
+        call cursor_ahead(set, orbit, mu, ahead, found, ok, err)
     end subroutine newton_other_side
 
     !> The impacting orbit near a grazing where a gap touches zero, to first order in the new

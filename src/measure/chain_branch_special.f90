@@ -342,8 +342,8 @@ contains
             end associate
             reason = "simultaneous impact (corner) at "//set%opt%parameter//" = "// &
                      fmt_real(value)//": oscillator "//fmt_int(oscillator)//" is hit by "// &
-                     "both neighbours at one instant (the map is not smooth there), the "// &
-                     "branch ends"
+                     "both neighbours at one instant (the map jumps there) and Newton finds "// &
+                     "no orbit with its impacts in another order past it, the branch ends"
         case ('section')
             reason = "an impact at the section at "//set%opt%parameter//" = "// &
                      fmt_real(value)//" (a gap of the orbit's state on the section vanishes: "// &

@@ -8,6 +8,7 @@ program measure_tests
     use test_branch_switch, only: run_switch_tests
     use test_budd_dux, only: run_budd_dux_tests
     use test_graze, only: run_graze_tests
+    use test_branch_corner, only: run_branch_corner_tests
     use test_curve, only: run_curve_tests
     implicit none
     type(suite_runner_t) :: runner
@@ -18,6 +19,7 @@ program measure_tests
     call runner%run('switch', run_switch_tests)
     call runner%run('buddux', run_budd_dux_tests)
     call runner%run('graze', run_graze_tests)
+    call runner%run('corner', run_branch_corner_tests)
     call runner%run('curve', run_curve_tests)
     call runner%finish()
 end program measure_tests

@@ -4,8 +4,7 @@
 !> doubling against the simulator on either side of it, and the branch switched to there (its
 !> own doubling, the product of its multipliers); one branch from two starts, its special
 !> points located at the same parameter. Newton's result from the guess is kept, converged
-!> (the first point) or not (no point, the reason said). A branch that meets a simultaneous
-!> impact ends there, named a corner, its points kept. Each branch says where it began: on
+!> (the first point) or not (no point, the reason said). Each branch says where it began: on
 !> its parent's special point, whose orbit is its first point.
 !> A continuation run tells its monitor the transient's cycles, then its points, and stops
 !> when asked.
@@ -65,7 +64,6 @@ contains
         call period_doubling(t)
         call two_starts(t)
         call failed_start(t)
-        call corner_end(t)
         call branch_point(t)
         call monitored_run(t)
     end subroutine run_branch_tests
@@ -423,56 +421,6 @@ contains
                          .true., 1.0e-9_wp)
         call settle(model, 500_i8, 1, start)
     end subroutine chain12_orbit
-
-    !> The unstable 22-impact period-1 orbit of a chain of 12 (b = 0.02, K = 0.85, w = 2.3,
-    !> a = 1, walls; Newton from rest after 500 cycles at A = 5), continued down: near
-    !> A = 4.8296 oscillator 4 is hit by both neighbours at one instant. The branch ends there
-    !> named a corner, with the points before it kept; the stored orbit has two impacts on
-    !> neighbouring bonds within 1e-6 in time, and neither grazing monitor near zero.
-    subroutine corner_end(t)
-        type(tally_t), intent(inout) :: t
-        type(model_t) :: model
-        type(orbit_t) :: start
-        type(branches_t) :: res
-        type(branch_options_t) :: opt
-        type(error_t), allocatable :: err
-        real(wp), allocatable :: times(:)
-        integer, allocatable :: bonds(:)
-        real(wp) :: apart
-        integer :: j, k
-
-        call chain12_orbit(model, start)
-        call check(t, start%converged .and. start%impacts == 22, &
-                   'corner: the unstable 22-impact orbit at A = 5')
-        if (.not. start%converged) return
-        opt%parameter = 'amplitude'
-        opt%stop = 4.8_wp
-        opt%step = -0.01_wp
-        call follow_branches(model, 0.0_wp, 1, start%x, start%v, opt, res, err)
-        call check(t, .not. allocated(err), 'corner: a result, not an error')
-        if (allocated(err)) return
-        print '(a)', '    '//res%end_reason
-        call check(t, res%end_kind == 'corner' .and. res%n_specials == 1 .and. &
-                   res%n_points >= 8, 'corner: the end named, the points kept')
-        if (res%n_specials /= 1) return
-        call check(t, res%specials(1)%kind == 'corner' .and. &
-                   res%specials(1)%point == res%n_points .and. &
-                   abs(res%specials(1)%value - 4.8295554_wp) < 1.0e-6_wp, &
-                   'corner: the last point, at A = 4.8295554')
-        associate (o => res%points(res%n_points)%orbit)
-            call check(t, o%min_gap > 0.1_wp .and. o%min_impact_speed > 0.1_wp, &
-                       'corner: no grazing there')
-            bonds = impact_bonds(o)
-            times = pack(o%event_time, o%event_kind == 0)
-            apart = huge(1.0_wp)
-            do j = 1, size(bonds)
-                do k = j + 1, size(bonds)
-                    if (abs(bonds(j) - bonds(k)) == 1) apart = min(apart, times(k) - times(j))
-                end do
-            end do
-            call check(t, apart < 1.0e-6_wp, 'corner: two impacts of one oscillator at once')
-        end associate
-    end subroutine corner_end
 
     !> The same orbit continued up from A = 5: a real multiplier crosses +1 at A = 5.0040468
     !> while the parameter keeps its direction, the pitchfork of the mirror symmetry. It is

@@ -146,24 +146,30 @@ CHAIN12 = ("&chain n = 12, amplitude = 5.0, omega = 2.3, damping = 0.02, restitu
            "&run transient = 500 /\n")
 
 
-def test_corner_ends_a_branch(impactchain_exe, tmp_path):
+def test_branch_goes_through_a_corner(impactchain_exe, tmp_path):
     """Continued down from A = 5, the orbit reaches a corner near A = 4.8296, where
-    oscillator 4 is hit by both neighbours at one instant (the parameter column cannot be
-    carried there): the branch ends named a corner, not a grazing (neither monitor is near
-    zero), and the points before it are written (the run used to stop with an error)."""
+    oscillator 4 is hit by both neighbours at one instant (the map jumps there): the corner is
+    written as a special point (not a grazing: neither monitor is near zero), and the branch
+    goes on along the orbits with the 22 impacts in another order to the bound (the run used
+    to stop with an error, then to end there)."""
     text = (CHAIN12 + "&continuation parameter = 'amplitude', stop = 4.8, step = -0.01 /\n"
             "&output file = 'corner.h5' /\n")
     result = run_namelist(impactchain_exe, text, tmp_path)
-    assert "ends: corner" in result.stdout
+    assert "corner at" in result.stdout and "ends: bound" in result.stdout
     with h5py.File(tmp_path / "corner.h5") as f:
         g = f["continuation"]
-        assert g.attrs["end_kind"] == "corner"
-        assert "simultaneous impact (corner)" in g.attrs["end_reason"]
+        assert g.attrs["end_kind"] == "bound"
         assert [k.decode() for k in g["special_kind"][:]] == ["corner"]
-        assert g["special_index"][0] == g["values"].shape[0] - 1 >= 8
+        c = g["special_index"][0]
+        assert 8 <= c < g["values"].shape[0] - 1
         assert abs(g["special_value"][0] - 4.8295554) < 1e-6
+        assert g["values"][-1] == 4.8
         assert (g["min_gap"][:] > 0.1).all() and (g["min_impact_speed"][:] > 0.1).all()
         assert (g["impacts_per_period"][:] == 22).all()
+        # the orbit jumps at the corner: a new family, not a continuation
+        jump = np.hypot(np.linalg.norm(g["x"][c + 1] - g["x"][c]),
+                        np.linalg.norm(g["v"][c + 1] - g["v"][c]))
+        assert jump > 1e-3
 
 
 def test_corner_beyond_the_bound(impactchain_exe, tmp_path):
