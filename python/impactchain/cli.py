@@ -194,8 +194,9 @@ def _chart_options(parser: argparse.ArgumentParser) -> None:
                         help="a sweep over the curves' two parameters, drawn underneath as a "
                              "map")
     parser.add_argument("--quantity", choices=figures.QUANTITIES, default="period",
-                        help="what the map shows: the chain's period (default) or impacts per "
-                             "drive cycle")
+                        help="what the map shows: the chain's period (default), impacts per "
+                             "drive cycle, or the largest Lyapunov exponent (a sweep with "
+                             "&lyapunov)")
 
 
 def _plane_options(parser: argparse.ArgumentParser) -> None:

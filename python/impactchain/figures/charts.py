@@ -10,7 +10,7 @@ from functools import reduce
 
 import numpy as np
 from matplotlib.axes import Axes
-from matplotlib.colors import BoundaryNorm, ListedColormap
+from matplotlib.colors import BoundaryNorm, ListedColormap, TwoSlopeNorm
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 
@@ -30,8 +30,12 @@ APERIODIC_COLOUR = "0.55"
 CODIM2_STYLE = {"marker": "*", "s": 110, "color": "gold", "edgecolors": "k",
                 "linewidths": 0.6, "zorder": 4}
 """Codimension-two points met along a curve."""
-QUANTITIES = ("period", "impacts")
-"""What a chart's map can show: the period of the chain, or impacts per drive cycle."""
+QUANTITIES = ("period", "impacts", "exponent")
+"""What a chart's map can show: the period of the chain, impacts per drive cycle, or the
+largest Lyapunov exponent."""
+EXPONENT_CMAP = "RdBu_r"
+"""A chart's map of the largest exponent: blue below zero (periodic), white at zero (a
+torus, a bifurcation), red above (chaos), on a scale centred at zero."""
 
 
 def chart(curves: RunLike | Sequence[RunLike], over: RunLike | None = None,
@@ -48,7 +52,9 @@ def chart(curves: RunLike | Sequence[RunLike], over: RunLike | None = None,
     either order, on the same chain, drawn first as an image of its grid (each cell centred
     on its point): ``quantity`` ``'period'`` the period of the chain (the least common
     multiple of its oscillators' periods; aperiodic in grey), ``'impacts'`` the impacts per
-    drive cycle over its records (one colour per whole number up to :data:`IMPACTS_CAP`).
+    drive cycle over its records (one colour per whole number up to :data:`IMPACTS_CAP`),
+    ``'exponent'`` the largest Lyapunov exponent in bits per drive cycle (a sweep with
+    ``&lyapunov``; :data:`EXPONENT_CMAP`).
     The axes are the curves' parameters, their limits the map's cells (the curves clipped
     to them), or the curves' points without a map. ``ax``: one Axes.
     """
@@ -149,7 +155,9 @@ def _same(a: float, b: float) -> bool:
 def _draw_map(ax: Axes, run: Run, sweep: Sweep, curve: Curve,
               quantity: str) -> tuple[float, float, float, float]:
     """The sweep's grid as an image, cells centred on its points, with a colour bar in whole
-    numbers; the image's extent."""
+    numbers (the largest exponent: a continuous one); the image's extent."""
+    if quantity == "exponent":
+        return _draw_exponent_map(ax, run, sweep, curve)
     if quantity == "impacts":
         per_point = np.minimum(np.rint(sweep.collisions_per_cycle), IMPACTS_CAP + 1)
     else:
@@ -171,6 +179,25 @@ def _draw_map(ax: Axes, run: Run, sweep: Sweep, curve: Curve,
                       aspect="auto", interpolation="nearest", extent=extent, gid="map")
     bar = _parent(ax).colorbar(image, ax=ax, label=label, ticks=np.arange(len(present)))
     bar.ax.set_yticklabels(names)
+    return extent
+
+
+def _draw_exponent_map(ax: Axes, run: Run, sweep: Sweep,
+                       curve: Curve) -> tuple[float, float, float, float]:
+    """The largest exponent on the sweep's grid, on a diverging scale centred at zero; the
+    image's extent."""
+    if sweep.exponents is None or sweep.exponents.shape[1] == 0:
+        raise FigureError(f"{run.path}: the map shows the largest exponent, and this sweep "
+                          "has none (&lyapunov)")
+    first, second, grid = map_grid(sweep, curve.parameter, curve.parameter2,
+                                   sweep.exponents[:, 0])
+    extent = (*_cell_edges(first), *_cell_edges(second))
+    reach = max(float(np.nanmax(np.abs(grid))), 1e-12)
+    image = ax.imshow(grid, cmap=EXPONENT_CMAP, norm=TwoSlopeNorm(0.0, -reach, reach),
+                      origin="lower", aspect="auto", interpolation="nearest", extent=extent,
+                      gid="map")
+    _parent(ax).colorbar(image, ax=ax, label=_label("largest Lyapunov exponent",
+                                                    "bits/cycle"))
     return extent
 
 

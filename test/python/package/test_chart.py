@@ -18,10 +18,11 @@ FOLD = dict(amplitude=3.0, parameter="amplitude", stop=2.0, step=-0.05, max_poin
             follow="fold", parameter2="omega", stop2=1.95, step2=0.01)
 GRAZING = dict(amplitude=1.0, parameter="amplitude", stop=3.0, step=0.1, max_points=10,
                follow="grazing", parameter2="omega", stop2=1.7, step2=-0.05)
-# A down from 3 (as figure 10 sweeps it), 3 x 3 points, a few cycles each
+# A down from 3 (as figure 10 sweeps it), 3 x 3 points, a few cycles each, with the
+# largest exponent
 MAP = dict(amplitude=3.0, omega=1.88, transient=5, cycles=6, parameter="amplitude",
            start=3.0, stop=2.6, step=-0.2, parameter2="omega", start2=1.88, stop2=1.92,
-           step2=0.02)
+           step2=0.02, lyapunov=True, vectors=2)
 SWAPPED = dict(MAP, parameter="omega", start=1.88, stop=1.92, step=0.02,
                parameter2="amplitude", start2=3.0, stop2=2.6, step2=-0.2)
 
@@ -60,7 +61,25 @@ def _value(point: Any, quantity: str) -> int:
     return int(min(np.rint(point["collisions_per_cycle"].values), figures.IMPACTS_CAP + 1))
 
 
-@pytest.mark.parametrize("quantity", figures.QUANTITIES)
+def test_exponent_map_is_the_largest_exponent(curves: list[Any], sweep: Any) -> None:
+    """Each cell the largest exponent of its point, on a scale centred at zero."""
+    ax = figures.chart(curves, over=sweep, quantity="exponent").axes[0]
+    image = _map(ax)
+    assert image.get_extent() == pytest.approx((2.5, 3.1, 1.87, 1.93), abs=1e-12)
+    values = np.array([[float(sweep.sel(point=a, point2=w, method="nearest")["exponents"][0])
+                        for a in (2.6, 2.8, 3.0)] for w in (1.88, 1.90, 1.92)])
+    assert np.array_equal(np.asarray(image.get_array()), values)  # rows: w up
+    norm = image.norm
+    assert norm.vcenter == 0 and norm.vmin == -norm.vmax == -np.abs(values).max()
+
+
+def test_exponent_map_needs_exponents(curves: list[Any]) -> None:
+    plain = api.sweep(**{**FIG10, **MAP, "lyapunov": False})
+    with pytest.raises(figures.FigureError, match="lyapunov"):
+        figures.chart(curves, over=plain, quantity="exponent")
+
+
+@pytest.mark.parametrize("quantity", ("period", "impacts"))
 def test_map_extent_is_the_grid(curves: list[Any], sweep: Any, quantity: str) -> None:
     """Cells centred on the grid's points (A 2.6, 2.8, 3.0; w 1.88, 1.90, 1.92), the axes'
     limits theirs, each cell the value of its point (the sweep ran A down)."""
@@ -79,7 +98,8 @@ def test_map_extent_is_the_grid(curves: list[Any], sweep: Any, quantity: str) ->
 
 def test_either_order_of_the_sweep_draws_the_same_map(curves: list[Any], sweep: Any) -> None:
     swapped = api.sweep(**{**FIG10, **SWAPPED})
-    for quantity in figures.QUANTITIES:
+    # (the exponents over six cycles differ with the path each point was reached by)
+    for quantity in ("period", "impacts"):
         one = _map(figures.chart(curves, over=sweep, quantity=quantity).axes[0])
         two = _map(figures.chart(curves, over=swapped, quantity=quantity).axes[0])
         assert one.get_extent() == pytest.approx(two.get_extent(), abs=1e-12)
@@ -88,7 +108,7 @@ def test_either_order_of_the_sweep_draws_the_same_map(curves: list[Any], sweep: 
 
 def test_wrong_map_or_quantity_is_refused(curves: list[Any], sweep: Any) -> None:
     with pytest.raises(figures.FigureError, match="quantity"):
-        figures.chart(curves, over=sweep, quantity="exponent")
+        figures.chart(curves, over=sweep, quantity="largest")
     other = api.sweep(**{**FIG10, **MAP, "parameter2": "damping", "start2": 0.05,
                          "stop2": 0.06, "step2": 0.01})
     with pytest.raises(figures.FigureError, match="damping"):
