@@ -238,12 +238,15 @@ FIGURES := $(foreach f,fig1a fig1b fig1c fig1d fig2a fig2b fig2c fig2d fig2e fig
 CENSUS := gallery/census
 CENSUS_FIGURES := $(foreach f,fig1a fig1b fig1d fig2 fig3,figures/census_$(f).png) \
                   figures/census_fig3_plane.png
-# Two-parameter charts (docs/gallery.md, Figure 10's chain in (A, w)): their inputs live in
-# gallery/charts/ for the same reason (the map's sweep takes about 35 CPU seconds).
+# Two-parameter charts (docs/gallery.md, Figure 10's chain and the default chain in (A, w)):
+# their inputs live in gallery/charts/ for the same reason (the maps' sweeps take about 35
+# and 15 CPU seconds).
 CHARTS := gallery/charts
-CHART_FIGURES := figures/chart_fig10.png
+CHART_FIGURES := figures/chart_fig10.png figures/chart_default.png
 CHART_FIG10_CURVES := $(foreach f,grazing_down grazing_up fold_down fold_up,\
                         $(RUNS)/chart_fig10_$(f).h5)
+CHART_DEFAULT_CURVES := $(foreach f,grazing_down grazing_up fold_down fold_up,\
+                          $(RUNS)/chart_default_$(f).h5)
 
 .PHONY: figures figure-files census-figures
 .SECONDARY:
@@ -277,6 +280,9 @@ $(RUNS)/chart_%.h5: $(CHARTS)/chart_%.nml
 
 figures/chart_fig10.png: $(CHART_FIG10_CURVES) $(RUNS)/chart_fig10_map.h5
 	$(POST) chart $(CHART_FIG10_CURVES) --over $(RUNS)/chart_fig10_map.h5 -o $@ $(GALLERY)
+figures/chart_default.png: $(CHART_DEFAULT_CURVES) $(RUNS)/chart_default_map.h5
+	$(POST) chart $(CHART_DEFAULT_CURVES) --over $(RUNS)/chart_default_map.h5 \
+	    --quantity exponent -o $@ $(GALLERY)
 
 figures/census_fig3_plane.png: $(RUNS)/census_fig3_plane.h5
 	$(POST) basin-plane $< -o $@ $(GALLERY)

@@ -49,7 +49,8 @@ from impactchain.figures._style import (BAND_ALPHA, LEFT_COLOUR, OVERLAY_COLOURS
 from impactchain.figures.census import (ATTRACTOR_COLOURS, MIRROR_BLEND, SAMPLE_ALPHA,
                                         basin_fractions, basin_plane, ensemble_spectra)
 from impactchain.figures.charts import (APERIODIC_COLOUR, CODIM2_STYLE, EXPONENT_CMAP,
-                                        IMPACTS_CAP, QUANTITIES, chain_period, chart, map_grid)
+                                        EXPONENT_SCALE, IMPACTS_CAP, QUANTITIES, chain_period,
+                                        chart, map_grid)
 from impactchain.figures.clv import (CLV_CMAP, IMPACT_COLOUR, NEAR_TANGENCY, clv_angles, clv_ipr,
                                      clv_space_time)
 from impactchain.figures.orbits import (BRANCH_COLOURS, LOG_SPAN, OVER_COLOUR, SPECIAL_STYLES,

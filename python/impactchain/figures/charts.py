@@ -36,6 +36,9 @@ largest Lyapunov exponent."""
 EXPONENT_CMAP = "RdBu_r"
 """A chart's map of the largest exponent: blue below zero (periodic), white at zero (a
 torus, a bifurcation), red above (chaos), on a scale centred at zero."""
+EXPONENT_SCALE = 95
+"""The exponent map's scale reaches the percentile of |exponent| over the grid (a few
+violent points, deep in the chatter, would bleach the rest)."""
 
 
 def chart(curves: RunLike | Sequence[RunLike], over: RunLike | None = None,
@@ -192,12 +195,12 @@ def _draw_exponent_map(ax: Axes, run: Run, sweep: Sweep,
     first, second, grid = map_grid(sweep, curve.parameter, curve.parameter2,
                                    sweep.exponents[:, 0])
     extent = (*_cell_edges(first), *_cell_edges(second))
-    reach = max(float(np.nanmax(np.abs(grid))), 1e-12)
+    reach = max(float(np.nanpercentile(np.abs(grid), EXPONENT_SCALE)), 1e-12)
     image = ax.imshow(grid, cmap=EXPONENT_CMAP, norm=TwoSlopeNorm(0.0, -reach, reach),
                       origin="lower", aspect="auto", interpolation="nearest", extent=extent,
                       gid="map")
-    _parent(ax).colorbar(image, ax=ax, label=_label("largest Lyapunov exponent",
-                                                    "bits/cycle"))
+    _parent(ax).colorbar(image, ax=ax, extend="both",
+                         label=_label("largest Lyapunov exponent", "bits/cycle"))
     return extent
 
 
