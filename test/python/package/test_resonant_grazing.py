@@ -93,12 +93,13 @@ def test_fold_curve_is_the_closed_form(fold_curve: tuple[np.ndarray, np.ndarray]
 
 def test_fold_curve_tangent_to_grazing_curve(fold_curve: tuple[np.ndarray, np.ndarray]
                                              ) -> None:
-    """q = (A_f - A_g) / (w - w*)**2 along the curve tends to c: at the offsets nearest
+    """q = (A_f - A_g) / (w - w*)**2 along the curve tends to c. At the offsets nearest
     delta = 0.01 and delta / 2, 4 q(delta) / q(delta / 2) (the ratio of the differences at
-    delta and delta / 2, scaled to an exact halving) is 4 to within the next-order term,
-    4 |q'/q| delta / 2 = 0.05 (q' from the closed form); 0.15 admits a power of 2 +- 0.05 only.
-    The differences are not zero (below the grazing, as alpha < 0 says), and q extrapolated
-    linearly to w* is c to 1e-3 (the remainder O(delta**2))."""
+    delta and delta / 2, scaled to an exact halving) is 4 but for the next-order term, which
+    the closed form puts at -0.06 there; 0.15 admits only a power 2 +- 0.05. The differences
+    are not zero (below the grazing curve, as alpha < 0 says), and the parabola through q at
+    the offsets nearest 0.01, 0.005 and 0.0025 reaches c at w* to 1e-3 (its remainder is
+    O(delta**3))."""
     amplitude, omega = fold_curve
     offset = W_STAR - omega
     q = np.array([(a - grazing(w)) for a, w in zip(amplitude, omega, strict=True)]) / offset**2
