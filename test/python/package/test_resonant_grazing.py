@@ -25,11 +25,12 @@ at the impact, (1 - w**2) xp + 2 b xp'; so det(I + S M) = 0, a multiplier -1, wh
 
 one s, and R of the relation above: A_pd(w). u1 = M12 / det(I - M) vanishes with
 sin(sqrt(1 - b**2) tau) (the square-root term of the grazing map vanishes), at
-w = 2 p sqrt(1 - b**2) / m; only m = 1 keeps the orbit off the wall at the p - 1 drive minima
-between its impacts (the free part there, (M(k 2 pi / w) y+)_1, is s sin(k m pi / p) times a
-positive factor). At w* = 2 p sqrt(1 - b**2), M(tau) = -e I, e = exp(-b tau); alpha < 0 (a
-fold) below it, M12 > 0 (a period doubling) above. Expanding, A - A_g = c (w - w*)**2 + O((w - w*)**3) with
-M12' = e tau / w and beta = (1 + r) e / (1 + e) - 1 at w*,
+w = 2 p sqrt(1 - b**2) / m; for p >= 2 only m = 1 keeps the orbit off the wall at the p - 1
+drive minima between its impacts (to leading order the free part there, (M(k 2 pi / w) y+)_1,
+is s sin(k m pi / p) times a positive factor). At m = 1, w* = 2 p sqrt(1 - b**2),
+M(tau) = -e I, e = exp(-b tau); alpha < 0 (a fold) below it, M12 > 0 (a period doubling)
+above. Expanding, A - A_g = c (w - w*)**2 + O((w - w*)**3) with M12' = e tau / w and
+beta = (1 + r) e / (1 + e) - 1 at w*,
 
     fold:     c = -sqrt(D2) sigma (1 + r)**2 w**2 M12'**2 / (2 beta**2 (1 + e)**4),
     doubling: c = sqrt(D2) sigma (1 + r)**2 w**2 M12'**2 / (1 + r e)**2
