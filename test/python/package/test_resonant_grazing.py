@@ -38,7 +38,6 @@ beta = (1 + r) e / (1 + e) - 1 at w*,
 from __future__ import annotations
 
 import math
-from typing import Any
 
 import numpy as np
 import pytest
