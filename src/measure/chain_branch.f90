@@ -427,8 +427,8 @@ contains
                 call store(set, graze, res, err)
                 if (allocated(err)) return
                 res%specials(res%n_specials)%value = mu_g
-                call first_past(set, graze, mu_g + sign(delta, found%y(size(found%y)) - mu_g), &
-                                found, err)
+                call first_past(set, graze, mu_g, &
+                                mu_g + sign(delta, found%y(size(found%y)) - mu_g), found, err)
                 if (allocated(err)) return
             else
                 graze = located
@@ -440,20 +440,25 @@ contains
         here = found
     end subroutine go_through
 
-    !> The orbit of graze's family at mu, with its tangent oriented along found's: it replaces
-    !> found when Newton finds it.
-    subroutine first_past(set, graze, mu, found, err)
+    !> The orbit of graze's family at mu, with its tangent oriented away from the grazing at
+    !> mu_g (where an impact's speed falls to zero on the way up and the other family lies on
+    !> the same side, the branch turns there): it replaces found when Newton finds it.
+    subroutine first_past(set, graze, mu_g, mu, found, err)
         type(setting_t), intent(in) :: set
         type(cursor_t), intent(in) :: graze
-        real(wp), intent(in) :: mu
+        real(wp), intent(in) :: mu_g, mu
         type(cursor_t), intent(inout) :: found
         type(error_t), allocatable, intent(out) :: err
         type(cursor_t) :: again
+        real(wp), allocatable :: away(:)
         logical :: ok
 
         call orbit_at(set, graze, mu, again, ok, err)
         if (allocated(err) .or. .not. ok) return
-        call tangent_at(set, again, found%tangent, err)
+        allocate (away(size(again%y)))
+        away = 0
+        away(size(away)) = sign(1.0_wp, mu - mu_g)
+        call tangent_at(set, again, away, err)
         if (allocated(err)) then
             ! (no tangent there: the first orbit stays as found)
             deallocate (err)

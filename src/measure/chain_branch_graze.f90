@@ -184,6 +184,12 @@ contains
         call orbit_at(set, found, mu(1), trial, ok, err)
         if (.not. ok) return
         gap = [trial%orbit%min_gap, found%orbit%min_gap]
+        if (gap(1) < gap(2)) then
+            ! (mu_g was short of the grazing, found lies on the near side: the trial is nearer)
+            mu = mu([2, 1])
+            gap = gap([2, 1])
+            last = trial
+        end if
         do k = 1, 30
             if (gap(2) <= 1.0e-14_wp .or. .not. gap(1) > gap(2)) exit
             next = mu(2) - gap(2)*(mu(2) - mu(1))/(gap(2) - gap(1))

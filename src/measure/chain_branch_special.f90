@@ -19,6 +19,10 @@ module chain_branch_special
     private
     public :: locate_specials, locate_nonsmooth, nonsmooth_reason
 
+    !> A monitor (gap minimum, impact speed, corner, section gap) below this names the
+    !> non-smooth point where the impacts change.
+    real(wp), parameter :: vanishing = 1.0e-4_wp
+
 contains
 
     !> Between `here` and `next` (arclength h apart): a fold where the tangent's parameter
@@ -205,7 +209,6 @@ contains
         real(wp), intent(out) :: value
         type(error_t), allocatable, intent(out) :: err
         type(cursor_t), intent(out), optional :: located
-        real(wp), parameter :: vanishing = 1.0e-4_wp
         type(cursor_t) :: trial, last_same
         character(len=:), allocatable :: failure
         real(wp) :: s_lo, s_hi, s, mu_lo, mu_hi, corner_before, corner_last
@@ -249,6 +252,12 @@ contains
             kind = 'section'
             value = secant_root(here%y(m + 1), last_same%y(m + 1), section_gap(set, here), &
                                 section_gap(set, last_same))
+        else if (grazing_beyond(set, res, here, last_same)) then
+            ! (Newton gave out short of it, as the saltation matrices grow like 1/V)
+            kind = 'grazing'
+            value = secant_root(here%y(m + 1), last_same%y(m + 1), &
+                                grazing_monitor(here%orbit, last_same%orbit), &
+                                grazing_monitor(last_same%orbit, last_same%orbit))
         else
             kind = ''
             if (.not. keep) return
@@ -258,6 +267,42 @@ contains
         if (allocated(err) .or. len(kind) == 0) return
         call add_special(res, res%n_points, kind, value)
     end subroutine locate_nonsmooth
+
+    !> A grazing beyond the last orbit with the old impacts, which Newton could not reach:
+    !> that orbit's grazing monitor (its smaller one, the gap minimum or the impact speed) has
+    !> fallen below 1/20 of the monitor's largest over the branch's points, and the secant
+    !> through the point before it and it reaches zero within their distance.
+    pure logical function grazing_beyond(set, res, before, last)
+        type(setting_t), intent(in) :: set
+        type(branches_t), intent(in) :: res
+        type(cursor_t), intent(in) :: before, last
+        real(wp) :: largest, g
+        integer :: k, m
+
+        m = size(last%y) - 1
+        largest = 0
+        do k = 1, res%n_points
+            if (res%points(k)%branch /= set%branch) cycle
+            g = grazing_monitor(res%points(k)%orbit, last%orbit)
+            if (g < huge(1.0_wp)) largest = max(largest, g)
+        end do
+        g = grazing_monitor(last%orbit, last%orbit)
+        grazing_beyond = g < largest/20 .and. &
+                         secant_root(before%y(m + 1), last%y(m + 1), &
+                                     grazing_monitor(before%orbit, last%orbit), g) /= last%y(m + 1)
+    end function grazing_beyond
+
+    !> An orbit's grazing monitor of the kind that is the smaller on `last`: its smallest
+    !> impact speed or its smallest gap minimum (huge: none).
+    pure real(wp) function grazing_monitor(orbit, last) result(g)
+        type(orbit_t), intent(in) :: orbit, last
+
+        if (last%min_impact_speed < last%min_gap) then
+            g = orbit%min_impact_speed
+        else
+            g = orbit%min_gap
+        end if
+    end function grazing_monitor
 
     !> Where a monitor, g_before at mu_before and g_last at mu_last, reaches zero along their
     !> secant; mu_last itself when the secant does not apply (a monitor that did not decrease,
@@ -334,8 +379,14 @@ contains
 
         select case (kind)
         case ('grazing')
-            reason = "grazing at "//set%opt%parameter//" = "//fmt_real(value)// &
-                     ": the impacts change there, the branch ends"
+            reason = "grazing at "//set%opt%parameter//" = "//fmt_real(value)
+            associate (o => res%points(res%n_points)%orbit)
+                if (min(o%min_gap, o%min_impact_speed) >= vanishing) reason = reason// &
+                    " (extrapolated: Newton gave out at the orbit with "// &
+                    merge("impact speed", "gap minimum ", o%min_impact_speed < o%min_gap)// &
+                    " "//fmt_real(min(o%min_gap, o%min_impact_speed))//")"
+            end associate
+            reason = reason//": the impacts change there, the branch ends"
         case ('corner')
             associate (p => res%points(res%n_points))
                 call corner_monitor(set, p%orbit, p%value, apart, oscillator)
