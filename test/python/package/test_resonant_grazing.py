@@ -170,3 +170,26 @@ def test_curve_tangent_to_grazing(curve: tuple[int, str, np.ndarray, np.ndarray]
           f"{np.sort(offset[nearest])} -> {limit:.5f}, leading-order c {c:.5f}")
     assert abs(ratio - 4) < 0.15
     assert abs(limit / c - 1) < 1e-3
+
+
+def test_branch_turns_at_a_grazing_newton_cannot_reach() -> None:
+    """p = 1 at w* - 0.02, from the one-impact orbit at 1.03 A_g down: past the fold the
+    branch comes back up on the slow orbits, where Newton gives out short of the grazing (the
+    saltation's 1/V). The grazing is named all the same, located again from the forced
+    response's side at the closed form A_g to 1e-10 (its orbit without impacts), and the branch
+    turns down along the forced response, to its bound."""
+    w0 = w_star(1) - 0.02
+    x0, v0 = start(w0, 1, 1.03 * grazing(w0))
+    run = api.continuation(1, 1.03 * grazing(w0), w0, parameter="amplitude",
+                           stop=0.8 * grazing(w0), step=-0.002 * grazing(w0), max_points=300,
+                           x0=[x0], v0=[v0], transient=0, **OSCILLATOR)
+    kinds = [str(k) for k in run["special_kind"].values]
+    print(run.attrs["end_reason"], kinds)
+    assert kinds == ["fold", "grazing"]
+    g = int(run["special_index"].values[1])
+    assert abs(float(run["special_value"][1]) - grazing(w0)) < 1e-10
+    assert abs(float(run["values"][g]) - grazing(w0)) < 1e-10
+    impacts, values = run["impacts_per_period"].values, run["values"].values
+    assert impacts[g - 1] == 1 and (impacts[g:] == 0).all()
+    assert (np.diff(values[g:]) < 0).all() and values[-1] == pytest.approx(0.8 * grazing(w0))
+    assert run.attrs["end_kind"] == "bound"
