@@ -7,13 +7,13 @@
 !> points: chain_branch_special.
 module chain_branch_points
     use chain_kinds, only: wp, i8
-    use chain_error, only: error_t
+    use chain_error, only: error_t, set_error
     use chain_model, only: model_t, set_model_parameter
-    use chain_engine, only: chain_t, chain_positions, chain_velocities, chain_time, &
-                            chain_cycle, chain_period
+    use chain_engine, only: chain_t, chain_positions, chain_time
     use chain_event_log, only: event_log_t, event_log_init, event_impact
     use chain_section, only: chain_at_section, advance_to_point
     use chain_orbit, only: orbit_t, orbit_options_t, orbit_pass_t, describe_orbit, interleave
+    use chain_curve_mirror, only: half_pass, mirror_symmetric_chain
     implicit none
     private
     public :: branch_options_t, branch_point_t, special_point_t, branch_origin_t, branches_t
@@ -246,9 +246,7 @@ contains
         real(wp) :: size_of
 
         symmetric = .false.
-        associate (a => model%spacing)
-            if (any(a /= a(ubound(a, 1):lbound(a, 1):-1))) return
-        end associate
+        if (.not. mirror_symmetric_chain(model)) return
         call mirror_image(model, phase, x, v, x_mirror, v_mirror, err)
         if (allocated(err)) return
         size_of = 1 + max(maxval(abs(x)), maxval(abs(v)))
@@ -258,35 +256,22 @@ contains
     !> The mirror image S of the orbit through (x, v) on the section `phase` of a
     !> mirror-symmetric chain, on the same section (docs/model.md 9: x(i) -> -x(n+1-i),
     !> v(i) -> -v(n+1-i), the drive shifted by half a period): the state half a drive period
-    !> after the section, from a fresh chain, mirrored.
+    !> after the section, from a fresh chain, mirrored (chain_curve_mirror's half map).
     subroutine mirror_image(model, phase, x, v, x_mirror, v_mirror, err)
         type(model_t), intent(in) :: model
         real(wp), intent(in) :: phase, x(:), v(:)
         real(wp), allocatable, intent(out) :: x_mirror(:), v_mirror(:)
         type(error_t), allocatable, intent(out) :: err
-        type(chain_t) :: chain
-        type(event_log_t) :: log
-        real(wp) :: s, period
-        integer(i8) :: cycle
-        integer :: n
+        type(orbit_pass_t) :: pass
 
-        n = model%n
-        call chain_at_section(model, phase, x, v, chain, err)
+        call half_pass(model, phase, interleave(x, v), pass, err, .false.)
         if (allocated(err)) return
-        call event_log_init(log, .false., 0)
-        period = chain_period(chain)
-        s = chain_time(chain) + period/2
-        cycle = chain_cycle(chain)
-        if (s >= period) then
-            s = s - period
-            cycle = cycle + 1
+        if (.not. pass%admissible) then
+            call set_error(err, "mirror image: the state has a negative gap")
+            return
         end if
-        call advance_to_point(chain, cycle, s, log, err)
-        if (allocated(err)) return
-        x_mirror = -chain_positions(chain)
-        x_mirror = x_mirror(n:1:-1)
-        v_mirror = -chain_velocities(chain)
-        v_mirror = v_mirror(n:1:-1)
+        x_mirror = pass%image(1::2)
+        v_mirror = pass%image(2::2)
     end subroutine mirror_image
 
     subroutine add_special(res, point, kind, value)

@@ -1,5 +1,5 @@
-!> Fold, period-doubling and grazing curves in two parameters (docs/model.md section 12.6):
-!> from a fold, period doubling or grazing of a one-parameter branch (chain_branch), its curve
+!> Fold, period-doubling, grazing and branch-point curves in two parameters (docs/model.md
+!> section 12.6): from such a special point of a one-parameter branch (chain_branch), its curve
 !> in (parameter, parameter2) by pseudo-arclength continuation of the minimally augmented
 !> system of chain_curve_system, with the orbit and its multipliers at each point, and the
 !> fold-flip points met on the way (the other test, det(J + I) on a fold curve, det(J - I) on
@@ -9,11 +9,12 @@ module chain_curve
     use chain_error, only: error_t, set_error, fmt_int, fmt_real
     use chain_model, only: model_t, model_parameter, set_model_parameter
     use chain_orbit, only: orbit_t, orbit_options_t, describe_orbit, interleave, pass_impacts, &
-                           multiplier_distance
+                           multiplier_distance, orbit_pass_t, orbit_pass
     use chain_lapack, only: solve_linear
     use chain_curve_system, only: curve_setting_t, curve_state_t, evaluate, null_vectors, &
                                   lift_grazing_bond, grazing_aim, same_bonds
     use chain_curve_meet, only: meet_grazing
+    use chain_curve_mirror, only: mirror_symmetric_chain
     implicit none
     private
     public :: curve_options_t, curve_t, follow_curve, curve_kinds
@@ -22,8 +23,9 @@ module chain_curve
     real(wp), parameter :: tolerance = 1.0e-11_wp
 
     !> The kinds of special point a curve follows.
-    character(len=*), parameter :: curve_kinds(3) = [character(len=15) :: 'fold', &
-                                                     'period-doubling', 'grazing']
+    character(len=*), parameter :: curve_kinds(4) = [character(len=15) :: 'fold', &
+                                                     'period-doubling', 'grazing', &
+                                                     'branch-point']
 
     type :: curve_options_t
         character(len=:), allocatable :: follow     !! one of curve_kinds
@@ -70,8 +72,12 @@ contains
             return
         else if (.not. any(curve_kinds == opt%follow)) then
             call set_error(err, "curve: follow = '"//opt%follow//"' is none of fold, "// &
-                           "period-doubling, grazing")
+                           "period-doubling, grazing, branch-point")
             return
+        end if
+        if (opt%follow == 'branch-point') then
+            call check_mirror(model, cycles, err)
+            if (allocated(err)) return
         end if
         curve%kind = opt%follow
         allocate (curve%values(opt%max_points), curve%values2(opt%max_points), &
@@ -353,6 +359,7 @@ contains
         type(curve_state_t), intent(in) :: st
         type(curve_t), intent(inout) :: curve
         type(error_t), allocatable, intent(out) :: err
+        type(orbit_pass_t) :: full
         integer :: m, k
 
         m = size(y) - 2
@@ -361,13 +368,22 @@ contains
         curve%orbits(k)%reason = ''
         curve%orbits(k)%cycles = set%cycles
         curve%orbits(k)%phase = set%phase
-        curve%orbits(k)%residuals = [st%pass%residual]
-        call describe_orbit(model_at(set, y), st%pass, curve%orbits(k), err)
+        if (set%kind == 'branch-point') then
+            ! (Newton's pass is the half map's: the orbit is described by the whole period's)
+            call orbit_pass(model_at(set, y), set%phase, set%cycles, y(:m), full, err)
+            if (allocated(err)) return
+            curve%orbits(k)%residuals = [full%residual]
+            call describe_orbit(model_at(set, y), full, curve%orbits(k), err)
+        else
+            curve%orbits(k)%residuals = [st%pass%residual]
+            call describe_orbit(model_at(set, y), st%pass, curve%orbits(k), err)
+        end if
         if (allocated(err)) return
         curve%n_points = k
         curve%values(k) = y(m + 1)
         curve%values2(k) = y(m + 2)
-        if (k == 1 .or. set%kind == 'grazing') return
+        ! (on a branch-point curve det(J - I) vanishes all along: no fold-flip test)
+        if (k == 1 .or. set%kind == 'grazing' .or. set%kind == 'branch-point') return
         if (flip_sign(curve%orbits(k - 1), set%shift) /= flip_sign(curve%orbits(k), set%shift)) &
             then
             curve%n_codim2 = curve%n_codim2 + 1
@@ -390,6 +406,22 @@ contains
         end do
         flip_sign = merge(1, -1, product_ >= 0)
     end function flip_sign
+
+    !> A branch-point curve is the pitchfork of the mirror symmetry: a mirror-symmetric chain
+    !> and a period-1 orbit (the half map is half a drive period).
+    subroutine check_mirror(model, cycles, err)
+        type(model_t), intent(in) :: model
+        integer, intent(in) :: cycles
+        type(error_t), allocatable, intent(out) :: err
+
+        if (.not. mirror_symmetric_chain(model)) then
+            call set_error(err, "branch-point curve: the chain is not mirror-symmetric "// &
+                           "(spacing a(k) /= a(n-k)); only the mirror's pitchfork is followed")
+        else if (cycles /= 1) then
+            call set_error(err, "branch-point curve: period = "//fmt_int(cycles)// &
+                           " (only period 1 is followed)")
+        end if
+    end subroutine check_mirror
 
     !> The model at y's two parameters.
     function model_at(set, y) result(model)

@@ -5,6 +5,9 @@
 !>   [[J + shift I, b], [c^T, 0]] (w, s) = (0, 1) (shift -1 at a fold, +1 at a period
 !>   doubling), regular at a simple one; its row s_y = -v^T J_y w (v from the transposed
 !>   system) with J_y by central differences of exact Jacobians.
+!> - Branch point of the mirror symmetry: the period doubling of the half map Q
+!>   (chain_curve_mirror) in place of the map, P(z) - z replaced by Q(z) - z; its parameter
+!>   columns by central differences of Q.
 !> - Grazing: s = the smallest minimum of the grazing bond's gap over the orbit (chain_orbit's
 !>   gap monitor), less grazing_aim. The bond's contact is lifted out of reach while Newton
 !>   works (its spacing raised by `lift`, the gap lowered by as much): the orbit is continued
@@ -20,6 +23,7 @@ module chain_curve_system
     use chain_orbit, only: orbit_pass_t, orbit_pass, pass_refusal, pass_impacts, &
                            orbit_gap_minimum
     use chain_parameter, only: map_parameter_derivative
+    use chain_curve_mirror, only: half_pass, half_parameter_column
     use chain_lapack, only: solve_linear
     implicit none
     private
@@ -37,8 +41,9 @@ module chain_curve_system
         real(wp) :: phase = 0
         integer :: cycles = 1
         character(len=:), allocatable :: parameter, parameter2
-        character(len=:), allocatable :: kind !! fold, period-doubling or grazing
-        real(wp) :: shift = -1 !! the test matrix J + shift I: -1 fold, +1 period doubling
+        character(len=:), allocatable :: kind !! fold, period-doubling, grazing or branch-point
+        !> the test matrix J + shift I: -1 fold, +1 period doubling (and of DQ at a branch point)
+        real(wp) :: shift = -1
         real(wp), allocatable :: b(:), c(:) !! the bordering vectors (unit, near the null vectors)
         integer :: grazing_bond = -1 !! grazing: the bond whose gap touches zero (-1: none)
         !> grazing: the bonds lifted, the grazing bond and those whose gaps touch zero with it
@@ -88,12 +93,25 @@ contains
         st%residual = [st%pass%image - st%pass%z, st%s]
         st%ok = .true.
         if (.not. rows) return
-        call map_parameter_derivative(model, set%phase, set%cycles, y(1:m:2), y(2:m:2), &
-                                      set%parameter, st%pass%jacobian, p1, err)
+        if (set%kind == 'branch-point') then
+            call half_parameter_column(model, set%phase, y(:m), set%parameter, p1, st%failure, &
+                                       err)
+            if (.not. allocated(err)) call half_parameter_column(model, set%phase, y(:m), &
+                                                                 set%parameter2, p2, &
+                                                                 st%failure, err)
+        else
+            call map_parameter_derivative(model, set%phase, set%cycles, y(1:m:2), y(2:m:2), &
+                                          set%parameter, st%pass%jacobian, p1, err)
+            if (.not. allocated(err)) &
+                call map_parameter_derivative(model, set%phase, set%cycles, y(1:m:2), &
+                                              y(2:m:2), set%parameter2, st%pass%jacobian, p2, &
+                                              err)
+        end if
         if (allocated(err)) return
-        call map_parameter_derivative(model, set%phase, set%cycles, y(1:m:2), y(2:m:2), &
-                                      set%parameter2, st%pass%jacobian, p2, err)
-        if (allocated(err)) return
+        if (len(st%failure) > 0) then
+            st%ok = .false.
+            return
+        end if
         if (set%kind == 'grazing') then
             call gap_gradient(set, y, d_s, st%failure, err)
         else
@@ -113,7 +131,8 @@ contains
         st%rows(m + 1, :) = d_s
     end subroutine evaluate
 
-    !> One pass of the map at y (both parameters set), and the model it used.
+    !> One pass of the map at y (both parameters set; on a branch-point curve the half map),
+    !> and the model it used.
     subroutine pass_at(set, y, pass, model, failure, err)
         type(curve_setting_t), intent(in) :: set
         real(wp), intent(in) :: y(:)
@@ -124,7 +143,11 @@ contains
         character(len=:), allocatable :: refusal
 
         model = lifted_model(set, y)
-        call orbit_pass(model, set%phase, set%cycles, y(:size(y) - 2), pass, err)
+        if (set%kind == 'branch-point') then
+            call half_pass(model, set%phase, y(:size(y) - 2), pass, err, .true.)
+        else
+            call orbit_pass(model, set%phase, set%cycles, y(:size(y) - 2), pass, err)
+        end if
         if (allocated(err)) return
         refusal = pass_refusal(pass)
         if (len(refusal) > 0) failure = refusal

@@ -6,13 +6,15 @@ module chain_floquet
     use chain_kinds, only: wp, i8
     use chain_error, only: error_t, set_error
     use chain_engine, only: chain_t, chain_set_tangent, chain_size, chain_cycle, chain_time, &
-                            chain_tangent_frame
-    use chain_event_log, only: event_log_t, event_log_init
+                            chain_tangent_frame, chain_counts, chain_contacts
+    use chain_state, only: event_counts_t
+    use chain_event_log, only: event_log_t, event_log_init, event_impact
     use chain_lapack, only: general_eigenvalues
     use chain_section, only: advance_to_point
     implicit none
     private
-    public :: poincare_jacobian, advance_with_jacobian, floquet_multipliers, floquet_result
+    public :: poincare_jacobian, advance_with_jacobian, pass_end, floquet_multipliers, &
+              floquet_result
 
 contains
 
@@ -55,6 +57,23 @@ contains
         ! (the engine's power-of-two scaling undone, saturating at huge: such a map is singular)
         jacobian = chain_tangent_frame(chain)
     end subroutine advance_with_jacobian
+
+    !> At the end of a pass of the map (its events in `log`): did an oscillator come to rest,
+    !> and did the cluster rule act (an impact of speed 0)? Either makes the map not smooth.
+    subroutine pass_end(chain, log, rests, collapse)
+        type(chain_t), intent(in) :: chain
+        type(event_log_t), intent(in) :: log
+        logical, intent(out) :: rests, collapse
+        type(event_counts_t) :: counts
+        integer :: k
+
+        counts = chain_counts(chain)
+        rests = counts%sticks > 0 .or. any(chain_contacts(chain) /= 0)
+        collapse = .false.
+        do k = 1, log%count
+            if (log%kind(k) == event_impact .and. log%speed(k) == 0) collapse = .true.
+        end do
+    end subroutine pass_end
 
     !> The Jacobian of the p-cycle Poincare map at the chain's final state and its
     !> eigenvalues, the Floquet multipliers.

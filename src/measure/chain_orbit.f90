@@ -13,14 +13,13 @@ module chain_orbit
     use chain_error, only: error_t, set_error, fmt_int
     use chain_model, only: model_t, bond_gaps
     use chain_flow, only: flow_t, make_flow, propagator, forced_response
-    use chain_engine, only: chain_t, chain_positions, chain_velocities, chain_counts, &
-                            chain_contacts, chain_next_event, chain_advance, chain_sync, &
-                            chain_new_cycle, chain_cycle, chain_time, chain_period
-    use chain_state, only: event_counts_t
+    use chain_engine, only: chain_t, chain_positions, chain_velocities, chain_next_event, &
+                            chain_advance, chain_sync, chain_new_cycle, chain_cycle, chain_time, &
+                            chain_period
     use chain_event_log, only: event_log_t, event_log_init, event_log_clear, event_impact, &
                                event_stick
     use chain_section, only: chain_at_section
-    use chain_floquet, only: advance_with_jacobian, floquet_multipliers
+    use chain_floquet, only: advance_with_jacobian, floquet_multipliers, pass_end
     use chain_lapack, only: solve_linear
     implicit none
     private
@@ -193,8 +192,6 @@ contains
         type(orbit_pass_t), intent(out) :: pass
         type(error_t), allocatable, intent(out) :: err
         type(chain_t) :: chain
-        type(event_counts_t) :: counts
-        integer :: k
 
         pass%z = z
         pass%admissible = .not. any(bond_gaps(model%spacing, model%walls, z(1::2)) < 0)
@@ -205,13 +202,7 @@ contains
         call advance_with_jacobian(chain, cycles, pass%log, pass%jacobian, err)
         if (allocated(err)) return
         pass%image = interleave(chain_positions(chain), chain_velocities(chain))
-        counts = chain_counts(chain)
-        pass%rests = counts%sticks > 0 .or. any(chain_contacts(chain) /= 0)
-        associate (log => pass%log)
-            do k = 1, log%count
-                if (log%kind(k) == event_impact .and. log%speed(k) == 0) pass%collapse = .true.
-            end do
-        end associate
+        call pass_end(chain, pass%log, pass%rests, pass%collapse)
         pass%residual = maxval(abs(pass%image - z))/(1 + maxval(abs(z)))
     end subroutine orbit_pass
 

@@ -105,7 +105,8 @@ contains
         character(len=*), parameter :: when = '&continuation follow'
 
         call add(t, 'continuation', '/curve/@follow', 'attribute', '', 'string', '', '', &
-                 'the kind of special point followed: fold or period-doubling', when)
+                 'the kind of special point followed: fold, period-doubling, grazing or '// &
+                 'branch-point', when)
         call add(t, 'continuation', '/curve/@parameter', 'attribute', '', 'string', '', '', &
                  'the continued parameter (the special point''s)', when)
         call add(t, 'continuation', '/curve/@parameter2', 'attribute', '', 'string', '', '', &

@@ -476,3 +476,45 @@ def test_no_point_to_follow_is_said(impactchain_exe, tmp_path):
         assert f["curve"]["values"].shape == (0,)
         reason = f["curve"].attrs["end_reason"]
         assert "no fold" in (reason.decode() if isinstance(reason, bytes) else reason)
+
+
+def test_branch_point_curve_file(impactchain_exe, tmp_path):
+    """The chain of 12's branch point (A = 5.0040468 at w = 2.3) followed in (A, w) with
+    follow = 'branch-point' (docs/model.md 12.6): /curve starts at the located branch point,
+    has a real multiplier +1 at every point (the suite `bpcurve` checks the orbits' symmetry,
+    the eigenvector's oddness and the one-parameter branch points along it) and ends at
+    stop2."""
+    text = (CHAIN12 + "&continuation parameter = 'amplitude', stop = 5.01, step = 0.001, "
+            "follow = 'branch-point', parameter2 = 'omega', stop2 = 2.302, step2 = 0.005 /\n"
+            "&output file = 'bpcurve.h5' /\n")
+    run_namelist(impactchain_exe, text, tmp_path)
+    with h5py.File(tmp_path / "bpcurve.h5") as f:
+        cont, curve = f["continuation"], f["curve"]
+        kinds = list(cont["special_kind"][:].astype(str))
+        bp = cont["special_value"][kinds.index("branch-point")]
+        attrs = {k: curve.attrs[k].decode() if isinstance(curve.attrs[k], bytes) else
+                 curve.attrs[k] for k in ("follow", "parameter", "parameter2", "end_reason")}
+        assert attrs == {"follow": "branch-point", "parameter": "amplitude",
+                         "parameter2": "omega", "end_reason": "bound"}
+        values, values2 = curve["values"][:], curve["values2"][:]
+        assert abs(values[0] - bp) < 1e-8 and values2[0] == 2.3
+        assert len(values) >= 2 and np.all(np.diff(values2) > 0) and values2[-1] <= 2.302
+        rho = curve["multipliers_re"][:] + 1j * curve["multipliers_im"][:]
+        assert curve["x"].shape == (len(values), 12) and rho.shape == (len(values), 24)
+        assert np.abs(rho - 1).min(axis=1).max() < 1e-8
+        assert curve["codim2_index"].shape == (0,)
+
+
+def test_no_branch_point_to_follow_is_said(impactchain_exe, tmp_path):
+    """follow = 'branch-point' on a branch without one: /curve has no points and says why;
+    the branch is written, the run succeeds."""
+    text = (CHAIN + "&continuation parameter = 'amplitude', stop = 1.2, step = 0.05, "
+            "max_points = 4, follow = 'branch-point', parameter2 = 'omega', stop2 = 2, "
+            "step2 = 0.01 /\n&output file = 'none.h5' /\n")
+    run_namelist(impactchain_exe, text, tmp_path)
+    with h5py.File(tmp_path / "none.h5") as f:
+        assert f["continuation"]["values"].shape == (4,)
+        assert f["curve"]["values"].shape == (0,)
+        reason = f["curve"].attrs["end_reason"]
+        reason = reason.decode() if isinstance(reason, bytes) else reason
+        assert reason == "no branch-point located on branch 0"

@@ -1,5 +1,6 @@
-"""Two-parameter charts (docs/model.md section 12.6): fold, period-doubling and grazing curves
-drawn in the plane of their two parameters over a brute-force map of a two-parameter sweep.
+"""Two-parameter charts (docs/model.md section 12.6): fold, period-doubling, grazing and
+branch-point curves drawn in the plane of their two parameters over a brute-force map of a
+two-parameter sweep.
 """
 
 from __future__ import annotations
@@ -43,10 +44,10 @@ violent points, deep in the chatter, would bleach the rest)."""
 
 def chart(curves: RunLike | Sequence[RunLike], over: RunLike | None = None,
           quantity: str = "period", ax: Axes | None = None) -> Figure:
-    """Fold, period-doubling and grazing curves (``/curve``) as lines in the plane of their
-    two parameters, each in its kind's colour (:data:`orbits.SPECIAL_STYLES`), its start (the
-    one-parameter run's special point) marked with the kind's marker on a dotted line at
-    its value of the second parameter, and codimension-two points (those within the axes)
+    """Fold, period-doubling, grazing and branch-point curves (``/curve``) as lines in the plane
+    of their two parameters, each in its kind's colour (:data:`orbits.SPECIAL_STYLES`), its
+    start (the one-parameter run's special point) marked with the kind's marker on a dotted
+    line at its value of the second parameter, and codimension-two points (those within the axes)
     as stars.
 
     ``curves``: one curve file (or :func:`impactchain.api.curve` tree) or several of the same

@@ -58,6 +58,17 @@ def test_no_point_to_follow_is_a_result() -> None:
     assert "no fold" in tree["curve"].attrs["end_reason"]
 
 
+def test_no_branch_point_to_follow_is_a_result() -> None:
+    """follow = 'branch-point' from Python: the forced response has none, no points, and the
+    reason (the curve itself: the suite `bpcurve` and test_continuation_cli.py)."""
+    tree = api.curve(**FIG10, amplitude=1.0, parameter="amplitude", stop=1.2, step=0.05,
+                     max_points=4, **{**CURVE, "follow": "branch-point"})
+    assert tree["continuation"].sizes["point"] == 4
+    assert tree["curve"].sizes["curve_point"] == 0
+    assert tree["curve"].attrs["follow"] == "branch-point"
+    assert tree["curve"].attrs["end_reason"] == "no branch-point located on branch 0"
+
+
 def test_bad_curve_keys_are_the_clis_errors() -> None:
     with pytest.raises(ValueError, match="step2 = 0"):
         api.curve(**FIG10, amplitude=3.0, **FOLD, **{**CURVE, "step2": 0.0})
