@@ -1,5 +1,5 @@
-!> Fold, period-doubling and grazing curves in two parameters (docs/model.md section 12.6):
-!> from a fold, period doubling or grazing of a one-parameter branch (chain_branch), its curve
+!> Fold, period-doubling, grazing and Neimark-Sacker curves in two parameters (docs/model.md
+!> section 12.6): from such a special point of a one-parameter branch (chain_branch), its curve
 !> in (parameter, parameter2) by pseudo-arclength continuation of the minimally augmented
 !> system of chain_curve_system, with the orbit and its multipliers at each point, and the
 !> fold-flip points met on the way (the other test, det(J + I) on a fold curve, det(J - I) on
@@ -12,7 +12,8 @@ module chain_curve
                            multiplier_distance
     use chain_lapack, only: solve_linear
     use chain_curve_system, only: curve_setting_t, curve_state_t, evaluate, null_vectors, &
-                                  lift_grazing_bond, grazing_aim, same_bonds
+                                  lift_grazing_bond, grazing_aim, same_bonds, aim_at_pair
+    use chain_curve_ns, only: tracked_pair, pair_end_reason
     use chain_curve_meet, only: meet_grazing
     implicit none
     private
@@ -22,8 +23,9 @@ module chain_curve
     real(wp), parameter :: tolerance = 1.0e-11_wp
 
     !> The kinds of special point a curve follows.
-    character(len=*), parameter :: curve_kinds(3) = [character(len=15) :: 'fold', &
-                                                     'period-doubling', 'grazing']
+    character(len=*), parameter :: curve_kinds(4) = [character(len=15) :: 'fold', &
+                                                     'period-doubling', 'grazing', &
+                                                     'neimark-sacker']
 
     type :: curve_options_t
         character(len=:), allocatable :: follow     !! one of curve_kinds
@@ -66,11 +68,12 @@ contains
         integer :: m
 
         if (.not. allocated(opt%follow)) then
-            call set_error(err, "curve: no kind to follow (fold, period-doubling or grazing)")
+            call set_error(err, "curve: no kind to follow (fold, period-doubling, grazing or "// &
+                           "neimark-sacker)")
             return
         else if (.not. any(curve_kinds == opt%follow)) then
             call set_error(err, "curve: follow = '"//opt%follow//"' is none of fold, "// &
-                           "period-doubling, grazing")
+                           "period-doubling, grazing, neimark-sacker")
             return
         end if
         curve%kind = opt%follow
@@ -88,6 +91,9 @@ contains
         y = [interleave(x, v), mu, model_parameter(model, opt%parameter2)]
         if (opt%follow == 'grazing') then
             call lift_grazing_bond(set, y, err)
+            if (allocated(err)) return
+        else if (opt%follow == 'neimark-sacker') then
+            call aim_at_pair(set, y, err)
             if (allocated(err)) return
         else
             ! (a start the map cannot pass keeps unit bordering vectors; Newton then says why)
@@ -126,6 +132,8 @@ contains
         character(len=:), allocatable :: failure
         real(wp) :: h
         integer :: m, halvings
+        complex(wp) :: pair
+        logical :: complex_pair
 
         m = size(y) - 2
         curve%end_reason = 'max_points'
@@ -153,7 +161,10 @@ contains
             end if
             previous = y
             y = next
-            if (set%kind /= 'grazing') then
+            if (set%kind == 'neimark-sacker') then
+                call tracked_pair(st%pass%jacobian, set%pair, pair, complex_pair)
+                set%pair = pair
+            else if (set%kind /= 'grazing') then
                 set%b = st%v/norm2(st%v)
                 set%c = st%w/norm2(st%w)
             end if
@@ -240,8 +251,14 @@ contains
         real(wp) :: before(2), last(2), largest(2), t
         integer :: k, j
 
-        reason = 'newton: '//failure
         k = curve%n_points
+        if (set%kind == 'neimark-sacker' .and. k > 0) then
+            reason = pair_end_reason(set%pair, ' near '//set%parameter//' = '// &
+                                     fmt_real(curve%values(k))//', '//set%parameter2// &
+                                     ' = '//fmt_real(curve%values2(k)), failure)
+            if (len(reason) > 0) return
+        end if
+        reason = 'newton: '//failure
         if (k < 2) return
         before = [curve%orbits(k - 1)%min_impact_speed, curve%orbits(k - 1)%min_gap]
         last = [curve%orbits(k)%min_impact_speed, curve%orbits(k)%min_gap]
@@ -367,7 +384,8 @@ contains
         curve%n_points = k
         curve%values(k) = y(m + 1)
         curve%values2(k) = y(m + 2)
-        if (k == 1 .or. set%kind == 'grazing') return
+        ! (a Neimark-Sacker curve's codim-2 points are its ends: walk names them)
+        if (k == 1 .or. set%kind == 'grazing' .or. set%kind == 'neimark-sacker') return
         if (flip_sign(curve%orbits(k - 1), set%shift) /= flip_sign(curve%orbits(k), set%shift)) &
             then
             curve%n_codim2 = curve%n_codim2 + 1
