@@ -36,7 +36,7 @@ QUANTITIES = ("period", "impacts")
 
 def chart(curves: RunLike | Sequence[RunLike], over: RunLike | None = None,
           quantity: str = "period", ax: Axes | None = None) -> Figure:
-    """Fold, period-doubling and grazing curves (``/curve``) as lines in the plane of their
+    """Fold, period-doubling, grazing and Neimark-Sacker curves (``/curve``) as lines in the plane of their
     two parameters, each in its kind's colour (:data:`orbits.SPECIAL_STYLES`), its start (the
     one-parameter run's special point) marked with the kind's marker on a dotted line at
     its value of the second parameter, and codimension-two points (those within the axes)
