@@ -294,7 +294,8 @@ contains
         if (len(failure) > 0) call set_error(err, "neimark-sacker curve: the start: "//failure)
     end subroutine aim_at_pair
 
-    !> The scalar test of a grazing (gap_of) or Neimark-Sacker curve (pair_test) at y.
+    !> The scalar test at y: a Neimark-Sacker curve's pair_test, else the lifted bond's gap_of
+    !> (a grazing curve's, or that of a fold or doubling curve meeting one: gap_and_row).
     subroutine scalar_test(set, y, s, failure, err)
         type(curve_setting_t), intent(in) :: set
         real(wp), intent(in) :: y(:)
@@ -304,7 +305,7 @@ contains
         type(orbit_pass_t) :: pass
         type(model_t) :: model
 
-        if (set%kind == 'grazing') then
+        if (set%kind /= 'neimark-sacker') then
             call gap_of(set, y, s, failure, err)
             return
         end if
