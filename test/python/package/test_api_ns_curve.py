@@ -60,3 +60,19 @@ def test_no_ns_point_is_a_result() -> None:
 def test_unknown_follow_is_the_clis_error() -> None:
     with pytest.raises(ValueError, match="neimark-sacker"):
         api.curve(**CHAIN, amplitude=3.13, **BRANCH, **{**CURVE, "follow": "torus"})
+
+
+def test_ns_curve_ends_at_a_1_2_resonance() -> None:
+    """A four-oscillator chain's Neimark-Sacker curve followed down in w ends where its pair
+    turns real at -1: named a 1:2 resonance, its last pair on the unit circle near -1."""
+    chain = dict(n=4, omega=1.13, spacing=[0.76, 1.13, 0.93, 0.6, 0.73], restitution=0.68,
+                 damping=0.092, phase=0.39, transient=300)
+    tree = api.curve(**chain, amplitude=2.64, parameter="amplitude", stop=1.0, step=-0.05,
+                     max_points=300, follow="neimark-sacker", parameter2="omega", stop2=0.5,
+                     step2=-0.03)
+    curve = tree["curve"]
+    assert curve.attrs["end_reason"].startswith("1:2 resonance near amplitude = ")
+    re, im = curve["multipliers_re"].values[-1], curve["multipliers_im"].values[-1]
+    pair = np.argmin(np.where(im > 0, np.abs(np.hypot(re, im) - 1), np.inf))
+    assert abs(np.hypot(re[pair], im[pair]) - 1) < 1e-8
+    assert np.hypot(re[pair] + 1, im[pair]) < 0.1
