@@ -1,6 +1,6 @@
-"""A fold, period-doubling, grazing or branch-point curve in two parameters: :func:`curve`, the
-command line's ``&continuation follow``, and the tree it returns, the file's ``/continuation``
-and ``/curve`` groups (public through :mod:`impactchain.api`)."""
+"""A fold, period-doubling, grazing, branch-point or Neimark-Sacker curve in two parameters:
+:func:`curve`, the command line's ``&continuation follow``, and the tree it returns, the file's
+``/continuation`` and ``/curve`` groups (public through :mod:`impactchain.api`)."""
 
 from __future__ import annotations
 
@@ -43,13 +43,13 @@ def curve(
     progress: bool = False,
     **keys: Any,
 ) -> Any:
-    """A fold, period-doubling, grazing or branch-point curve in two parameters: the CLI's
-    ``&continuation`` with ``follow``. The branches of :func:`continuation` (its arguments, the
-    same meaning), then the first special point of kind ``follow`` (``'fold'``,
-    ``'period-doubling'``, ``'grazing'`` or ``'branch-point'``) on branch 0 followed in
-    (``parameter``, ``parameter2``) towards ``parameter2 = stop2`` with arclength steps
-    ``step2`` (its sign: the direction), at most ``max_points`` points (docs/model.md section
-    12.6). ``**keys`` as :func:`continuation`'s.
+    """A fold, period-doubling, grazing, branch-point or Neimark-Sacker curve in two
+    parameters: the CLI's ``&continuation`` with ``follow``. The branches of
+    :func:`continuation` (its arguments, the same meaning), then the first special point of
+    kind ``follow`` (``'fold'``, ``'period-doubling'``, ``'grazing'``, ``'branch-point'`` or
+    ``'neimark-sacker'``) on branch 0 followed in (``parameter``, ``parameter2``) towards
+    ``parameter2 = stop2`` with arclength steps ``step2`` (its sign: the direction), at most
+    ``max_points`` points (docs/model.md section 12.6). ``**keys`` as :func:`continuation`'s.
 
     Returns:
         An :class:`xarray.DataTree` with the groups ``continuation`` (as :func:`continuation`

@@ -315,8 +315,8 @@ COMMANDS: dict[str, Command] = {
                 "with their special points (continuation file)",
                 ("continuation",), (), True, _branches_options, _branches),
         Command("chart",
-                "fold, period-doubling and grazing curves in the plane of their two "
-                "parameters, over a two-parameter sweep (curve files, &continuation follow)",
+                "fold, period-doubling, grazing and Neimark-Sacker curves in the plane of "
+                "their two parameters, over a two-parameter sweep (curve files, &continuation follow)",
                 ("curve",), (), True, _chart_options, _chart),
         Command("multipliers",
                 "largest Floquet multiplier of the continued orbits against the parameter "

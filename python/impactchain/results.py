@@ -275,14 +275,15 @@ class Continuation:
 
 @dataclass(frozen=True, eq=False)
 class Curve:
-    """A fold, period-doubling or grazing curve in two parameters (``/curve``): from the
-    first such point of branch 0 of the file's continuation, one orbit per point at
-    ``parameter = values[i]``, ``parameter2 = values2[i]``, with a multiplier +1 (a fold) or
-    -1 (a period doubling), or a gap touching zero (a grazing). No points when the branch had
+    """A fold, period-doubling, grazing or Neimark-Sacker curve in two parameters
+    (``/curve``): from the first such point of branch 0 of the file's continuation, one orbit
+    per point at ``parameter = values[i]``, ``parameter2 = values2[i]``, with a multiplier +1
+    (a fold) or -1 (a period doubling), a gap touching zero (a grazing) or a complex pair on
+    the unit circle (a Neimark-Sacker point). No points when the branch had
     no such point (``end_reason`` says so).
     """
 
-    follow: str  # fold, period-doubling or grazing
+    follow: str  # fold, period-doubling, grazing or neimark-sacker
     parameter: str  # the continued parameter
     parameter2: str  # the curve's second parameter
     end_reason: str  # why the curve ended, or why it has no points

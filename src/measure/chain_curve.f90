@@ -1,4 +1,4 @@
-!> Fold, period-doubling, grazing and branch-point curves in two parameters (docs/model.md
+!> Fold, period-doubling, grazing, branch-point and Neimark-Sacker curves in two parameters (docs/model.md
 !> section 12.6): from such a special point of a one-parameter branch (chain_branch), its curve
 !> in (parameter, parameter2) by pseudo-arclength continuation of the minimally augmented
 !> system of chain_curve_system, with the orbit and its multipliers at each point, and the
@@ -12,7 +12,8 @@ module chain_curve
                            multiplier_distance, orbit_pass_t, orbit_pass
     use chain_lapack, only: solve_linear
     use chain_curve_system, only: curve_setting_t, curve_state_t, evaluate, null_vectors, &
-                                  lift_grazing_bond, grazing_aim, same_bonds
+                                  lift_grazing_bond, grazing_aim, same_bonds, aim_at_pair
+    use chain_curve_ns, only: tracked_pair, pair_end_reason
     use chain_curve_meet, only: meet_grazing
     use chain_curve_mirror, only: mirror_symmetric_chain
     implicit none
@@ -23,9 +24,9 @@ module chain_curve
     real(wp), parameter :: tolerance = 1.0e-11_wp
 
     !> The kinds of special point a curve follows.
-    character(len=*), parameter :: curve_kinds(4) = [character(len=15) :: 'fold', &
+    character(len=*), parameter :: curve_kinds(5) = [character(len=15) :: 'fold', &
                                                      'period-doubling', 'grazing', &
-                                                     'branch-point']
+                                                     'branch-point', 'neimark-sacker']
 
     type :: curve_options_t
         character(len=:), allocatable :: follow     !! one of curve_kinds
@@ -68,11 +69,12 @@ contains
         integer :: m
 
         if (.not. allocated(opt%follow)) then
-            call set_error(err, "curve: no kind to follow (fold, period-doubling or grazing)")
+            call set_error(err, "curve: no kind to follow (fold, period-doubling, grazing, "// &
+                           "branch-point or neimark-sacker)")
             return
         else if (.not. any(curve_kinds == opt%follow)) then
             call set_error(err, "curve: follow = '"//opt%follow//"' is none of fold, "// &
-                           "period-doubling, grazing, branch-point")
+                           "period-doubling, grazing, branch-point, neimark-sacker")
             return
         end if
         if (opt%follow == 'branch-point') then
@@ -94,6 +96,9 @@ contains
         y = [interleave(x, v), mu, model_parameter(model, opt%parameter2)]
         if (opt%follow == 'grazing') then
             call lift_grazing_bond(set, y, err)
+            if (allocated(err)) return
+        else if (opt%follow == 'neimark-sacker') then
+            call aim_at_pair(set, y, err)
             if (allocated(err)) return
         else
             ! (a start the map cannot pass keeps unit bordering vectors; Newton then says why)
@@ -132,6 +137,8 @@ contains
         character(len=:), allocatable :: failure
         real(wp) :: h
         integer :: m, halvings
+        complex(wp) :: pair
+        logical :: complex_pair
 
         m = size(y) - 2
         curve%end_reason = 'max_points'
@@ -159,7 +166,10 @@ contains
             end if
             previous = y
             y = next
-            if (set%kind /= 'grazing') then
+            if (set%kind == 'neimark-sacker') then
+                call tracked_pair(st%pass%jacobian, set%pair, pair, complex_pair)
+                set%pair = pair
+            else if (set%kind /= 'grazing') then
                 set%b = st%v/norm2(st%v)
                 set%c = st%w/norm2(st%w)
             end if
@@ -246,8 +256,14 @@ contains
         real(wp) :: before(2), last(2), largest(2), t
         integer :: k, j
 
-        reason = 'newton: '//failure
         k = curve%n_points
+        if (set%kind == 'neimark-sacker' .and. k > 0) then
+            reason = pair_end_reason(set%pair, ' near '//set%parameter//' = '// &
+                                     fmt_real(curve%values(k))//', '//set%parameter2// &
+                                     ' = '//fmt_real(curve%values2(k)), failure)
+            if (len(reason) > 0) return
+        end if
+        reason = 'newton: '//failure
         if (k < 2) return
         before = [curve%orbits(k - 1)%min_impact_speed, curve%orbits(k - 1)%min_gap]
         last = [curve%orbits(k)%min_impact_speed, curve%orbits(k)%min_gap]
@@ -382,8 +398,10 @@ contains
         curve%n_points = k
         curve%values(k) = y(m + 1)
         curve%values2(k) = y(m + 2)
-        ! (on a branch-point curve det(J - I) vanishes all along: no fold-flip test)
-        if (k == 1 .or. set%kind == 'grazing' .or. set%kind == 'branch-point') return
+        ! (on a branch-point curve det(J - I) vanishes all along: no fold-flip test; a
+        ! Neimark-Sacker curve's codim-2 points are its ends: walk names them)
+        if (k == 1 .or. set%kind == 'grazing' .or. set%kind == 'branch-point' .or. &
+            set%kind == 'neimark-sacker') return
         if (flip_sign(curve%orbits(k - 1), set%shift) /= flip_sign(curve%orbits(k), set%shift)) &
             then
             curve%n_codim2 = curve%n_codim2 + 1

@@ -14,6 +14,8 @@
 !>   smoothly across the grazing, as the orbit with the old impacts (the penetrating
 !>   continuation), so Newton may step to either side; the points kept lie on the side where
 !>   the gap is positive, as real orbits. Its row by central differences.
+!> - Neimark-Sacker: s = |mu|^2 - 1 of the tracked complex pair (chain_curve_ns). Its row by
+!>   central differences.
 !> The orbit rows of Newton's matrix are exact, [J - I, P_mu1, P_mu2]; the residual is exact,
 !> only the test's row is approximate.
 module chain_curve_system
@@ -25,10 +27,11 @@ module chain_curve_system
     use chain_parameter, only: map_parameter_derivative
     use chain_curve_mirror, only: half_pass, half_parameter_column
     use chain_lapack, only: solve_linear
+    use chain_curve_ns, only: pair_test, unit_circle_pair
     implicit none
     private
     public :: curve_setting_t, curve_state_t, evaluate, border, null_vectors
-    public :: lift_grazing_bond, grazing_aim, same_bonds, gap_and_row
+    public :: lift_grazing_bond, grazing_aim, same_bonds, gap_and_row, aim_at_pair
 
     !> The gap a grazing curve aims at (Newton stops within grazing_aim / 2 of it): just above
     !> zero, so that the orbit kept has no new impact of a speed the engine resolves. The
@@ -41,7 +44,8 @@ module chain_curve_system
         real(wp) :: phase = 0
         integer :: cycles = 1
         character(len=:), allocatable :: parameter, parameter2
-        character(len=:), allocatable :: kind !! fold, period-doubling, grazing or branch-point
+        !> fold, period-doubling, grazing, branch-point or neimark-sacker
+        character(len=:), allocatable :: kind
         !> the test matrix J + shift I: -1 fold, +1 period doubling (and of DQ at a branch point)
         real(wp) :: shift = -1
         real(wp), allocatable :: b(:), c(:) !! the bordering vectors (unit, near the null vectors)
@@ -51,6 +55,7 @@ module chain_curve_system
         integer, allocatable :: lifted(:)
         real(wp) :: lift = 0 !! grazing: added to the lifted bonds' spacings while Newton works
         integer, allocatable :: bonds(:) !! grazing: the bonds of the orbit's impacts, in time order
+        complex(wp) :: pair = 0 !! neimark-sacker: the tracked multiplier at the last point
     end type curve_setting_t
 
     !> The system at one y: the residual (P(z) - z, s), Newton's m + 1 rows, and the
@@ -83,6 +88,10 @@ contains
         st%failure = ''
         if (set%kind == 'grazing') then
             call gap_at(set, y, st%pass, model, st%s, st%failure, err)
+        else if (set%kind == 'neimark-sacker') then
+            call pass_at(set, y, st%pass, model, st%failure, err)
+            if (allocated(err) .or. len(st%failure) > 0) return
+            call pair_test(st%pass%jacobian, set%pair, st%s, st%failure)
         else
             call pass_at(set, y, st%pass, model, st%failure, err)
             if (allocated(err) .or. len(st%failure) > 0) return
@@ -112,8 +121,8 @@ contains
             st%ok = .false.
             return
         end if
-        if (set%kind == 'grazing') then
-            call gap_gradient(set, y, d_s, st%failure, err)
+        if (set%kind == 'grazing' .or. set%kind == 'neimark-sacker') then
+            call difference_row(set, y, d_s, st%failure, err)
         else
             call s_gradient(set, y, st%w, st%v, d_s, st%failure, err)
         end if
@@ -281,7 +290,7 @@ contains
 
         call gap_of(set, y, gap, failure, err)
         if (allocated(err) .or. len(failure) > 0) return
-        call gap_gradient(set, y, row, failure, err)
+        call difference_row(set, y, row, failure, err)
     end subroutine gap_and_row
 
     !> Are two sequences of impact bonds the same?
@@ -292,9 +301,47 @@ contains
         if (same_bonds) same_bonds = all(a == b)
     end function same_bonds
 
-    !> The grazing test's row by central differences (a relative step 1e-6: the gap minimum is
-    !> smooth in y, its error of order step**2).
-    subroutine gap_gradient(set, y, d_g, failure, err)
+    !> A Neimark-Sacker curve's setting from its start y: the pair tracked is the complex
+    !> multiplier nearest the unit circle there.
+    subroutine aim_at_pair(set, y, err)
+        type(curve_setting_t), intent(inout) :: set
+        real(wp), intent(in) :: y(:)
+        type(error_t), allocatable, intent(out) :: err
+        type(orbit_pass_t) :: pass
+        type(model_t) :: model
+        character(len=:), allocatable :: failure
+
+        failure = ''
+        call pass_at(set, y, pass, model, failure, err)
+        if (allocated(err)) return
+        if (len(failure) == 0) call unit_circle_pair(pass%jacobian, set%pair, failure)
+        if (len(failure) > 0) call set_error(err, "neimark-sacker curve: the start: "//failure)
+    end subroutine aim_at_pair
+
+    !> The scalar test at y: a Neimark-Sacker curve's pair_test, else the lifted bond's gap_of
+    !> (a grazing curve's, or that of a fold or doubling curve meeting one: gap_and_row).
+    subroutine scalar_test(set, y, s, failure, err)
+        type(curve_setting_t), intent(in) :: set
+        real(wp), intent(in) :: y(:)
+        real(wp), intent(out) :: s
+        character(len=:), allocatable, intent(inout) :: failure
+        type(error_t), allocatable, intent(out) :: err
+        type(orbit_pass_t) :: pass
+        type(model_t) :: model
+
+        if (set%kind /= 'neimark-sacker') then
+            call gap_of(set, y, s, failure, err)
+            return
+        end if
+        s = huge(1.0_wp)
+        call pass_at(set, y, pass, model, failure, err)
+        if (allocated(err) .or. len(failure) > 0) return
+        call pair_test(pass%jacobian, set%pair, s, failure)
+    end subroutine scalar_test
+
+    !> The scalar test's row by central differences (a relative step 1e-6: the gap minimum
+    !> and the pair's modulus are smooth in y, the error of order step**2).
+    subroutine difference_row(set, y, d_g, failure, err)
         type(curve_setting_t), intent(in) :: set
         real(wp), intent(in) :: y(:)
         real(wp), allocatable, intent(out) :: d_g(:)
@@ -310,13 +357,13 @@ contains
             h = relative*(1 + abs(y(k)))
             e = 0
             e(k) = h
-            call gap_of(set, y + e, plus, failure, err)
+            call scalar_test(set, y + e, plus, failure, err)
             if (allocated(err) .or. len(failure) > 0) return
-            call gap_of(set, y - e, minus, failure, err)
+            call scalar_test(set, y - e, minus, failure, err)
             if (allocated(err) .or. len(failure) > 0) return
             d_g(k) = (plus - minus)/(2*h)
         end do
-    end subroutine gap_gradient
+    end subroutine difference_row
 
     !> s_y = -v^T J_y w, J_y by central differences of exact Jacobians (a relative step 1e-6:
     !> the Jacobians are exact to rounding, the difference's error is of order step**2).

@@ -37,7 +37,7 @@ module chain_config_type
         real(wp) :: cont_stop = 0, cont_step = 0
         integer :: cont_period = 1, cont_max_points = 200, cont_doublings = 0
         integer :: cont_branch_points = 0
-        !> a fold or period-doubling curve in (parameter, parameter2) (chain_curve): follow
+        !> a curve of special points in (parameter, parameter2) (chain_curve): follow
         !> ('' none) and parameter2, the bound stop2 and step step2
         character(len=:), allocatable :: cont_follow, cont_parameter2
         real(wp) :: cont_stop2 = 0, cont_step2 = 0

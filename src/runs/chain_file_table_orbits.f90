@@ -98,15 +98,15 @@ contains
                  'branch-point ('''': none)', 'always')
     end subroutine entries_continuation
 
-    !> /curve: a continuation's fold or period-doubling curve in two parameters (&continuation
+    !> /curve: a continuation's curve of special points in two parameters (&continuation
     !> follow). values2's '{parameter}' stands for the second parameter, parameter2.
     subroutine entries_curve(t)
         type(output_entry_t), allocatable, intent(inout) :: t(:)
         character(len=*), parameter :: when = '&continuation follow'
 
         call add(t, 'continuation', '/curve/@follow', 'attribute', '', 'string', '', '', &
-                 'the kind of special point followed: fold, period-doubling, grazing or '// &
-                 'branch-point', when)
+                 'the kind of special point followed: fold, period-doubling, grazing, '// &
+                 'branch-point or neimark-sacker', when)
         call add(t, 'continuation', '/curve/@parameter', 'attribute', '', 'string', '', '', &
                  'the continued parameter (the special point''s)', when)
         call add(t, 'continuation', '/curve/@parameter2', 'attribute', '', 'string', '', '', &

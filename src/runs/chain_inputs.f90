@@ -173,7 +173,7 @@ module chain_inputs
                     low=0, high=4, units='1', &
                     help='levels of switching at branch points (two branches each)'), &
         input_key_t('continuation', 'follow', key_string, default="''", &
-                    choices=' fold period-doubling grazing branch-point', &
+                    choices=' fold period-doubling grazing branch-point neimark-sacker', &
                     help="the first such special point of branch 0 followed in two "// &
                     "parameters, to /curve ('': none)"), &
         input_key_t('continuation', 'parameter2', key_string, default="''", dynamic=.true., &

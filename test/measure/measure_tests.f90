@@ -11,6 +11,7 @@ program measure_tests
     use test_branch_corner, only: run_branch_corner_tests
     use test_curve, only: run_curve_tests
     use test_curve_branch_point, only: run_curve_branch_point_tests
+    use test_curve_ns, only: run_curve_ns_tests
     implicit none
     type(suite_runner_t) :: runner
 
@@ -23,5 +24,6 @@ program measure_tests
     call runner%run('corner', run_branch_corner_tests)
     call runner%run('curve', run_curve_tests)
     call runner%run('bpcurve', run_curve_branch_point_tests)
+    call runner%run('nscurve', run_curve_ns_tests)
     call runner%finish()
 end program measure_tests

@@ -44,10 +44,11 @@ violent points, deep in the chatter, would bleach the rest)."""
 
 def chart(curves: RunLike | Sequence[RunLike], over: RunLike | None = None,
           quantity: str = "period", ax: Axes | None = None) -> Figure:
-    """Fold, period-doubling, grazing and branch-point curves (``/curve``) as lines in the plane
-    of their two parameters, each in its kind's colour (:data:`orbits.SPECIAL_STYLES`), its
-    start (the one-parameter run's special point) marked with the kind's marker on a dotted
-    line at its value of the second parameter, and codimension-two points (those within the axes)
+    """Fold, period-doubling, grazing, branch-point and Neimark-Sacker curves (``/curve``) as
+    lines in the plane of their two parameters, each in its kind's colour
+    (:data:`orbits.SPECIAL_STYLES`), its start (the one-parameter run's special point) marked
+    with the kind's marker on a dotted line at its value of the second parameter, and
+    codimension-two points (those within the axes)
     as stars.
 
     ``curves``: one curve file (or :func:`impactchain.api.curve` tree) or several of the same
