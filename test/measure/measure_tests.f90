@@ -9,6 +9,7 @@ program measure_tests
     use test_budd_dux, only: run_budd_dux_tests
     use test_graze, only: run_graze_tests
     use test_curve, only: run_curve_tests
+    use test_curve_codim2, only: run_curve_codim2_tests
     implicit none
     type(suite_runner_t) :: runner
 
@@ -19,5 +20,6 @@ program measure_tests
     call runner%run('buddux', run_budd_dux_tests)
     call runner%run('graze', run_graze_tests)
     call runner%run('curve', run_curve_tests)
+    call runner%run('codim2', run_curve_codim2_tests)
     call runner%finish()
 end program measure_tests
