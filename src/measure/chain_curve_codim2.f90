@@ -4,7 +4,7 @@
 !> when the multipliers there confirm it.
 module chain_curve_codim2
     use chain_kinds, only: wp
-    use chain_error, only: error_t, fmt_real
+    use chain_error, only: error_t
     use chain_lapack, only: general_eigenvalues
     use chain_curve_system, only: curve_setting_t, curve_state_t
     implicit none
@@ -17,6 +17,11 @@ module chain_curve_codim2
 
     !> A fold-flip point: multipliers +1 and -1, each within this distance.
     real(wp), parameter :: flip_confirmation = 1.0e-8_wp
+    !> A 1:1 (1:2) point: two multipliers within this distance of +1 (-1). A double multiplier
+    !> with a Jordan block splits like the square root of a perturbation of J: with s at
+    !> rounding (1e-15 relative) the pair sits about 1e-6 apart (found: 1.1e-6 in the test,
+    !> 1.7e-5 before the last Newton step from |s| <= 1e-11); a tenfold margin.
+    real(wp), parameter :: resonance_confirmation = 1.0e-5_wp
 
     !> A codim-2 point located between two points of a curve.
     type :: codim2_point_t
@@ -24,7 +29,6 @@ module chain_curve_codim2
         real(wp), allocatable :: y(:)          !! (z, mu1, mu2) there
         type(curve_state_t) :: st              !! the converged state there
         logical :: confirmed = .false.
-        character(len=:), allocatable :: note  !! the multipliers' distances, or the failure
     end type codim2_point_t
 
     abstract interface
@@ -42,16 +46,26 @@ module chain_curve_codim2
 
 contains
 
-    !> The names of the tests of a fold or period-doubling curve, in the order of codim2_tests.
-    pure function codim2_names() result(names)
+    !> The names of the tests of a curve with this shift (-1 fold, +1 period doubling), in the
+    !> order of codim2_tests.
+    pure function codim2_names(shift) result(names)
+        real(wp), intent(in) :: shift
         character(len=16), allocatable :: names(:)
 
-        names = [character(len=16) :: 'fold-flip']
+        if (shift < 0) then
+            names = [character(len=16) :: 'fold-flip', '1:1']
+        else
+            names = [character(len=16) :: 'fold-flip', '1:2']
+        end if
     end function codim2_names
 
     !> The test functions at a converged point (state st) of a curve with this shift:
-    !> fold-flip, det(J - shift I) (the other curve's test) from the multipliers, each factor
-    !> mu - shift divided by 1 + |mu| (of order one whatever the orbit's stability).
+    !> - fold-flip: det(J - shift I) (the other curve's test) from the multipliers, each factor
+    !>   mu - shift divided by 1 + |mu| (of order one whatever the orbit's stability);
+    !> - 1:1 (fold) or 1:2 (doubling): v . w / (|v| |w|), the bordered system's left and right
+    !>   null vectors of J + shift I, zero where they are orthogonal: the multiplier is double
+    !>   with a Jordan block. (Their signs follow the bordering vectors, so the test is
+    !>   continuous along the curve.)
     function codim2_tests(shift, st) result(tests)
         real(wp), intent(in) :: shift
         type(curve_state_t), intent(in) :: st
@@ -59,7 +73,8 @@ contains
         real(wp), allocatable :: re(:), im(:)
 
         call multipliers(st%pass%jacobian, re, im)
-        tests = [other_determinant(re, im, shift)]
+        tests = [other_determinant(re, im, shift), &
+                 dot_product(st%v, st%w)/(norm2(st%v)*norm2(st%w))]
     end function codim2_tests
 
     !> prod (mu - shift)/(1 + |mu|): det(J - shift I) scaled, real (pairs give |.|^2 > 0).
@@ -100,11 +115,11 @@ contains
         integer, parameter :: max_iterations = 60
         character(len=:), allocatable :: failure
         character(len=16), allocatable :: names(:)
-        real(wp), allocatable :: tests(:)
+        real(wp), allocatable :: tests(:), y(:)
         real(wp) :: a, b, ga, gb, tau, g
         integer :: iteration, side
 
-        names = codim2_names()
+        names = codim2_names(set%shift)
         point%kind = trim(names(which))
         a = 0
         b = dot_product(y1 - y0, t0)
@@ -115,10 +130,7 @@ contains
             tau = (a*gb - b*ga)/(gb - ga)
             call correct(set, y0 + tau*t0, t0, point%y, point%st, failure, err)
             if (allocated(err)) return
-            if (len(failure) > 0) then
-                point%note = point%kind//' not located: '//failure
-                return
-            end if
+            if (len(failure) > 0) return
             tests = codim2_tests(set%shift, point%st)
             g = tests(which)
             if (abs(g) <= test_tolerance .or. abs(b - a) <= bracket_tolerance) exit
@@ -134,25 +146,35 @@ contains
                 side = 1
             end if
         end do
-        call confirm(point)
+        ! (one more Newton step from the point found, on the same hyperplane: Newton stops at
+        ! |s| <= 1e-11, and at a double multiplier J + shift I's two small singular values
+        ! meet, so the pair sits sqrt(|s|) apart there; the extra step takes s to rounding)
+        call correct(set, point%y, t0, y, point%st, failure, err)
+        if (allocated(err)) return
+        if (len(failure) > 0) return
+        point%y = y
+        call confirm(point, -set%shift)
     end subroutine locate_codim2
 
-    !> The multipliers' word on a located point: fold-flip, +1 and -1 each within
-    !> flip_confirmation.
-    subroutine confirm(point)
+    !> The multipliers' word on a located point of a curve whose own multiplier is `own`:
+    !> fold-flip, +1 and -1 each within flip_confirmation; 1:1 or 1:2, two multipliers within
+    !> resonance_confirmation of `own`.
+    subroutine confirm(point, own)
         type(codim2_point_t), intent(inout) :: point
-        real(wp), allocatable :: re(:), im(:), d_plus(:), d_minus(:)
+        real(wp), intent(in) :: own
+        real(wp), allocatable :: re(:), im(:), d_plus(:), d_minus(:), d_own(:)
 
         call multipliers(point%st%pass%jacobian, re, im)
         d_plus = sorted_distances(re, im, 1.0_wp)
         d_minus = sorted_distances(re, im, -1.0_wp)
+        d_own = merge(d_plus, d_minus, own > 0)
         select case (point%kind)
         case ('fold-flip')
             point%confirmed = d_plus(1) <= flip_confirmation .and. &
                               d_minus(1) <= flip_confirmation
-            point%note = 'distances to +1, -1: '//fmt_real(d_plus(1))//', '//fmt_real(d_minus(1))
+        case default
+            point%confirmed = d_own(2) <= resonance_confirmation
         end select
-        if (.not. point%confirmed) point%note = point%kind//' not confirmed: '//point%note
     end subroutine confirm
 
     !> The distances of the multipliers from `target`, smallest first.

@@ -3,7 +3,8 @@
 !> oscillators with unequal spacings (1, 0.7, 1.3: no mirror symmetry, so no multiplier is
 !> doubled), K = 0.8, b = 0.02: the first period doubling of its period-1 orbit from rest at
 !> A = 0.3, w = 1.4 upwards, followed up in w, meets a fold curve: the fold-flip point is
-!> located on it, its orbit with multipliers +1 and -1, each to 1e-8.
+!> located on it, its orbit with multipliers +1 and -1, each to 1e-8; further on a second
+!> multiplier comes to -1: the 1:2 point, two multipliers -1 to 1e-5.
 module test_curve_codim2
     use chain_kinds, only: wp, i8
     use chain_error, only: error_t
@@ -24,12 +25,13 @@ contains
     subroutine run_curve_codim2_tests(t)
         type(tally_t), intent(inout) :: t
 
-        call doubling_fold_flip(t)
+        call doubling_codim2(t)
     end subroutine run_curve_codim2_tests
 
-    !> The period-doubling curve from w = 1.4 up in w: one fold-flip point, a point of the
-    !> curve with multipliers +1 and -1 (each to 1e-8), between its neighbours in w.
-    subroutine doubling_fold_flip(t)
+    !> The period-doubling curve from w = 1.4 up in w: a fold-flip point, a point of the curve
+    !> with multipliers +1 and -1 (each to 1e-8), and then a 1:2 point, two multipliers within
+    !> 1e-5 of -1 (a Jordan block: see chain_curve_codim2), each between its neighbours in w.
+    subroutine doubling_codim2(t)
         type(tally_t), intent(inout) :: t
         type(branches_t) :: pd
         type(curve_t) :: curve
@@ -38,42 +40,71 @@ contains
         integer :: k, j
 
         call first_special(1.4_wp, 'period-doubling', pd, k)
-        call check(t, k > 0, 'fold-flip: a period doubling at w = 1.4')
+        call check(t, k > 0, 'doubling codim-2: a period doubling at w = 1.4')
         if (k == 0) return
         opt%follow = 'period-doubling'
         opt%parameter = 'amplitude'
         opt%parameter2 = 'omega'
         opt%stop2 = 2.6_wp
         opt%step2 = 0.03_wp
-        opt%max_points = 40
+        opt%max_points = 60
         call follow_curve(two_oscillators(pd%points(k)%value, 1.4_wp), 0.0_wp, 1, &
                           pd%points(k)%orbit%x, pd%points(k)%orbit%v, pd%points(k)%value, opt, &
                           curve, err)
-        call check(t, .not. allocated(err), 'fold-flip: doubling curve followed')
+        call check(t, .not. allocated(err), 'doubling codim-2: the curve followed')
         if (allocated(err)) then
             print '(a)', '    '//err%message
             return
         end if
         print '(a,i0,a,i0,a)', '    doubling curve: ', curve%n_points, ' points, ', &
             curve%n_codim2, ' codim-2, '//curve%end_reason
-        call check(t, curve%n_codim2 == 1, 'fold-flip: one codim-2 point on the curve')
-        if (curve%n_codim2 /= 1) return
-        call check(t, curve%codim2_kind(1) == 'fold-flip', "fold-flip: its kind 'fold-flip'")
+        call check(t, curve%n_codim2 == 2, 'doubling codim-2: two codim-2 points on the curve')
+        if (curve%n_codim2 /= 2) return
+        call check(t, curve%codim2_kind(1) == 'fold-flip' .and. curve%codim2_kind(2) == '1:2', &
+                   "doubling codim-2: 'fold-flip', then '1:2'")
+        do j = 1, 2
+            call check_point(t, curve, curve%codim2_index(j))
+        end do
         j = curve%codim2_index(1)
-        call check(t, j > 1 .and. j < curve%n_points, 'fold-flip: between two points')
-        if (j <= 1 .or. j >= curve%n_points) return
-        write (*, '(a,f16.12,a,f16.12,a,es9.2,a,es9.2)') '    fold-flip at A = ', &
-            curve%values(j), ', w = ', curve%values2(j), '; |mu - 1| = ', &
-            multiplier_distance(curve%orbits(j), 1.0_wp), ', |mu + 1| = ', &
-            multiplier_distance(curve%orbits(j), -1.0_wp)
-        call check(t, (curve%values2(j) - curve%values2(j - 1))* &
-                   (curve%values2(j + 1) - curve%values2(j)) > 0, &
-                   'fold-flip: between its neighbours in w')
         call check_close(t, multiplier_distance(curve%orbits(j), 1.0_wp), 0.0_wp, &
                          'fold-flip: a multiplier +1', 1.0e-8_wp)
         call check_close(t, multiplier_distance(curve%orbits(j), -1.0_wp), 0.0_wp, &
                          'fold-flip: a multiplier -1', 1.0e-8_wp)
-    end subroutine doubling_fold_flip
+        j = curve%codim2_index(2)
+        call check_close(t, nearest(curve%orbits(j), -1.0_wp, 2), 0.0_wp, &
+                         '1:2: two multipliers -1', 1.0e-5_wp)
+    end subroutine doubling_codim2
+
+    !> The codim-2 point j of the curve lies between its neighbours in the second parameter;
+    !> where it is and its multipliers' distances from +1 and -1 are printed.
+    subroutine check_point(t, curve, j)
+        type(tally_t), intent(inout) :: t
+        type(curve_t), intent(in) :: curve
+        integer, intent(in) :: j
+
+        call check(t, j > 1 .and. j < curve%n_points, 'codim-2: a point between two points')
+        if (j <= 1 .or. j >= curve%n_points) return
+        write (*, '(a,f16.12,a,f16.12,a,2es9.2,a,2es9.2)') '    at A = ', curve%values(j), &
+            ', w = ', curve%values2(j), '; two nearest to +1: ', nearest(curve%orbits(j), &
+            1.0_wp, 1), nearest(curve%orbits(j), 1.0_wp, 2), ', to -1: ', &
+            nearest(curve%orbits(j), -1.0_wp, 1), nearest(curve%orbits(j), -1.0_wp, 2)
+        call check(t, (curve%values2(j) - curve%values2(j - 1))* &
+                   (curve%values2(j + 1) - curve%values2(j)) > 0, &
+                   'codim-2: between its neighbours in w')
+    end subroutine check_point
+
+    !> The distance of the orbit's `rank`-th nearest multiplier (1 or 2) from `target`.
+    pure real(wp) function nearest(orbit, target, rank)
+        type(orbit_t), intent(in) :: orbit
+        real(wp), intent(in) :: target
+        integer, intent(in) :: rank
+        real(wp), allocatable :: d(:)
+        integer :: i
+
+        d = abs(cmplx(orbit%multipliers_re - target, orbit%multipliers_im, wp))
+        nearest = minval(d)
+        if (rank == 2) nearest = minval(d, mask=[(i /= minloc(d, 1), i=1, size(d))])
+    end function nearest
 
     !> The period-1 orbit of the two oscillators from rest at A = 0.3, frequency w, followed up
     !> to A = 6; k the point of its first special point of this kind (0: none).
