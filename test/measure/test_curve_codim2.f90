@@ -4,7 +4,8 @@
 !> doubled), K = 0.8, b = 0.02: the first period doubling of its period-1 orbit from rest at
 !> A = 0.3, w = 1.4 upwards, followed up in w, meets a fold curve: the fold-flip point is
 !> located on it, its orbit with multipliers +1 and -1, each to 1e-8; further on a second
-!> multiplier comes to -1: the 1:2 point, two multipliers -1 to 1e-5.
+!> multiplier comes to -1: the 1:2 point, two multipliers -1 to 1e-5. The first fold of the same
+!> orbit, followed up in w, meets a second multiplier +1: the 1:1 point, two multipliers +1.
 module test_curve_codim2
     use chain_kinds, only: wp, i8
     use chain_error, only: error_t
@@ -26,7 +27,45 @@ contains
         type(tally_t), intent(inout) :: t
 
         call doubling_codim2(t)
+        call fold_one_to_one(t)
     end subroutine run_curve_codim2_tests
+
+    !> The fold curve from w = 1.4 up in w: its second real multiplier (4.5 at the start) comes
+    !> down to +1, a 1:1 point, two multipliers within 1e-5 of +1, between its neighbours.
+    subroutine fold_one_to_one(t)
+        type(tally_t), intent(inout) :: t
+        type(branches_t) :: fold
+        type(curve_t) :: curve
+        type(curve_options_t) :: opt
+        type(error_t), allocatable :: err
+        integer :: k
+
+        call first_special(1.4_wp, 'fold', fold, k)
+        call check(t, k > 0, '1:1: a fold at w = 1.4')
+        if (k == 0) return
+        opt%follow = 'fold'
+        opt%parameter = 'amplitude'
+        opt%parameter2 = 'omega'
+        opt%stop2 = 1.7_wp
+        opt%step2 = 0.03_wp
+        opt%max_points = 30
+        call follow_curve(two_oscillators(fold%points(k)%value, 1.4_wp), 0.0_wp, 1, &
+                          fold%points(k)%orbit%x, fold%points(k)%orbit%v, fold%points(k)%value, &
+                          opt, curve, err)
+        call check(t, .not. allocated(err), '1:1: the fold curve followed')
+        if (allocated(err)) then
+            print '(a)', '    '//err%message
+            return
+        end if
+        print '(a,i0,a,i0,a)', '    fold curve: ', curve%n_points, ' points, ', &
+            curve%n_codim2, ' codim-2, '//curve%end_reason
+        call check(t, curve%n_codim2 == 1, '1:1: one codim-2 point on the curve')
+        if (curve%n_codim2 /= 1) return
+        call check(t, curve%codim2_kind(1) == '1:1', "1:1: its kind '1:1'")
+        call check_point(t, curve, curve%codim2_index(1))
+        call check_close(t, nearest(curve%orbits(curve%codim2_index(1)), 1.0_wp, 2), 0.0_wp, &
+                         '1:1: two multipliers +1', 1.0e-5_wp)
+    end subroutine fold_one_to_one
 
     !> The period-doubling curve from w = 1.4 up in w: a fold-flip point, a point of the curve
     !> with multipliers +1 and -1 (each to 1e-8), and then a 1:2 point, two multipliers within
