@@ -41,8 +41,9 @@ module chain_curve
         real(wp), allocatable :: values(:), values2(:) !! (point)
         type(orbit_t), allocatable :: orbits(:) !! the orbit and its multipliers at each point
         integer :: n_codim2 = 0
-        !> 'fold-flip' (on a fold or doubling curve), 'fold-grazing' or 'doubling-grazing' (on
-        !> a grazing curve): located between two points, confirmed by its multipliers
+        !> 'fold-flip', '1:1' (fold) or '1:2' (doubling) on a fold or doubling curve,
+        !> 'fold-grazing' or 'doubling-grazing' on a grazing curve: located between two points,
+        !> confirmed by its multipliers
         character(len=16), allocatable :: codim2_kind(:)
         integer, allocatable :: codim2_index(:)  !! the curve's point that is the codim-2 point
         character(len=:), allocatable :: end_reason
