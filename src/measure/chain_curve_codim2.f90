@@ -9,7 +9,7 @@ module chain_curve_codim2
     use chain_curve_system, only: curve_setting_t, curve_state_t
     implicit none
     private
-    public :: codim2_tests, codim2_names, codim2_point_t, locate_codim2, corrector
+    public :: codim2_tests, codim2_point_t, locate_codim2
 
     !> The zero is located when |test| is below test_tolerance (the tests are of order one)
     !> or the arclength bracket below bracket_tolerance.
