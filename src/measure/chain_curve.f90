@@ -2,8 +2,8 @@
 !> section 12.6): from such a special point of a one-parameter branch (chain_branch), its curve
 !> in (parameter, parameter2) by pseudo-arclength continuation of the minimally augmented
 !> system of chain_curve_system, with the orbit and its multipliers at each point, and the
-!> fold-flip points met on the way (the other test, det(J + I) on a fold curve, det(J - I) on
-!> a period-doubling curve, changes sign between two points).
+!> codim-2 points met on the way (located between two points by chain_curve_codim2, or by
+!> chain_curve_meet on a grazing curve, and stored as points of the curve).
 module chain_curve
     use chain_kinds, only: wp
     use chain_error, only: error_t, set_error, fmt_int, fmt_real
@@ -16,6 +16,7 @@ module chain_curve
     use chain_curve_ns, only: tracked_pair, pair_end_reason
     use chain_curve_meet, only: meet_grazing
     use chain_curve_mirror, only: mirror_symmetric_chain
+    use chain_curve_codim2, only: codim2_tests, codim2_point_t, locate_codim2
     implicit none
     private
     public :: curve_options_t, curve_t, follow_curve, curve_kinds
@@ -43,10 +44,11 @@ module chain_curve
         real(wp), allocatable :: values(:), values2(:) !! (point)
         type(orbit_t), allocatable :: orbits(:) !! the orbit and its multipliers at each point
         integer :: n_codim2 = 0
-        !> 'fold-flip' (on a fold or doubling curve, not located), 'fold-grazing' or
-        !> 'doubling-grazing' (on a grazing curve, located: a point of the curve)
+        !> 'fold-flip', '1:1' (fold) or '1:2' (doubling) on a fold or doubling curve,
+        !> 'fold-grazing' or 'doubling-grazing' on a grazing curve: located between two points,
+        !> confirmed by its multipliers
         character(len=16), allocatable :: codim2_kind(:)
-        integer, allocatable :: codim2_index(:)  !! the point after the sign change
+        integer, allocatable :: codim2_index(:)  !! the curve's point that is the codim-2 point
         character(len=:), allocatable :: end_reason
     end type curve_t
 
@@ -132,7 +134,7 @@ contains
         type(curve_state_t), intent(inout) :: st
         type(curve_t), intent(inout) :: curve
         type(error_t), allocatable, intent(out) :: err
-        real(wp), allocatable :: next(:), fresh(:), previous(:)
+        real(wp), allocatable :: next(:), fresh(:), previous(:), before(:), tests(:)
         integer, allocatable :: bonds(:)
         character(len=:), allocatable :: failure
         real(wp) :: h
@@ -142,6 +144,7 @@ contains
 
         m = size(y) - 2
         curve%end_reason = 'max_points'
+        if (has_codim2_tests(set)) tests = codim2_tests(set%shift, st)
         do while (curve%n_points < opt%max_points)
             h = abs(opt%step2)
             bonds = pass_impacts(st%pass)
@@ -174,6 +177,7 @@ contains
                 set%c = st%w/norm2(st%w)
             end if
             call tangent_of(st, tangent, fresh, failure)
+            before = tangent
             tangent = fresh
             if (len(failure) > 0) then
                 curve%end_reason = 'newton: '//failure
@@ -181,7 +185,11 @@ contains
             end if
             call keep(set, y, st, curve, err)
             if (allocated(err)) return
-            if (set%kind == 'grazing') call meetings(set, opt, previous, y, curve, err)
+            if (set%kind == 'grazing') then
+                call meetings(set, opt, previous, y, curve, err)
+            else if (has_codim2_tests(set)) then
+                call codim2_points(set, opt, previous, before, y, st, tests, curve, err)
+            end if
             if (allocated(err)) return
         end do
     end subroutine walk
@@ -201,9 +209,7 @@ contains
         real(wp), parameter :: shifts(2) = [-1.0_wp, 1.0_wp] !! J + shift I singular
         type(curve_setting_t) :: other
         type(curve_state_t) :: st
-        type(orbit_t) :: last
         real(wp), allocatable :: meeting(:)
-        real(wp) :: last_values(2)
         logical :: met
         integer :: k, j
 
@@ -220,17 +226,8 @@ contains
                               met, err)
             if (allocated(err)) return
             if (.not. met) cycle
-            ! the meeting goes before the last point
-            last = curve%orbits(k)
-            last_values = [curve%values(k), curve%values2(k)]
-            curve%n_points = k - 1
-            curve%orbits(k) = orbit_t()
-            call keep(set, meeting, st, curve, err)
+            call keep_before_last(set, meeting, st, curve, err)
             if (allocated(err)) return
-            curve%orbits(k + 1) = last
-            curve%values(k + 1) = last_values(1)
-            curve%values2(k + 1) = last_values(2)
-            curve%n_points = k + 1
             if (multiplier_distance(curve%orbits(k), -shifts(j)) <= 1.0e-8_wp .and. &
                 abs(curve%orbits(k)%min_gap) <= 1.0e-10_wp) then
                 curve%n_codim2 = curve%n_codim2 + 1
@@ -240,6 +237,72 @@ contains
             k = k + 1
         end do
     end subroutine meetings
+
+    !> Fold and doubling curves have codim-2 tests (chain_curve_codim2); on a branch-point
+    !> curve det(J - I) vanishes all along, and a Neimark-Sacker curve's codim-2 points are its
+    !> ends, which walk names.
+    pure logical function has_codim2_tests(set)
+        type(curve_setting_t), intent(in) :: set
+
+        has_codim2_tests = set%kind == 'fold' .or. set%kind == 'period-doubling'
+    end function has_codim2_tests
+
+    !> On a fold or doubling curve, between its last two points (`previous`, tangent `before`,
+    !> tests `tests`; y, state st): the zero of each codim-2 test that changes sign, located
+    !> (chain_curve_codim2) and, when its multipliers confirm it, stored as a point of the
+    !> curve before the last one. On return `tests` are y's.
+    subroutine codim2_points(set, opt, previous, before, y, st, tests, curve, err)
+        type(curve_setting_t), intent(in) :: set
+        type(curve_options_t), intent(in) :: opt
+        real(wp), intent(in) :: previous(:), before(:), y(:)
+        type(curve_state_t), intent(in) :: st
+        real(wp), allocatable, intent(inout) :: tests(:)
+        type(curve_t), intent(inout) :: curve
+        type(error_t), allocatable, intent(out) :: err
+        type(codim2_point_t) :: point
+        real(wp), allocatable :: fresh(:)
+        integer :: which
+
+        fresh = codim2_tests(set%shift, st)
+        do which = 1, size(fresh)
+            if (sign(1.0_wp, tests(which)) == sign(1.0_wp, fresh(which))) cycle
+            if (curve%n_points >= opt%max_points) exit
+            call locate_codim2(set, newton, which, previous, before, tests(which), y, &
+                               fresh(which), point, err)
+            if (allocated(err)) return
+            if (.not. point%confirmed) cycle
+            call keep_before_last(set, point%y, point%st, curve, err)
+            if (allocated(err)) return
+            curve%n_codim2 = curve%n_codim2 + 1
+            curve%codim2_kind(curve%n_codim2) = point%kind
+            curve%codim2_index(curve%n_codim2) = curve%n_points - 1
+        end do
+        tests = fresh
+    end subroutine codim2_points
+
+    !> Stores the point y (state st) as the curve's point before its last one.
+    subroutine keep_before_last(set, y, st, curve, err)
+        type(curve_setting_t), intent(in) :: set
+        real(wp), intent(in) :: y(:)
+        type(curve_state_t), intent(in) :: st
+        type(curve_t), intent(inout) :: curve
+        type(error_t), allocatable, intent(out) :: err
+        type(orbit_t) :: last
+        real(wp) :: last_values(2)
+        integer :: k
+
+        k = curve%n_points
+        last = curve%orbits(k)
+        last_values = [curve%values(k), curve%values2(k)]
+        curve%n_points = k - 1
+        curve%orbits(k) = orbit_t()
+        call keep(set, y, st, curve, err)
+        if (allocated(err)) return
+        curve%orbits(k + 1) = last
+        curve%values(k + 1) = last_values(1)
+        curve%values2(k + 1) = last_values(2)
+        curve%n_points = k + 1
+    end subroutine keep_before_last
 
     !> Why the curve ends where no step from its last point succeeds: a grazing when the
     !> smallest impact speed or smallest gap of the last orbit is below 1/20 of its largest
@@ -368,7 +431,7 @@ contains
         call null_vectors(st%pass%jacobian, out%shift, out%c, out%b)
     end function set_with_nulls
 
-    !> Stores the point y (the converged state st): its orbit, multipliers and fold-flip test.
+    !> Stores the point y (the converged state st): its orbit and multipliers.
     subroutine keep(set, y, st, curve, err)
         type(curve_setting_t), intent(in) :: set
         real(wp), intent(in) :: y(:)
@@ -398,16 +461,6 @@ contains
         curve%n_points = k
         curve%values(k) = y(m + 1)
         curve%values2(k) = y(m + 2)
-        ! (on a branch-point curve det(J - I) vanishes all along: no fold-flip test; a
-        ! Neimark-Sacker curve's codim-2 points are its ends: walk names them)
-        if (k == 1 .or. set%kind == 'grazing' .or. set%kind == 'branch-point' .or. &
-            set%kind == 'neimark-sacker') return
-        if (flip_sign(curve%orbits(k - 1), set%shift) /= flip_sign(curve%orbits(k), set%shift)) &
-            then
-            curve%n_codim2 = curve%n_codim2 + 1
-            curve%codim2_kind(curve%n_codim2) = 'fold-flip'
-            curve%codim2_index(curve%n_codim2) = k
-        end if
     end subroutine keep
 
     !> The sign of the other curve's test, det(J - shift I) up to sign: the product of

@@ -139,9 +139,9 @@ contains
                  'curve_point multiplier', 'float64', '1', '', &
                  'Floquet multiplier, imaginary part', when)
         call add(t, 'continuation', '/curve/codim2_index', 'dataset', 'codim2', 'int32', '1', &
-                 '', 'the point (0-based index) after which the other test changed sign', when)
+                 '', 'the curve point (0-based index) that is the codimension-two point', when)
         call add(t, 'continuation', '/curve/codim2_kind', 'dataset', 'codim2', 'string', '1', &
-                 '', 'the kind of codimension-two point (fold-flip, ...)', when)
+                 '', 'the kind of codimension-two point (fold-flip, 1:1, 1:2, ...)', when)
     end subroutine entries_curve
 
 end module chain_file_table_orbits

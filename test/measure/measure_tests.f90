@@ -12,6 +12,7 @@ program measure_tests
     use test_curve, only: run_curve_tests
     use test_curve_branch_point, only: run_curve_branch_point_tests
     use test_curve_ns, only: run_curve_ns_tests
+    use test_curve_codim2, only: run_curve_codim2_tests
     implicit none
     type(suite_runner_t) :: runner
 
@@ -25,5 +26,6 @@ program measure_tests
     call runner%run('curve', run_curve_tests)
     call runner%run('bpcurve', run_curve_branch_point_tests)
     call runner%run('nscurve', run_curve_ns_tests)
+    call runner%run('codim2', run_curve_codim2_tests)
     call runner%finish()
 end program measure_tests

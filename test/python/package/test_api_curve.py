@@ -110,3 +110,31 @@ def test_grazing_curve_is_the_closed_form() -> None:
     assert curve.attrs["follow"] == "grazing" and curve.sizes["curve_point"] >= 3
     a, w = curve["values"].values, curve["values2"].values
     assert np.abs(a - np.hypot(1 - w**2, 2 * 0.05 * w)).max() < 1e-10
+
+
+# Two oscillators, unequal spacings (no mirror symmetry): the first period doubling from rest
+# at A = 0.3, w = 1.4 upwards, followed up in w (docs/model.md 12.6, suite codim2)
+TWO = dict(n=2, omega=1.4, damping=0.02, restitution=0.8, spacing=[1.0, 0.7, 1.3],
+           transient=20)
+DOUBLING = dict(parameter="amplitude", stop=6.0, step=0.05, max_points=300)
+DOUBLING_CURVE = dict(follow="period-doubling", parameter2="omega", stop2=2.6, step2=0.03)
+
+
+def test_codim2_points_in_the_file(cli: Path, tmp_path: Path) -> None:  # noqa: F811
+    """The fold-flip and 1:2 points of the doubling curve are stored in the file's /curve as
+    curve points, named as documented, their multipliers +1 and -1 (fold-flip), twice -1 (1:2);
+    the api's tree is the file's."""
+    pytest.importorskip("h5netcdf")
+    text = (namelist(**{**TWO, "amplitude": 0.3}, cycles=1, events=False)
+            + "&continuation " + ", ".join(f"{key} = {value!r}" for key, value in
+                                           {**DOUBLING, **DOUBLING_CURVE}.items()) + " /\n")
+    result = run_cli(cli, text, tmp_path)
+    assert result.returncode == 0, result.stderr
+    curve = _file_tree(tmp_path / "run.h5")["curve"]
+    assert list(curve["codim2_kind"].values) == ["fold-flip", "1:2"]
+    multipliers = curve["multipliers_re"].values + 1j * curve["multipliers_im"].values
+    flip, resonance = (multipliers[int(i)] for i in curve["codim2_index"].values)
+    assert min(abs(flip - 1)) < 1e-8 and min(abs(flip + 1)) < 1e-8
+    assert sorted(abs(resonance + 1))[1] < 1e-5
+    tree = api.curve(**TWO, amplitude=0.3, **DOUBLING, **DOUBLING_CURVE)
+    assert_same_bits(tree["curve"].to_dataset(), curve)

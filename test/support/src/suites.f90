@@ -26,7 +26,7 @@ module suites
         'queue', 'engine', 'corners', 'invariants', &          ! test/engine/engine_tests.f90
         'lyapunov', 'clv', &                                   ! test/spectra/spectra_tests.f90
         'orbit', 'branch', 'switch', 'buddux', 'graze', 'curve', & ! test/measure/measure_tests.f90
-        'corner', 'bpcurve', 'nscurve', &                      ! test/measure/measure_tests.f90
+        'corner', 'bpcurve', 'nscurve', 'codim2', &            ! test/measure/measure_tests.f90
         'hdf5', 'sweep', 'checkpoint', 'census', 'taskfarm'] ! test/runs/runs_tests.f90
 
     abstract interface
