@@ -252,8 +252,9 @@ contains
             kind = 'section'
             value = secant_root(here%y(m + 1), last_same%y(m + 1), section_gap(set, here), &
                                 section_gap(set, last_same))
-        else if (grazing_beyond(set, res, here, last_same)) then
-            ! (Newton gave out short of it, as the saltation matrices grow like 1/V)
+        else if (keep .and. grazing_beyond(set, res, here, last_same)) then
+            ! (Newton gave out short of it, as the saltation matrices grow like 1/V; where
+            ! the corrector merely failed, the step is halved and comes nearer instead)
             kind = 'grazing'
             value = secant_root(here%y(m + 1), last_same%y(m + 1), &
                                 grazing_monitor(here%orbit, last_same%orbit), &
