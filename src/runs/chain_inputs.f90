@@ -34,7 +34,7 @@ module chain_inputs
         real(wp) :: low = -none, high = none
         logical :: low_open = .false., high_open = .false.
         logical :: dynamic = .false.    !! the range names another key: checked in code
-        character(len=48) :: choices = '' !! blank-separated allowed strings (any case)
+        character(len=64) :: choices = '' !! blank-separated allowed strings (any case)
         character(len=16) :: units = ''
         character(len=96) :: help = ''
         logical :: echo_default = .true. !! echoed when at its default (else left out)
