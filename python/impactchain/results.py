@@ -294,7 +294,7 @@ class Curve:
     multipliers_re: np.ndarray  # (C, 2n) Floquet multipliers
     multipliers_im: np.ndarray  # (C, 2n)
     codim2_index: np.ndarray  # (K,) 0-based point of each codimension-two point
-    codim2_kind: np.ndarray  # (K,) str: fold-flip, 1:1, 1:2, fold-grazing, doubling-grazing
+    codim2_kind: np.ndarray  # (K,) str: fold-flip, 1:1, 1:2, cusp, fold-grazing, doubling-grazing
 
     @property
     def multipliers(self) -> np.ndarray:

@@ -12,7 +12,8 @@ module chain_curve
                            multiplier_distance, orbit_pass_t, orbit_pass
     use chain_lapack, only: solve_linear
     use chain_curve_system, only: curve_setting_t, curve_state_t, evaluate, null_vectors, &
-                                  lift_grazing_bond, grazing_aim, same_bonds, aim_at_pair
+                                  lift_grazing_bond, grazing_aim, same_bonds, aim_at_pair, &
+                                  tangent_of
     use chain_curve_ns, only: tracked_pair, pair_end_reason
     use chain_curve_meet, only: meet_grazing
     use chain_curve_mirror, only: mirror_symmetric_chain
@@ -44,7 +45,7 @@ module chain_curve
         real(wp), allocatable :: values(:), values2(:) !! (point)
         type(orbit_t), allocatable :: orbits(:) !! the orbit and its multipliers at each point
         integer :: n_codim2 = 0
-        !> 'fold-flip', '1:1' (fold) or '1:2' (doubling) on a fold or doubling curve,
+        !> 'fold-flip', '1:1' or 'cusp' (fold) or '1:2' (doubling) on a fold or doubling curve,
         !> 'fold-grazing' or 'doubling-grazing' on a grazing curve: located between two points,
         !> confirmed by its multipliers
         character(len=16), allocatable :: codim2_kind(:)
@@ -144,7 +145,10 @@ contains
 
         m = size(y) - 2
         curve%end_reason = 'max_points'
-        if (has_codim2_tests(set)) tests = codim2_tests(set%shift, st)
+        if (has_codim2_tests(set)) then
+            call codim2_tests(set, y, st, tests, err)
+            if (allocated(err)) return
+        end if
         do while (curve%n_points < opt%max_points)
             h = abs(opt%step2)
             bonds = pass_impacts(st%pass)
@@ -263,7 +267,8 @@ contains
         real(wp), allocatable :: fresh(:)
         integer :: which
 
-        fresh = codim2_tests(set%shift, st)
+        call codim2_tests(set, y, st, fresh, err)
+        if (allocated(err)) return
         do which = 1, size(fresh)
             if (sign(1.0_wp, tests(which)) == sign(1.0_wp, fresh(which))) cycle
             if (curve%n_points >= opt%max_points) exit
@@ -389,31 +394,6 @@ contains
         end do
         failure = "no convergence in "//fmt_int(max_iterations)//" iterations"
     end subroutine newton
-
-    !> The unit tangent of the curve at st: rows t = 0, direction . t = 1.
-    subroutine tangent_of(st, direction, tangent, failure)
-        type(curve_state_t), intent(in) :: st
-        real(wp), intent(in) :: direction(:)
-        real(wp), allocatable, intent(out) :: tangent(:)
-        character(len=:), allocatable, intent(out) :: failure
-        real(wp), allocatable :: a(:, :), rhs(:, :)
-        integer :: n, info
-
-        failure = ''
-        n = size(direction)
-        allocate (a(n, n), rhs(n, 1))
-        a(:n - 1, :) = st%rows
-        a(n, :) = direction
-        rhs = 0
-        rhs(n, 1) = 1
-        call solve_linear(a, rhs, info)
-        if (info > 0) then
-            failure = "singular tangent system of the curve"
-            return
-        end if
-        tangent = rhs(:, 1)/norm2(rhs(:, 1))
-        if (dot_product(tangent, direction) < 0) tangent = -tangent
-    end subroutine tangent_of
 
     !> The setting with bordering vectors from the null vectors of J + shift I at y.
     function set_with_nulls(set, y) result(out)

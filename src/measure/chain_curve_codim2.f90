@@ -6,7 +6,7 @@ module chain_curve_codim2
     use chain_kinds, only: wp
     use chain_error, only: error_t
     use chain_lapack, only: general_eigenvalues
-    use chain_curve_system, only: curve_setting_t, curve_state_t
+    use chain_curve_system, only: curve_setting_t, curve_state_t, evaluate, tangent_of
     implicit none
     private
     public :: codim2_tests, codim2_point_t, locate_codim2
@@ -22,6 +22,10 @@ module chain_curve_codim2
     !> rounding (1e-15 relative) the pair sits about 1e-6 apart (found: 1.1e-6 in the test,
     !> 1.7e-5 before the last Newton step from |s| <= 1e-11); a tenfold margin.
     real(wp), parameter :: resonance_confirmation = 1.0e-5_wp
+    !> A cusp: a multiplier +1 within flip_confirmation, and the curve's tangent (unit in
+    !> (z, mu1, mu2)) with a part in the parameter plane below this: there the fold curve turns
+    !> back in both parameters.
+    real(wp), parameter :: cusp_confirmation = 1.0e-4_wp
 
     !> A codim-2 point located between two points of a curve.
     type :: codim2_point_t
@@ -53,29 +57,63 @@ contains
         character(len=16), allocatable :: names(:)
 
         if (shift < 0) then
-            names = [character(len=16) :: 'fold-flip', '1:1']
+            names = [character(len=16) :: 'fold-flip', '1:1', 'cusp']
         else
             names = [character(len=16) :: 'fold-flip', '1:2']
         end if
     end function codim2_names
 
-    !> The test functions at a converged point (state st) of a curve with this shift:
+    !> The test functions at a converged point y (state st) of a curve:
     !> - fold-flip: det(J - shift I) (the other curve's test) from the multipliers, each factor
     !>   mu - shift divided by 1 + |mu| (of order one whatever the orbit's stability);
     !> - 1:1 (fold) or 1:2 (doubling): v . w / (|v| |w|), the bordered system's left and right
     !>   null vectors of J + shift I, zero where they are orthogonal: the multiplier is double
     !>   with a Jordan block. (Their signs follow the bordering vectors, so the test is
     !>   continuous along the curve.)
-    function codim2_tests(shift, st) result(tests)
-        real(wp), intent(in) :: shift
+    !> - cusp (fold): v . B(w, w) / (|v| |w|**2), the fold's quadratic normal-form coefficient
+    !>   up to the factor |v| |w| / (v . w), of fixed sign away from 1:1.
+    subroutine codim2_tests(set, y, st, tests, err)
+        type(curve_setting_t), intent(in) :: set
+        real(wp), intent(in) :: y(:)
         type(curve_state_t), intent(in) :: st
-        real(wp), allocatable :: tests(:)
-        real(wp), allocatable :: re(:), im(:)
+        real(wp), allocatable, intent(out) :: tests(:)
+        type(error_t), allocatable, intent(out) :: err
+        real(wp), allocatable :: re(:), im(:), bww(:)
 
         call multipliers(st%pass%jacobian, re, im)
-        tests = [other_determinant(re, im, shift), &
+        tests = [other_determinant(re, im, set%shift), &
                  dot_product(st%v, st%w)/(norm2(st%v)*norm2(st%w))]
-    end function codim2_tests
+        if (set%shift > 0) return
+        call second_derivative(set, y, st%w, bww, err)
+        if (allocated(err)) return
+        tests = [tests, dot_product(st%v, bww)/(norm2(st%v)*norm2(st%w)**2)]
+    end subroutine codim2_tests
+
+    !> B(w, w), the second derivative of the map along w, as (J(z + h w) - J(z - h w)) w / (2 h):
+    !> the Jacobians are exact, so the error is O(h**2) with no cancellation of function values;
+    !> h = 1e-5 (1 + |z|) / |w| keeps both passes on the orbit's impacts away from a grazing.
+    !> Zero when a pass fails (no test there).
+    subroutine second_derivative(set, y, w, bww, err)
+        type(curve_setting_t), intent(in) :: set
+        real(wp), intent(in) :: y(:), w(:)
+        real(wp), allocatable, intent(out) :: bww(:)
+        type(error_t), allocatable, intent(out) :: err
+        type(curve_state_t) :: plus, minus
+        real(wp), allocatable :: step(:)
+        real(wp) :: h
+        integer :: m
+
+        m = size(w)
+        h = 1.0e-5_wp*(1 + norm2(y(:m)))/norm2(w)
+        step = [h*w, 0.0_wp, 0.0_wp]
+        bww = spread(0.0_wp, 1, m)
+        call evaluate(set, y + step, plus, err, .false.)
+        if (allocated(err)) return
+        call evaluate(set, y - step, minus, err, .false.)
+        if (allocated(err)) return
+        if (.not. (plus%ok .and. minus%ok)) return
+        bww = matmul(plus%pass%jacobian - minus%pass%jacobian, w)/(2*h)
+    end subroutine second_derivative
 
     !> prod (mu - shift)/(1 + |mu|): det(J - shift I) scaled, real (pairs give |.|^2 > 0).
     pure real(wp) function other_determinant(re, im, shift)
@@ -115,7 +153,7 @@ contains
         integer, parameter :: max_iterations = 60
         character(len=:), allocatable :: failure
         character(len=16), allocatable :: names(:)
-        real(wp), allocatable :: tests(:), y(:)
+        real(wp), allocatable :: tests(:), y(:), tangent(:)
         real(wp) :: a, b, ga, gb, tau, g
         integer :: iteration, side
 
@@ -131,7 +169,8 @@ contains
             call correct(set, y0 + tau*t0, t0, point%y, point%st, failure, err)
             if (allocated(err)) return
             if (len(failure) > 0) return
-            tests = codim2_tests(set%shift, point%st)
+            call codim2_tests(set, point%y, point%st, tests, err)
+            if (allocated(err)) return
             g = tests(which)
             if (abs(g) <= test_tolerance .or. abs(b - a) <= bracket_tolerance) exit
             if (sign(1.0_wp, g) == sign(1.0_wp, ga)) then
@@ -153,15 +192,18 @@ contains
         if (allocated(err)) return
         if (len(failure) > 0) return
         point%y = y
-        call confirm(point, -set%shift)
+        call tangent_of(point%st, t0, tangent, failure)
+        if (len(failure) > 0) return
+        call confirm(point, -set%shift, tangent(size(y) - 1:))
     end subroutine locate_codim2
 
     !> The multipliers' word on a located point of a curve whose own multiplier is `own`:
     !> fold-flip, +1 and -1 each within flip_confirmation; 1:1 or 1:2, two multipliers within
-    !> resonance_confirmation of `own`.
-    subroutine confirm(point, own)
+    !> resonance_confirmation of `own`; cusp, +1 within flip_confirmation and the unit
+    !> tangent's parameter part `turn` below cusp_confirmation.
+    subroutine confirm(point, own, turn)
         type(codim2_point_t), intent(inout) :: point
-        real(wp), intent(in) :: own
+        real(wp), intent(in) :: own, turn(:)
         real(wp), allocatable :: re(:), im(:), d_plus(:), d_minus(:), d_own(:)
 
         call multipliers(point%st%pass%jacobian, re, im)
@@ -172,6 +214,9 @@ contains
         case ('fold-flip')
             point%confirmed = d_plus(1) <= flip_confirmation .and. &
                               d_minus(1) <= flip_confirmation
+        case ('cusp')
+            point%confirmed = d_plus(1) <= flip_confirmation .and. &
+                              norm2(turn) <= cusp_confirmation
         case default
             point%confirmed = d_own(2) <= resonance_confirmation
         end select

@@ -31,7 +31,7 @@ module chain_curve_system
     implicit none
     private
     public :: curve_setting_t, curve_state_t, evaluate, border, null_vectors
-    public :: lift_grazing_bond, grazing_aim, same_bonds, gap_and_row, aim_at_pair
+    public :: lift_grazing_bond, grazing_aim, same_bonds, gap_and_row, tangent_of, aim_at_pair
 
     !> The gap a grazing curve aims at (Newton stops within grazing_aim / 2 of it): just above
     !> zero, so that the orbit kept has no new impact of a speed the engine resolves. The
@@ -470,5 +470,30 @@ contains
         right = x(:, 1)
         left = x(:, 2)
     end subroutine null_vectors
+
+    !> The unit tangent of the curve at st: rows t = 0, direction . t = 1.
+    subroutine tangent_of(st, direction, tangent, failure)
+        type(curve_state_t), intent(in) :: st
+        real(wp), intent(in) :: direction(:)
+        real(wp), allocatable, intent(out) :: tangent(:)
+        character(len=:), allocatable, intent(out) :: failure
+        real(wp), allocatable :: a(:, :), rhs(:, :)
+        integer :: n, info
+
+        failure = ''
+        n = size(direction)
+        allocate (a(n, n), rhs(n, 1))
+        a(:n - 1, :) = st%rows
+        a(n, :) = direction
+        rhs = 0
+        rhs(n, 1) = 1
+        call solve_linear(a, rhs, info)
+        if (info > 0) then
+            failure = "singular tangent system of the curve"
+            return
+        end if
+        tangent = rhs(:, 1)/norm2(rhs(:, 1))
+        if (dot_product(tangent, direction) < 0) tangent = -tangent
+    end subroutine tangent_of
 
 end module chain_curve_system

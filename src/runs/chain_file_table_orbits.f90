@@ -141,7 +141,7 @@ contains
         call add(t, 'continuation', '/curve/codim2_index', 'dataset', 'codim2', 'int32', '1', &
                  '', 'the curve point (0-based index) that is the codimension-two point', when)
         call add(t, 'continuation', '/curve/codim2_kind', 'dataset', 'codim2', 'string', '1', &
-                 '', 'the kind of codimension-two point (fold-flip, 1:1, 1:2, ...)', when)
+                 '', 'the kind of codimension-two point (fold-flip, 1:1, 1:2, cusp, ...)', when)
     end subroutine entries_curve
 
 end module chain_file_table_orbits
