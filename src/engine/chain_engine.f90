@@ -44,8 +44,7 @@ module chain_engine
     use chain_model, only: model_t, bond_gaps
     use chain_state, only: chain_state_t, event_counts_t, contact_free, contact_left, &
                            contact_right
-    use chain_queue, only: queue_t, queue_init, queue_set, queue_set_bonds, queue_top, &
-                           queue_shift, queue_ties
+    use chain_queue, only: queue_t, queue_init, queue_set, queue_top, queue_shift, queue_ties
     use chain_lapack, only: qr_workspace_t
     use chain_lyapunov, only: lyapunov_acc_t
     use chain_event_log, only: event_log_t, event_log_append, event_impact, event_release
@@ -739,33 +738,20 @@ contains
         type(chain_t), intent(inout) :: chain
         integer, intent(in) :: bond
         type(error_t), allocatable, intent(out) :: err
-        real(wp) :: time
-
-        call plan_event(chain, bond, time, err)
-        if (.not. allocated(err)) call queue_set(chain%queue, bond, time)
-    end subroutine schedule
-
-    !> The next event of a bond from the current time: its kind into chain%action, its time
-    !> into `time`, for the caller to queue (schedule; or several bonds at once).
-    subroutine plan_event(chain, bond, time, err)
-        type(chain_t), intent(inout) :: chain
-        integer, intent(in) :: bond
-        real(wp), intent(out) :: time
-        type(error_t), allocatable, intent(out) :: err
         type(gap_t) :: gap
         type(gap_search_t) :: found
         logical :: closes
         integer :: resting
 
-        time = never
         call gap_now(chain, bond, gap, closes, resting)
         if (resting /= 0) then
             chain%action(bond) = action_release
-            time = release_time(chain, resting)
+            call queue_set(chain%queue, bond, release_time(chain, resting))
             return
         end if
         if (.not. closes) then
             chain%action(bond) = action_none
+            call queue_set(chain%queue, bond, never)
             return
         end if
         found = next_gap_zero(chain%flow, gap, chain%s, chain%flow%period)
@@ -777,43 +763,37 @@ contains
         select case (found%status)
         case (search_root)
             chain%action(bond) = action_impact
-            time = chain%s + found%tau
+            call queue_set(chain%queue, bond, chain%s + found%tau)
         case (search_horizon)
             chain%action(bond) = action_recheck
-            time = chain%s + found%tau
+            call queue_set(chain%queue, bond, chain%s + found%tau)
         case default
             chain%action(bond) = action_none
+            call queue_set(chain%queue, bond, never)
         end select
-    end subroutine plan_event
+    end subroutine schedule
 
-    !> Reschedule every bond touching oscillators first..last (bonds first-1 .. last), queued
-    !> a few neighbours at a time (queue_set_bonds).
+    !> Reschedule every bond touching oscillators first..last (bonds first-1 .. last).
     subroutine schedule_around(chain, first, last, err)
         type(chain_t), intent(inout) :: chain
         integer, intent(in) :: first, last
         type(error_t), allocatable, intent(out) :: err
-        integer, parameter :: batch = 8 !! (a cluster or a whole chain: a few at a time)
-        real(wp) :: times(batch)
-        integer :: low, bond
+        integer :: bond
 
-        do low = first - 1, last, batch
-            do bond = low, min(low + batch - 1, last)
-                call plan_event(chain, bond, times(bond - low + 1), err)
-                if (allocated(err)) return
-            end do
-            call queue_set_bonds(chain%queue, low, times(:bond - low))
+        do bond = first - 1, last
+            call schedule(chain, bond, err)
+            if (allocated(err)) return
         end do
     end subroutine schedule_around
 
-    !> The next event of a pair bond of two moving oscillators, with gap `gap` now, that is
-    !> opening (as plan_event): rather than searching its next impact now, look again when it
-    !> could first close at the earliest (chain_gaps' earliest_closing), as long as that is not
-    !> soon; a neighbour's impact usually reschedules it before then.
-    subroutine plan_separating(chain, bond, gap, time, err)
+    !> Schedule a pair bond of two moving oscillators, with gap `gap` now, that is opening:
+    !> rather than searching its next impact now, look again when it could first close at the
+    !> earliest (chain_gaps' earliest_closing), as long as that is not soon; a neighbour's
+    !> impact usually reschedules it before then.
+    subroutine schedule_separating(chain, bond, gap, err)
         type(chain_t), intent(inout) :: chain
         integer, intent(in) :: bond
         type(gap_t), intent(in) :: gap
-        real(wp), intent(out) :: time
         type(error_t), allocatable, intent(out) :: err
         real(wp) :: earliest
 
@@ -821,12 +801,12 @@ contains
             earliest = earliest_closing(chain%flow, gap)
             if (earliest > defer_after) then
                 chain%action(bond) = action_recheck
-                time = chain%s + earliest
+                call queue_set(chain%queue, bond, chain%s + earliest)
                 return
             end if
         end if
-        call plan_event(chain, bond, time, err)
-    end subroutine plan_separating
+        call schedule(chain, bond, err)
+    end subroutine schedule_separating
 
     !> The gap function of a bond as it stands now: a(bond) + x(right) - x(left), where each
     !> side is a moving oscillator or a fixed position (a wall, or an oscillator resting in a
@@ -1037,7 +1017,7 @@ contains
         type(event_log_t), intent(inout) :: log
         type(error_t), allocatable, intent(out) :: err
         integer :: l, r
-        real(wp) :: u, yl, wl, yr, wr, curvature, u_min, times(3)
+        real(wp) :: u, yl, wl, yr, wr, curvature, u_min
         type(gap_t) :: gap
         logical :: both_moving
 
@@ -1076,12 +1056,10 @@ contains
             call pair_bounce(chain, bond, u, yl, wl, yr, wr, log)
             ! the pair just separated: its next impact is far, and usually pre-empted (its gap
             ! now is the one gap_now would give: both free parts were set at this instant)
-            ! (bonds l - 1, l = bond and r, queued at once)
-            call plan_event(chain, l - 1, times(1), err)
-            if (.not. allocated(err)) call plan_separating(chain, bond, &
-                gap_t(chain%spacing(bond), yr - yl, wr - wl, 0.0_wp), times(2), err)
-            if (.not. allocated(err)) call plan_event(chain, r, times(3), err)
-            if (.not. allocated(err)) call queue_set_bonds(chain%queue, l - 1, times)
+            call schedule(chain, l - 1, err)
+            if (.not. allocated(err)) call schedule_separating(chain, bond, &
+                gap_t(chain%spacing(bond), yr - yl, wr - wl, 0.0_wp), err)
+            if (.not. allocated(err)) call schedule(chain, r, err)
             return
         end if
         call schedule_around(chain, l, r, err)

@@ -1,9 +1,8 @@
 !> The next event time of every bond (0..n), in blocks of `block` consecutive bonds: each block
 !> knows its earliest (time, bond), and an indexed 4-ary min-heap orders the blocks by it. An
-!> impact reschedules two or three neighbouring bonds, nearly always in one block, all at once
-!> (`queue_set_bonds`): the block's earliest is found again (by a scan of its times, a few
-!> cache lines, vectorised, if it was one of them) and the block moves once in a heap of n/32
-!> entries, which stays in the first-level cache at any n. So an
+!> impact reschedules two or three neighbouring bonds, nearly always in one block: the block's
+!> earliest is found again by a scan of its times (a few cache lines, vectorised) and the
+!> block moves in a heap of n/32 entries, which stays in the first-level cache at any n. So an
 !> impact costs about the same at n = 16 and n = 16384 (a heap of the bonds themselves grew
 !> with log n and missed the cache once its arrays outgrew it). A chain of at most `block`
 !> bonds is one block and needs no heap. Ties are broken by the bond index (the lowest bond of
@@ -15,7 +14,7 @@ module chain_queue
     use chain_kinds, only: wp
     implicit none
     private
-    public :: queue_t, queue_init, queue_set, queue_set_bonds, queue_top, queue_shift, queue_ties
+    public :: queue_t, queue_init, queue_set, queue_top, queue_shift, queue_ties
 
     integer, parameter :: arity = 4
     integer, parameter :: block = 32 !! bonds per block: four cache lines of times
@@ -120,65 +119,28 @@ contains
         end do
     end subroutine queue_ties
 
-    !> Set the event time of `bond` (queue_set_bonds for one bond).
+    !> Set the event time of `bond`; its block's earliest changes if the bond comes before it
+    !> now, or was it; the block then moves up (earlier) or down (later) in the heap.
     pure subroutine queue_set(q, bond, time)
         type(queue_t), intent(inout) :: q
         integer, intent(in) :: bond
         real(wp), intent(in) :: time
+        integer :: b, first
+        real(wp) :: old, new
 
         q%time(bond) = time
-        if (q%blocks > 1) call settle_block(q, bond/block + 1, bond, bond)
-    end subroutine queue_set
-
-    !> Set the event times of the consecutive bonds first, first + 1, ... (`times`): all that
-    !> one event reschedules. Each block they fall in (nearly always one) then finds its
-    !> earliest and moves in the heap once, where setting them one by one moved it up to three
-    !> times, each move a walk through the heap of branches taken at random. The queue comes
-    !> out the same (every block with the same earliest), so the order of events does too.
-    pure subroutine queue_set_bonds(q, first, times)
-        type(queue_t), intent(inout) :: q
-        integer, intent(in) :: first
-        real(wp), intent(in) :: times(:)
-        integer :: last, b
-
-        last = first + size(times) - 1
-        q%time(first:last) = times
         if (q%blocks == 1) return
-        do b = first/block + 1, last/block + 1
-            call settle_block(q, b, max(first, (b - 1)*block), min(last, b*block - 1))
-        end do
-    end subroutine queue_set_bonds
-
-    !> Block b after the times of its bonds low..high were set: its earliest comes from those
-    !> bonds and the earliest before, or from a scan of the block if that was one of them; the
-    !> block then moves up (earlier) or down (later) in the heap. (An unchanged key keeps its
-    !> place: the heap ties blocks by their index, not by their earliest bond.)
-    pure subroutine settle_block(q, b, low, high)
-        type(queue_t), intent(inout) :: q
-        integer, intent(in) :: b, low, high
-        integer :: bond, j
-        real(wp) :: old, time
-
+        b = bond/block + 1
         old = q%key(q%slot(b))
-        bond = q%first(b)
-        time = old
-        if (bond >= low .and. bond <= high) then
-            call block_earliest(q, b, bond, time)
-        else
-            do j = low, high
-                if (earlier(q%time(j), j, time, bond)) then
-                    bond = j
-                    time = q%time(j)
-                end if
-            end do
+        if (earlier(time, bond, old, q%first(b))) then
+            q%first(b) = bond
+            if (time /= old) call sift_up(q, b, time)
+        else if (bond == q%first(b)) then
+            call block_earliest(q, b, first, new)
+            q%first(b) = first
+            if (new /= old) call sift_down(q, b, new)
         end if
-        q%first(b) = bond
-        if (time < old) then
-            call sift_up(q, b, time)
-        else if (time /= old) then
-            call sift_down(q, b, time)
-        end if
-    end subroutine settle_block
+    end subroutine queue_set
 
     !> The earliest (time, bond) of block b: the lowest bond due at the block's minimum time,
     !> by a minimum without branches (the compiler vectorises it; a scan that branches on each

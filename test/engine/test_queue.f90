@@ -1,12 +1,10 @@
 !> The event queue against a brute-force minimum: after every update of a random bond, with
 !> ties in time, the top is the earliest (time, bond) pair and the ties are the bonds due
 !> then, for queue sizes of one block (no heap), either side of one and two blocks, and enough
-!> blocks for a heap of several levels; one bond at a time (queue_set) and a few neighbours at
-!> once (queue_set_bonds, as one event reschedules them, across a block's end too).
+!> blocks for a heap of several levels.
 module test_queue
     use chain_kinds, only: wp
-    use chain_queue, only: queue_t, queue_init, queue_set, queue_set_bonds, queue_top, &
-                           queue_shift, queue_ties
+    use chain_queue, only: queue_t, queue_init, queue_set, queue_top, queue_shift, queue_ties
     use testing, only: tally_t, check
     implicit none
     private
@@ -37,7 +35,7 @@ contains
         real(wp), parameter :: never = huge(1.0_wp)
         type(queue_t) :: q
         real(wp) :: times(0:n_bonds - 1), top_time, h
-        integer :: u, bond, top_bond, want, wrong, n_ties, ties(n_bonds), last, j
+        integer :: u, bond, top_bond, want, wrong, n_ties, ties(n_bonds)
         logical :: tied, listed(0:n_bonds - 1)
         character(len=12) :: label
 
@@ -48,19 +46,9 @@ contains
             h = sin(12.9898_wp*u + 4.1_wp*n_bonds)*43758.5453_wp
             h = h - floor(h)
             bond = min(n_bonds - 1, int(h*n_bonds))
-            ! coarse times make ties common; now and then a bond leaves the schedule; every
-            ! other update sets up to five neighbours at once
-            last = bond
-            if (mod(u, 2) == 0) last = min(n_bonds - 1, bond + mod(u/2, 5))
-            do j = bond, last
-                times(j) = merge(never, real(int(100*abs(sin(7.3_wp*(u + j)))), wp), &
-                                 mod(u + j, 17) == 0)
-            end do
-            if (last == bond) then
-                call queue_set(q, bond, times(bond))
-            else
-                call queue_set_bonds(q, bond, times(bond:last))
-            end if
+            ! coarse times make ties common; now and then a bond leaves the schedule
+            times(bond) = merge(never, real(int(100*abs(sin(7.3_wp*u))), wp), mod(u, 17) == 0)
+            call queue_set(q, bond, times(bond))
             if (mod(u, 101) == 0) then
                 call queue_shift(q, 3.0_wp, never)
                 where (times < never) times = times - 3
