@@ -10,7 +10,7 @@ module chain_lapack
     private
     public :: qr_orthonormalise, qr_workspace_t, general_eigenvalues
     public :: solve_linear, qr_last_r, qr_copy_r, solve_upper_triangle, upper_product
-    public :: general_eigenvectors, blas_one_thread
+    public :: general_eigenvectors, blas_one_thread, qr_orthonormalise_blocks
 
     !> Triangular matrices of at most this order are solved and multiplied in plain loops.
     integer, parameter :: small_triangle = 40
@@ -177,6 +177,86 @@ contains
             call dorgqr(m, k, k, a, m, tau, work, size(work), info)
         end associate
     end subroutine qr_orthonormalise
+
+    !> qr_orthonormalise of a square frame a (2n x 2n, two rows and columns per oscillator)
+    !> whose oscillators outside `coupled` (n) are decoupled: such an oscillator's two columns
+    !> are zero outside its own two rows and its rows zero outside its own columns (a full
+    !> spectrum started from unit vectors: no impact has yet joined it to a neighbour), and the
+    !> coupled oscillators' columns are zero outside their rows. Householder's reflections then
+    !> never mix the pieces: every reflection of a coupled column is zero outside the coupled
+    !> rows, every one of a decoupled column outside its own two rows, so R and Q are, entry
+    !> for entry, those of the dense factorisation in exact arithmetic (docs/model.md section
+    !> 7.2). The coupled block (its rows and columns in ascending order) goes to
+    !> qr_orthonormalise; each decoupled 2 x 2 block is factorised in closed form: the reflector
+    !> of its first column, Q = H = [a c; c -a]/beta (beta = -sign(|(a, c)|, a)), or Q = I when
+    !> c = 0, as householder_qr builds it. Cost O(m^3 + n), m twice the number of coupled
+    !> oscillators. With `keep_singular`, a frame with an exactly zero R(j,j) is left as it was.
+    subroutine qr_orthonormalise_blocks(a, coupled, r_diag, ws, info, keep_singular)
+        real(wp), intent(inout), contiguous :: a(:, :)
+        logical, intent(in) :: coupled(:)
+        real(wp), intent(out) :: r_diag(:)
+        type(qr_workspace_t), intent(inout) :: ws
+        integer, intent(out) :: info
+        logical, intent(in), optional :: keep_singular
+        real(wp), allocatable :: block(:, :), block_diag(:), q(:, :, :)
+        real(wp) :: beta
+        integer, allocatable :: rows(:)
+        integer :: n, p, i, j
+
+        n = size(coupled)
+        info = 0
+        rows = pack([(j, j=1, 2*n)], spread_pairs(coupled))
+        allocate (q(2, 2, n))
+        ! the decoupled blocks first, kept aside until the coupled block is known to be
+        ! regular (keep_singular leaves the frame as it was)
+        do p = 1, n
+            if (coupled(p)) cycle
+            i = 2*p - 1
+            associate (a11 => a(i, i), a21 => a(i + 1, i), a12 => a(i, i + 1), &
+                       a22 => a(i + 1, i + 1))
+                if (a21 == 0) then
+                    q(:, :, p) = reshape([1.0_wp, 0.0_wp, 0.0_wp, 1.0_wp], [2, 2])
+                    r_diag(i) = a11
+                    r_diag(i + 1) = a22
+                else
+                    beta = -sign(hypot(a11, a21), a11)
+                    q(:, 1, p) = [a11, a21]/beta
+                    q(:, 2, p) = [a21, -a11]/beta
+                    r_diag(i) = beta
+                    r_diag(i + 1) = (a21*a12 - a11*a22)/beta
+                end if
+            end associate
+        end do
+        if (present(keep_singular)) then
+            if (keep_singular .and. any(r_diag(pack([(j, j=1, 2*n)], &
+                                                     .not. spread_pairs(coupled))) == 0)) return
+        end if
+        if (size(rows) > 0) then
+            block = a(rows, rows)
+            allocate (block_diag(size(rows)))
+            call qr_orthonormalise(block, block_diag, ws, info, keep_singular)
+            if (info /= 0) return
+            if (present(keep_singular)) then
+                if (keep_singular .and. any(block_diag == 0)) return
+            end if
+            a(rows, rows) = block
+            r_diag(rows) = block_diag
+        end if
+        do p = 1, n
+            if (coupled(p)) cycle
+            i = 2*p - 1
+            a(i:i + 1, i:i + 1) = q(:, :, p)
+        end do
+    end subroutine qr_orthonormalise_blocks
+
+    !> Each oscillator's flag for its two rows.
+    pure function spread_pairs(flags) result(rows)
+        logical, intent(in) :: flags(:)
+        logical :: rows(2*size(flags))
+
+        rows(1::2) = flags
+        rows(2::2) = flags
+    end function spread_pairs
 
     !> Householder QR of r (m x k, m >= k) in place, in LAPACK's storage (dgeqrf's): R in the
     !> upper triangle, the reflectors' vectors below it (first entry 1, implied) and their

@@ -10,7 +10,7 @@
 !> instant are kept in the coordinates of now until the instant ends.
 submodule(chain_engine) chain_engine_tangent
     use chain_error, only: set_error, fmt_int
-    use chain_lapack, only: qr_orthonormalise, qr_last_r, qr_copy_r
+    use chain_lapack, only: qr_orthonormalise, qr_orthonormalise_blocks, qr_last_r, qr_copy_r
     use chain_lyapunov, only: lyapunov_step
     use chain_clv, only: fold_upper
     use, intrinsic :: ieee_arithmetic, only: ieee_value, ieee_negative_inf
@@ -50,8 +50,53 @@ contains
         chain%n_touched = 0
         chain%row_stamp = -1
         chain%tangent = frame
+        call find_coupled(chain)
         call forget_resting_rows(chain)
     end procedure chain_set_tangent
+
+    !> For a square frame without kept R factors, the oscillators whose rows or columns reach
+    !> outside their own 2 x 2 block (none for unit vectors, all for a generic frame; a frame
+    !> restored from a saved run gets the set its run had, to exact zeros).
+    pure subroutine find_coupled(chain)
+        type(chain_t), intent(inout) :: chain
+        integer :: n, p, i
+
+        if (allocated(chain%coupled)) deallocate (chain%coupled)
+        n = chain%n
+        if (chain%n_vectors /= 2*n .or. chain%keep_r_factors) return
+        allocate (chain%coupled(n))
+        do p = 1, n
+            i = 2*p - 1
+            chain%coupled(p) = any(chain%tangent(i:i + 1, :i - 1) /= 0) .or. &
+                               any(chain%tangent(i:i + 1, i + 2:) /= 0) .or. &
+                               any(chain%tangent(:i - 1, i:i + 1) /= 0) .or. &
+                               any(chain%tangent(i + 2:, i:i + 1) /= 0)
+        end do
+    end subroutine find_coupled
+
+    !> Oscillators first..last joined by one jump (a pair impact, a cluster).
+    pure subroutine couple(chain, first, last)
+        type(chain_t), intent(inout) :: chain
+        integer, intent(in) :: first, last
+
+        if (allocated(chain%coupled) .and. last > first) chain%coupled(first:last) = .true.
+    end subroutine couple
+
+    !> Re-orthonormalise the frame (Q in place, the diagonal of R in r_diag): the coupled block
+    !> and 2 x 2 blocks when the frame knows its coupled oscillators, else the whole frame.
+    subroutine factorise_frame(chain, r_diag, info, keep_singular)
+        type(chain_t), intent(inout) :: chain
+        real(wp), intent(out) :: r_diag(:)
+        integer, intent(out) :: info
+        logical, intent(in), optional :: keep_singular
+
+        if (allocated(chain%coupled)) then
+            call qr_orthonormalise_blocks(chain%tangent, chain%coupled, r_diag, chain%qr, info, &
+                                          keep_singular)
+        else
+            call qr_orthonormalise(chain%tangent, r_diag, chain%qr, info, keep_singular)
+        end if
+    end subroutine factorise_frame
 
     module procedure chain_vectors
         chain_vectors = chain%n_vectors
@@ -80,7 +125,7 @@ contains
 
         k = size(chain%tangent, 2)
         call lyapunov_step(acc, chain%tangent, info, chain%tangent_scale_bits, &
-                           chain%tangent_log, chain%rank_losses > 0, cycles)
+                           chain%tangent_log, chain%rank_losses > 0, cycles, chain%coupled)
         if (present(r_factor)) then
             r_factor = 0
             r_log = 0
@@ -95,8 +140,9 @@ contains
                 end if
             end if
         end if
-        ! (the step may have dropped collapsed directions)
+        ! (the step may have dropped collapsed directions: the frame is no longer square)
         chain%n_vectors = size(chain%tangent, 2)
+        if (chain%n_vectors /= k .and. allocated(chain%coupled)) deallocate (chain%coupled)
         chain%tangent_log = [(0.0_wp, i=1, chain%n_vectors)]
         call restart_bookkeeping(chain)
         if (info /= 0) call set_error(err, "lyapunov: QR factorisation failed (LAPACK info "// &
@@ -111,7 +157,7 @@ contains
         real(wp) :: r_diag(chain%n_vectors)
         integer :: info, j
 
-        call qr_orthonormalise(chain%tangent, r_diag, chain%qr, info)
+        call factorise_frame(chain, r_diag, info)
         if (info /= 0) then
             call set_error(err, "lyapunov: QR factorisation failed while aligning the "// &
                            "frame (LAPACK info "//fmt_int(info)//")")
@@ -172,6 +218,7 @@ contains
 
         ns = size(s, 1)
         last = i + ns/2 - 1
+        call couple(chain, i, last)
         s_max = maxval(abs(s))
         if (chain%same_instant == 0 .and. s_max <= moderate_jump .and. &
             all(chain%row_stamp(i:last) /= chain%instant)) then
@@ -224,27 +271,51 @@ contains
     !> (After propagators_now.) Rows already moved to now at this instant stay. Afterwards every row
     !> is in the coordinates of now.
     module procedure move_tangent_epoch
-        real(wp) :: a, b
         logical :: moves(chain%n)
-        integer :: i, j
+        integer, allocatable :: rows(:)
+        integer :: i, j, p
 
         if (chain%n_vectors > 0) then
             moves = chain%row_stamp /= chain%instant .and. chain%contact == contact_free
-            ! column by column: each column is read and written once, in order
-            associate (t => chain%tangent, m => chain%m)
+            if (allocated(chain%coupled)) then
+                ! only the nonzero rows of each column: the coupled ones for a coupled column,
+                ! the oscillator's own for a decoupled one
+                rows = pack([(i, i=1, chain%n)], moves .and. chain%coupled)
                 do j = 1, chain%n_vectors
-                    do i = 1, chain%n
-                        if (.not. moves(i)) cycle
-                        a = t(2*i - 1, j)
-                        b = t(2*i, j)
-                        t(2*i - 1, j) = m(1, 1)*a + m(1, 2)*b
-                        t(2*i, j) = m(2, 1)*a + m(2, 2)*b
-                    end do
+                    p = (j + 1)/2
+                    if (chain%coupled(p)) then
+                        call move_rows(chain%tangent, rows, j, chain%m)
+                    else if (moves(p)) then
+                        call move_rows(chain%tangent, [p], j, chain%m)
+                    end if
                 end do
-            end associate
+            else
+                ! column by column: each column is read and written once, in order
+                rows = pack([(i, i=1, chain%n)], moves)
+                do j = 1, chain%n_vectors
+                    call move_rows(chain%tangent, rows, j, chain%m)
+                end do
+            end if
         end if
         chain%n_touched = 0
     end procedure move_tangent_epoch
+
+    !> Rows of the oscillators `rows` of column j moved by the 2 x 2 map m.
+    pure subroutine move_rows(t, rows, j, m)
+        real(wp), contiguous, intent(inout) :: t(:, :)
+        integer, intent(in) :: rows(:), j
+        real(wp), intent(in) :: m(2, 2)
+        real(wp) :: a, b
+        integer :: q, i
+
+        do q = 1, size(rows)
+            i = rows(q)
+            a = t(2*i - 1, j)
+            b = t(2*i, j)
+            t(2*i - 1, j) = m(1, 1)*a + m(1, 2)*b
+            t(2*i, j) = m(2, 1)*a + m(2, 2)*b
+        end do
+    end subroutine move_rows
 
     !> (M^-1 of that instant.)
     module procedure rows_back_to_epoch
@@ -282,6 +353,7 @@ contains
 
         m = last - first + 1
         if (m > 1 .or. stopped) chain%rank_losses = chain%rank_losses + 1
+        call couple(chain, first, last)
         allocate (rows(chain%n_vectors))
         rows = 0
         do i = first, last
@@ -322,7 +394,7 @@ contains
         end if
         ! a zero diagonal (a direction lost exactly) is left to the QR step to report: the
         ! frame is then left as it was
-        call qr_orthonormalise(chain%tangent, chain%r_diag, chain%qr, info, keep_singular=.true.)
+        call factorise_frame(chain, chain%r_diag, info, keep_singular=.true.)
         if (info /= 0 .or. any(chain%r_diag == 0)) return
         chain%jumps_volume = 0
         do j = 1, chain%n_vectors

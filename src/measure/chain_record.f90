@@ -459,15 +459,27 @@ contains
 
     end subroutine transient_part
 
-    !> Carry a tangent frame from now: &lyapunov vectors generic orthonormal vectors.
+    !> Carry a tangent frame from now: &lyapunov vectors generic orthonormal vectors, or for
+    !> the full spectrum the unit vectors (docs/model.md section 7.1), unless covariant vectors
+    !> or finite-time exponents need the columns in the order of the exponents.
     subroutine start_tangent(chain, spec, err)
         type(chain_t), intent(inout) :: chain
         type(record_spec_t), intent(in) :: spec
         type(error_t), allocatable, intent(out) :: err
         real(wp), allocatable :: frame(:, :)
-        integer :: info
+        integer :: info, m, k, j
 
-        call initial_frame(2*chain_size(chain), vector_count(spec, chain_size(chain)), frame, info)
+        m = 2*chain_size(chain)
+        k = vector_count(spec, chain_size(chain))
+        if (k == m .and. .not. spec%covariant .and. spec%window == 0) then
+            allocate (frame(m, m), source=0.0_wp)
+            do j = 1, m
+                frame(j, j) = 1
+            end do
+            info = 0
+        else
+            call initial_frame(m, k, frame, info)
+        end if
         if (info /= 0) then
             call set_error(err, "lyapunov: cannot build the initial tangent frame")
             return

@@ -20,7 +20,8 @@
 module chain_lyapunov
     use chain_kinds, only: wp, i8
     use, intrinsic :: ieee_arithmetic, only: ieee_value, ieee_negative_inf, ieee_is_finite
-    use chain_lapack, only: qr_orthonormalise, qr_workspace_t, general_eigenvalues
+    use chain_lapack, only: qr_orthonormalise, qr_orthonormalise_blocks, qr_workspace_t, &
+                            general_eigenvalues
     use chain_blocking, only: blocking_t, blocking_start, blocking_add, blocking_error, &
                               blocking_pack, blocking_unpack
     implicit none
@@ -225,7 +226,7 @@ contains
     !> rounding. With adaptive steps, the interval to the next step is set here. A step that
     !> ends a window of finite-time exponents counts it in acc%windows, its exponents in
     !> acc%window_last.
-    subroutine lyapunov_step(acc, frame, info, scale_bits, log_scale, singular, cycles)
+    subroutine lyapunov_step(acc, frame, info, scale_bits, log_scale, singular, cycles, coupled)
         type(lyapunov_acc_t), intent(inout) :: acc
         real(wp), allocatable, intent(inout) :: frame(:, :)
         integer, intent(out) :: info
@@ -235,6 +236,8 @@ contains
         real(wp), intent(in), optional :: log_scale(:)
         logical, intent(in), optional :: singular
         integer, intent(in), optional :: cycles
+        !> a square frame's coupled oscillators (chain_lapack's qr_orthonormalise_blocks)
+        logical, intent(in), optional :: coupled(:)
         real(wp), allocatable :: before(:, :), scale(:)
         real(wp) :: minus_infinity
         logical, allocatable :: gone(:)
@@ -251,7 +254,11 @@ contains
         do
             kept = size(frame, 2)
             if (kept == 0) exit
-            call qr_orthonormalise(frame, acc%r_diag(:kept), acc%qr, info)
+            if (present(coupled) .and. kept == size(frame, 1)) then
+                call qr_orthonormalise_blocks(frame, coupled, acc%r_diag(:kept), acc%qr, info)
+            else
+                call qr_orthonormalise(frame, acc%r_diag(:kept), acc%qr, info)
+            end if
             if (info /= 0) return
             if (.not. allocated(before)) exit
             gone = [(abs(acc%r_diag(j)) <= collapse_tolerance*norm2(before(:, j)), j=1, kept)]
