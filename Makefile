@@ -45,7 +45,16 @@ export FPM_CFLAGS = $(shell $(BLAS_PKG_CONFIG) --cflags $(IMPACTCHAIN_BLAS) 2>/d
 # FPM_FFLAGS, so the runtime-checked flags carry them too.
 BLAS_FFLAGS = $(filter -D%,$(FPM_CFLAGS)) \
     -DIMPACTCHAIN_BLAS_FLAGS=$(shell echo '$(FPM_LDFLAGS) $(FPM_CFLAGS)' | md5sum | cut -c1-12)
-export FPM_FFLAGS = $(BLAS_FFLAGS)
+# Code generation for this machine's CPU, opt-in (docs/performance.md, "Flags for the
+# machine"): e.g. `make MACHINE_FLAGS=-march=native build`. The same flags reach fpm (its
+# Fortran flags, so the build gets a directory of its own) and the Python extension
+# (meson.build reads IMPACTCHAIN_MACHINE_FLAGS), which keeps the two bit-identical on this
+# machine; the extension is built in a directory of its own per set of flags, as meson reads
+# them only when it configures one. Not for the runtime-checked build, which tests the code
+# rather than its code generation.
+MACHINE_FLAGS ?=
+export IMPACTCHAIN_MACHINE_FLAGS = $(strip $(MACHINE_FLAGS))
+export FPM_FFLAGS = $(strip $(BLAS_FFLAGS) $(IMPACTCHAIN_MACHINE_FLAGS))
 APT_PACKAGES := gfortran libhdf5-dev liblapack-dev libblas-dev pkg-config libopenmpi-dev \
                 openmpi-bin
 PY_STAMP := $(VENV)/.requirements-installed
@@ -53,7 +62,8 @@ PY_STAMP := $(VENV)/.requirements-installed
 # built by meson-python from meson.build): installed into the venv as `pip install .` installs
 # it anywhere, from a build directory kept between runs, so that a rebuild compiles only what
 # changed (nothing changed: a few seconds). meson and ninja come from the venv.
-PKG_BUILD := $(CURDIR)/build/meson-python
+PKG_BUILD := $(CURDIR)/build/meson-python$(if $(IMPACTCHAIN_MACHINE_FLAGS),-$(shell \
+    echo '$(IMPACTCHAIN_MACHINE_FLAGS)' | md5sum | cut -c1-8))
 INSTALL_PKG := PATH="$(abspath $(VENV))/bin:$$PATH" $(PY) -m pip install --quiet \
                --no-build-isolation --no-deps -Cbuild-dir=$(PKG_BUILD) .
 DEFAULT_RUN := runs/default.h5
@@ -120,6 +130,7 @@ blas-env: blas-check
 	echo "export FPM_LDFLAGS='$(FPM_LDFLAGS)'"
 	echo "export FPM_CFLAGS='$(FPM_CFLAGS)'"
 	echo "export FPM_FFLAGS='$(FPM_FFLAGS)'"
+	echo "export IMPACTCHAIN_MACHINE_FLAGS='$(IMPACTCHAIN_MACHINE_FLAGS)'"
 
 build: setup blas-check
 	$(FPM) build $(RELEASE) $(FPM_LOG)
