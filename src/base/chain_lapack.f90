@@ -179,84 +179,110 @@ contains
     end subroutine qr_orthonormalise
 
     !> qr_orthonormalise of a square frame a (2n x 2n, two rows and columns per oscillator)
-    !> whose oscillators outside `coupled` (n) are decoupled: such an oscillator's two columns
-    !> are zero outside its own two rows and its rows zero outside its own columns (a full
-    !> spectrum started from unit vectors: no impact has yet joined it to a neighbour), and the
-    !> coupled oscillators' columns are zero outside their rows. Householder's reflections then
-    !> never mix the pieces: every reflection of a coupled column is zero outside the coupled
-    !> rows, every one of a decoupled column outside its own two rows, so R and Q are, entry
-    !> for entry, those of the dense factorisation in exact arithmetic (docs/model.md section
-    !> 7.2). The coupled block (its rows and columns in ascending order) goes to
-    !> qr_orthonormalise; each decoupled 2 x 2 block is factorised in closed form: the reflector
-    !> of its first column, Q = H = [a c; c -a]/beta (beta = -sign(|(a, c)|, a)), or Q = I when
-    !> c = 0, as householder_qr builds it. Cost O(m^3 + n), m twice the number of coupled
-    !> oscillators. With `keep_singular`, a frame with an exactly zero R(j,j) is left as it was.
-    subroutine qr_orthonormalise_blocks(a, coupled, r_diag, ws, info, keep_singular)
+    !> made of independent pieces: `joined` (n - 1) marks the bonds joined (bond i between
+    !> oscillators i and i + 1), a piece is a maximal run [p, q] of oscillators joined by them,
+    !> and a piece's columns 2p - 1 .. 2q are zero outside its rows 2p - 1 .. 2q and its rows
+    !> zero outside its columns (a full spectrum started from unit vectors: only impacts join
+    !> neighbours). The frame is block diagonal with contiguous blocks, and Householder's
+    !> reflections never mix them: every reflection of a piece's column is zero outside the
+    !> piece's rows, so R and Q are, entry for entry, those of the dense factorisation in exact
+    !> arithmetic (docs/model.md section 7.2). A piece of two or more oscillators goes to
+    !> qr_orthonormalise (the workspace is shaped anew when the size changes); a piece of one
+    !> oscillator is factorised in closed form: the reflector of its first column,
+    !> Q = H = [a c; c -a]/beta (beta = -sign(|(a, c)|, a)), or Q = I when c = 0, as
+    !> householder_qr builds it. Cost the sum of the pieces' m^3 (m twice a piece's length).
+    !> With `keep_singular`, a frame with an exactly zero R(j,j) is left as it was: the
+    !> pieces' Q are kept aside until all are known to be regular.
+    subroutine qr_orthonormalise_blocks(a, joined, r_diag, ws, info, keep_singular)
         real(wp), intent(inout), contiguous :: a(:, :)
-        logical, intent(in) :: coupled(:)
+        logical, intent(in) :: joined(:)
         real(wp), intent(out) :: r_diag(:)
         type(qr_workspace_t), intent(inout) :: ws
         integer, intent(out) :: info
         logical, intent(in), optional :: keep_singular
-        real(wp), allocatable :: block(:, :), block_diag(:), q(:, :, :)
-        real(wp) :: beta
-        integer, allocatable :: rows(:)
-        integer :: n, p, i, j
+        real(wp), allocatable :: block(:, :), q_all(:)
+        logical :: keep
+        integer :: n, first, last, low, high, m, used
 
-        n = size(coupled)
+        n = size(joined) + 1
         info = 0
-        rows = pack([(j, j=1, 2*n)], spread_pairs(coupled))
-        allocate (q(2, 2, n))
-        ! the decoupled blocks first, kept aside until the coupled block is known to be
-        ! regular (keep_singular leaves the frame as it was)
-        do p = 1, n
-            if (coupled(p)) cycle
-            i = 2*p - 1
-            associate (a11 => a(i, i), a21 => a(i + 1, i), a12 => a(i, i + 1), &
-                       a22 => a(i + 1, i + 1))
-                if (a21 == 0) then
-                    q(:, :, p) = reshape([1.0_wp, 0.0_wp, 0.0_wp, 1.0_wp], [2, 2])
-                    r_diag(i) = a11
-                    r_diag(i + 1) = a22
-                else
-                    beta = -sign(hypot(a11, a21), a11)
-                    q(:, 1, p) = [a11, a21]/beta
-                    q(:, 2, p) = [a21, -a11]/beta
-                    r_diag(i) = beta
-                    r_diag(i + 1) = (a21*a12 - a11*a22)/beta
-                end if
-            end associate
+        keep = .false.
+        if (present(keep_singular)) keep = keep_singular
+        ! (the pieces' sizes add up to at most (2n)**2 entries; usually far fewer)
+        used = 0
+        first = 1
+        do while (first <= n)
+            last = piece_end(joined, first)
+            used = used + (2*(last - first + 1))**2
+            first = last + 1
         end do
-        if (present(keep_singular)) then
-            if (keep_singular .and. any(r_diag(pack([(j, j=1, 2*n)], &
-                                                     .not. spread_pairs(coupled))) == 0)) return
-        end if
-        if (size(rows) > 0) then
-            block = a(rows, rows)
-            allocate (block_diag(size(rows)))
-            call qr_orthonormalise(block, block_diag, ws, info, keep_singular)
-            if (info /= 0) return
-            if (present(keep_singular)) then
-                if (keep_singular .and. any(block_diag == 0)) return
+        allocate (q_all(used))
+        used = 0
+        first = 1
+        do while (first <= n)
+            last = piece_end(joined, first)
+            low = 2*first - 1
+            high = 2*last
+            m = high - low + 1
+            block = a(low:high, low:high)
+            if (m == 2) then
+                call closed_form_qr(block, r_diag(low:high))
+            else
+                call qr_orthonormalise(block, r_diag(low:high), ws, info, keep_singular)
+                if (info /= 0) return
             end if
-            a(rows, rows) = block
-            r_diag(rows) = block_diag
-        end if
-        do p = 1, n
-            if (coupled(p)) cycle
-            i = 2*p - 1
-            a(i:i + 1, i:i + 1) = q(:, :, p)
+            if (keep .and. any(r_diag(low:high) == 0)) return
+            q_all(used + 1:used + m*m) = reshape(block, [m*m])
+            used = used + m*m
+            first = last + 1
         end do
+        used = 0
+        first = 1
+        do while (first <= n)
+            last = piece_end(joined, first)
+            low = 2*first - 1
+            high = 2*last
+            m = high - low + 1
+            a(low:high, low:high) = reshape(q_all(used + 1:used + m*m), [m, m])
+            used = used + m*m
+            first = last + 1
+        end do
+    contains
+        !> The last oscillator of the piece that starts at `first`.
+        pure integer function piece_end(joined, first) result(last)
+            logical, intent(in) :: joined(:)
+            integer, intent(in) :: first
+
+            last = first
+            do while (last <= size(joined))
+                if (.not. joined(last)) exit
+                last = last + 1
+            end do
+        end function piece_end
     end subroutine qr_orthonormalise_blocks
 
-    !> Each oscillator's flag for its two rows.
-    pure function spread_pairs(flags) result(rows)
-        logical, intent(in) :: flags(:)
-        logical :: rows(2*size(flags))
+    !> A 2 x 2 block b replaced by its Q, R's diagonal in r_diag (qr_orthonormalise_blocks).
+    pure subroutine closed_form_qr(b, r_diag)
+        real(wp), intent(inout) :: b(:, :)
+        real(wp), intent(out) :: r_diag(:)
+        real(wp) :: beta, a11, a21, a12, a22
 
-        rows(1::2) = flags
-        rows(2::2) = flags
-    end function spread_pairs
+        a11 = b(1, 1)
+        a21 = b(2, 1)
+        a12 = b(1, 2)
+        a22 = b(2, 2)
+        if (a21 == 0) then
+            b = reshape([1.0_wp, 0.0_wp, 0.0_wp, 1.0_wp], [2, 2])
+            r_diag(1) = a11
+            r_diag(2) = a22
+        else
+            beta = -sign(hypot(a11, a21), a11)
+            b(:, 1) = [a11, a21]/beta
+            b(:, 2) = [a21, -a11]/beta
+            r_diag(1) = beta
+            r_diag(2) = (a21*a12 - a11*a22)/beta
+        end if
+    end subroutine closed_form_qr
 
     !> Householder QR of r (m x k, m >= k) in place, in LAPACK's storage (dgeqrf's): R in the
     !> upper triangle, the reflectors' vectors below it (first entry 1, implied) and their

@@ -117,12 +117,13 @@ module chain_engine
                                                !! as LAPACK factorises them (no copies);
                                                !! moving rows referred back to the epoch
         integer :: tangent_scale_bits = 0   !! the frame is the true one times 2**(-bits)
-        !> A square frame (all 2n vectors, no R factors kept) knows which oscillators an impact
-        !> or a cluster has joined to a neighbour since it started (coupled(n)); the others'
-        !> columns and rows stay within their own 2 x 2 block (a full spectrum started from
-        !> unit vectors), which QR steps and epoch moves skip (docs/model.md section 7.2).
-        !> Not allocated for any other frame.
-        logical, allocatable :: coupled(:)
+        !> A square frame (all 2n vectors, no R factors kept) knows which bonds an impact or a
+        !> cluster has joined since it started (joined(n - 1), bond i between oscillators i and
+        !> i + 1). A piece, a maximal run of oscillators joined by such bonds [a, b], keeps its
+        !> rows and columns 2a - 1 .. 2b to itself (a full spectrum started from unit vectors):
+        !> QR steps factorise each piece alone, jumps and epoch moves touch only its columns
+        !> (docs/model.md section 7.2). Not allocated for any other frame.
+        logical, allocatable :: joined(:)
         !> For Lyapunov spectra: re-orthonormalise the frame right after a large jump (a slow
         !> impact, |S| ~ 1/u) instead of carrying its spread of scales to the next QR step,
         !> where later jumps and the factorisation would lose the directions it squeezed. The

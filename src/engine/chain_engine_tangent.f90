@@ -50,48 +50,87 @@ contains
         chain%n_touched = 0
         chain%row_stamp = -1
         chain%tangent = frame
-        call find_coupled(chain)
+        call find_joined(chain)
         call forget_resting_rows(chain)
     end procedure chain_set_tangent
 
-    !> For a square frame without kept R factors, the oscillators whose rows or columns reach
-    !> outside their own 2 x 2 block (none for unit vectors, all for a generic frame; a frame
-    !> restored from a saved run gets the set its run had, to exact zeros).
-    pure subroutine find_coupled(chain)
+    !> For a square frame without kept R factors, the bonds its pattern crosses (none for unit
+    !> vectors, all for a generic frame; a frame restored from a saved run gets the pieces its
+    !> run had, to exact zeros). Cut i, between oscillators i and i + 1, is crossed iff a
+    !> column left of it (<= 2i) has a nonzero row below it (> 2i) or a column right of it one
+    !> above it: a running maximum of the columns' last nonzero rows from the left, a running
+    !> minimum of their first from the right, O(n^2) in all.
+    pure subroutine find_joined(chain)
         type(chain_t), intent(inout) :: chain
-        integer :: n, p, i
+        integer :: first_row(2*chain%n), last_row(2*chain%n)
+        integer :: n, i, j, reach, low(2*chain%n + 1)
 
-        if (allocated(chain%coupled)) deallocate (chain%coupled)
+        if (allocated(chain%joined)) deallocate (chain%joined)
         n = chain%n
         if (chain%n_vectors /= 2*n .or. chain%keep_r_factors) return
-        allocate (chain%coupled(n))
-        do p = 1, n
-            i = 2*p - 1
-            chain%coupled(p) = any(chain%tangent(i:i + 1, :i - 1) /= 0) .or. &
-                               any(chain%tangent(i:i + 1, i + 2:) /= 0) .or. &
-                               any(chain%tangent(:i - 1, i:i + 1) /= 0) .or. &
-                               any(chain%tangent(i + 2:, i:i + 1) /= 0)
+        allocate (chain%joined(n - 1))
+        do j = 1, 2*n
+            ! (a zero column crosses no cut)
+            first_row(j) = findloc(chain%tangent(:, j) /= 0, .true., dim=1)
+            if (first_row(j) == 0) first_row(j) = 2*n + 1
+            last_row(j) = findloc(chain%tangent(:, j) /= 0, .true., dim=1, back=.true.)
         end do
-    end subroutine find_coupled
+        low(2*n + 1) = 2*n + 1
+        do j = 2*n, 1, -1
+            low(j) = min(low(j + 1), first_row(j))
+        end do
+        reach = 0
+        do i = 1, n - 1
+            reach = max(reach, last_row(2*i - 1), last_row(2*i))
+            chain%joined(i) = reach > 2*i .or. low(2*i + 1) <= 2*i
+        end do
+    end subroutine find_joined
 
     !> Oscillators first..last joined by one jump (a pair impact, a cluster).
-    pure subroutine couple(chain, first, last)
+    pure subroutine join(chain, first, last)
         type(chain_t), intent(inout) :: chain
         integer, intent(in) :: first, last
 
-        if (allocated(chain%coupled) .and. last > first) chain%coupled(first:last) = .true.
-    end subroutine couple
+        if (allocated(chain%joined) .and. last > first) chain%joined(first:last - 1) = .true.
+    end subroutine join
 
-    !> Re-orthonormalise the frame (Q in place, the diagonal of R in r_diag): the coupled block
-    !> and 2 x 2 blocks when the frame knows its coupled oscillators, else the whole frame.
+    !> The columns that can be nonzero in oscillator i's rows: its piece's, 2a - 1 .. 2b for
+    !> the piece [a, b], when the frame knows its pieces; else all of them.
+    pure subroutine piece_columns(chain, i, low, high)
+        type(chain_t), intent(in) :: chain
+        integer, intent(in) :: i
+        integer, intent(out) :: low, high
+        integer :: a, b
+
+        if (.not. allocated(chain%joined)) then
+            low = 1
+            high = chain%n_vectors
+            return
+        end if
+        a = i
+        do while (a > 1)
+            if (.not. chain%joined(a - 1)) exit
+            a = a - 1
+        end do
+        b = i
+        do while (b < chain%n)
+            if (.not. chain%joined(b)) exit
+            b = b + 1
+        end do
+        low = 2*a - 1
+        high = 2*b
+    end subroutine piece_columns
+
+    !> Re-orthonormalise the frame (Q in place, the diagonal of R in r_diag): piece by piece
+    !> when the frame knows its pieces, else the whole frame.
     subroutine factorise_frame(chain, r_diag, info, keep_singular)
         type(chain_t), intent(inout) :: chain
         real(wp), intent(out) :: r_diag(:)
         integer, intent(out) :: info
         logical, intent(in), optional :: keep_singular
 
-        if (allocated(chain%coupled)) then
-            call qr_orthonormalise_blocks(chain%tangent, chain%coupled, r_diag, chain%qr, info, &
+        if (allocated(chain%joined)) then
+            call qr_orthonormalise_blocks(chain%tangent, chain%joined, r_diag, chain%qr, info, &
                                           keep_singular)
         else
             call qr_orthonormalise(chain%tangent, r_diag, chain%qr, info, keep_singular)
@@ -125,7 +164,7 @@ contains
 
         k = size(chain%tangent, 2)
         call lyapunov_step(acc, chain%tangent, info, chain%tangent_scale_bits, &
-                           chain%tangent_log, chain%rank_losses > 0, cycles, chain%coupled)
+                           chain%tangent_log, chain%rank_losses > 0, cycles, chain%joined)
         if (present(r_factor)) then
             r_factor = 0
             r_log = 0
@@ -142,7 +181,7 @@ contains
         end if
         ! (the step may have dropped collapsed directions: the frame is no longer square)
         chain%n_vectors = size(chain%tangent, 2)
-        if (chain%n_vectors /= k .and. allocated(chain%coupled)) deallocate (chain%coupled)
+        if (chain%n_vectors /= k .and. allocated(chain%joined)) deallocate (chain%joined)
         chain%tangent_log = [(0.0_wp, i=1, chain%n_vectors)]
         call restart_bookkeeping(chain)
         if (info /= 0) call set_error(err, "lyapunov: QR factorisation failed (LAPACK info "// &
@@ -214,16 +253,19 @@ contains
         real(wp), parameter :: moderate_jump = 16
         real(wp) :: in_epoch(4, 4), largest  ! (fixed size: automatic arrays are allocated)
         real(wp) :: s_max
-        integer :: last, j, p, ns
+        integer :: last, j, p, ns, low, high
 
         ns = size(s, 1)
         last = i + ns/2 - 1
-        call couple(chain, i, last)
+        ! (joined first: the jump's rows are then nonzero only in the merged piece's columns)
+        call join(chain, i, last)
+        call piece_columns(chain, i, low, high)
         s_max = maxval(abs(s))
         if (chain%same_instant == 0 .and. s_max <= moderate_jump .and. &
             all(chain%row_stamp(i:last) /= chain%instant)) then
             if (ns == 2) then
-                call apply_jump(chain, 2*i - 1, conjugated(s, chain%m, chain%m_inv), largest)
+                call apply_jump(chain, 2*i - 1, conjugated(s, chain%m, chain%m_inv), low, high, &
+                                largest)
             else
                 do p = 1, ns, 2
                     do j = 1, ns, 2
@@ -231,13 +273,13 @@ contains
                                                                 chain%m_inv)
                     end do
                 end do
-                call apply_jump(chain, 2*i - 1, in_epoch, largest)
+                call apply_jump(chain, 2*i - 1, in_epoch, low, high, largest)
             end if
         else
             do j = i, last
                 call rows_to_now(chain, j)
             end do
-            call apply_jump(chain, 2*i - 1, s, largest)
+            call apply_jump(chain, 2*i - 1, s, low, high, largest)
         end if
         call keep_tangent_finite(chain, largest)
         ! (not while a direction removed by a rest waits for the QR step to find it: a
@@ -273,25 +315,37 @@ contains
     module procedure move_tangent_epoch
         logical :: moves(chain%n)
         integer, allocatable :: rows(:)
-        integer :: i, j, p
+        integer :: i, j, first, last, q, q_end
 
         if (chain%n_vectors > 0) then
             moves = chain%row_stamp /= chain%instant .and. chain%contact == contact_free
-            if (allocated(chain%coupled)) then
-                ! only the nonzero rows of each column: the coupled ones for a coupled column,
-                ! the oscillator's own for a decoupled one
-                rows = pack([(i, i=1, chain%n)], moves .and. chain%coupled)
-                do j = 1, chain%n_vectors
-                    p = (j + 1)/2
-                    if (chain%coupled(p)) then
-                        call move_rows(chain%tangent, rows, j, chain%m)
-                    else if (moves(p)) then
-                        call move_rows(chain%tangent, [p], j, chain%m)
+            rows = pack([(i, i=1, chain%n)], moves)
+            if (allocated(chain%joined)) then
+                ! piece by piece, its columns times its moving rows (rows(q:q_end)): the
+                ! only nonzero entries of those rows
+                q = 1
+                first = 1
+                do while (first <= chain%n)
+                    last = first
+                    do while (last < chain%n)
+                        if (.not. chain%joined(last)) exit
+                        last = last + 1
+                    end do
+                    q_end = q - 1
+                    do while (q_end < size(rows))
+                        if (rows(q_end + 1) > last) exit
+                        q_end = q_end + 1
+                    end do
+                    if (q_end >= q) then
+                        do j = 2*first - 1, 2*last
+                            call move_rows(chain%tangent, rows(q:q_end), j, chain%m)
+                        end do
                     end if
+                    q = q_end + 1
+                    first = last + 1
                 end do
             else
                 ! column by column: each column is read and written once, in order
-                rows = pack([(i, i=1, chain%n)], moves)
                 do j = 1, chain%n_vectors
                     call move_rows(chain%tangent, rows, j, chain%m)
                 end do
@@ -320,11 +374,12 @@ contains
     !> (M^-1 of that instant.)
     module procedure rows_back_to_epoch
         real(wp) :: largest
-        integer :: j, i
+        integer :: j, i, low, high
 
         do j = 1, chain%n_touched
             i = chain%touched(j)
-            call jump_two_rows(chain%tangent, 2*i - 1, chain%m_inv, largest)
+            call piece_columns(chain, i, low, high)
+            call jump_two_rows(chain%tangent, 2*i - 1, chain%m_inv, low, high, largest)
         end do
         chain%n_touched = 0
     end procedure rows_back_to_epoch
@@ -349,20 +404,22 @@ contains
     !> no saltation term: a singular map.
     module procedure average_rows
         real(wp), allocatable :: rows(:)
-        integer :: i, m
+        integer :: i, m, low, high
 
         m = last - first + 1
         if (m > 1 .or. stopped) chain%rank_losses = chain%rank_losses + 1
-        call couple(chain, first, last)
-        allocate (rows(chain%n_vectors))
+        call join(chain, first, last)
+        ! (the merged piece's columns: the rows are zero in the others)
+        call piece_columns(chain, first, low, high)
+        allocate (rows(low:high))
         rows = 0
         do i = first, last
-            rows = rows + chain%tangent(2*i, :)
+            rows = rows + chain%tangent(2*i, low:high)
         end do
         ! a cluster stopped by a wall has v = 0 whatever the perturbation
         if (stopped) rows = 0
         do i = first, last
-            chain%tangent(2*i, :) = rows/m
+            chain%tangent(2*i, low:high) = rows/m
         end do
     end procedure average_rows
 
@@ -372,9 +429,11 @@ contains
         type(chain_t), intent(inout) :: chain
         integer, intent(in) :: i
         real(wp) :: largest
+        integer :: low, high
 
         if (chain%row_stamp(i) == chain%instant) return
-        call jump_two_rows(chain%tangent, 2*i - 1, chain%m, largest)
+        call piece_columns(chain, i, low, high)
+        call jump_two_rows(chain%tangent, 2*i - 1, chain%m, low, high, largest)
         chain%row_stamp(i) = chain%instant
         chain%n_touched = chain%n_touched + 1
         chain%touched(chain%n_touched) = i
@@ -424,32 +483,32 @@ contains
     end subroutine keep_tangent_finite
 
     !> Replace the tangent rows first, first + 1, ... (one oscillator, s 2x2, or a neighbour
-    !> pair, s 4x4) by S times them; `largest` is the largest magnitude written
-    !> (jump_two_rows, jump_four_rows: the rows of one oscillator, or of two, in every
-    !> column; the whole frame is passed, as a section of its rows would be copied).
-    pure subroutine apply_jump(chain, first, s, largest)
+    !> pair, s 4x4) by S times them in columns low..high (the others are zero in those rows);
+    !> `largest` is the largest magnitude written (jump_two_rows, jump_four_rows; the whole
+    !> frame is passed, as a section of its rows would be copied).
+    pure subroutine apply_jump(chain, first, s, low, high, largest)
         type(chain_t), intent(inout) :: chain
-        integer, intent(in) :: first
+        integer, intent(in) :: first, low, high
         real(wp), intent(in) :: s(:, :)
         real(wp), intent(out) :: largest
 
         if (size(s, 1) == 2) then
-            call jump_two_rows(chain%tangent, first, s, largest)
+            call jump_two_rows(chain%tangent, first, s, low, high, largest)
         else
-            call jump_four_rows(chain%tangent, first, s, largest)
+            call jump_four_rows(chain%tangent, first, s, low, high, largest)
         end if
     end subroutine apply_jump
 
-    pure subroutine jump_two_rows(t, first, s, largest)
+    pure subroutine jump_two_rows(t, first, s, low, high, largest)
         real(wp), contiguous, intent(inout) :: t(:, :)
-        integer, intent(in) :: first
+        integer, intent(in) :: first, low, high
         real(wp), intent(in) :: s(2, 2)
         real(wp), intent(out) :: largest
         real(wp) :: a, b
         integer :: j
 
         largest = 0
-        do j = 1, size(t, 2)
+        do j = low, high
             a = t(first, j)
             b = t(first + 1, j)
             t(first, j) = s(1, 1)*a + s(1, 2)*b
@@ -458,16 +517,16 @@ contains
         end do
     end subroutine jump_two_rows
 
-    pure subroutine jump_four_rows(t, first, s, largest)
+    pure subroutine jump_four_rows(t, first, s, low, high, largest)
         real(wp), contiguous, intent(inout) :: t(:, :)
-        integer, intent(in) :: first
+        integer, intent(in) :: first, low, high
         real(wp), intent(in) :: s(4, 4)
         real(wp), intent(out) :: largest
         real(wp) :: a, b, c, d
         integer :: j
 
         largest = 0
-        do j = 1, size(t, 2)
+        do j = low, high
             a = t(first, j)
             b = t(first + 1, j)
             c = t(first + 2, j)

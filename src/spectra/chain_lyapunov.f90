@@ -226,7 +226,7 @@ contains
     !> rounding. With adaptive steps, the interval to the next step is set here. A step that
     !> ends a window of finite-time exponents counts it in acc%windows, its exponents in
     !> acc%window_last.
-    subroutine lyapunov_step(acc, frame, info, scale_bits, log_scale, singular, cycles, coupled)
+    subroutine lyapunov_step(acc, frame, info, scale_bits, log_scale, singular, cycles, joined)
         type(lyapunov_acc_t), intent(inout) :: acc
         real(wp), allocatable, intent(inout) :: frame(:, :)
         integer, intent(out) :: info
@@ -236,8 +236,8 @@ contains
         real(wp), intent(in), optional :: log_scale(:)
         logical, intent(in), optional :: singular
         integer, intent(in), optional :: cycles
-        !> a square frame's coupled oscillators (chain_lapack's qr_orthonormalise_blocks)
-        logical, intent(in), optional :: coupled(:)
+        !> a square frame's joined bonds, its pieces (chain_lapack's qr_orthonormalise_blocks)
+        logical, intent(in), optional :: joined(:)
         real(wp), allocatable :: before(:, :), scale(:)
         real(wp) :: minus_infinity
         logical, allocatable :: gone(:)
@@ -254,8 +254,8 @@ contains
         do
             kept = size(frame, 2)
             if (kept == 0) exit
-            if (present(coupled) .and. kept == size(frame, 1)) then
-                call qr_orthonormalise_blocks(frame, coupled, acc%r_diag(:kept), acc%qr, info)
+            if (present(joined) .and. kept == size(frame, 1)) then
+                call qr_orthonormalise_blocks(frame, joined, acc%r_diag(:kept), acc%qr, info)
             else
                 call qr_orthonormalise(frame, acc%r_diag(:kept), acc%qr, info)
             end if

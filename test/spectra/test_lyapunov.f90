@@ -726,33 +726,38 @@ contains
         end do
     end subroutine unit_frame_spectrum
 
-    !> qr_orthonormalise_blocks on a frame of decoupled 2 x 2 blocks and a coupled block is
-    !> the dense factorisation: R's diagonal and Q to rounding; a decoupled block with a zero
+    !> qr_orthonormalise_blocks on a frame of independent pieces (single oscillators' 2 x 2
+    !> blocks and longer pieces of several sizes, at both ends and in between) is the dense
+    !> factorisation: R's diagonal and Q to rounding; a single oscillator with a zero
     !> lower-left entry (Q = I) included. Dense and blocked differ if the structure is false.
-    !> n = 9: a coupled block of 12 (the written-out reflections); n = 40: of 46 (dgeqrf).
+    !> n = 9: pieces 1-3, 4, 5-6, 7-9 (the written-out reflections); n = 40: one piece of 50
+    !> rows (dgeqrf) among pieces of 2 to 8.
     subroutine block_factorisation(t, n)
         type(tally_t), intent(inout) :: t
         integer, intent(in) :: n
         real(wp) :: dense(2*n, 2*n), blocks(2*n, 2*n), r_dense(2*n), r_blocks(2*n), h
-        logical :: coupled(n)
+        logical :: joined(n - 1)
+        integer :: piece(n)
         type(qr_workspace_t) :: ws_dense, ws_blocks
         integer :: i, j, info
 
-        ! coupled at both ends and in between, decoupled oscillators among them
-        coupled = [(modulo(i, 7) /= 3 .and. modulo(i, 7) /= 4 .and. modulo(i, 7) /= 6, i=1, n)]
+        joined = [(modulo(i, 7) /= 3 .and. modulo(i, 7) /= 4 .and. modulo(i, 7) /= 6 .or. &
+                   i > 6 .and. i < 30, i=1, n - 1)]
+        piece = [(1 + count(.not. joined(:i - 1)), i=1, n)]
         dense = 0
         do j = 1, 2*n
             do i = 1, 2*n
-                if (coupled((i + 1)/2) .and. coupled((j + 1)/2) .or. (i + 1)/2 == (j + 1)/2) then
+                if (piece((i + 1)/2) == piece((j + 1)/2)) then
                     h = sin(3.1_wp*i + 7.7_wp*j)*917.3_wp
                     dense(i, j) = h - floor(h) - 0.5_wp
                 end if
             end do
         end do
-        dense(6, 5) = 0
+        ! (oscillator 4 is a piece of its own)
+        dense(8, 7) = 0
         blocks = dense
         call qr_orthonormalise(dense, r_dense, ws_dense, info)
-        call qr_orthonormalise_blocks(blocks, coupled, r_blocks, ws_blocks, info)
+        call qr_orthonormalise_blocks(blocks, joined, r_blocks, ws_blocks, info)
         call check(t, info == 0, 'block factorisation: info 0')
         call check_close(t, maxval(abs(abs(r_blocks) - abs(r_dense))/abs(r_dense)), 0.0_wp, &
                          'block factorisation: |R(j,j)| of the dense one', 1.0e-12_wp)
@@ -762,10 +767,10 @@ contains
                          'block factorisation: Q of the dense one, column for column', 1.0e-12_wp)
         ! a frame that is not block-structured is not factorised by it
         blocks = dense
-        blocks(1, 5) = 0.3_wp
+        blocks(7, 1) = 0.3_wp
         dense = blocks
         call qr_orthonormalise(dense, r_dense, ws_dense, info)
-        call qr_orthonormalise_blocks(blocks, coupled, r_blocks, ws_blocks, info)
+        call qr_orthonormalise_blocks(blocks, joined, r_blocks, ws_blocks, info)
         call check(t, maxval(abs(abs(r_blocks) - abs(r_dense))) > 1.0e-3_wp, &
                    'block factorisation: a coupling outside the blocks is not kept')
     contains
