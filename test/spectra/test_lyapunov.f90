@@ -12,7 +12,8 @@ module test_lyapunov
     use chain_model, only: model_t
     use chain_state, only: event_counts_t, moving_state
     use chain_engine, only: chain_t, chain_init, chain_model, chain_cycle, chain_time, &
-                            chain_positions, chain_velocities, chain_counts, chain_reset_counts
+                            chain_positions, chain_velocities, chain_counts, chain_reset_counts, &
+                            chain_set_tangent, chain_reorthonormalise, chain_tangent_frame
     use chain_event_log, only: event_log_t, event_log_init
     use chain_config, only: config_t, check_size
     use chain_record, only: record_cycles, memory_sink_t, record_result_t, record_state_t
@@ -731,15 +732,20 @@ contains
     !> factorisation: R's diagonal and Q to rounding; a single oscillator with a zero
     !> lower-left entry (Q = I) included. Dense and blocked differ if the structure is false.
     !> n = 9: pieces 1-3, 4, 5-6, 7-9 (the written-out reflections); n = 40: one piece of 50
-    !> rows (dgeqrf) among pieces of 2 to 8.
+    !> rows (dgeqrf) among pieces of 2 to 8. A chain given the frame finds its pieces from the
+    !> frame's entries (as when a run is restored) and re-orthonormalises it as the dense
+    !> factorisation does.
     subroutine block_factorisation(t, n)
         type(tally_t), intent(inout) :: t
         integer, intent(in) :: n
         real(wp) :: dense(2*n, 2*n), blocks(2*n, 2*n), r_dense(2*n), r_blocks(2*n), h
+        real(wp) :: frame(2*n, 2*n)
+        type(chain_t) :: chain
+        type(error_t), allocatable :: err
         logical :: joined(n - 1)
         integer :: piece(n)
         type(qr_workspace_t) :: ws_dense, ws_blocks
-        integer :: i, j, info
+        integer :: i, j, q, info
 
         joined = [(modulo(i, 7) /= 3 .and. modulo(i, 7) /= 4 .and. modulo(i, 7) /= 6 .or. &
                    i > 6 .and. i < 30, i=1, n - 1)]
@@ -755,6 +761,7 @@ contains
         end do
         ! (oscillator 4 is a piece of its own)
         dense(8, 7) = 0
+        frame = dense
         blocks = dense
         call qr_orthonormalise(dense, r_dense, ws_dense, info)
         call qr_orthonormalise_blocks(blocks, joined, r_blocks, ws_blocks, info)
@@ -765,6 +772,28 @@ contains
         call check_close(t, maxval(abs(abs(matmul(transpose(dense), blocks)) - &
                                        identity(2*n))), 0.0_wp, &
                          'block factorisation: Q of the dense one, column for column', 1.0e-12_wp)
+        ! the frame as it is, then with a coupling that crosses cut 3 only above the diagonal
+        ! (a row of oscillator 1, a column of oscillator 4), then one only below it: it joins
+        ! them
+        do q = 1, 3
+            if (q > 1) then
+                frame(1, 7) = merge(0.3_wp, 0.0_wp, q == 2)
+                frame(7, 1) = merge(0.3_wp, 0.0_wp, q == 3)
+                dense = frame
+                call qr_orthonormalise(dense, r_dense, ws_dense, info)
+            end if
+            call make_chain(chain, n, 1.7_wp, 1.5_wp, 0.05_wp, 0.7_wp, .true., 0.3_wp, 0.5_wp, &
+                            err)
+            call chain_set_tangent(chain, frame)
+            call chain_reorthonormalise(chain, err)
+            call check(t, .not. allocated(err), 'block factorisation: a chain given the '// &
+                       'frame re-orthonormalises it')
+            call check_close(t, maxval(abs(abs(matmul(transpose(dense), &
+                                                      chain_tangent_frame(chain))) - &
+                                           identity(2*n))), 0.0_wp, &
+                             'block factorisation: the pieces a chain finds from its frame '// &
+                             'give the dense Q', 1.0e-12_wp)
+        end do
         ! a frame that is not block-structured is not factorised by it
         blocks = dense
         blocks(7, 1) = 0.3_wp
