@@ -57,21 +57,27 @@ contains
     !> For a square frame without kept R factors, the oscillators whose rows or columns reach
     !> outside their own 2 x 2 block (none for unit vectors, all for a generic frame; a frame
     !> restored from a saved run gets the set its run had, to exact zeros).
+    !> One pass over the columns, in storage order (a frame of 2n = 2048 is 32 MB).
     pure subroutine find_coupled(chain)
         type(chain_t), intent(inout) :: chain
-        integer :: n, p, i
+        logical, allocatable :: reached(:), outside(:)
+        integer :: n, p, j
 
         if (allocated(chain%coupled)) deallocate (chain%coupled)
         n = chain%n
         if (chain%n_vectors /= 2*n .or. chain%keep_r_factors) return
-        allocate (chain%coupled(n))
-        do p = 1, n
-            i = 2*p - 1
-            chain%coupled(p) = any(chain%tangent(i:i + 1, :i - 1) /= 0) .or. &
-                               any(chain%tangent(i:i + 1, i + 2:) /= 0) .or. &
-                               any(chain%tangent(:i - 1, i:i + 1) /= 0) .or. &
-                               any(chain%tangent(i + 2:, i:i + 1) /= 0)
+        allocate (chain%coupled(n), reached(2*n), outside(2*n))
+        reached = .false.
+        chain%coupled = .false.
+        do j = 1, 2*n
+            p = (j + 1)/2
+            outside = chain%tangent(:, j) /= 0
+            outside(2*p - 1:2*p) = .false.
+            ! column j reaches rows of other oscillators: both sides are coupled
+            chain%coupled(p) = chain%coupled(p) .or. any(outside)
+            reached = reached .or. outside
         end do
+        chain%coupled = chain%coupled .or. reached(1::2) .or. reached(2::2)
     end subroutine find_coupled
 
     !> Oscillators first..last joined by one jump (a pair impact, a cluster).
