@@ -8,7 +8,9 @@ alternately in the process's CPU time, best of the rounds.
 Both sides start from the same state on the attractor (200 reference cycles from the default
 random start) with a fresh frame; impactchain runs through its Python package
 (`impactchain.api`, the same Fortran as the CLI), the reference through numba, whose QR is numpy's (`np.linalg.qr` compiled
-by numba: LAPACK's dgeqrf + dorgqr). Both sides QR every cycle; impactchain's default adaptive
+by numba: LAPACK's dgeqrf + dorgqr). Both sides QR every cycle (impactchain's full spectra
+start from unit vectors and factorise only the block of the oscillators impacts have joined,
+docs/model.md 7.2; the reference factorises its whole frame); impactchain's default adaptive
 schedule (same exponents to 1e-10 bits per cycle, model.md 7.2) is a row of its own.
 A call's fixed cost (impactchain's start: the input's checks, the initial frame and its QR,
 the result arrays; 0.15 s at n = 256) is not a drive cycle's, so each side's cost per cycle is

@@ -467,19 +467,10 @@ contains
         type(record_spec_t), intent(in) :: spec
         type(error_t), allocatable, intent(out) :: err
         real(wp), allocatable :: frame(:, :)
-        integer :: info, m, k, j
+        integer :: info
 
-        m = 2*chain_size(chain)
-        k = vector_count(spec, chain_size(chain))
-        if (k == m .and. .not. spec%covariant .and. spec%window == 0) then
-            allocate (frame(m, m), source=0.0_wp)
-            do j = 1, m
-                frame(j, j) = 1
-            end do
-            info = 0
-        else
-            call initial_frame(m, k, frame, info)
-        end if
+        call initial_frame(2*chain_size(chain), vector_count(spec, chain_size(chain)), frame, &
+                           info, unit=.not. spec%covariant .and. spec%window == 0)
         if (info /= 0) then
             call set_error(err, "lyapunov: cannot build the initial tangent frame")
             return

@@ -427,15 +427,27 @@ contains
     !> start: a chain that splits into independent pieces (a bond that never closes) keeps
     !> them inside one piece. Entry (i, j) depends on i and j only, so the first k vectors
     !> are the same whatever k: a frame of k vectors gives exactly the leading k exponents
-    !> of the full spectrum.
-    subroutine initial_frame(m, k, frame, info)
+    !> of the full spectrum. With `unit` and k = m, the unit vectors instead: the full
+    !> spectrum's frame, whose blocks its QR steps exploit (docs/model.md section 7.1).
+    subroutine initial_frame(m, k, frame, info, unit)
         integer, intent(in) :: m, k
         real(wp), allocatable, intent(out) :: frame(:, :)
         integer, intent(out) :: info
+        logical, intent(in), optional :: unit
         real(wp) :: r_diag(k), h
         type(qr_workspace_t) :: ws
         integer :: i, j
 
+        if (present(unit)) then
+            if (unit .and. k == m) then
+                allocate (frame(m, m), source=0.0_wp)
+                do j = 1, m
+                    frame(j, j) = 1
+                end do
+                info = 0
+                return
+            end if
+        end if
         allocate (frame(m, k))
         do j = 1, k
             do i = 1, m

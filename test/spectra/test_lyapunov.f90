@@ -70,6 +70,7 @@ contains
         call finite_differences(t, 4, .true., 2.0_wp)
         call leading_vectors(t)
         call unit_frame_spectrum(t)
+        call unit_frame_continued(t)
         call block_factorisation(t, 9)
         call block_factorisation(t, 40)
         call adaptive_matches_every_cycle(t, 4, 4.15_wp, 0.9_wp, 200_i8, 1000_i8, 0, .true.)
@@ -726,6 +727,43 @@ contains
             end associate
         end do
     end subroutine unit_frame_spectrum
+
+    !> A full spectrum from unit vectors stopped at a record and continued from its saved state
+    !> (the frame finds its pieces from its own entries) ends as the run that was
+    !> never stopped, bit for bit: on the default chain at n = 48, whose middle stays
+    !> decoupled, with adaptive QR steps.
+    subroutine unit_frame_continued(t)
+        type(tally_t), intent(inout) :: t
+        type(chain_t) :: plain_chain, chain
+        type(config_t) :: cfg
+        type(record_result_t) :: plain, res
+        type(memory_sink_t) :: plain_sink, sink, rest
+        type(record_state_t) :: state
+        type(watching_monitor_t) :: watch
+        type(error_t), allocatable :: err
+
+        cfg = spectrum_config(48, 300_i8, 200_i8, 0)
+        cfg%record%qr_every = 0
+        call make_chain(plain_chain, 48, 1.7_wp, 1.5_wp, 0.05_wp, 0.7_wp, .true., 0.3_wp, &
+                        0.5_wp, err)
+        call record_cycles(cfg%record, plain_chain, plain_sink, plain, err)
+        call check(t, .not. allocated(err), 'unit frame, n = 48: the whole run')
+        if (allocated(err)) return
+        watch = watching_monitor_t(stop_stage=stage_records, stop_at=77)
+        call make_chain(chain, 48, 1.7_wp, 1.5_wp, 0.05_wp, 0.7_wp, .true., 0.3_wp, 0.5_wp, err)
+        call record_cycles(cfg%record, chain, sink, res, err, watch, state)
+        call check(t, .not. allocated(err) .and. .not. res%complete .and. &
+                   res%cycles_done == 77, 'unit frame, n = 48: stopped at record 77')
+        if (allocated(err)) return
+        call record_cycles(cfg%record, chain, rest, res, err, state=state)
+        call check(t, .not. allocated(err) .and. res%complete, &
+                   'unit frame, n = 48: the stopped run continues')
+        if (allocated(err)) return
+        call check(t, all(res%lyapunov%bits_per_cycle == plain%lyapunov%bits_per_cycle) .and. &
+                   all(res%lyapunov%stderr_bits == plain%lyapunov%stderr_bits) .and. &
+                   res%impacts == plain%impacts, 'unit frame, n = 48: continued = whole run''s '// &
+                   'exponents and errors, bit for bit')
+    end subroutine unit_frame_continued
 
     !> qr_orthonormalise_blocks on a frame of independent pieces (single oscillators' 2 x 2
     !> blocks and longer pieces of several sizes, at both ends and in between) is the dense
