@@ -201,28 +201,20 @@ contains
         integer, intent(out) :: info
         logical, intent(in), optional :: keep_singular
         real(wp), allocatable :: block(:, :), q_all(:)
+        integer, allocatable :: pieces(:, :)
         logical :: keep
-        integer :: n, first, last, low, high, m, used
+        integer :: k, low, high, m, used
 
-        n = size(joined) + 1
         info = 0
         keep = .false.
         if (present(keep_singular)) keep = keep_singular
-        ! (the pieces' sizes add up to at most (2n)**2 entries; usually far fewer)
+        pieces = piece_rows(joined)
+        ! (with keep_singular, the pieces' Q wait here until every piece is known regular)
+        if (keep) allocate (q_all(sum((pieces(2, :) - pieces(1, :) + 1)**2)))
         used = 0
-        first = 1
-        do while (first <= n)
-            last = piece_end(joined, first)
-            used = used + (2*(last - first + 1))**2
-            first = last + 1
-        end do
-        allocate (q_all(used))
-        used = 0
-        first = 1
-        do while (first <= n)
-            last = piece_end(joined, first)
-            low = 2*first - 1
-            high = 2*last
+        do k = 1, size(pieces, 2)
+            low = pieces(1, k)
+            high = pieces(2, k)
             m = high - low + 1
             block = a(low:high, low:high)
             if (m == 2) then
@@ -231,34 +223,41 @@ contains
                 call qr_orthonormalise(block, r_diag(low:high), ws, info, keep_singular)
                 if (info /= 0) return
             end if
-            if (keep .and. any(r_diag(low:high) == 0)) return
+            if (.not. keep) then
+                a(low:high, low:high) = block
+                cycle
+            end if
+            if (any(r_diag(low:high) == 0)) return
             q_all(used + 1:used + m*m) = reshape(block, [m*m])
             used = used + m*m
-            first = last + 1
         end do
+        if (.not. keep) return
         used = 0
-        first = 1
-        do while (first <= n)
-            last = piece_end(joined, first)
-            low = 2*first - 1
-            high = 2*last
+        do k = 1, size(pieces, 2)
+            low = pieces(1, k)
+            high = pieces(2, k)
             m = high - low + 1
             a(low:high, low:high) = reshape(q_all(used + 1:used + m*m), [m, m])
             used = used + m*m
-            first = last + 1
         end do
     contains
-        !> The last oscillator of the piece that starts at `first`.
-        pure integer function piece_end(joined, first) result(last)
+        !> The first and last row of each piece, in order: a piece ends at each bond not joined.
+        pure function piece_rows(joined) result(rows)
             logical, intent(in) :: joined(:)
-            integer, intent(in) :: first
+            integer :: rows(2, count(.not. joined) + 1)
+            integer :: first, last, k
 
-            last = first
-            do while (last <= size(joined))
-                if (.not. joined(last)) exit
-                last = last + 1
+            first = 1
+            k = 0
+            do last = 1, size(joined) + 1
+                if (last <= size(joined)) then
+                    if (joined(last)) cycle
+                end if
+                k = k + 1
+                rows(:, k) = [2*first - 1, 2*last]
+                first = last + 1
             end do
-        end function piece_end
+        end function piece_rows
     end subroutine qr_orthonormalise_blocks
 
     !> A 2 x 2 block b replaced by its Q, R's diagonal in r_diag (qr_orthonormalise_blocks).
