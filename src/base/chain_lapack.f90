@@ -11,6 +11,7 @@ module chain_lapack
     public :: qr_orthonormalise, qr_workspace_t, general_eigenvalues
     public :: solve_linear, qr_last_r, qr_copy_r, solve_upper_triangle, upper_product
     public :: general_eigenvectors, blas_one_thread, qr_orthonormalise_blocks
+    public :: qr_orthonormalise_piece
 
     !> Triangular matrices of at most this order are solved and multiplied in plain loops.
     integer, parameter :: small_triangle = 40
@@ -192,7 +193,7 @@ contains
     !> Q = H = [a c; c -a]/beta (beta = -sign(|(a, c)|, a)), or Q = I when c = 0, as
     !> householder_qr builds it. Cost the sum of the pieces' m^3 (m twice a piece's length).
     !> With `keep_singular`, a frame with an exactly zero R(j,j) is left as it was: the
-    !> pieces' Q are kept aside until all are known to be regular.
+    !> pieces are kept aside as they were until all are known to be regular.
     subroutine qr_orthonormalise_blocks(a, joined, r_diag, ws, info, keep_singular)
         real(wp), intent(inout), contiguous :: a(:, :)
         logical, intent(in) :: joined(:)
@@ -200,7 +201,7 @@ contains
         type(qr_workspace_t), intent(inout) :: ws
         integer, intent(out) :: info
         logical, intent(in), optional :: keep_singular
-        real(wp), allocatable :: block(:, :), q_all(:)
+        real(wp), allocatable :: q_all(:)
         integer, allocatable :: pieces(:, :)
         logical :: keep
         integer :: k, low, high, m, used
@@ -209,38 +210,43 @@ contains
         keep = .false.
         if (present(keep_singular)) keep = keep_singular
         pieces = piece_rows(joined)
-        ! (with keep_singular, the pieces' Q wait here until every piece is known regular)
+        ! (with keep_singular, each piece is kept here as it was until all are known regular)
         if (keep) allocate (q_all(sum((pieces(2, :) - pieces(1, :) + 1)**2)))
         used = 0
         do k = 1, size(pieces, 2)
             low = pieces(1, k)
             high = pieces(2, k)
             m = high - low + 1
-            block = a(low:high, low:high)
-            if (m == 2) then
-                call closed_form_qr(block, r_diag(low:high))
-            else
-                call qr_orthonormalise(block, r_diag(low:high), ws, info, keep_singular)
-                if (info /= 0) return
-            end if
             if (.not. keep) then
-                a(low:high, low:high) = block
+                call qr_orthonormalise_piece(a, low, high, r_diag(low:high), ws, info)
+                if (info /= 0) return
                 cycle
             end if
-            if (any(r_diag(low:high) == 0)) return
-            q_all(used + 1:used + m*m) = reshape(block, [m*m])
+            q_all(used + 1:used + m*m) = reshape(a(low:high, low:high), [m*m])
             used = used + m*m
-        end do
-        if (.not. keep) return
-        used = 0
-        do k = 1, size(pieces, 2)
-            low = pieces(1, k)
-            high = pieces(2, k)
-            m = high - low + 1
-            a(low:high, low:high) = reshape(q_all(used + 1:used + m*m), [m, m])
-            used = used + m*m
+            call qr_orthonormalise_piece(a, low, high, r_diag(low:high), ws, info, &
+                                         keep_singular)
+            if (info /= 0 .or. any(r_diag(low:high) == 0)) then
+                call put_back(k)
+                return
+            end if
         end do
     contains
+        !> Pieces 1 .. last as they were before their factorisation.
+        subroutine put_back(last)
+            integer, intent(in) :: last
+            integer :: k, low, high, m, used
+
+            used = 0
+            do k = 1, last
+                low = pieces(1, k)
+                high = pieces(2, k)
+                m = high - low + 1
+                a(low:high, low:high) = reshape(q_all(used + 1:used + m*m), [m, m])
+                used = used + m*m
+            end do
+        end subroutine put_back
+
         !> The first and last row of each piece, in order: a piece ends at each bond not joined.
         pure function piece_rows(joined) result(rows)
             logical, intent(in) :: joined(:)
@@ -259,6 +265,30 @@ contains
             end do
         end function piece_rows
     end subroutine qr_orthonormalise_blocks
+
+    !> The piece of a block-diagonal frame a whose rows and columns are low .. high (zero
+    !> outside that block, qr_orthonormalise_blocks) re-orthonormalised alone, the diagonal of
+    !> its R in r_diag (high - low + 1): the other pieces are left as they are, which is their
+    !> dense factorisation too. A piece of one oscillator (2 x 2) in closed form.
+    subroutine qr_orthonormalise_piece(a, low, high, r_diag, ws, info, keep_singular)
+        real(wp), intent(inout), contiguous :: a(:, :)
+        integer, intent(in) :: low, high
+        real(wp), intent(out) :: r_diag(:)
+        type(qr_workspace_t), intent(inout) :: ws
+        integer, intent(out) :: info
+        logical, intent(in), optional :: keep_singular
+        real(wp), allocatable :: block(:, :)
+
+        info = 0
+        block = a(low:high, low:high)
+        if (high - low == 1) then
+            call closed_form_qr(block, r_diag)
+        else
+            call qr_orthonormalise(block, r_diag, ws, info, keep_singular)
+            if (info /= 0) return
+        end if
+        a(low:high, low:high) = block
+    end subroutine qr_orthonormalise_piece
 
     !> A 2 x 2 block b replaced by its Q, R's diagonal in r_diag (qr_orthonormalise_blocks).
     pure subroutine closed_form_qr(b, r_diag)

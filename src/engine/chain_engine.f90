@@ -93,6 +93,7 @@ module chain_engine
         integer :: n = 0
         type(flow_t) :: flow
         real(wp) :: restitution = 0.7_wp
+        real(wp) :: impact_volume = 2*log(0.7_wp) !! ln |det S| = ln K**2 of every impact (4.5)
         real(wp) :: stick_speed = 1.0e-9_wp !! rebound speed below which chatter ends in sticking
         logical :: walls = .true.           !! fixed (true) or free (false) boundaries
         real(wp), allocatable :: spacing(:) !! spacing(0:n), bond k between osc k and k+1
@@ -130,7 +131,10 @@ module chain_engine
         !> logarithms of the diagonal of R are kept in tangent_log(k), per column, for that
         !> step. (Not for a Poincare-map Jacobian, which must be the plain product.)
         logical :: orthonormalise_jumps = .false.
-        real(wp) :: jumps_volume = 0 !! ln |det| of the jumps since the frame was orthonormal
+        !> ln |det| of the jumps since the frame's piece was orthonormal, per column: a jump's
+        !> on the first column of its piece (of the frame, without pieces); a piece's volume is
+        !> the sum over its columns (pieces that merge add theirs)
+        real(wp), allocatable :: jumps_volume(:)
         real(wp), allocatable :: tangent_log(:)
         real(wp), allocatable :: r_diag(:)
         !> For covariant Lyapunov vectors (docs/model.md section 14.2): the whole R factors of

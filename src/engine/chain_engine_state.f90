@@ -51,6 +51,7 @@ contains
         chain%n = n
         chain%flow = make_flow(model%damping, model%amplitude, model%omega)
         chain%restitution = model%restitution
+        chain%impact_volume = 2*log(max(model%restitution, tiny(1.0_wp)))
         chain%stick_speed = model%stick_speed
         chain%walls = model%walls
         allocate (chain%spacing(0:n))

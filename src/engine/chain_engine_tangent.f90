@@ -10,7 +10,8 @@
 !> instant are kept in the coordinates of now until the instant ends.
 submodule(chain_engine) chain_engine_tangent
     use chain_error, only: set_error, fmt_int
-    use chain_lapack, only: qr_orthonormalise, qr_orthonormalise_blocks, qr_last_r, qr_copy_r
+    use chain_lapack, only: qr_orthonormalise, qr_orthonormalise_blocks, qr_orthonormalise_piece, &
+                            qr_last_r, qr_copy_r
     use chain_lyapunov, only: lyapunov_step
     use chain_clv, only: fold_upper
     use, intrinsic :: ieee_arithmetic, only: ieee_value, ieee_negative_inf
@@ -19,7 +20,8 @@ submodule(chain_engine) chain_engine_tangent
 
     !> A saltation matrix with an entry above this re-orthonormalises a Lyapunov frame at once.
     real(wp), parameter :: large_jump = 64
-    !> ... and so does a run of jumps that shrank the frame's volume by more than e**(-18).
+    !> ... and so does a run of jumps that shrank the frame's volume by more than e**(-18)
+    !> (a piece's alone, when the frame knows its pieces: the others are untouched).
     real(wp), parameter :: small_volume = -18
     !> ... and so does a frame entry above this (the frame was orthonormal: entries <= 1).
     real(wp), parameter :: large_growth = 1024
@@ -42,7 +44,7 @@ contains
             call reset_r_product(chain)
         end if
         chain%tangent_log = [(0.0_wp, i=1, size(frame, 2))]
-        chain%jumps_volume = 0
+        chain%jumps_volume = [(0.0_wp, i=1, size(frame, 2))]
         chain%n_vectors = 0
         call chain_sync(chain)
         chain%n_vectors = size(frame, 2)
@@ -222,10 +224,11 @@ contains
     !> singular jump since, no shrinking of its volume.
     pure subroutine restart_bookkeeping(chain)
         type(chain_t), intent(inout) :: chain
+        integer :: j
 
         chain%tangent_scale_bits = 0
         chain%rank_losses = 0
-        chain%jumps_volume = 0
+        chain%jumps_volume = [(0.0_wp, j=1, chain%n_vectors)]
         ! (P = I still unless a re-orthonormalisation came since the last reset)
         if (chain%keep_r_factors .and. chain%r_folded) call reset_r_product(chain)
     end subroutine restart_bookkeeping
@@ -285,13 +288,15 @@ contains
         ! (not while a direction removed by a rest waits for the QR step to find it: a
         ! factorisation here would turn it into a unit vector)
         ! (nor after many strongly inelastic impacts: each shrinks the frame's volume by K**2,
-        ! and a frame shrunk by 1e-8 within one interval keeps its smallest directions poorly)
-        chain%jumps_volume = chain%jumps_volume + 2*log(max(chain%restitution, tiny(1.0_wp)))
+        ! and a frame shrunk by 1e-8 within one interval keeps its smallest directions poorly;
+        ! a piece's columns meet no other rows, so the volume that matters is the piece's)
+        chain%jumps_volume(low) = chain%jumps_volume(low) + chain%impact_volume
         ! (nor while the frame grows fast: once an entry passes large_growth, its leading
         ! direction outgrows the others by about as much, and their digits go)
-        if (chain%orthonormalise_jumps .and. chain%rank_losses == 0 .and. &
-            (s_max > large_jump .or. chain%jumps_volume < small_volume .or. &
-             largest > large_growth)) call orthonormalise_tangent(chain)
+        if (chain%orthonormalise_jumps .and. chain%rank_losses == 0) then
+            if (s_max > large_jump .or. sum(chain%jumps_volume(low:high)) < small_volume .or. &
+                largest > large_growth) call orthonormalise_tangent(chain, low, high)
+        end if
     contains
         ! (internal, so that it is inlined: no procedure of a submodule is)
         !> M^-1 B M for 2x2 blocks (written out: a section of s passed to fixed-shape dummies
@@ -439,11 +444,14 @@ contains
         chain%touched(chain%n_touched) = i
     end subroutine rows_to_now
 
-    !> Re-orthonormalise the frame now, keeping ln |R(j,j)| in tangent_log. Any upper
+    !> Re-orthonormalise the frame now, keeping ln |R(j,j)| in tangent_log: the piece of
+    !> columns (and rows) low .. high alone when the frame knows its pieces and carries no
+    !> power-of-two scale (which is the whole frame's), else the whole frame. Any upper
     !> triangular change of the columns commutes with the rows' own coordinates (epoch or
     !> now), so the frame need not be synced first.
-    subroutine orthonormalise_tangent(chain)
+    subroutine orthonormalise_tangent(chain, low, high)
         type(chain_t), intent(inout) :: chain
+        integer, intent(in) :: low, high
         integer :: info, j
 
         if (.not. allocated(chain%r_diag)) allocate (chain%r_diag(chain%n_vectors))
@@ -453,6 +461,16 @@ contains
         end if
         ! a zero diagonal (a direction lost exactly) is left to the QR step to report: the
         ! frame is then left as it was
+        if (allocated(chain%joined) .and. chain%tangent_scale_bits == 0) then
+            associate (r_diag => chain%r_diag(low:high))
+                call qr_orthonormalise_piece(chain%tangent, low, high, r_diag, chain%qr, info, &
+                                             keep_singular=.true.)
+                if (info /= 0 .or. any(r_diag == 0)) return
+                chain%jumps_volume(low:high) = 0
+                chain%tangent_log(low:high) = chain%tangent_log(low:high) + log(abs(r_diag))
+            end associate
+            return
+        end if
         call factorise_frame(chain, chain%r_diag, info, keep_singular=.true.)
         if (info /= 0 .or. any(chain%r_diag == 0)) return
         chain%jumps_volume = 0

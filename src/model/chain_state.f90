@@ -28,8 +28,9 @@ module chain_state
         integer :: scale_bits = 0            !! the frame is the true one times 2**(-bits)
         real(wp), allocatable :: growth_log(:) !! (n_vectors): ln growth kept since the QR step
         integer(i8) :: rank_losses = 0       !! singular tangent maps since the QR step
-        real(wp) :: jumps_volume = 0         !! ln |det| of the jumps since the frame was
-                                             !! orthonormal
+        real(wp), allocatable :: jumps_volume(:) !! (n_vectors): ln |det| of the jumps since
+                                             !! each piece of the frame was orthonormal,
+                                             !! on the piece's first column
         !> Re-orthonormalised right after large jumps (a Lyapunov frame, section 7.6); false
         !> for a Poincare-map Jacobian, which must be the plain product.
         logical :: orthonormalise_jumps = .true.

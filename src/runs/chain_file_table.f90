@@ -331,8 +331,9 @@ contains
         call add(t, 'run', '/resume/rank_losses', 'dataset', '', 'int64', '1', '', &
                  'singular tangent maps since the last QR step', &
                  'a run stopped early, &lyapunov enabled')
-        call add(t, 'run', '/resume/jumps_volume', 'dataset', '', 'float64', '1', 'nats', &
-                 'ln |det| of the jumps since the last QR step', &
+        call add(t, 'run', '/resume/jumps_volume', 'dataset', 'vector', 'float64', '1', 'nats', &
+                 'ln |det| of the jumps since the vector''s piece was orthonormal (on its '// &
+                 'first vector)', &
                  'a run stopped early, &lyapunov enabled')
         call add(t, 'run', '/resume/lyapunov_int', 'dataset', 'packed_int', 'int64', '1', '', &
                  'the Lyapunov accumulator''s integers (packed)', &

@@ -122,6 +122,7 @@ contains
             allocate (state%tangent%growth_log(size(state%tangent%frame, 1)))
             call h5_read(src, 'resume/tangent_log', state%tangent%growth_log, err)
             call h5_read(src, 'resume/rank_losses', state%tangent%rank_losses, err)
+            allocate (state%tangent%jumps_volume(size(state%tangent%frame, 1)))
             call h5_read(src, 'resume/jumps_volume', state%tangent%jumps_volume, err)
             call h5_read_alloc(src, 'resume/lyapunov_int', data%lyapunov_int, err)
             call h5_read_alloc(src, 'resume/lyapunov_real', data%lyapunov_real, err)

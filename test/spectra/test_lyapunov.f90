@@ -13,7 +13,8 @@ module test_lyapunov
     use chain_state, only: event_counts_t, moving_state
     use chain_engine, only: chain_t, chain_init, chain_model, chain_cycle, chain_time, &
                             chain_positions, chain_velocities, chain_counts, chain_reset_counts, &
-                            chain_set_tangent, chain_reorthonormalise, chain_tangent_frame
+                            chain_set_tangent, chain_reorthonormalise, chain_tangent_frame, &
+                            chain_snapshot
     use chain_event_log, only: event_log_t, event_log_init
     use chain_config, only: config_t, check_size
     use chain_record, only: record_cycles, memory_sink_t, record_result_t, record_state_t
@@ -23,7 +24,8 @@ module test_lyapunov
                               lyapunov_start, lyapunov_step, lyapunov_result_t, &
                               lyapunov_result, running_capacity, running_rows, &
                               lyapunov_pack, lyapunov_unpack
-    use chain_lapack, only: qr_orthonormalise, qr_orthonormalise_blocks, qr_workspace_t
+    use chain_lapack, only: qr_orthonormalise, qr_orthonormalise_blocks, qr_orthonormalise_piece, &
+                            qr_workspace_t
     use test_chains, only: make_chain
     use test_sum_rule, only: check_sum_rule
     use test_chains, only: flow_of
@@ -729,12 +731,13 @@ contains
     end subroutine unit_frame_spectrum
 
     !> A full spectrum from unit vectors stopped at a record and continued from its saved state
-    !> (the frame finds its pieces from its own entries) ends as the run that was
-    !> never stopped, bit for bit: on the default chain at n = 48, whose middle stays
-    !> decoupled, with adaptive QR steps.
+    !> in a new chain (the frame finds its pieces from its own entries, and gets each piece's
+    !> shrinking since its last factorisation) ends as the run that was never stopped, bit for
+    !> bit: on the default chain at n = 48, whose middle stays decoupled, with adaptive QR
+    !> steps.
     subroutine unit_frame_continued(t)
         type(tally_t), intent(inout) :: t
-        type(chain_t) :: plain_chain, chain
+        type(chain_t) :: plain_chain, chain, continued
         type(config_t) :: cfg
         type(record_result_t) :: plain, res
         type(memory_sink_t) :: plain_sink, sink, rest
@@ -755,7 +758,10 @@ contains
         call check(t, .not. allocated(err) .and. .not. res%complete .and. &
                    res%cycles_done == 77, 'unit frame, n = 48: stopped at record 77')
         if (allocated(err)) return
-        call record_cycles(cfg%record, chain, rest, res, err, state=state)
+        call chain_init(continued, chain_model(chain), chain_snapshot(chain), err)
+        call check(t, .not. allocated(err), 'unit frame, n = 48: a new chain from the state')
+        if (allocated(err)) return
+        call record_cycles(cfg%record, continued, rest, res, err, state=state)
         call check(t, .not. allocated(err) .and. res%complete, &
                    'unit frame, n = 48: the stopped run continues')
         if (allocated(err)) return
@@ -777,13 +783,13 @@ contains
         type(tally_t), intent(inout) :: t
         integer, intent(in) :: n
         real(wp) :: dense(2*n, 2*n), blocks(2*n, 2*n), r_dense(2*n), r_blocks(2*n), h
-        real(wp) :: frame(2*n, 2*n)
+        real(wp) :: frame(2*n, 2*n), single(2*n, 2*n), outside(2*n, 2*n), r_single(2*n)
         type(chain_t) :: chain
         type(error_t), allocatable :: err
         logical :: joined(n - 1)
         integer :: piece(n)
-        type(qr_workspace_t) :: ws_dense, ws_blocks
-        integer :: i, j, q, info
+        type(qr_workspace_t) :: ws_dense, ws_blocks, ws_single
+        integer :: i, j, q, info, low, high
 
         joined = [(modulo(i, 7) /= 3 .and. modulo(i, 7) /= 4 .and. modulo(i, 7) /= 6 .or. &
                    i > 6 .and. i < 30, i=1, n - 1)]
@@ -804,6 +810,18 @@ contains
         call qr_orthonormalise(dense, r_dense, ws_dense, info)
         call qr_orthonormalise_blocks(blocks, joined, r_blocks, ws_blocks, info)
         call check(t, info == 0, 'block factorisation: info 0')
+        ! one piece alone (oscillators 5 and 6 at n = 9): its block as the blocks' factorisation
+        ! has it, every other entry untouched, bit for bit
+        single = frame
+        low = 2*findloc(piece, piece(6), dim=1) - 1
+        high = 2*findloc(piece, piece(6), dim=1, back=.true.)
+        call qr_orthonormalise_piece(single, low, high, r_single(low:high), ws_single, info)
+        outside = frame
+        outside(low:high, low:high) = single(low:high, low:high)
+        call check(t, info == 0 .and. high - low > 2 .and. &
+                   all(single(low:high, low:high) == blocks(low:high, low:high)) .and. &
+                   all(r_single(low:high) == r_blocks(low:high)) .and. all(single == outside), &
+                   'block factorisation: one piece alone = its block of all, the rest untouched')
         call check_close(t, maxval(abs(abs(r_blocks) - abs(r_dense))/abs(r_dense)), 0.0_wp, &
                          'block factorisation: |R(j,j)| of the dense one', 1.0e-12_wp)
         ! (columns may differ in sign between two Householder orders: compare |Q^T Q'|)
