@@ -21,7 +21,7 @@
 !> Infrastructure, no model section.
 module chain_file_table
     use chain_inputs, only: input_keys, find_input
-    use chain_file_entry, only: output_entry_t, add
+    use chain_file_entry, only: output_entry_t, entry_list_t, add, entries_of
     use chain_file_table_orbits, only: entries_continuation, entries_curve
     implicit none
     private
@@ -32,18 +32,19 @@ contains
     !> Every entry, group by group in the order a run's file is written.
     function output_table() result(t)
         type(output_entry_t), allocatable :: t(:)
+        type(entry_list_t) :: list
 
-        allocate (t(0))
-        call entries_root_params(t)
-        call entries_initial_strobe_events_final(t)
-        call entries_stats_lyapunov_finite_time(t)
-        call entries_clv_floquet(t)
-        call entries_resume(t)
-        call entries_sweep(t)
-        call entries_continuation(t)
-        call entries_curve(t)
-        call entries_census_attributes(t)
-        call entries_census(t)
+        call entries_root_params(list)
+        call entries_initial_strobe_events_final(list)
+        call entries_stats_lyapunov_finite_time(list)
+        call entries_clv_floquet(list)
+        call entries_resume(list)
+        call entries_sweep(list)
+        call entries_continuation(list)
+        call entries_curve(list)
+        call entries_census_attributes(list)
+        call entries_census(list)
+        t = entries_of(list)
     end function output_table
 
     !> The reduced unit of an input key as a file states it (model_units): the input table's,
@@ -58,7 +59,7 @@ contains
 
     !> /, /params attributes, /params.
     subroutine entries_root_params(t)
-        type(output_entry_t), allocatable, intent(inout) :: t(:)
+        type(entry_list_t), intent(inout) :: t
 
         call add(t, 'run', '/@schema_version', 'attribute', '', 'int32', '1', '', &
                  'version of the file''s layout', 'header')
@@ -116,7 +117,7 @@ contains
 
     !> /initial, /strobe, /events, /final.
     subroutine entries_initial_strobe_events_final(t)
-        type(output_entry_t), allocatable, intent(inout) :: t(:)
+        type(entry_list_t), intent(inout) :: t
 
         call add(t, 'run', '/initial/oscillator', 'dataset', 'oscillator', 'int32', '1', '', &
                  'oscillator index', 'header')
@@ -172,7 +173,7 @@ contains
 
     !> /stats, /lyapunov and /finite_time, their attributes first.
     subroutine entries_stats_lyapunov_finite_time(t)
-        type(output_entry_t), allocatable, intent(inout) :: t(:)
+        type(entry_list_t), intent(inout) :: t
 
         call add(t, 'run', '/stats/@collisions_per_cycle', 'attribute', '', 'float64', '1', &
                  'impacts per drive cycle', &
@@ -235,7 +236,7 @@ contains
 
     !> /clv and /floquet, their attributes first.
     subroutine entries_clv_floquet(t)
-        type(output_entry_t), allocatable, intent(inout) :: t(:)
+        type(entry_list_t), intent(inout) :: t
 
         call add(t, 'run', '/clv/@clv_transient', 'attribute', '', 'int32', '1', 'drive cycles', &
                  'backward steps without vectors at the end', '&lyapunov covariant')
@@ -300,7 +301,7 @@ contains
 
     !> /resume.
     subroutine entries_resume(t)
-        type(output_entry_t), allocatable, intent(inout) :: t(:)
+        type(entry_list_t), intent(inout) :: t
 
         call add(t, 'run', '/resume/start_cycle', 'dataset', '', 'int64', '1', 'drive cycles', &
                  'drive cycle of the run''s start', 'a run stopped early')
@@ -345,7 +346,7 @@ contains
 
     !> /sweep attributes, /sweep.
     subroutine entries_sweep(t)
-        type(output_entry_t), allocatable, intent(inout) :: t(:)
+        type(entry_list_t), intent(inout) :: t
 
         call add(t, 'sweep', '/sweep/@parameter', 'attribute', '', 'string', '', '', &
                  'the swept parameter', 'always')
@@ -391,7 +392,7 @@ contains
 
     !> /census attributes.
     subroutine entries_census_attributes(t)
-        type(output_entry_t), allocatable, intent(inout) :: t(:)
+        type(entry_list_t), intent(inout) :: t
 
         call add(t, 'census', '/census/@samples', 'attribute', '', 'int32', '1', '', &
                  'samples per point', 'always')
@@ -424,7 +425,7 @@ contains
 
     !> /census.
     subroutine entries_census(t)
-        type(output_entry_t), allocatable, intent(inout) :: t(:)
+        type(entry_list_t), intent(inout) :: t
 
         call add(t, 'census', '/census/point', 'dataset', 'point', 'float64', '1', '{parameter}', &
                  '{parameter} (the swept parameter) at the point', 'a census over a sweep')

@@ -2,7 +2,7 @@
 !> (/continuation) and its curve in two parameters (/curve).
 !> Infrastructure, no model section.
 module chain_file_table_orbits
-    use chain_file_entry, only: output_entry_t, add
+    use chain_file_entry, only: entry_list_t, add
     implicit none
     private
     public :: entries_continuation, entries_curve
@@ -11,7 +11,7 @@ contains
 
     !> /continuation attributes, /continuation.
     subroutine entries_continuation(t)
-        type(output_entry_t), allocatable, intent(inout) :: t(:)
+        type(entry_list_t), intent(inout) :: t
 
         call add(t, 'continuation', '/continuation/@parameter', 'attribute', '', 'string', '', &
                  '', 'the continued parameter', 'always')
@@ -101,7 +101,7 @@ contains
     !> /curve: a continuation's curve of special points in two parameters (&continuation
     !> follow). values2's '{parameter}' stands for the second parameter, parameter2.
     subroutine entries_curve(t)
-        type(output_entry_t), allocatable, intent(inout) :: t(:)
+        type(entry_list_t), intent(inout) :: t
         character(len=*), parameter :: when = '&continuation follow'
 
         call add(t, 'continuation', '/curve/@follow', 'attribute', '', 'string', '', '', &
