@@ -305,13 +305,25 @@ contains
             r_diag(1) = a11
             r_diag(2) = a22
         else
-            beta = -sign(hypot(a11, a21), a11)
+            if (plain_squares(max(abs(a11), abs(a21)))) then
+                beta = -sign(sqrt(a11**2 + a21**2), a11)
+            else
+                beta = -sign(hypot(a11, a21), a11)
+            end if
             b(:, 1) = [a11, a21]/beta
             b(:, 2) = [a21, -a11]/beta
             r_diag(1) = beta
             r_diag(2) = (a21*a12 - a11*a22)/beta
         end if
     end subroutine closed_form_qr
+
+    !> Can squares of numbers up to `largest` be summed without overflow or underflow that
+    !> matters? (Then a length is the square root of the plain sum of squares.)
+    pure logical function plain_squares(largest)
+        real(wp), intent(in) :: largest
+
+        plain_squares = largest > 1.0e-100_wp .and. largest < 1.0e100_wp
+    end function plain_squares
 
     !> Householder QR of r (m x k, m >= k) in place, in LAPACK's storage (dgeqrf's): R in the
     !> upper triangle, the reflectors' vectors below it (first entry 1, implied) and their
@@ -321,7 +333,7 @@ contains
     pure subroutine householder_qr(r, tau)
         real(wp), intent(inout), contiguous :: r(:, :)
         real(wp), intent(out) :: tau(:)
-        real(wp) :: alpha, beta, xnorm, scale
+        real(wp) :: alpha, beta, xnorm, scale, squares
         integer :: m, k, j, c
 
         m = size(r, 1)
@@ -329,11 +341,13 @@ contains
         do j = 1, k
             alpha = r(j, j)
             xnorm = 0
+            scale = 0
             if (j < m) then
                 scale = maxval(abs(r(j + 1:m, j)))
                 ! the plain sum of squares unless it could overflow or underflow
-                if (scale > 1.0e-100_wp .and. scale < 1.0e100_wp) then
-                    xnorm = sqrt(sum(r(j + 1:m, j)**2))
+                if (plain_squares(scale)) then
+                    squares = sum(r(j + 1:m, j)**2)
+                    xnorm = sqrt(squares)
                 else if (scale > 0) then
                     xnorm = norm2(r(j + 1:m, j))
                 end if
@@ -342,7 +356,13 @@ contains
                 tau(j) = 0
                 cycle
             end if
-            beta = -sign(hypot(alpha, xnorm), alpha)
+            ! |(alpha, x)| by one square root of the sum of squares where nothing can overflow
+            ! (IEEE 754 rounds it alike on every machine, the library's hypot need not)
+            if (plain_squares(scale) .and. abs(alpha) < 1.0e100_wp) then
+                beta = -sign(sqrt(alpha**2 + squares), alpha)
+            else
+                beta = -sign(hypot(alpha, xnorm), alpha)
+            end if
             tau(j) = (beta - alpha)/beta
             r(j + 1:m, j) = r(j + 1:m, j)/(alpha - beta)
             r(j, j) = beta
