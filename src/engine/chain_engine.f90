@@ -837,6 +837,16 @@ contains
         r = bond + 1
         resting = 0
         closes = .true.
+        ! nearly every call: an inner bond between two moving oscillators
+        if (l >= 1 .and. r <= chain%n) then
+            if (chain%contact(l) == contact_free .and. chain%contact(r) == contact_free) then
+                call propagators_now(chain)
+                call free_part_now(chain, r, y, vy)
+                call free_part_now(chain, l, yl, vyl)
+                gap = gap_t(chain%spacing(bond), y - yl, vy - vyl, 0.0_wp)
+                return
+            end if
+        end if
         if (.not. chain%walls .and. (bond == 0 .or. bond == chain%n)) then
             closes = .false.
             return

@@ -280,8 +280,10 @@ contains
                 return
             end if
             tau = tau + h
-            ! far from contact, stop here and let the queue come back: most predictions are
-            ! overwritten by a neighbour's impact before they are due
+            ! far from contact, stop here and let the queue come back: a neighbour's impact
+            ! may overwrite the prediction first (about a quarter of them on the paper's
+            ! default chain), and the steps a longer search spends on those cost about what
+            ! resuming the others costs (docs/performance.md)
             if (it >= lazy_steps .and. g > 0.25_wp*gap%offset) then
                 res%status = search_horizon
                 res%tau = tau
