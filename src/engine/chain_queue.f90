@@ -195,7 +195,7 @@ contains
 
     !> Subtract `dt` from every time: the start of a new drive cycle. The order is unchanged,
     !> but two times apart by less than the rounding of the difference may now be equal, so
-    !> the tree is settled again (a few thousand operations per drive cycle at most).
+    !> the tree is settled again (one pass over its inner nodes, fewer than n/16, per cycle).
     pure subroutine queue_shift(q, dt, never)
         type(queue_t), intent(inout) :: q
         real(wp), intent(in) :: dt, never
