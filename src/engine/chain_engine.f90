@@ -29,9 +29,9 @@
 !> per oscillator, and nothing is touched but the two oscillators involved. After an impact the
 !> new free part is referred back to the epoch with M^-1. `chain_sync` moves the epoch to the
 !> current time and fills x, v; it also keeps e^(b (s - epoch)) bounded in long cycles. Every
-!> bond keeps its next event in an indexed heap; an impact reschedules only the neighbouring
-!> bonds. Times are times within the current drive cycle; `chain_new_cycle` moves the frame on
-!> by one period.
+!> bond keeps its next event in the queue (blocks of bonds under a tournament tree); an impact
+!> reschedules only the neighbouring bonds. Times are times within the current drive cycle;
+!> `chain_new_cycle` moves the frame on by one period.
 module chain_engine
     use chain_kinds, only: wp, i8
     use chain_error, only: error_t, set_error, fmt_int

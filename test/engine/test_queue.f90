@@ -1,7 +1,7 @@
 !> The event queue against a brute-force minimum: after every update of a random bond, with
 !> ties in time, the top is the earliest (time, bond) pair and the ties are the bonds due
-!> then, for queue sizes of one block (no heap), either side of one and two blocks, and enough
-!> blocks for a heap of several levels.
+!> then, for queue sizes of one block (no tree), either side of one and two blocks, and enough
+!> blocks for a tree of several levels, full or padded with empty leaves.
 module test_queue
     use chain_kinds, only: wp
     use chain_queue, only: queue_t, queue_init, queue_set, queue_top, queue_shift, queue_ties
@@ -16,7 +16,7 @@ contains
         type(tally_t), intent(inout) :: t
         integer :: n_bonds
 
-        ! chain_queue's blocks hold 32 bonds: one block (no heap), and either side of the
+        ! chain_queue's blocks hold 32 bonds: one block (no tree), and either side of the
         ! second and third block's start
         do n_bonds = 1, 40
             call random_updates(t, n_bonds, 400)
@@ -24,8 +24,10 @@ contains
         do n_bonds = 62, 66
             call random_updates(t, n_bonds, 2000)
         end do
-        ! heaps of 32 and 157 blocks (three and four levels), the last block part full
+        ! trees of 32 blocks (five levels, full), 33 (six levels, 31 empty leaves: a chain of
+        ! 1024) and 157 (eight levels), the last block part full
         call random_updates(t, 1000, 20000)
+        call random_updates(t, 1025, 20000)
         call random_updates(t, 5001, 20000)
     end subroutine run_queue_tests
 
