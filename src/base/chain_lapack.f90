@@ -184,16 +184,12 @@ contains
     !> oscillators i and i + 1), a piece is a maximal run [p, q] of oscillators joined by them,
     !> and a piece's columns 2p - 1 .. 2q are zero outside its rows 2p - 1 .. 2q and its rows
     !> zero outside its columns (a full spectrum started from unit vectors: only impacts join
-    !> neighbours). The frame is block diagonal with contiguous blocks, and Householder's
-    !> reflections never mix them: every reflection of a piece's column is zero outside the
-    !> piece's rows, so R and Q are, entry for entry, those of the dense factorisation in exact
-    !> arithmetic (docs/model.md section 7.2). A piece of two or more oscillators goes to
-    !> qr_orthonormalise (the workspace is shaped anew when the size changes); a piece of one
-    !> oscillator is factorised in closed form: the reflector of its first column,
-    !> Q = H = [a c; c -a]/beta (beta = -sign(|(a, c)|, a)), or Q = I when c = 0, as
-    !> householder_qr builds it. Cost the sum of the pieces' m^3 (m twice a piece's length).
-    !> With `keep_singular`, a frame with an exactly zero R(j,j) is left as it was: the
-    !> pieces are kept aside as they were until all are known to be regular.
+    !> neighbours). Householder's reflections never mix such blocks (every reflection of a
+    !> piece's column is zero outside the piece's rows), so R and Q are, entry for entry, those
+    !> of the dense factorisation in exact arithmetic (docs/model.md section 7.2); each piece
+    !> goes to qr_orthonormalise_piece. Cost the sum of the pieces' m^3 (m twice a piece's
+    !> length). With `keep_singular`, a frame with an exactly zero R(j,j) is left as it was:
+    !> the pieces are kept aside as they were until all are known to be regular.
     subroutine qr_orthonormalise_blocks(a, joined, r_diag, ws, info, keep_singular)
         real(wp), intent(inout), contiguous :: a(:, :)
         logical, intent(in) :: joined(:)
@@ -217,19 +213,12 @@ contains
             low = pieces(1, k)
             high = pieces(2, k)
             m = high - low + 1
-            if (.not. keep) then
-                call qr_orthonormalise_piece(a, low, high, r_diag(low:high), ws, info)
-                if (info /= 0) return
-                cycle
-            end if
-            q_all(used + 1:used + m*m) = reshape(a(low:high, low:high), [m*m])
+            if (keep) q_all(used + 1:used + m*m) = reshape(a(low:high, low:high), [m*m])
             used = used + m*m
-            call qr_orthonormalise_piece(a, low, high, r_diag(low:high), ws, info, &
-                                         keep_singular)
-            if (info /= 0 .or. any(r_diag(low:high) == 0)) then
-                call put_back(k)
-                return
-            end if
+            call qr_orthonormalise_piece(a, low, high, r_diag(low:high), ws, info, keep_singular)
+            if (info == 0 .and. .not. (keep .and. any(r_diag(low:high) == 0))) cycle
+            if (keep) call put_back(k)
+            return
         end do
     contains
         !> Pieces 1 .. last as they were before their factorisation.
@@ -268,8 +257,9 @@ contains
 
     !> The piece of a block-diagonal frame a whose rows and columns are low .. high (zero
     !> outside that block, qr_orthonormalise_blocks) re-orthonormalised alone, the diagonal of
-    !> its R in r_diag (high - low + 1): the other pieces are left as they are, which is their
-    !> dense factorisation too. A piece of one oscillator (2 x 2) in closed form.
+    !> its R in r_diag (high - low + 1): the frame's columns change by block-diag(I, R^-1, I),
+    !> upper triangular, so the growth telescopes as for a whole factorisation. A piece of one
+    !> oscillator (2 x 2) in closed form; with `keep_singular`, a singular piece is left as is.
     subroutine qr_orthonormalise_piece(a, low, high, r_diag, ws, info, keep_singular)
         real(wp), intent(inout), contiguous :: a(:, :)
         integer, intent(in) :: low, high
@@ -283,6 +273,9 @@ contains
         block = a(low:high, low:high)
         if (high - low == 1) then
             call closed_form_qr(block, r_diag)
+            if (present(keep_singular)) then
+                if (keep_singular .and. any(r_diag == 0)) return
+            end if
         else
             call qr_orthonormalise(block, r_diag, ws, info, keep_singular)
             if (info /= 0) return
@@ -290,7 +283,9 @@ contains
         a(low:high, low:high) = block
     end subroutine qr_orthonormalise_piece
 
-    !> A 2 x 2 block b replaced by its Q, R's diagonal in r_diag (qr_orthonormalise_blocks).
+    !> A 2 x 2 block b = [a b; c d] replaced by its Q, R's diagonal in r_diag: the reflector of
+    !> its first column, Q = H = [a c; c -a]/beta (beta = -sign(|(a, c)|, a)), or Q = I when
+    !> c = 0, as householder_qr builds it.
     pure subroutine closed_form_qr(b, r_diag)
         real(wp), intent(inout) :: b(:, :)
         real(wp), intent(out) :: r_diag(:)
@@ -305,7 +300,7 @@ contains
             r_diag(1) = a11
             r_diag(2) = a22
         else
-            if (plain_squares(max(abs(a11), abs(a21)))) then
+            if (plain_squares(abs(a21)) .and. abs(a11) < 1.0e100_wp) then
                 beta = -sign(sqrt(a11**2 + a21**2), a11)
             else
                 beta = -sign(hypot(a11, a21), a11)

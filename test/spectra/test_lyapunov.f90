@@ -822,6 +822,23 @@ contains
                    all(single(low:high, low:high) == blocks(low:high, low:high)) .and. &
                    all(r_single(low:high) == r_blocks(low:high)) .and. all(single == outside), &
                    'block factorisation: one piece alone = its block of all, the rest untouched')
+        ! a singular piece (a zero column: an exactly zero R(j,j)) with keep_singular leaves
+        ! the frame as it was, for one piece (2 x 2: oscillator 4; 4 x 4: oscillators 5 and 6)
+        ! and for all pieces, whichever piece is singular
+        do q = 8, 12, 4
+            single = frame
+            single(:, q) = 0
+            outside = single
+            low = merge(7, 9, q == 8)
+            call qr_orthonormalise_piece(single, low, q, r_single(low:q), ws_single, info, &
+                                         keep_singular=.true.)
+            call check(t, info == 0 .and. any(r_single(low:q) == 0) .and. all(single == outside), &
+                       'block factorisation: a singular piece alone is kept as it was')
+            call qr_orthonormalise_blocks(single, joined, r_single, ws_single, info, &
+                                          keep_singular=.true.)
+            call check(t, info == 0 .and. any(r_single == 0) .and. all(single == outside), &
+                       'block factorisation: a frame with a singular piece is kept as it was')
+        end do
         call check_close(t, maxval(abs(abs(r_blocks) - abs(r_dense))/abs(r_dense)), 0.0_wp, &
                          'block factorisation: |R(j,j)| of the dense one', 1.0e-12_wp)
         ! (columns may differ in sign between two Householder orders: compare |Q^T Q'|)
