@@ -837,7 +837,8 @@ contains
         r = bond + 1
         resting = 0
         closes = .true.
-        ! nearly every call: an inner bond between two moving oscillators
+        ! nearly every call, so first: an inner bond between two moving oscillators, whose
+        ! gap is the difference of their free parts (the drive cancels)
         if (l >= 1 .and. r <= chain%n) then
             if (chain%contact(l) == contact_free .and. chain%contact(r) == contact_free) then
                 call propagators_now(chain)
@@ -866,12 +867,8 @@ contains
         call side_position(chain, l, moving_l, fixed_l)
         call side_position(chain, r, moving_r, fixed_r)
         call propagators_now(chain)
-        if (moving_l .and. moving_r) then
-            ! the drive cancels in a pair gap: the difference of the free parts
-            call free_part_now(chain, r, y, vy)
-            call free_part_now(chain, l, yl, vyl)
-            gap = gap_t(chain%spacing(bond), y - yl, vy - vyl, 0.0_wp)
-        else if (moving_r) then
+        ! (both sides moving was the first case: a wall or a resting side is fixed here)
+        if (moving_r) then
             call free_part_now(chain, r, y, vy)
             gap = gap_t(chain%spacing(bond) - fixed_l, y, vy, 1.0_wp)
         else if (moving_l) then
